@@ -1,0 +1,47 @@
+# Thin front door over CMake. `make demo` and `make test` work on a fresh Debian 12 as root.
+JOBS ?= 2
+BUILD ?= build
+ASAN_BUILD ?= build-asan
+CMAKE_FLAGS ?=
+PREFIX ?= /usr/local
+IBL = $(BUILD)/ibl
+DEMO_DIR = out/demo
+
+.PHONY: all deps build test test-release test-asan demo bench fuzz install clean
+
+all: build
+
+deps:
+	@sh scripts/install-deps.sh
+
+build: deps
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DIBL_WERROR=ON $(CMAKE_FLAGS) >/dev/null
+	@cmake --build $(BUILD) -j $(JOBS) -- --no-print-directory
+
+test-release: build
+	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+test-asan: deps
+	@cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=Debug -DIBL_WERROR=ON -DIBL_SANITIZE=ON -DIBL_BUILD_BENCH=OFF $(CMAKE_FLAGS) >/dev/null
+	@cmake --build $(ASAN_BUILD) -j $(JOBS)
+	@cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS)
+
+# Both builds; the run ends with CTest's summary line of the sanitizer build.
+test: test-release test-asan
+
+demo: build
+	@sh scripts/demo.sh $(IBL) $(DEMO_DIR)
+
+bench: build
+	@sh scripts/install-deps.sh --bench
+	@sh bench/run.sh $(BUILD)
+
+fuzz:
+	@sh scripts/install-deps.sh --fuzz
+	@sh fuzz/run.sh
+
+install: build
+	@cmake --install $(BUILD) --prefix $(PREFIX)
+
+clean:
+	rm -rf $(BUILD) $(ASAN_BUILD) build-fuzz out

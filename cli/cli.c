@@ -1,0 +1,216 @@
+#include "cli.h"
+
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+static volatile sig_atomic_t interrupted;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    interrupted = 1;
+}
+
+void cli_install_signal_handlers(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+}
+
+double cli_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+void cli_usage_error(const cli_args *a, const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "ibl %s: ", a && a->command ? a->command : "");
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fprintf(stderr, " (see 'ibl %s --help')\n", a && a->command ? a->command : "");
+    exit(CLI_EXIT_USAGE);
+}
+
+void cli_error(const char *fmt, ...)
+{
+    va_list ap;
+    fputs("ibl: ", stderr);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+}
+
+void cli_info(const cli_common *c, const char *fmt, ...)
+{
+    if (c && c->quiet) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+}
+
+const char *cli_next(cli_args *a)
+{
+    if (a->index >= a->argc) return NULL;
+    const char *arg = a->argv[a->index++];
+    if (strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0) {
+        fputs(a->usage, stdout);
+        exit(CLI_EXIT_OK);
+    }
+    return arg;
+}
+
+static const char *pending_value;
+
+int cli_is(cli_args *a, const char *arg, const char *name, const char *alias)
+{
+    (void)a;
+    pending_value = NULL;
+    size_t n = strlen(name);
+    if (strcmp(arg, name) == 0 || (alias && strcmp(arg, alias) == 0)) return 1;
+    if (strncmp(arg, name, n) == 0 && arg[n] == '=') {
+        pending_value = arg + n + 1;
+        return 1;
+    }
+    return 0;
+}
+
+const char *cli_value(cli_args *a, const char *arg)
+{
+    if (pending_value) {
+        const char *v = pending_value;
+        pending_value = NULL;
+        return v;
+    }
+    if (a->index >= a->argc) cli_usage_error(a, "%s needs a value", arg);
+    return a->argv[a->index++];
+}
+
+int cli_int(cli_args *a, const char *arg, int min, int max)
+{
+    const char *v = cli_value(a, arg);
+    char *end = NULL;
+    long x = strtol(v, &end, 10);
+    if (!*v || *end || x < min || x > max)
+        cli_usage_error(a, "%s wants a whole number from %d to %d, not '%s'", arg, min, max, v);
+    return (int)x;
+}
+
+double cli_double(cli_args *a, const char *arg, double min, double max)
+{
+    const char *v = cli_value(a, arg);
+    char *end = NULL;
+    double x = strtod(v, &end);
+    if (!*v || *end || !(x >= min && x <= max))
+        cli_usage_error(a, "%s wants a number from %g to %g, not '%s'", arg, min, max, v);
+    return x;
+}
+
+int cli_common_option(cli_args *a, const char *arg)
+{
+    if (cli_is(a, arg, "--quiet", "-q")) {
+        a->common.quiet = 1;
+        return 1;
+    }
+    if (cli_is(a, arg, "--threads", "-j")) {
+        a->common.threads = cli_int(a, arg, 0, 256);
+        return 1;
+    }
+    if (cli_is(a, arg, "--clamp", NULL)) {
+        a->common.clamp = 1;
+        return 1;
+    }
+    if (cli_is(a, arg, "--max-memory", NULL)) {
+        a->common.max_memory_mib = cli_double(a, arg, 1, 1e9);
+        return 1;
+    }
+    return 0;
+}
+
+void cli_positional_or_unknown(cli_args *a, const char *arg)
+{
+    if (arg[0] == '-' && arg[1] != 0) cli_usage_error(a, "unknown option '%s'", arg);
+    if (a->positional_count >= 8) cli_usage_error(a, "too many arguments");
+    a->positional[a->positional_count++] = arg;
+}
+
+int cli_exit_code(ibl_status status)
+{
+    if (status == IBL_OK) return CLI_EXIT_OK;
+    if (status == IBL_ERR_INVALID_ARGUMENT) return CLI_EXIT_USAGE;
+    return CLI_EXIT_BAD_INPUT;
+}
+
+typedef struct progress_state {
+    int tty;
+    double last_print;
+    char stage[64];
+} progress_state;
+
+static progress_state progress;
+
+static int on_progress(void *user, const char *stage, double fraction)
+{
+    (void)user;
+    if (interrupted) {
+        if (progress.tty) fputs("\r\033[K", stderr);
+        return 1;
+    }
+    if (!progress.tty) return 0;
+    double now = cli_seconds();
+    int new_stage = stage && strncmp(progress.stage, stage, sizeof progress.stage - 1) != 0;
+    if (!new_stage && now - progress.last_print < 0.1 && fraction < 1.0) return 0;
+    progress.last_print = now;
+    if (stage) snprintf(progress.stage, sizeof progress.stage, "%s", stage);
+    int width = 30, filled = (int)(fraction * width + 0.5);
+    fprintf(stderr, "\r\033[K%-20s [", progress.stage);
+    for (int i = 0; i < width; i++) fputc(i < filled ? '#' : ' ', stderr);
+    fprintf(stderr, "] %3d%%", (int)(fraction * 100 + 0.5));
+    if (fraction >= 1.0) fputs("\r\033[K", stderr);
+    fflush(stderr);
+    return 0;
+}
+
+ibl_context *cli_context(const cli_common *c)
+{
+    ibl_context_desc d;
+    memset(&d, 0, sizeof d);
+    d.threads = c->threads;
+    if (c->max_memory_mib > 0) d.max_bytes = (uint64_t)(c->max_memory_mib * 1048576.0);
+    progress.tty = !c->quiet && isatty(STDERR_FILENO);
+    d.progress = on_progress;
+    ibl_context *ctx = NULL;
+    if (ibl_context_create(&d, &ctx) != IBL_OK) {
+        cli_error("cannot create the library context (out of memory?)");
+        exit(CLI_EXIT_BAD_INPUT);
+    }
+    return ctx;
+}
+
+void cli_report_pixels(const cli_common *c, const char *path, const ibl_pixel_report *r)
+{
+    if (!r) return;
+    if (r->nan_count)
+        cli_info(c, "ibl: warning: %s: %llu texels had NaN values, set to 0\n", path,
+                 (unsigned long long)r->nan_count);
+    if (r->negative_count)
+        cli_info(c, "ibl: warning: %s: %llu texels had negative values, set to 0\n", path,
+                 (unsigned long long)r->negative_count);
+    if (r->inf_count)
+        cli_info(c, "ibl: warning: %s: %llu texels were infinite, clamped\n", path,
+                 (unsigned long long)r->inf_count);
+}

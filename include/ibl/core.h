@@ -1,0 +1,242 @@
+/*
+ * ibl/core.h - status codes, the context (allocator, parallel-for, limits, progress),
+ * float RGBA images, cubemaps and generic textures.
+ *
+ * Conventions used everywhere in the library:
+ *  - Pixels are linear float RGBA (4 floats per texel), rows stored top row first.
+ *  - Every fallible call returns an ibl_status; the human-readable reason of the last
+ *    failure is kept in the context (ibl_context_message). The library never prints,
+ *    never exits, and owns no global mutable state.
+ *  - Structs named *_desc are descriptors: zero-initialise them and set only what you need;
+ *    a zero field means "the documented default".
+ */
+#ifndef IBL_CORE_H
+#define IBL_CORE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define IBL_VERSION_MAJOR 0
+#define IBL_VERSION_MINOR 1
+#define IBL_VERSION_PATCH 0
+#define IBL_VERSION_STRING "0.1.0"
+
+/* ------------------------------------------------------------------------------------------ */
+/* Status                                                                                     */
+
+typedef enum ibl_status {
+    IBL_OK = 0,
+    IBL_ERR_INVALID_ARGUMENT, /* the caller passed something the API does not accept        */
+    IBL_ERR_OUT_OF_MEMORY,    /* an allocation failed                                       */
+    IBL_ERR_TOO_LARGE,        /* the request exceeds the context's memory limit or size_t   */
+    IBL_ERR_IO,               /* the operating system refused a read, write or rename       */
+    IBL_ERR_FORMAT,           /* the input is malformed, truncated or inconsistent          */
+    IBL_ERR_UNSUPPORTED,      /* well-formed, but a feature this library does not handle    */
+    IBL_ERR_BAD_PIXELS,       /* infinite pixels (or other values) refused by the policy    */
+    IBL_ERR_CANCELLED         /* the progress callback asked to stop                        */
+} ibl_status;
+
+/* A fixed English name for the status ("invalid argument", "malformed input", ...). */
+const char *ibl_status_name(ibl_status status);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Context: the host's hooks. One context per thread of the host that calls the library.     */
+
+typedef struct ibl_allocator {
+    void *(*alloc)(size_t bytes, void *user); /* must return memory aligned to 16 bytes */
+    void (*free)(void *ptr, void *user);
+    void *user;
+} ibl_allocator;
+
+/* Runs task(task_arg, i) for every i in [0, count), in any order, possibly concurrently,
+ * and returns when all are done. The library always splits work into the same chunks
+ * regardless of how many threads run them, so results are bit-identical at any thread count. */
+typedef void (*ibl_task_fn)(void *task_arg, int index);
+typedef void (*ibl_parallel_for_fn)(void *host, int count, ibl_task_fn task, void *task_arg);
+
+/* Called now and then during long work with fraction in [0, 1]; return non-zero to cancel. */
+typedef int (*ibl_progress_fn)(void *user, const char *stage, double fraction);
+
+typedef struct ibl_context_desc {
+    ibl_allocator allocator;         /* zero: malloc/free                                       */
+    ibl_parallel_for_fn parallel_for; /* zero: the built-in thread pool                          */
+    void *parallel_host;             /* passed to parallel_for                                  */
+    int threads;                     /* built-in pool size; 0: every online core; 1: no threads */
+    uint64_t max_bytes;              /* largest single image/texture allocation; 0: 4 GiB       */
+    ibl_progress_fn progress;        /* optional                                                */
+    void *progress_user;
+} ibl_context_desc;
+
+typedef struct ibl_context ibl_context;
+
+/* Creates a context; desc may be NULL for every default. */
+ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out);
+void ibl_context_destroy(ibl_context *ctx);
+/* The message of the last failure in this context ("" if none). Valid until the next call. */
+const char *ibl_context_message(const ibl_context *ctx);
+/* The status of the last recorded failure (what ibl_fail was given). */
+ibl_status ibl_context_status(const ibl_context *ctx);
+/* Number of threads the context runs work on (1 when a host parallel_for is used: unknown). */
+int ibl_context_threads(const ibl_context *ctx);
+
+/* Allocation through the context: checks the memory limit, records a message on failure. */
+void *ibl_alloc(ibl_context *ctx, size_t bytes);
+void *ibl_calloc(ibl_context *ctx, size_t count, size_t size);
+void ibl_free(ibl_context *ctx, void *ptr);
+/* Records a printf-style failure message in the context and returns status. */
+ibl_status ibl_fail(ibl_context *ctx, ibl_status status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+/* Runs task over [0, count) with the context's parallel-for. */
+void ibl_parallel_for(ibl_context *ctx, int count, ibl_task_fn task, void *task_arg);
+/* Reports progress; returns IBL_ERR_CANCELLED (with a message) if the host asked to stop. */
+ibl_status ibl_progress(ibl_context *ctx, const char *stage, double fraction);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Pixel formats (how texels are stored in a file; in memory they are always float RGBA).   */
+
+typedef enum ibl_format {
+    IBL_FORMAT_DEFAULT = 0,  /* the container's natural choice (RGBA16F for KTX2/DDS)     */
+    IBL_FORMAT_RGBA16F,      /* VK_FORMAT_R16G16B16A16_SFLOAT / DXGI 10                  */
+    IBL_FORMAT_RGBA32F,      /* VK_FORMAT_R32G32B32A32_SFLOAT / DXGI 2                   */
+    IBL_FORMAT_RG11B10F,     /* VK_FORMAT_B10G11R11_UFLOAT_PACK32 / DXGI 26              */
+    IBL_FORMAT_RGB9E5,       /* VK_FORMAT_E5B9G9R9_UFLOAT_PACK32 / DXGI 67               */
+    IBL_FORMAT_RG16F,        /* VK_FORMAT_R16G16_SFLOAT / DXGI 34                        */
+    IBL_FORMAT_RG32F,        /* VK_FORMAT_R32G32_SFLOAT / DXGI 16                        */
+    IBL_FORMAT_RGB32F,       /* 3 x float (PFM, EXR, Radiance in-memory meaning)          */
+    IBL_FORMAT_RGB16F,       /* 3 x half (EXR)                                            */
+    IBL_FORMAT_RGBA8_SRGB,   /* 8-bit sRGB (PNG/JPEG previews)                            */
+    IBL_FORMAT_RGBA16_UNORM, /* 16-bit linear (PNG tables)                                */
+    IBL_FORMAT_RGBE,         /* Radiance shared exponent                                  */
+    IBL_FORMAT_COUNT
+} ibl_format;
+
+/* "rgba16f", "rgba32f", "rg11b10f", "rgb9e5", "rg16f", "rg32f", ... */
+const char *ibl_format_name(ibl_format format);
+/* Parses a name as above; returns IBL_FORMAT_DEFAULT for NULL/unknown and sets *ok = 0. */
+ibl_format ibl_format_from_name(const char *name, int *ok);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Images: one 2D float RGBA picture (a reader's output, a layout's input).                 */
+
+typedef struct ibl_image {
+    int width, height;
+    float *pixels; /* width * height * 4 floats, top row first; owned by whoever allocated it */
+} ibl_image;
+
+ibl_status ibl_image_alloc(ibl_context *ctx, int width, int height, ibl_image *out);
+void ibl_image_free(ibl_context *ctx, ibl_image *image);
+static inline float *ibl_image_texel(const ibl_image *im, int x, int y)
+{
+    return im->pixels + ((size_t)y * (size_t)im->width + (size_t)x) * 4u;
+}
+
+/* Counts of non-finite and negative values found (and fixed) by ibl_sanitize_pixels. */
+typedef struct ibl_pixel_report {
+    uint64_t nan_count, inf_count, negative_count; /* texels with at least one such channel */
+    uint64_t texel_count;
+} ibl_pixel_report;
+
+/* The policy all readers follow: NaN and negatives become 0; +-Inf is refused with
+ * IBL_ERR_BAD_PIXELS unless clamp_infinite, in which case +Inf becomes clamp_value (or
+ * 65504 if clamp_value <= 0) and -Inf 0. The report is filled either way. Alpha is kept. */
+ibl_status ibl_sanitize_pixels(ibl_context *ctx, float *rgba, size_t texel_count,
+                               int clamp_infinite, float clamp_value, ibl_pixel_report *report);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Cubemaps: 6 square faces per level, a full or partial mip chain.                          */
+
+enum { IBL_MAX_LEVELS = 16 };
+
+typedef enum ibl_cube_face {
+    IBL_FACE_POS_X = 0,
+    IBL_FACE_NEG_X,
+    IBL_FACE_POS_Y,
+    IBL_FACE_NEG_Y,
+    IBL_FACE_POS_Z,
+    IBL_FACE_NEG_Z
+} ibl_cube_face;
+
+/* Memory layout (identical to a KTX2 cubemap's level images): for each level, faces in the
+ * order +X -X +Y -Y +Z -Z, each face max(1, size >> level) squared texels, RGBA float,
+ * row-major, row 0 at t = 0. One contiguous block. */
+typedef struct ibl_cubemap {
+    int size;    /* edge of a level-0 face in texels */
+    int levels;  /* 1 .. log2(size) + 1             */
+    float *data; /* ibl_cubemap_floats(size, levels) floats */
+    int owns_data;
+} ibl_cubemap;
+
+static inline int ibl_level_size(int size, int level)
+{
+    int s = size >> level;
+    return s < 1 ? 1 : s;
+}
+/* Number of levels of a full chain down to 1x1. */
+int ibl_full_mip_count(int size);
+/* Floats needed for a cubemap (0 if the arguments are invalid or overflow). */
+size_t ibl_cubemap_floats(int size, int levels);
+/* Allocates (zeroed). */
+ibl_status ibl_cubemap_alloc(ibl_context *ctx, int size, int levels, ibl_cubemap *out);
+/* Wraps caller-owned memory of ibl_cubemap_floats(size, levels) floats: no allocation. */
+ibl_status ibl_cubemap_wrap(int size, int levels, float *memory, ibl_cubemap *out);
+void ibl_cubemap_free(ibl_context *ctx, ibl_cubemap *cube);
+/* Pointer to texel (0,0) of a face of a level. */
+float *ibl_cubemap_face(const ibl_cubemap *cube, int level, int face);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Textures: what containers (KTX2, KTX1, DDS) hold. 2D, 3D or cube, with mips and metadata. */
+
+typedef enum ibl_texture_kind {
+    IBL_TEXTURE_2D = 0,
+    IBL_TEXTURE_3D,
+    IBL_TEXTURE_CUBE
+} ibl_texture_kind;
+
+typedef struct ibl_key_value {
+    char *key;   /* NUL-terminated UTF-8                     */
+    char *value; /* NUL-terminated (KTX2 values are written with their NUL) */
+} ibl_key_value;
+
+/* Memory layout: for each level, for each face (1, or 6 for cubes), for each slice z
+ * (depth >> level, at least 1), rows top first, RGBA float. Cubes have width == height and
+ * are laid out exactly like ibl_cubemap. */
+typedef struct ibl_texture {
+    ibl_texture_kind kind;
+    int width, height, depth; /* depth 1 unless 3D */
+    int levels;
+    ibl_format format;        /* storage format read from / to write to a file */
+    float *data;
+    int owns_data;
+    ibl_key_value *metadata;  /* owned by the texture when read from a file */
+    int metadata_count;
+    int owns_metadata;
+} ibl_texture;
+
+size_t ibl_texture_floats(ibl_texture_kind kind, int width, int height, int depth, int levels);
+ibl_status ibl_texture_alloc(ibl_context *ctx, ibl_texture_kind kind, int width, int height,
+                             int depth, int levels, ibl_texture *out);
+void ibl_texture_free(ibl_context *ctx, ibl_texture *tex);
+/* Texels of one level/face (face 0 for non-cubes); the slices of a 3D level follow each other. */
+float *ibl_texture_level(const ibl_texture *tex, int level, int face);
+int ibl_texture_faces(const ibl_texture *tex);
+/* A non-owning texture view of a cubemap (no copy). */
+ibl_texture ibl_texture_from_cubemap(const ibl_cubemap *cube);
+/* A non-owning cubemap view of a cube texture; IBL_ERR_INVALID_ARGUMENT if not a cube. */
+ibl_status ibl_cubemap_from_texture(const ibl_texture *tex, ibl_cubemap *out);
+/* Adds (copies) a key/value pair to a texture's metadata. */
+ibl_status ibl_texture_set_metadata(ibl_context *ctx, ibl_texture *tex, const char *key,
+                                    const char *value);
+/* The value for key, or NULL. */
+const char *ibl_texture_get_metadata(const ibl_texture *tex, const char *key);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,17 @@
+/*
+ * ibl.h - umbrella header of libibl, a C library for physically based image-based lighting.
+ *
+ * Start with core.h (context, images, cubemaps, textures), then io.h (files), layout.h (2D
+ * layouts <-> cubemaps), cubemap.h (geometry and sampling). The bake stages (sh.h,
+ * irradiance.h, specular.h, brdf.h, sky.h) take cubemaps and return plain data; shade.h
+ * evaluates baked data at runtime. docs/ has the design, conventions and measurements.
+ */
+#ifndef IBL_IBL_H
+#define IBL_IBL_H
+
+#include "core.h"
+#include "cubemap.h"
+#include "io.h"
+#include "layout.h"
+
+#endif

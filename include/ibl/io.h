@@ -1,0 +1,113 @@
+/*
+ * ibl/io.h - reading and writing images and textures.
+ *
+ * Flat images: Radiance .hdr, OpenEXR .exr, .pfm, .png, .jpg. Textures (2D, 3D, cube, mips,
+ * metadata): .ktx2, .ktx (KTX 1.1), .dds (DX10 header). The container is chosen from the
+ * path's extension when writing and from the file's magic bytes when reading.
+ *
+ * Every reader applies the pixel policy of ibl_sanitize_pixels (NaN and negatives become 0,
+ * infinities are refused unless clamp_infinite) and reports what it changed in info->pixels.
+ * Every writer encodes the whole file in memory, writes it under a temporary name in the same
+ * folder and renames it over the target only when complete, so a failed or interrupted write
+ * never leaves a partial file and never damages an existing one. Error messages name the file.
+ */
+#ifndef IBL_IO_H
+#define IBL_IO_H
+
+#include "core.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum ibl_file_type {
+    IBL_FILE_UNKNOWN = 0,
+    IBL_FILE_HDR,
+    IBL_FILE_EXR,
+    IBL_FILE_PFM,
+    IBL_FILE_PNG,
+    IBL_FILE_JPEG,
+    IBL_FILE_KTX2,
+    IBL_FILE_KTX1,
+    IBL_FILE_DDS
+} ibl_file_type;
+
+const char *ibl_file_type_name(ibl_file_type type); /* "hdr", "exr", ... */
+/* From the extension (case-insensitive): .hdr .pic .exr .pfm .png .jpg .jpeg .ktx2 .ktx .dds */
+ibl_file_type ibl_file_type_from_path(const char *path);
+/* From the first bytes of a file (at least 16 bytes wanted). */
+ibl_file_type ibl_file_type_sniff(const void *bytes, size_t size);
+/* Non-zero if the type stores textures (ktx2, ktx1, dds) rather than one flat image. */
+int ibl_file_type_is_container(ibl_file_type type);
+
+typedef struct ibl_read_desc {
+    int clamp_infinite; /* accept +-Inf and clamp them (the CLI's --clamp)              */
+    float clamp_value;  /* value for +Inf when clamping; 0: 65504 (largest half)        */
+} ibl_read_desc;
+
+typedef struct ibl_file_info {
+    ibl_file_type type;
+    ibl_format format;        /* how the pixels were stored                          */
+    ibl_texture_kind kind;    /* 2D for flat images                                  */
+    int width, height, depth, levels;
+    ibl_pixel_report pixels;  /* what the pixel policy found and changed             */
+    int has_alpha;            /* the file had a real alpha channel                   */
+} ibl_file_info;
+
+/* Reads a flat image (for containers: level 0 of a 2D texture). desc and info may be NULL. */
+ibl_status ibl_read_image(ibl_context *ctx, const char *path, const ibl_read_desc *desc,
+                          ibl_image *out, ibl_file_info *info);
+/* Reads any supported file as a texture (flat images become one-level 2D textures). */
+ibl_status ibl_read_texture(ibl_context *ctx, const char *path, const ibl_read_desc *desc,
+                            ibl_texture *out, ibl_file_info *info);
+/* The same from memory; name is used in messages (e.g. the path, or "<memory>"). */
+ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, const char *name,
+                              const ibl_read_desc *desc, ibl_texture *out, ibl_file_info *info);
+
+typedef enum ibl_tonemap {
+    IBL_TONEMAP_DEFAULT = 0, /* filmic for 8-bit outputs, none otherwise */
+    IBL_TONEMAP_NONE,        /* clamp to [0, 1]                          */
+    IBL_TONEMAP_FILMIC       /* ACES fitted curve (Narkowicz 2015)        */
+} ibl_tonemap;
+
+typedef enum ibl_exr_compression {
+    IBL_EXR_DEFAULT = 0, /* ZIP */
+    IBL_EXR_NONE,
+    IBL_EXR_RLE,
+    IBL_EXR_ZIPS,
+    IBL_EXR_ZIP,
+    IBL_EXR_PIZ
+} ibl_exr_compression;
+
+typedef struct ibl_write_desc {
+    ibl_format format;        /* 0: the container's default (see docs/FORMATS.md)      */
+    float exposure_ev;        /* 8-bit outputs: scale by 2^exposure_ev before tonemap  */
+    ibl_tonemap tonemap;
+    ibl_exr_compression exr_compression;
+    int hdr_no_rle;           /* Radiance: write flat scanlines                        */
+} ibl_write_desc;
+
+/* Writes one flat image; the container follows the extension (.hdr .exr .pfm .png .jpg, or
+ * .ktx2/.ktx/.dds as a one-level 2D texture). desc may be NULL. */
+ibl_status ibl_write_image(ibl_context *ctx, const char *path, const ibl_image *image,
+                           const ibl_write_desc *desc);
+/* Writes a texture to .ktx2, .ktx or .dds (all levels, faces, slices, metadata). */
+ibl_status ibl_write_texture(ibl_context *ctx, const char *path, const ibl_texture *texture,
+                             const ibl_write_desc *desc);
+/* Encodes a texture into a new buffer (freed with ibl_free). type: KTX2, KTX1 or DDS. */
+ibl_status ibl_encode_texture(ibl_context *ctx, ibl_file_type type, const ibl_texture *texture,
+                              const ibl_write_desc *desc, void **bytes, size_t *size);
+
+/* Writes bytes to path atomically (temporary file + rename). */
+ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void *bytes,
+                                 size_t size);
+/* Reads a whole file into a new buffer (freed with ibl_free); refuses files over max_bytes. */
+ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_t *size);
+
+/* Tone mapping used by 8-bit writers: linear value -> display value in [0, 1] (before sRGB). */
+float ibl_tonemap_apply(ibl_tonemap tonemap, float linear);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,101 @@
+#include "test_support.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static char tmpdir[256];
+
+static void remove_tmpdir(void)
+{
+    if (!tmpdir[0]) return;
+    char cmd[400];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
+    if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", tmpdir);
+}
+
+ibl_context *test_context(int threads)
+{
+    ibl_context_desc d = {0};
+    d.threads = threads;
+    ibl_context *ctx = NULL;
+    assert_int_equal(ibl_context_create(&d, &ctx), IBL_OK);
+    return ctx;
+}
+
+const char *test_tmpdir(void)
+{
+    if (!tmpdir[0]) {
+        snprintf(tmpdir, sizeof tmpdir, "/tmp/ibl-test-XXXXXX");
+        if (!mkdtemp(tmpdir)) {
+            fprintf(stderr, "mkdtemp failed\n");
+            abort();
+        }
+        atexit(remove_tmpdir);
+    }
+    return tmpdir;
+}
+
+const char *test_path(const char *name)
+{
+    static char buf[8][512];
+    static int next;
+    char *b = buf[next++ & 7];
+    snprintf(b, 512, "%s/%s", test_tmpdir(), name);
+    return b;
+}
+
+const char *test_data(const char *name)
+{
+    static char buf[8][512];
+    static int next;
+    char *b = buf[next++ & 7];
+    snprintf(b, 512, "%s/%s", IBL_TEST_DATA, name);
+    return b;
+}
+
+int test_run_cli(const char **out, const char *fmt, ...)
+{
+    static char output[65536];
+    char args[4096], cmd[4608];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(args, sizeof args, fmt, ap);
+    va_end(ap);
+    snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", IBL_CLI_PATH, args);
+    FILE *p = popen(cmd, "r");
+    if (!p) return -1;
+    size_t n = fread(output, 1, sizeof output - 1, p);
+    output[n] = 0;
+    int rc = pclose(p);
+    if (out) *out = output;
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+int test_file_exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+void test_assert_near(double a, double b, double tol, const char *expr, const char *file, int line)
+{
+    double d = a - b;
+    if (!(d <= tol && -d <= tol)) {
+        fail_msg("%s:%d: %s = %.12g, expected %.12g within %.3g (off by %.3g)", file, line, expr, a,
+                 b, tol, d);
+    }
+}
+
+void test_fill_cube(ibl_cubemap *cube, float r, float g, float b)
+{
+    size_t n = ibl_cubemap_floats(cube->size, cube->levels) / 4;
+    for (size_t i = 0; i < n; i++) {
+        cube->data[i * 4 + 0] = r;
+        cube->data[i * 4 + 1] = g;
+        cube->data[i * 4 + 2] = b;
+        cube->data[i * 4 + 3] = 1.0f;
+    }
+}

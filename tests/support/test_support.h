@@ -1,0 +1,31 @@
+/* Shared helpers for the cmocka test programs. */
+#ifndef IBL_TEST_SUPPORT_H
+#define IBL_TEST_SUPPORT_H
+
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "ibl/ibl.h"
+
+/* A context with `threads` threads (0: all cores); fails the test if creation fails. */
+ibl_context *test_context(int threads);
+/* A fresh empty temporary directory for this test program (removed at exit). */
+const char *test_tmpdir(void);
+/* test_tmpdir()/name in a static rotating buffer. */
+const char *test_path(const char *name);
+/* Path of a file in tests/data. */
+const char *test_data(const char *name);
+/* Runs the ibl CLI with a printf-style argument string through /bin/sh; returns the exit
+ * code and, if out is not NULL, stores the combined stdout+stderr (static buffer). */
+int test_run_cli(const char **out, const char *fmt, ...);
+int test_file_exists(const char *path);
+/* Asserts |a - b| <= tol with a readable message. */
+#define assert_near(a, b, tol) test_assert_near((double)(a), (double)(b), (double)(tol), #a, __FILE__, __LINE__)
+void test_assert_near(double a, double b, double tol, const char *expr, const char *file, int line);
+/* Fills a cube with a constant colour. */
+void test_fill_cube(ibl_cubemap *cube, float r, float g, float b);
+
+#endif
