@@ -283,6 +283,162 @@ static void exr_real_dwab(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* Hand-built uncompressed OpenEXR files (the layout of the OpenEXR file-format document),
+ * to pin what our writer never produces: tiles, grey, and data != display window. */
+typedef struct exr_builder {
+    uint8_t b[16384];
+    size_t n, table; /* bytes used; where the chunk offset table starts */
+} exr_builder;
+
+static void put(exr_builder *e, const void *v, size_t len)
+{
+    memcpy(e->b + e->n, v, len);
+    e->n += len;
+}
+
+static void put_i32(exr_builder *e, int32_t v)
+{
+    put(e, &v, 4); /* little-endian host */
+}
+
+static void put_attr(exr_builder *e, const char *name, const char *type, const void *v, int32_t len)
+{
+    put(e, name, strlen(name) + 1);
+    put(e, type, strlen(type) + 1);
+    put_i32(e, len);
+    put(e, v, (size_t)len);
+}
+
+/* The value stored for channel c (index in the sorted name list) at absolute pixel (x, y). */
+static float exr_value(int c, int x, int y)
+{
+    return (float)(c * 100 + x * 10 + y) + 0.25f;
+}
+
+/* channels: names in sorted order (all FLOAT); tile 0 = scanlines. */
+static size_t build_exr(exr_builder *e, const char *const *channels, int nch, const int32_t data[4],
+                        const int32_t disp[4], int tile)
+{
+    e->n = 0;
+    const uint8_t magic[8] = {0x76, 0x2f, 0x31, 0x01, 2, tile ? 2 : 0, 0, 0};
+    put(e, magic, 8);
+    uint8_t ch[256];
+    size_t cn = 0;
+    for (int c = 0; c < nch; c++) {
+        size_t l = strlen(channels[c]) + 1;
+        memcpy(ch + cn, channels[c], l), cn += l;
+        const int32_t fields[4] = {2 /* FLOAT */, 0 /* pLinear + reserved */, 1, 1};
+        memcpy(ch + cn, fields, 16), cn += 16;
+    }
+    ch[cn++] = 0;
+    put_attr(e, "channels", "chlist", ch, (int32_t)cn);
+    const uint8_t zero = 0;
+    put_attr(e, "compression", "compression", &zero, 1);
+    put_attr(e, "dataWindow", "box2i", data, 16);
+    put_attr(e, "displayWindow", "box2i", disp, 16);
+    put_attr(e, "lineOrder", "lineOrder", &zero, 1);
+    const float one = 1.0f, centre[2] = {0, 0};
+    put_attr(e, "pixelAspectRatio", "float", &one, 4);
+    put_attr(e, "screenWindowCenter", "v2f", centre, 8);
+    put_attr(e, "screenWindowWidth", "float", &one, 4);
+    if (tile) {
+        uint8_t td[9];
+        int32_t t32 = tile;
+        memcpy(td, &t32, 4), memcpy(td + 4, &t32, 4), td[8] = 0; /* one level */
+        put_attr(e, "tiles", "tiledesc", td, 9);
+    }
+    put(e, &zero, 1);
+    int w = data[2] - data[0] + 1, h = data[3] - data[1] + 1;
+    int tx = tile ? (w + tile - 1) / tile : 1, ty = tile ? (h + tile - 1) / tile : h;
+ size_t table = e->n;
+    e->table = table;
+    e->n += (size_t)tx * (size_t)ty * 8;
+    for (int j = 0; j < ty; j++)
+        for (int i = 0; i < tx; i++) {
+            uint64_t off = e->n;
+            memcpy(e->b + table + ((size_t)j * (size_t)tx + (size_t)i) * 8, &off, 8);
+            int x0 = tile ? i * tile : 0, x1 = tile ? x0 + tile : w;
+            int y0 = tile ? j * tile : j, y1 = tile ? y0 + tile : j + 1;
+            if (x1 > w) x1 = w;
+            if (y1 > h) y1 = h;
+            if (tile) {
+                put_i32(e, i), put_i32(e, j), put_i32(e, 0), put_i32(e, 0);
+            } else {
+                put_i32(e, data[1] + j);
+            }
+            put_i32(e, (y1 - y0) * (x1 - x0) * nch * 4);
+            for (int y = y0; y < y1; y++)
+                for (int c = 0; c < nch; c++)
+                    for (int x = x0; x < x1; x++) {
+                        float v = exr_value(c, data[0] + x, data[1] + y);
+                        put(e, &v, 4);
+                    }
+        }
+    return e->n;
+}
+
+static void exr_windows_tiles_grey(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    static exr_builder e;
+    ibl_texture t;
+    ibl_file_info fi;
+    const char *const bgr[3] = {"B", "G", "R"};
+    /* Data window inside a larger display window: the rest is black and transparent. */
+    const int32_t data[4] = {1, 1, 2, 2}, disp[4] = {0, 0, 3, 2};
+    size_t n = build_exr(&e, bgr, 3, data, disp, 0);
+    assert_int_equal(decode(ctx, e.b, n, &t, &fi), IBL_OK);
+    assert_int_equal(t.width, 4);
+    assert_int_equal(t.height, 3);
+    assert_int_equal(fi.format, IBL_FORMAT_RGB32F);
+    for (int y = 0; y < 3; y++)
+        for (int x = 0; x < 4; x++) {
+            const float *p = t.data + ((size_t)y * 4 + (size_t)x) * 4;
+            int inside = x >= 1 && x <= 2 && y >= 1 && y <= 2;
+            assert_true(p[0] == (inside ? exr_value(2, x, y) : 0.0f)); /* R is channel 2 */
+            assert_true(p[1] == (inside ? exr_value(1, x, y) : 0.0f));
+            assert_true(p[2] == (inside ? exr_value(0, x, y) : 0.0f));
+            assert_true(p[3] == (inside ? 1.0f : 0.0f));
+        }
+    ibl_texture_free(ctx, &t);
+    /* Data window beyond the display window: cropped. */
+    const int32_t data2[4] = {-1, -2, 3, 3}, disp2[4] = {0, 0, 1, 1};
+    n = build_exr(&e, bgr, 3, data2, disp2, 0);
+    assert_int_equal(decode(ctx, e.b, n, &t, NULL), IBL_OK);
+    assert_int_equal(t.width, 2);
+    assert_int_equal(t.height, 2);
+    for (int y = 0; y < 2; y++)
+        for (int x = 0; x < 2; x++) assert_true(t.data[((size_t)y * 2 + (size_t)x) * 4] == exr_value(2, x, y));
+    ibl_texture_free(ctx, &t);
+    /* Tiled (2x2 tiles, partial at the edges), grey Y with alpha. */
+    const char *const ay[2] = {"A", "Y"};
+    const int32_t data3[4] = {0, 0, 4, 2};
+    n = build_exr(&e, ay, 2, data3, data3, 2);
+    assert_int_equal(decode(ctx, e.b, n, &t, &fi), IBL_OK);
+    assert_int_equal(t.width, 5);
+    assert_int_equal(t.height, 3);
+    assert_int_equal(fi.format, IBL_FORMAT_RGBA32F);
+    assert_int_equal(fi.has_alpha, 1);
+    for (int y = 0; y < 3; y++)
+        for (int x = 0; x < 5; x++) {
+            const float *p = t.data + ((size_t)y * 5 + (size_t)x) * 4;
+            for (int c = 0; c < 3; c++) assert_true(p[c] == exr_value(1, x, y));
+            assert_true(p[3] == exr_value(0, x, y));
+        }
+    ibl_texture_free(ctx, &t);
+    /* Channels that are neither colour nor grey are refused by name. */
+    const char *const z[1] = {"Z"};
+    n = build_exr(&e, z, 1, data3, data3, 0);
+    assert_int_equal(decode(ctx, e.b, n, &t, NULL), IBL_ERR_UNSUPPORTED);
+    assert_non_null(strstr(ibl_context_message(ctx), "Z"));
+    /* A chunk offset pointing past the end is refused before decoding. */
+    n = build_exr(&e, bgr, 3, data, disp, 0);
+    memset(e.b + e.table + 8, 0xff, 8);
+    assert_int_equal(decode(ctx, e.b, n, &t, NULL), IBL_ERR_FORMAT);
+    ibl_context_destroy(ctx);
+}
+
 /* ---- Radiance ------------------------------------------------------------------------ */
 
 /* A minimal RGBE reader written from the format description, independent of src/io/hdr.c
@@ -906,7 +1062,7 @@ int main(void)
         cmocka_unit_test(file_types),         cmocka_unit_test(pfm_round_trip),
         cmocka_unit_test(pfm_grey_big_endian), cmocka_unit_test(exr_float_round_trip),
         cmocka_unit_test(exr_half_round_trip), cmocka_unit_test(exr_real_dwab),
-        cmocka_unit_test(hdr_uffizi),         cmocka_unit_test(hdr_round_trip),
+        cmocka_unit_test(exr_windows_tiles_grey), cmocka_unit_test(hdr_uffizi),         cmocka_unit_test(hdr_round_trip),
         cmocka_unit_test(hdr_orientations),   cmocka_unit_test(png16_round_trip),
         cmocka_unit_test(png8_round_trip),    cmocka_unit_test(png8_exposure_filmic),
         cmocka_unit_test(jpeg_round_trip),    cmocka_unit_test(truncated_files),
