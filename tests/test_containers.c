@@ -746,6 +746,16 @@ static void encoder_refusals(void **state)
         assert_int_equal(ct->encode(ctx, &bad, NULL, ct->name, &vb, &size), IBL_ERR_INVALID_ARGUMENT);
         assert_message_named(ctx, ct->name);
     }
+    /* at most 4096 key/value entries, the container's own two included */
+    for (int i = 0; i < 4095; i++) {
+        char key[16];
+        snprintf(key, sizeof key, "k%04d", i);
+        assert_int_equal(ibl_texture_set_metadata(ctx, &t, key, "v"), IBL_OK);
+    }
+    void *vb = NULL;
+    size_t size = 0;
+    assert_int_equal(ibl__ktx2_encode(ctx, &t, NULL, "many.ktx2", &vb, &size), IBL_ERR_INVALID_ARGUMENT);
+    assert_message_named(ctx, "many.ktx2");
     ibl_texture_free(ctx, &t);
     ibl_context_destroy(ctx);
 }

@@ -112,6 +112,11 @@ ibl_status ibl__kv_build(ibl_context *ctx, const char *name, const ibl_key_value
         }
         if (!reserved_key(kv->key)) pairs[n++] = *kv;
     }
+    if (n > IBL__MAX_KEY_VALUES) {
+        ibl_free(ctx, pairs);
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: %zu metadata entries (at most %d)",
+                        name, n, (int)IBL__MAX_KEY_VALUES);
+    }
     qsort(pairs, n, sizeof *pairs, compare_pairs);
     size_t total = 0;
     for (size_t i = 0; i < n; i++) {
@@ -151,7 +156,11 @@ ibl_status ibl__kv_parse(ibl_context *ctx, const char *name, const uint8_t *byte
                          ibl_texture *tex)
 {
     size_t at = 0;
+    int count = 0;
     while (at < size) {
+        if (++count > IBL__MAX_KEY_VALUES)
+            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: more than %d key/value entries", name,
+                            (int)IBL__MAX_KEY_VALUES);
         if (size - at < 4)
             return ibl_fail(ctx, IBL_ERR_FORMAT,
                             "%s: key/value data ends inside an entry's length at byte %zu", name, at);

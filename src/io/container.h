@@ -45,6 +45,10 @@ ibl_status ibl__check_dimensions(ibl_context *ctx, const char *name, ibl_texture
                                  uint64_t width, uint64_t height, uint64_t depth,
                                  uint64_t levels);
 
+/* Most key/value pairs a container accepts (keeps metadata handling linear-ish for hostile
+ * files: duplicate detection is quadratic in the count). */
+enum { IBL__MAX_KEY_VALUES = 4096 };
+
 /* Builds a key/value block (KTX 1 and KTX 2 share the layout): for each pair sorted by the
  * key's bytes (the Unicode code point order for UTF-8), UInt32 keyAndValueByteLength, the
  * key, NUL, the value, NUL, then zero padding to 4 bytes. The `fixed` pairs are the ones
