@@ -760,6 +760,49 @@ static void encoder_refusals(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* Packing runs in fixed chunks of 65536 texels through the thread pool: the bytes and the
+ * decoded texels must be identical at 1, 2 and 8 threads. */
+static void thread_count_invariance(void **state)
+{
+    (void)state;
+    static const int threads[3] = {1, 2, 8};
+    void *first = NULL;
+    size_t first_size = 0;
+    ibl_texture first_out = {0};
+    for (int i = 0; i < 3; i++) {
+        ibl_context *ctx = test_context(threads[i]);
+        ibl_texture t;
+        /* level 0 of a 128 cube is 98,304 texels: two chunks, the second one partial */
+        assert_int_equal(ibl_texture_alloc(ctx, IBL_TEXTURE_CUBE, 128, 128, 1, 2, &t), IBL_OK);
+        rng = 99;
+        fill_random(&t, IBL_FORMAT_RGB9E5);
+        t.format = IBL_FORMAT_RGB9E5;
+        void *vb;
+        size_t size;
+        assert_int_equal(ibl__ktx2_encode(ctx, &t, NULL, "mt.ktx2", &vb, &size), IBL_OK);
+        ibl_texture out;
+        assert_int_equal(ibl__ktx2_decode(ctx, vb, size, "mt.ktx2", &out, NULL), IBL_OK);
+        size_t n = ibl_texture_floats(out.kind, out.width, out.height, out.depth, out.levels);
+        if (i == 0) {
+            first = malloc(size);
+            memcpy(first, vb, size);
+            first_size = size;
+            first_out.data = malloc(n * sizeof(float));
+            memcpy(first_out.data, out.data, n * sizeof(float));
+        } else {
+            assert_int_equal(size, first_size);
+            assert_memory_equal(vb, first, size);
+            assert_memory_equal(out.data, first_out.data, n * sizeof(float));
+        }
+        ibl_free(ctx, vb);
+        ibl_texture_free(ctx, &out);
+        ibl_texture_free(ctx, &t);
+        ibl_context_destroy(ctx);
+    }
+    free(first);
+    free(first_out.data);
+}
+
 /* If KTX-Software's `ktx` tool is installed (it is not packaged in Debian 12), it must accept
  * what we write; otherwise the check is skipped. */
 static void ktx_tool_validates(void **state)
@@ -798,6 +841,7 @@ int main(void)
         cmocka_unit_test(orientation_and_legacy),
         cmocka_unit_test(malformed_inputs),
         cmocka_unit_test(encoder_refusals),
+        cmocka_unit_test(thread_count_invariance),
         cmocka_unit_test(ktx_tool_validates),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -65,6 +65,12 @@ ibl_status ibl__kv_parse(ibl_context *ctx, const char *name, const uint8_t *byte
 /* Mirrors every level/face of a texture along x, y and/or z (slices). */
 void ibl__flip_texture(ibl_texture *tex, int flip_x, int flip_y, int flip_z);
 
+/* ibl_pack_texels / ibl_unpack_texels split into fixed chunks of texels run through
+ * ibl_parallel_for: the output does not depend on the thread count. */
+void ibl__pack(ibl_context *ctx, ibl_format format, const float *rgba, size_t count, uint8_t *dst);
+void ibl__unpack(ibl_context *ctx, ibl_format format, const uint8_t *src, size_t count,
+                 float *rgba);
+
 /* Fills the file info of a decoded texture. */
 void ibl__fill_info(ibl_file_info *info, ibl_file_type type, const ibl_texture *tex);
 
