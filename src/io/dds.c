@@ -128,10 +128,9 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
         caps |= DDSCAPS_COMPLEX;
         caps2 |= DDSCAPS2_CUBEMAP | DDSCAPS2_CUBEMAP_ALLFACES;
     }
-    if (is3d) {
-        caps |= DDSCAPS_COMPLEX;
-        caps2 |= DDSCAPS2_VOLUME;
-    }
+    /* COMPLEX marks files with more than one surface: mips or cube faces (a volume without
+     * mips is one surface) */
+    if (is3d) caps2 |= DDSCAPS2_VOLUME;
     uint8_t *h = buf + 4;
     ibl__wr32(buf, DDS_MAGIC);
     ibl__wr32(h + 0, HEADER_SIZE);
