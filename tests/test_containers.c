@@ -742,6 +742,20 @@ static void encoder_refusals(void **state)
         assert_int_equal(ct->encode(ctx, &t, &d, ct->name, &vb, &size), IBL_ERR_UNSUPPORTED);
         assert_message_named(ctx, ct->name);
         assert_null(vb);
+        /* no format asked for: keep the texture's own, widen RGB32F, else RGBA16F */
+        ibl_format own[4][2] = {{IBL_FORMAT_RGB9E5, IBL_FORMAT_RGB9E5}, {IBL_FORMAT_RGB32F, IBL_FORMAT_RGBA32F},
+                                {IBL_FORMAT_RGB16F, IBL_FORMAT_RGBA16F}, {IBL_FORMAT_DEFAULT, IBL_FORMAT_RGBA16F}};
+        for (int i = 0; i < 4; i++) {
+            ibl_texture v = t;
+            v.format = own[i][0];
+            assert_int_equal(ct->encode(ctx, &v, NULL, ct->name, &vb, &size), IBL_OK);
+            ibl_texture out;
+            assert_int_equal(ct->decode(ctx, vb, size, ct->name, &out, NULL), IBL_OK);
+            assert_int_equal(out.format, own[i][1]);
+            ibl_texture_free(ctx, &out);
+            ibl_free(ctx, vb);
+            vb = NULL;
+        }
         ibl_texture bad = t;
         bad.levels = 9; /* more than log2(8) + 1 */
         assert_int_equal(ct->encode(ctx, &bad, NULL, ct->name, &vb, &size), IBL_ERR_INVALID_ARGUMENT);

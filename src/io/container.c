@@ -17,9 +17,18 @@ ibl_status ibl__fail_named(ibl_context *ctx, ibl_status status, const char *name
 
 ibl_format ibl__container_format(const ibl_texture *tex, const ibl_write_desc *desc)
 {
-    if (desc && desc->format != IBL_FORMAT_DEFAULT) return desc->format;
-    if (tex && tex->format != IBL_FORMAT_DEFAULT) return tex->format;
-    return IBL_FORMAT_RGBA16F;
+    if (desc && desc->format != IBL_FORMAT_DEFAULT) return desc->format; /* asked for: exact */
+    ibl_format f = tex ? tex->format : IBL_FORMAT_DEFAULT;
+    switch (f) {
+    case IBL_FORMAT_RGBA16F:
+    case IBL_FORMAT_RGBA32F:
+    case IBL_FORMAT_RG11B10F:
+    case IBL_FORMAT_RGB9E5:
+    case IBL_FORMAT_RG16F:
+    case IBL_FORMAT_RG32F: return f; /* keep what the texture was read as */
+    case IBL_FORMAT_RGB32F: return IBL_FORMAT_RGBA32F; /* e.g. from PFM or float EXR */
+    default: return IBL_FORMAT_RGBA16F;
+    }
 }
 
 uint64_t ibl__level_texels(ibl_texture_kind kind, int width, int height, int depth, int level)

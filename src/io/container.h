@@ -29,7 +29,9 @@ static inline void ibl__wr64(uint8_t *p, uint64_t v)
 /* Re-records the context's current failure as "name: <message>" and returns status. */
 ibl_status ibl__fail_named(ibl_context *ctx, ibl_status status, const char *name);
 
-/* The storage format an encoder writes: desc->format, else tex->format, else RGBA16F. */
+/* The storage format an encoder writes: desc->format if set (refused later if the container
+ * cannot store it); else tex->format if it is one of the six container formats; else
+ * RGBA32F for RGB32F textures (keeps float precision) and RGBA16F for anything else. */
 ibl_format ibl__container_format(const ibl_texture *tex, const ibl_write_desc *desc);
 
 /* Validates a texture handed to an encoder (kind, dimensions, levels, data). */
