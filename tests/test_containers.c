@@ -847,6 +847,53 @@ static void ktx_tool_validates(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* Cross-check with an independent KTX2 implementation, ktx-parse (npm; glTF-Transform's
+ * parser/serializer): it must read every file we write and, writing it back, produce the very
+ * same bytes (layout, alignment, level order, DFD, sorted KVD and padding). Runs when
+ * IBL_KTX_PARSE_DIR names a folder where `npm install ktx-parse` was run; skipped otherwise
+ * (the project's dependencies are Debian packages only). */
+static void ktx_parse_cross_check(void **state)
+{
+    (void)state;
+    const char *dir = getenv("IBL_KTX_PARSE_DIR");
+    char probe[600];
+    if (!dir || snprintf(probe, sizeof probe, "%s/node_modules/ktx-parse/package.json", dir) <= 0 ||
+        !test_file_exists(probe) || system("command -v node >/dev/null 2>&1") != 0) {
+        skip();
+        return;
+    }
+    ibl_context *ctx = test_context(1);
+    static const ibl_texture_kind kinds[] = {IBL_TEXTURE_2D, IBL_TEXTURE_3D, IBL_TEXTURE_CUBE};
+    for (size_t fi = 0; fi < sizeof FORMATS / sizeof FORMATS[0]; fi++) {
+        for (int k = 0; k < 3; k++) {
+            ibl_texture t = make_texture(ctx, kinds[k], 1, FORMATS[fi]);
+            add_metadata(ctx, &t);
+            void *vb;
+            size_t size;
+            assert_int_equal(ibl__ktx2_encode(ctx, &t, NULL, "x.ktx2", &vb, &size), IBL_OK);
+            const char *path = test_path("cross.ktx2");
+            FILE *f = fopen(path, "wb");
+            assert_non_null(f);
+            assert_int_equal(fwrite(vb, 1, size, f), size);
+            fclose(f);
+            char cmd[1600];
+            snprintf(cmd, sizeof cmd,
+                     "cd '%s' && node --input-type=module -e \"import {read, write} from 'ktx-parse';"
+                     "import fs from 'fs'; const b = new Uint8Array(fs.readFileSync(process.argv[1]));"
+                     "const c = read(b); const r = write(c, {keepWriter: true});"
+                     "const same = r.length === b.length && r.every((v, i) => v === b[i]);"
+                     "process.exit(same && c.vkFormat === %u && c.levels.length === %d ? 0 : 3);\" '%s'",
+                     dir, (unsigned)((const uint8_t *)vb)[12] | ((unsigned)((const uint8_t *)vb)[13] << 8),
+                     t.levels, path);
+            if (system(cmd) != 0)
+                fail_msg("ktx-parse disagrees on the %s kind %d file", ibl_format_name(FORMATS[fi]), k);
+            ibl_free(ctx, vb);
+            ibl_texture_free(ctx, &t);
+        }
+    }
+    ibl_context_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -858,6 +905,7 @@ int main(void)
         cmocka_unit_test(encoder_refusals),
         cmocka_unit_test(thread_count_invariance),
         cmocka_unit_test(ktx_tool_validates),
+        cmocka_unit_test(ktx_parse_cross_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
