@@ -13,5 +13,7 @@
 #include "cubemap.h"
 #include "io.h"
 #include "layout.h"
+#include "sh.h"
+#include "irradiance.h"
 
 #endif
