@@ -15,5 +15,6 @@
 #include "layout.h"
 #include "sh.h"
 #include "irradiance.h"
+#include "sky.h"
 
 #endif

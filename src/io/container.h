@@ -26,9 +26,6 @@ static inline void ibl__wr64(uint8_t *p, uint64_t v)
     ibl__wr32(p + 4, (uint32_t)(v >> 32));
 }
 
-/* Re-records the context's current failure as "name: <message>" and returns status. */
-ibl_status ibl__fail_named(ibl_context *ctx, ibl_status status, const char *name);
-
 /* The storage format an encoder writes: desc->format, else tex->format, else RGBA16F. */
 ibl_format ibl__container_format(const ibl_texture *tex, const ibl_write_desc *desc);
 

@@ -91,7 +91,8 @@ int ibl_file_type_is_container(ibl_file_type type)
 ibl_status ibl__fail_named(ibl_context *ctx, ibl_status status, const char *name)
 {
     char saved[400];
-    snprintf(saved, sizeof saved, "%s", ibl_context_message(ctx));
+    const char *m = ibl_context_message(ctx);
+    snprintf(saved, sizeof saved, "%s", m && m[0] ? m : ibl_status_name(status));
     return ibl_fail(ctx, status, "%s: %s", name, saved);
 }
 
