@@ -529,17 +529,27 @@ static void uffizi_table(void **state)
     for (int i = 0; i < 9; i++)
         for (int c = 0; c < 3; c++) {
             /* Four values do not reproduce the README's "within 0.002" with its own formula
-             * (checked with two other decoders, stb_image and a hand-written one; any pixel-centre offset or row
-             * weighting moves them by < 2e-4): L10 blue -0.0031 (table .00), L2-2 blue
-             * -0.0242 (-.03), L20 green -0.2747 (-.28), L22 blue -0.2840 (-.28). They get their
-             * measured distance plus 5e-4; the other 23 keep the issue's 0.003. */
+             * (checked with two other decoders, stb_image and a hand-written one; pixel-centre
+             * offsets, row weightings and the RGBE (m + 0.5) rounding move them by < 1e-3):
+             * L10 blue -0.0031 (table .00), L2-2 blue -0.0242 (-.03), L20 green -0.2756
+             * (-.28), L22 blue -0.2848 (-.28). They get their measured distance plus 5e-4;
+             * the other 23 keep the issue's 0.003. */
             double tol = 0.003;
             if (i == 2 && c == 2) tol = 0.0036;
-            if (i == 4 && c == 2) tol = 0.0064;
-            if (i == 6 && c == 1) tol = 0.0058;
-            if (i == 8 && c == 2) tol = 0.0045;
+            if (i == 4 && c == 2) tol = 0.0063;
+            if (i == 6 && c == 1) tol = 0.0049;
+            if (i == 8 && c == 2) tol = 0.0053;
             assert_near(sh.c[i][c] * 0.100189, table[i][c], tol);
         }
+    /* The README's frame is the library's equirect frame with x and z swapped (its centre
+     * column looks toward -X, the library's toward -Z): the library's own equirect projection
+     * must give the same coefficients with x <-> z exchanged, 1e-9 (same sums, other order). */
+    ibl_sh lib;
+    assert_int_equal(ibl_sh_project_equirect(ctx, &im, 3, &lib), IBL_OK);
+    static const int swap[9] = {0, 1, 3, 2, 5, 4, -1, 7, -1}; /* README index -> library index */
+    for (int i = 0; i < 9; i++)
+        if (swap[i] >= 0)
+            for (int c = 0; c < 3; c++) assert_near(sh.c[i][c], lib.c[swap[i]][c], 1e-9);
     free(dirs);
     free(weights);
     ibl_image_free(ctx, &im);
