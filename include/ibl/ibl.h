@@ -13,6 +13,8 @@
 #include "cubemap.h"
 #include "io.h"
 #include "layout.h"
+#include "sh.h"
+#include "irradiance.h"
 #include "sky.h"
 
 #endif
