@@ -12,8 +12,6 @@
 
 static const double PI = 3.14159265358979323846;
 
-enum { DEFAULT_ORDER = 24 };
-
 double ibl_blinn_normalization_factor(ibl_blinn_normalization normalization, double s)
 {
     if (normalization == IBL_BLINN_EXACT)
@@ -25,17 +23,8 @@ double ibl_blinn_normalization_factor(ibl_blinn_normalization normalization, dou
 
 typedef struct ambient_plan {
     ibl_ambient_brdf_desc d;
-    ibl__rule u, phi;
+    ibl__quadrature q;
 } ambient_plan;
-
-static void plan_rules(int order, ibl__rule *u, ibl__rule *phi)
-{
-    if (order <= 0) order = DEFAULT_ORDER;
-    if (order > IBL__GL_MAX) order = IBL__GL_MAX;
-    int half = (order + 1) / 2;
-    ibl__gauss_legendre(order, u);
-    ibl__gauss_legendre(half < 4 ? 4 : half, phi);
-}
 
 static ibl__lobe_params blinn(double s, ibl_blinn_normalization n)
 {
@@ -56,12 +45,12 @@ static double clamp_mu(double mu)
 double ibl_ambient_brdf(double nv, double shininess, double f0,
                         ibl_blinn_normalization normalization, int order)
 {
-    ibl__rule u, phi;
-    plan_rules(order, &u, &phi);
+    ibl__quadrature q;
+    ibl__quadrature_init(&q, order);
     if (!(shininess > 0)) shininess = 1e-6;
     ibl__lobe_params p = blinn(shininess, normalization);
     double out;
-    ibl__albedo_f0(&p, clamp_mu(nv), &u, &phi, &f0, 1, &out);
+    ibl__albedo_f0(&p, clamp_mu(nv), &q, &f0, 1, &out);
     return out;
 }
 
@@ -127,7 +116,7 @@ static void volume_row(void *arg, int j)
     double f0[1024], val[1024];
     for (int k = 0; k < depth; k++) f0[k] = (k + 0.5) / depth;
     for (int i = 0; i < w; i++) {
-        ibl__albedo_f0(&p, (i + 0.5) / w, &job->plan.u, &job->plan.phi, f0, depth, val);
+        ibl__albedo_f0(&p, (i + 0.5) / w, &job->plan.q, f0, depth, val);
         for (int k = 0; k < depth; k++) {
             float *px = job->tex->data + (((size_t)k * h + j) * w + i) * 4u;
             px[0] = (float)val[k];
@@ -145,7 +134,7 @@ static void table_row(void *arg, int j)
     ibl__lobe_params p = blinn(ibl_ambient_brdf_row_shininess(d, j), d->normalization);
     for (int i = 0; i < d->size_nv; i++) {
         double m[2];
-        ibl__albedo_moments(&p, (i + 0.5) / d->size_nv, &job->plan.u, &job->plan.phi, m);
+        ibl__albedo_moments(&p, (i + 0.5) / d->size_nv, &job->plan.q, m);
         float *px = ibl_image_texel(job->img, i, j);
         px[0] = (float)m[0];
         px[1] = (float)m[1];
@@ -163,7 +152,7 @@ ibl_status ibl_ambient_brdf_volume(ibl_context *ctx, const ibl_ambient_brdf_desc
     memset(&job, 0, sizeof job);
     ibl_status st = check_desc(ctx, desc, &job.plan.d);
     if (st != IBL_OK) return st;
-    plan_rules(job.plan.d.order, &job.plan.u, &job.plan.phi);
+    ibl__quadrature_init(&job.plan.q, job.plan.d.order);
     st = ibl_progress(ctx, "ambient brdf", 0.0);
     if (st != IBL_OK) return st;
     st = ibl_texture_alloc(ctx, IBL_TEXTURE_3D, job.plan.d.size_nv, job.plan.d.size_shininess,
@@ -185,7 +174,7 @@ ibl_status ibl_ambient_brdf_table(ibl_context *ctx, const ibl_ambient_brdf_desc 
     memset(&job, 0, sizeof job);
     ibl_status st = check_desc(ctx, desc, &job.plan.d);
     if (st != IBL_OK) return st;
-    plan_rules(job.plan.d.order, &job.plan.u, &job.plan.phi);
+    ibl__quadrature_init(&job.plan.q, job.plan.d.order);
     st = ibl_progress(ctx, "ambient brdf", 0.0);
     if (st != IBL_OK) return st;
     st = ibl_image_alloc(ctx, job.plan.d.size_nv, job.plan.d.size_shininess, out);

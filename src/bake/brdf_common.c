@@ -33,6 +33,17 @@ void ibl__gauss_legendre(int n, ibl__rule *rule)
     }
 }
 
+void ibl__quadrature_init(ibl__quadrature *q, int order)
+{
+    if (order <= 0) order = IBL__DEFAULT_ORDER;
+    if (order < 4) order = 4;
+    if (order > IBL__GL_MAX) order = IBL__GL_MAX;
+    ibl__gauss_legendre(order, &q->u_part);
+    ibl__gauss_legendre(order * 2 / 3, &q->u_full);
+    ibl__gauss_legendre((order + 1) / 2, &q->phi);
+    q->circle = order * 2 / 3;
+}
+
 /* Exact importance maps of each lobe's weight measure, written in zeta = sqrt(1 - u) where u
  * is the measure's CDF in theta_h. u itself is the textbook importance map; zeta also
  * removes the 1/sqrt(1 - u) end-point singularity that 1/(n.h) factors have at the horizon
@@ -169,8 +180,7 @@ static void sort_small(double *v, int n)
         }
 }
 
-static void integrate(const ibl__lobe_params *p, double mu, const ibl__rule *ru,
-                      const ibl__rule *rphi, sink *s)
+static void integrate(const ibl__lobe_params *p, double mu, const ibl__quadrature *q, sink *s)
 {
     if (mu > 1.0) mu = 1.0;
     double sv = sqrt((1.0 - mu) * (1.0 + mu)), tv = acos(mu);
@@ -198,6 +208,7 @@ static void integrate(const ibl__lobe_params *p, double mu, const ibl__rule *ru,
          * (t - t0)^(3/2)-type end points; the cubic smoothstep t = x^2 (3 - 2x) makes
          * them O(x^3) so Gauss-Legendre keeps converging fast. */
         int partial = th[seg] >= th1 - 1e-15;
+        const ibl__rule *ru = partial ? &q->u_part : &q->u_full, *rphi = &q->phi;
         for (int i = 0; i < ru->n; i++) {
             double x = ru->x[i], wx = ru->w[i];
             if (partial) {
@@ -227,6 +238,16 @@ static void integrate(const ibl__lobe_params *p, double mu, const ibl__rule *ru,
             }
             double wu = 2.0 * z * dz * wx * mass / PI; /* (1/2pi) * 2 sides of phi */
             int n = 0;
+            if (ncut == 2 && phimax >= PI) {
+                /* The whole circle: the integrand is smooth, even and 2 pi periodic, where
+                 * the midpoint rule converges geometrically (exact for cos(k phi), k < 2m). */
+                int m = q->circle;
+                for (int j = 0; j < m; j++) {
+                    cphi[n] = cos_0_pi((j + 0.5) * PI / m);
+                    wgt[n++] = wu * PI / m;
+                }
+                ncut = 0;
+            }
             for (int c = 0; c + 1 < ncut; c++) {
                 double pa = cuts[c], dp = cuts[c + 1] - pa;
                 if (!(dp > 0)) continue;
@@ -255,18 +276,18 @@ static void integrate(const ibl__lobe_params *p, double mu, const ibl__rule *ru,
     }
 }
 
-void ibl__albedo_moments(const ibl__lobe_params *p, double mu, const ibl__rule *ru,
-                         const ibl__rule *rphi, double out[2])
+void ibl__albedo_moments(const ibl__lobe_params *p, double mu, const ibl__quadrature *q,
+                         double out[2])
 {
     out[0] = out[1] = 0;
     sink s = {out, NULL, 0};
-    integrate(p, mu, ru, rphi, &s);
+    integrate(p, mu, q, &s);
 }
 
-void ibl__albedo_f0(const ibl__lobe_params *p, double mu, const ibl__rule *ru,
-                    const ibl__rule *rphi, const double *f0, int nf0, double *out)
+void ibl__albedo_f0(const ibl__lobe_params *p, double mu, const ibl__quadrature *q,
+                    const double *f0, int nf0, double *out)
 {
     for (int k = 0; k < nf0; k++) out[k] = 0;
     sink s = {out, f0, nf0};
-    integrate(p, mu, ru, rphi, &s);
+    integrate(p, mu, q, &s);
 }

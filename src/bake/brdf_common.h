@@ -22,6 +22,19 @@ typedef struct ibl__rule {
 /* Fills a rule of n points (1 <= n <= IBL__GL_MAX); nodes by Newton iteration, float64. */
 void ibl__gauss_legendre(int n, ibl__rule *rule);
 
+/* The rules one albedo integral uses, all derived from one "order" (points per smooth piece
+ * in theta_h where only part of the phi circle is valid; the full-circle piece, which is
+ * smoother, gets 2/3 of it, phi pieces half of it, whole circles 2/3 of it as midpoints). */
+typedef struct ibl__quadrature {
+    ibl__rule u_part, u_full, phi;
+    int circle;
+} ibl__quadrature;
+
+enum { IBL__DEFAULT_ORDER = 24 };
+
+/* order 0: IBL__DEFAULT_ORDER; clamped to [4, IBL__GL_MAX]. */
+void ibl__quadrature_init(ibl__quadrature *q, int order);
+
 typedef enum ibl__lobe {
     IBL__LOBE_GGX_CORRELATED, /* GGX D, height-correlated Smith G2                     */
     IBL__LOBE_GGX_SEPARABLE,  /* GGX D, Schlick-GGX G1(l) G1(v) with k = alpha / 2        */
@@ -39,13 +52,13 @@ typedef struct ibl__lobe_params {
 /* The two Schlick moments of the directional albedo at n.v = mu (0 < mu <= 1):
  *   out[0] = integral f/F (1 - (1 - v.h)^5) (n.l) dl,  out[1] = integral f/F (1 - v.h)^5 (n.l) dl
  * so that with F = F0 + (F90 - F0)(1 - v.h)^5 the albedo is F0 out[0] + F90 out[1].
- * order_u / order_phi: rules applied to every smooth piece. */
-void ibl__albedo_moments(const ibl__lobe_params *p, double mu, const ibl__rule *ru,
-                         const ibl__rule *rphi, double out[2]);
+ * q: the rules applied to every smooth piece. */
+void ibl__albedo_moments(const ibl__lobe_params *p, double mu, const ibl__quadrature *q,
+                         double out[2]);
 
 /* The same with Schlick F evaluated for nf0 values of F0 at every node (so the sum follows
  * the integrand, not the affine shortcut): out[k] = integral f(F0 = f0[k]) (n.l) dl. */
-void ibl__albedo_f0(const ibl__lobe_params *p, double mu, const ibl__rule *ru,
-                    const ibl__rule *rphi, const double *f0, int nf0, double *out);
+void ibl__albedo_f0(const ibl__lobe_params *p, double mu, const ibl__quadrature *q,
+                    const double *f0, int nf0, double *out);
 
 #endif

@@ -9,20 +9,17 @@
 
 #include "bake/brdf_common.h"
 
-enum { DEFAULT_ORDER = 24, DEFAULT_SIZE = 128 };
+enum { DEFAULT_SIZE = 128 };
 
 typedef struct rules {
-    ibl__rule u, phi, mu; /* theta_h pieces, phi pieces, the n.v average */
+    ibl__quadrature q; /* the albedo integral                    */
+    ibl__rule mu;      /* the cosine-weighted average over n.v   */
 } rules;
 
 static void make_rules(int order, rules *r)
 {
-    if (order <= 0) order = DEFAULT_ORDER;
-    if (order > IBL__GL_MAX) order = IBL__GL_MAX;
-    int half = (order + 1) / 2;
-    ibl__gauss_legendre(order, &r->u);
-    ibl__gauss_legendre(half < 4 ? 4 : half, &r->phi);
-    ibl__gauss_legendre(order, &r->mu);
+    ibl__quadrature_init(&r->q, order);
+    ibl__gauss_legendre(r->q.u_part.n, &r->mu);
 }
 
 static ibl__lobe_params ggx_params(double r, ibl_brdf_visibility vis)
@@ -54,7 +51,7 @@ static void splitsum_rules(double nv, double r, ibl_brdf_visibility vis, const r
     }
     ibl__lobe_params p = ggx_params(r > 1 ? 1 : r, vis);
     double m[2];
-    ibl__albedo_moments(&p, mu, &R->u, &R->phi, m);
+    ibl__albedo_moments(&p, mu, &R->q, m);
     *a = m[0];
     *b = m[1];
 }
@@ -67,7 +64,7 @@ static double sheen_rules(double nv, double r, const rules *R)
     p.lobe = IBL__LOBE_CHARLIE;
     p.alpha = r > 1 ? 1 : r * r;
     double m[2];
-    ibl__albedo_moments(&p, clamp_mu(nv), &R->u, &R->phi, m);
+    ibl__albedo_moments(&p, clamp_mu(nv), &R->q, m);
     return m[0] + m[1];
 }
 
