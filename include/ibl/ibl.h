@@ -14,5 +14,6 @@
 #include "cubemap.h"
 #include "io.h"
 #include "layout.h"
+#include "sky.h"
 
 #endif
