@@ -9,6 +9,7 @@
 #ifndef IBL_IBL_H
 #define IBL_IBL_H
 
+#include "brdf.h"
 #include "core.h"
 #include "cubemap.h"
 #include "io.h"
