@@ -47,10 +47,6 @@ static dvec dv(double x, double y, double z)
 static dvec dadd(dvec a, dvec b) { return dv(a.x + b.x, a.y + b.y, a.z + b.z); }
 static dvec dscale(dvec a, double s) { return dv(a.x * s, a.y * s, a.z * s); }
 static double ddot(dvec a, dvec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-static dvec dcross(dvec a, dvec b)
-{
-    return dv(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
 static dvec dnorm(dvec a)
 {
     double l = sqrt(ddot(a, a));
@@ -102,52 +98,35 @@ static double bent_fraction(const ibl_bent_desc *desc, float blur_radius)
     }
     double r = blur_radius > 0 ? blur_radius / at : 0.0;
     if (r > 1.0) r = 1.0;
-    return small + (large - small) * r;
+    double fraction = small + (large - small) * r;
+    /* beyond 1 an edge texel would pass its partner (and at 1 + alpha_e/target, infinity) */
+    return fraction > 1.0 ? 1.0 : fraction;
 }
 
-/* The bend toward one face edge as a rotation vector. `along` is the texel's coordinate
- * along that edge, `across` its coordinate toward it; axis_a is the frame axis across the
- * edge, axis_b the one along it. The edge texel of this row E and its partner across the
- * seam P (the neighbour's texel next to the edge at the same along-edge coordinate) span the
- * target angle; every texel of the row turns about the axis E x P, by fraction * target
- * scaled linearly from 0 at the face centre to 1 at the edge texel. */
-static dvec bend_toward_edge(const face_frame *f, dvec axis_a, dvec axis_b, double across,
-                             double along, double edge, double fraction)
-{
-    if (across == 0.0 || edge <= 0.0) return dv(0, 0, 0);
-    double sign = across > 0 ? 1.0 : -1.0;
-    dvec e = dnorm(dadd(dadd(f->m, dscale(axis_a, sign * edge)), dscale(axis_b, along)));
-    dvec p = dnorm(dadd(dadd(dscale(f->m, edge), dscale(axis_a, sign)), dscale(axis_b, along)));
-    dvec axis = dcross(e, p);
-    double sin_t = sqrt(ddot(axis, axis));
-    if (sin_t == 0.0) return dv(0, 0, 0);
-    double target = atan2(sin_t, ddot(e, p));
-    double amount = fraction * target * (fabs(across) / edge);
-    return dscale(axis, amount / sin_t);
-}
-
-/* Rodrigues' rotation of v by the rotation vector w. */
-static dvec rotate(dvec v, dvec w)
-{
-    double angle = sqrt(ddot(w, w));
-    if (angle == 0.0) return v;
-    dvec k = dscale(w, 1.0 / angle);
-    double c = cos(angle), s = sin(angle);
-    return dadd(dadd(dscale(v, c), dscale(dcross(k, v), s)), dscale(k, ddot(k, v) * (1.0 - c)));
-}
-
+/* Angles on a face: a direction M + u*S + v*T is at angle alpha = atan(u) from the face
+ * centre in the plane spanned by M and S (the plane perpendicular to the u-edges), beta =
+ * atan(v) likewise. Seen in that plane, the normals of the two edge texels facing each other
+ * across a u-edge (centres at alpha_e = atan(1 - 1/n) on each side, the edge at pi/4) are
+ * target = 2 (pi/4 - alpha_e) apart; that is the angle between them at the middle of the
+ * edge, and its projection perpendicular to the edge elsewhere. The bend offsets alpha by
+ * fraction * target * |alpha| / alpha_e toward the edge (zero at the centre, the target share
+ * at the edge texel), and beta likewise: alpha' = k alpha, k = 1 + fraction * target /
+ * alpha_e. At fraction 1/2 every edge texel lands on the face edge at the same point as its
+ * partner (corner texels on the cube corner), at 1 on its partner's original direction. */
 static dvec bent_direction(const ibl_bent_desc *desc, int face, int n, int x, int y,
                            float blur_radius)
 {
     face_frame f = frame_of(face);
     double u = centre_coord(x, n), v = centre_coord(y, n);
-    dvec nrm = dnorm(frame_point(&f, 1.0, u, v));
-    if (n < 2) return nrm;
-    double edge = 1.0 - 1.0 / n, fraction = bent_fraction(desc, blur_radius);
-    /* the two bends add as rotation vectors, so the result does not depend on an order */
-    dvec w = dadd(bend_toward_edge(&f, f.s, f.t, u, v, edge, fraction),
-                  bend_toward_edge(&f, f.t, f.s, v, u, edge, fraction));
-    return dnorm(rotate(nrm, w));
+    if (n >= 2) {
+        double fraction = bent_fraction(desc, blur_radius);
+        double alpha_e = atan(1.0 - 1.0 / n);
+        double target = 2.0 * (atan(1.0) - alpha_e);
+        double k = 1.0 + fraction * target / alpha_e;
+        u = tan(k * atan(u));
+        v = tan(k * atan(v));
+    }
+    return dnorm(frame_point(&f, 1.0, u, v));
 }
 
 /* ---- warp: NVTT / cmft ---- */

@@ -35,6 +35,8 @@ enum { FIT_BINS = 384, FIT_SUB = 4, FIT_GRID = 48, FIT_GRID_SMALL = 40 };
 typedef struct ring_table {
     double mass[FIT_BINS]; /* sum of response * solid angle per ring, shift-averaged */
     double root_qmax;      /* rings are uniform in sqrt(1 - mu) over [0, root_qmax] */
+    double log_mu[FIT_BINS + 1]; /* log of mu at the ring borders (-inf where mu <= 0) */
+    double area[FIT_BINS];       /* solid angle of each ring */
 } ring_table;
 
 /* Bilinear weight of texel (x0, y0) of face 4 when sampling at face-plane (u, v) of face 4
@@ -142,12 +144,8 @@ static double lobe_distance(const ring_table *t, double s)
     double cross = 0;
     for (int b = 0; b < FIT_BINS; b++) {
         if (t->mass[b] == 0) continue;
-        double r0 = t->root_qmax * b / FIT_BINS, r1 = t->root_qmax * (b + 1) / FIT_BINS;
-        double q0 = r0 * r0, q1 = r1 * r1; /* mu = 1 - q: q0 < q1 means m1 > m0 */
-        double hi = q0 < 1 ? exp((s + 1.0) * log1p(-q0)) : 0.0;
-        double lo = q1 < 1 ? exp((s + 1.0) * log1p(-q1)) : 0.0;
-        double ring = 2.0 * PI * (q1 - q0);
-        cross += t->mass[b] * (hi - lo) / ring;
+        double hi = exp((s + 1.0) * t->log_mu[b]), lo = exp((s + 1.0) * t->log_mu[b + 1]);
+        cross += t->mass[b] * (hi - lo) / t->area[b];
     }
     return -2.0 * cross + (s + 1.0) * (s + 1.0) / (2.0 * PI * (2.0 * s + 1.0));
 }
@@ -161,8 +159,16 @@ static double fit_shininess(int n)
     sweep(&f, &t, 0);
     t.root_qmax = sqrt(t.root_qmax) * 1.000001;
     sweep(&f, &t, 1);
+    for (int b = 0; b <= FIT_BINS; b++) {
+        double r = t.root_qmax * b / FIT_BINS, q = r * r; /* mu = 1 - q */
+        t.log_mu[b] = q < 1 ? log1p(-q) : -INFINITY;
+        if (b < FIT_BINS) {
+            double r1 = t.root_qmax * (b + 1) / FIT_BINS;
+            t.area[b] = 2.0 * PI * (r1 * r1 - q);
+        }
+    }
     /* coarse scan in log s, then golden-section refinement around the best point */
-    double best = 0, best_e = INFINITY, step = 0.05;
+    double best = 0, best_e = INFINITY, step = 0.25;
     for (double x = log(0.05); x <= log(1e8); x += step) {
         double e = lobe_distance(&t, exp(x));
         if (e < best_e) best_e = e, best = x;
