@@ -11,7 +11,8 @@
  * P_s(mu) = (s+1)/(2 pi) max(mu, 0)^s, mu = d.w0, splits into a part independent of s and
  * the distance between P_s and the response's mean over rings of constant mu; so the ring
  * means are tabulated once and s is found by a 1D search. The result depends on the level's
- * edge n only (the chain below is an exact area mean); it is ~0.7 n^2 (docs give the table). */
+ * edge n only (the chain below is an exact area mean); it is ~0.94 n^2 for n >= 16 (docs give
+ * the table). */
 #include "bake/specular_seed.h"
 
 #include <math.h>
