@@ -14,5 +14,6 @@
 #include "io.h"
 #include "layout.h"
 #include "edge_fixup.h"
+#include "sky.h"
 
 #endif
