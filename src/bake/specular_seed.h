@@ -10,7 +10,8 @@
 
 /* also declared in specular_internal.h */
 /* dst->size and dst->levels given; fills every level: level 0 = src resampled to dst->size
- * (ibl_cubemap_resample), then the area-correct box mip chain. */
+ * (the exact area mean of the covered source texels when src->size is a multiple of
+ * dst->size, ibl_cubemap_resample otherwise), then the area-correct box mip chain. */
 ibl_status ibl__specular_box(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst);
 
 /* also declared in specular_internal.h */
