@@ -42,7 +42,9 @@ typedef struct ibl_bent_desc {
 ibl_vec3 ibl_edge_fixup_texel_direction(ibl_edge_fixup fixup, const ibl_bent_desc *bent, int face,
                                         int n, int x, int y, float blur_radius);
 
-/* Post-process of one level in place (OVERLAP, OVERLAP2; the others do nothing here). */
+/* Post-process of one level in place (OVERLAP, OVERLAP2). For every method but NONE a 1x1
+ * level becomes the mean of its six faces (a 1x1 face has no direction to bend or warp);
+ * BENT and WARP change nothing on larger levels. Call it on every level after filtering. */
 ibl_status ibl_edge_fixup_apply(ibl_context *ctx, ibl_edge_fixup fixup, ibl_cubemap *cube,
                                 int level);
 

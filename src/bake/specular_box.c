@@ -75,7 +75,7 @@ static ibl_status block_mean(ibl_context *ctx, const ibl_cubemap *src, ibl_cubem
 
 ibl_status ibl__specular_box(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst)
 {
-    if (!src || !dst || !src->data || !dst->data || dst->levels < 1)
+    if (!src || !dst || !src->data || !dst->data || dst->levels < 1 || dst->size < 1 || src->size < 1)
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "box prefilter: missing cubemap");
     ibl_status st = src->size % dst->size == 0 ? block_mean(ctx, src, dst)
                                                : ibl_cubemap_resample(ctx, src, dst);
