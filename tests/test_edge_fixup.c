@@ -566,6 +566,10 @@ static void apply_arguments(void **state)
     assert_int_equal(ibl_edge_fixup_apply(ctx, IBL_EDGE_FIXUP_OVERLAP, &cube, -1), IBL_ERR_INVALID_ARGUMENT);
     assert_int_equal(ibl_edge_fixup_apply(ctx, (ibl_edge_fixup)42, &cube, 0), IBL_ERR_INVALID_ARGUMENT);
     assert_int_equal(ibl_edge_fixup_apply(ctx, IBL_EDGE_FIXUP_OVERLAP, NULL, 0), IBL_ERR_INVALID_ARGUMENT);
+    ibl_vec3 z = ibl_edge_fixup_texel_direction(IBL_EDGE_FIXUP_BENT, NULL, 6, 8, 0, 0, 0);
+    assert_true(z.x == 0 && z.y == 0 && z.z == 0);
+    z = ibl_edge_fixup_texel_direction(IBL_EDGE_FIXUP_NONE, NULL, 0, 8, 8, 0, 0);
+    assert_true(z.x == 0 && z.y == 0 && z.z == 0);
     /* bent and warp change nothing on levels larger than 1x1 */
     size_t bytes = ibl_cubemap_floats(8, 2) * sizeof(float);
     float *copy = malloc(bytes);

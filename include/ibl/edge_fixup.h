@@ -38,7 +38,8 @@ typedef struct ibl_bent_desc {
 
 /* The (normalised) direction the prefilter should centre its kernel on for texel (x, y) of a
  * face of edge n, for a kernel of angular radius blur_radius (radians, e.g. the angle where
- * the lobe falls to half). NONE, OVERLAP and OVERLAP2 return the texel centre direction. */
+ * the lobe falls to half). NONE, OVERLAP and OVERLAP2 return the texel centre direction.
+ * Returns (0, 0, 0) for a face, n or texel out of range. */
 ibl_vec3 ibl_edge_fixup_texel_direction(ibl_edge_fixup fixup, const ibl_bent_desc *bent, int face,
                                         int n, int x, int y, float blur_radius);
 

@@ -145,6 +145,7 @@ static double warp_inverse(double w, double a)
 ibl_vec3 ibl_edge_fixup_texel_direction(ibl_edge_fixup fixup, const ibl_bent_desc *bent, int face,
                                         int n, int x, int y, float blur_radius)
 {
+    if (face < 0 || face >= 6 || n < 1 || x < 0 || y < 0 || x >= n || y >= n) return to_vec3(dv(0, 0, 0));
     if (fixup == IBL_EDGE_FIXUP_BENT) return to_vec3(bent_direction(bent, face, n, x, y, blur_radius));
     if (fixup == IBL_EDGE_FIXUP_WARP && n >= 2) {
         double a = warp_factor(n);
