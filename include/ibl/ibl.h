@@ -16,6 +16,7 @@
 #include "layout.h"
 #include "sh.h"
 #include "irradiance.h"
+#include "edge_fixup.h"
 #include "sky.h"
 
 #endif
