@@ -197,6 +197,54 @@ static void sky_and_round_trips(void **state)
     assert_true(test_file_exists(png));
 }
 
+static int files_equal(const char *a, const char *b)
+{
+    static char x[1 << 22], y[1 << 22];
+    size_t na = read_bytes(a, x, sizeof x), nb = read_bytes(b, y, sizeof y);
+    return na > 0 && na == nb && memcmp(x, y, na) == 0;
+}
+
+/* Every command's output is bit-identical at any thread count. */
+static void outputs_identical_across_threads(void **state)
+{
+    (void)state;
+    const char *text;
+    const char *in = test_data("studio.exr");
+    /* each: the subcommand with its options (%d = threads), input and output names */
+    const char *commands[][2] = {
+        {"convert -q -j %d '%s' -o '%s' --size 64 --mips --format rgba32f", "t.ktx2"},
+        {"convert -q -j %d '%s' -o '%s' --out-layout hcross --size 32", "t.exr"},
+    };
+    static const int threads[3] = {1, 2, 8};
+    for (size_t c = 0; c < sizeof commands / sizeof commands[0]; c++) {
+        char first[512];
+        for (int t = 0; t < 3; t++) {
+            char name[64];
+            snprintf(name, sizeof name, "%d-%s", threads[t], commands[c][1]);
+            const char *out = test_path(name);
+            char args[1024];
+            snprintf(args, sizeof args, commands[c][0], threads[t], in, out);
+            int rc = test_run_cli(&text, "%s", args);
+            if (rc) fail_msg("%s: %s", args, text);
+            if (t == 0) snprintf(first, sizeof first, "%s", out);
+            else if (!files_equal(first, out)) fail_msg("%s differs from %s", out, first);
+        }
+    }
+}
+
+/* The memory limit refuses an input that would need more, with a clear message. */
+static void memory_limit(void **state)
+{
+    (void)state;
+    const char *text;
+    const char *out = test_path("mem.ktx2");
+    int rc = test_run_cli(&text, "convert '%s' -o '%s' --max-memory 1", test_data("studio.exr"), out);
+    assert_int_equal(rc, 1);
+    assert_int_equal(count_lines(text), 1);
+    assert_non_null(strstr(text, "memory limit"));
+    assert_false(test_file_exists(out));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -205,6 +253,8 @@ int main(void)
         cmocka_unit_test(existing_output_kept),
         cmocka_unit_test(conversion_keeps_mean_radiance),
         cmocka_unit_test(sky_and_round_trips),
+        cmocka_unit_test(outputs_identical_across_threads),
+        cmocka_unit_test(memory_limit),
     };
     return cmocka_run_group_tests_name("cli", tests, NULL, NULL);
 }
