@@ -120,13 +120,19 @@ ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
 
 /* ---- 8-bit display encoding shared by the PNG and JPEG writers ----------------------- */
 
-/* Exposure, tone map and sRGB encoding to the nearest 8-bit code. The code is found among
- * the 255 decision levels (the linear values whose sRGB encoding is k + 0.5 codes), which
- * gives round(oetf(t) * 255) without a pow per channel. */
+/* Exposure, tone map and sRGB encoding to the nearest 8-bit code, without a pow per channel:
+ * the code is the number of decision levels (the linear values whose sRGB encoding is k + 0.5
+ * codes) at or below the value, i.e. round(oetf(t) * 255). A 4096-bucket table gives the
+ * count at each bucket's lower edge; levels are at least 1 / (255 * 12.92) = 3.0e-4 apart
+ * (the steepest, linear part of the curve) and buckets 2.4e-4 wide, so at most one more
+ * level can lie inside a bucket: one comparison finishes the job. */
+enum { DISPLAY_BUCKETS = 4096 };
+
 typedef struct display_encoder {
     float scale;
     ibl_tonemap tonemap;
-    float level[255]; /* level[k]: smallest linear value that encodes to code k + 1 */
+    float level[256];                     /* level[k]: smallest value encoding to k + 1 */
+    uint8_t base[DISPLAY_BUCKETS + 1];    /* levels <= bucket / DISPLAY_BUCKETS */
 } display_encoder;
 
 static void display_encoder_init(display_encoder *d, float exposure_ev, ibl_tonemap tm)
@@ -134,18 +140,20 @@ static void display_encoder_init(display_encoder *d, float exposure_ev, ibl_tone
     d->scale = exp2f(exposure_ev);
     d->tonemap = tm;
     for (int k = 0; k < 255; k++) d->level[k] = (float)srgb_to_linear((k + 0.5) / 255.0);
+    d->level[255] = 2.0f; /* sentinel above every tone-mapped value */
+    int code = 0;
+    for (int b = 0; b <= DISPLAY_BUCKETS; b++) {
+        float edge = (float)b / DISPLAY_BUCKETS;
+        while (code < 255 && d->level[code] <= edge) code++;
+        d->base[b] = (uint8_t)code;
+    }
 }
 
 static uint8_t display_code(const display_encoder *d, float linear)
 {
-    float t = ibl_tonemap_apply(d->tonemap, linear * d->scale);
-    int lo = 0, hi = 255; /* answer in [lo, hi]: number of levels <= t */
-    while (lo < hi) {
-        int mid = (lo + hi) >> 1;
-        if (d->level[mid] <= t) lo = mid + 1;
-        else hi = mid;
-    }
-    return (uint8_t)lo;
+    float t = ibl_tonemap_apply(d->tonemap, linear * d->scale); /* in [0, 1] */
+    int code = d->base[(int)(t * DISPLAY_BUCKETS)];
+    return (uint8_t)(code + (d->level[code] <= t));
 }
 
 static uint8_t unit_code8(float a)
