@@ -7,14 +7,6 @@
 
 #include "core/pixel_format.h"
 
-ibl_status ibl__fail_named(ibl_context *ctx, ibl_status status, const char *name)
-{
-    char reason[256];
-    const char *m = ibl_context_message(ctx);
-    snprintf(reason, sizeof reason, "%s", m && m[0] ? m : ibl_status_name(status));
-    return ibl_fail(ctx, status, "%s: %s", name, reason);
-}
-
 ibl_format ibl__container_format(const ibl_texture *tex, const ibl_write_desc *desc)
 {
     if (desc && desc->format != IBL_FORMAT_DEFAULT) return desc->format; /* asked for: exact */
