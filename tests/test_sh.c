@@ -564,6 +564,44 @@ static void uffizi_table(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* ibl sh: one JSON object with the issue's keys; its radiance equals the library's direct
+ * equirect projection (printed with 9 significant digits: 1e-7 relative); usage errors exit 2,
+ * unreadable input exits 1. */
+static void cli_sh(void **state)
+{
+    (void)state;
+    const char *out;
+    const char *in = test_data("uffizi_latlong_256x128.hdr");
+    assert_int_equal(test_run_cli(&out, "sh '%s' --json -q", in), 0);
+    assert_true(out[0] == '{');
+    static const char *const keys[] = {"\"radiance\": [[", "\"irradiance\": [[",
+                                       "\"irradiance_over_pi\": [[", "\"polynomial\"",
+                                       "\"basis\"", "\"axes\"", "\"up\": \"+y\"", "\"window\""};
+    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) assert_non_null(strstr(out, keys[i]));
+    double r, g, b;
+    assert_int_equal(sscanf(strstr(out, "\"radiance\": [[") + 14, "%lf, %lf, %lf", &r, &g, &b), 3);
+    ibl_context *ctx = test_context(1);
+    ibl_image im;
+    assert_int_equal(ibl_read_image(ctx, in, NULL, &im, NULL), IBL_OK);
+    ibl_sh sh;
+    assert_int_equal(ibl_sh_project_equirect(ctx, &im, 3, &sh), IBL_OK);
+    assert_near(r, sh.c[0][0], 1e-7 * sh.c[0][0]);
+    assert_near(g, sh.c[0][1], 1e-7 * sh.c[0][1]);
+    assert_near(b, sh.c[0][2], 1e-7 * sh.c[0][2]);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+    /* nine radiance coefficients for 3 bands, twenty-five for 5 */
+    assert_int_equal(test_run_cli(&out, "sh '%s' --json -q --bands 5 --window auto", in), 0);
+    assert_non_null(strstr(out, "\"bands\": 5"));
+    assert_int_equal(test_run_cli(&out, "sh '%s' -q --fast-centres", in), 0);
+    assert_non_null(strstr(out, "face-centres"));
+    assert_int_equal(test_run_cli(NULL, "sh"), 2);
+    assert_int_equal(test_run_cli(NULL, "sh '%s' --bands 6", in), 2);
+    assert_int_equal(test_run_cli(NULL, "sh '%s' --window sideways", in), 2);
+    assert_int_equal(test_run_cli(&out, "sh '%s'", test_path("missing.hdr")), 1);
+    assert_non_null(strstr(out, "missing.hdr"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -579,6 +617,7 @@ int main(void)
         cmocka_unit_test(windowing),
         cmocka_unit_test(face_centres),
         cmocka_unit_test(uffizi_table),
+        cmocka_unit_test(cli_sh),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
