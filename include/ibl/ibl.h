@@ -14,6 +14,9 @@
 #include "cubemap.h"
 #include "io.h"
 #include "layout.h"
+#include "sh.h"
+#include "irradiance.h"
+#include "edge_fixup.h"
 #include "sky.h"
 
 #endif
