@@ -6,6 +6,7 @@
 #include "ibl/sh.h"
 
 #include "ibl/cubemap.h"
+#include "sh_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -424,6 +425,12 @@ ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh
     ibl_free(ctx, grid);
     *out = p;
     return IBL_OK;
+}
+
+int ibl__sh_plan_use_simd(ibl_sh_plan *p, int simd)
+{
+    p->simd = simd && cpu_has_avx2();
+    return p->simd;
 }
 
 void ibl_sh_plan_destroy(ibl_sh_plan *p)
