@@ -3,6 +3,8 @@
  * brute-force double sums written here, the published Uffizi table). */
 #include "test_support.h"
 
+#include "bake/sh_internal.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -213,6 +215,17 @@ static void cube_projection_matches_brute_force(void **state)
                 for (int c = 0; c < 3; c++)
                     assert_near(sh.c[i][c], i < bands * bands ? ref[i][c] : 0.0,
                                 1e-11 * (1 + fabs(ref[i][c])));
+            /* both row-sum paths (portable C and, where the CPU has it, AVX2) */
+            ibl_sh_plan *plan;
+            assert_int_equal(ibl_sh_plan_create(ctx, n, bands, &plan), IBL_OK);
+            for (int simd = 0; simd < 2; simd++) {
+                ibl__sh_plan_use_simd(plan, simd);
+                assert_int_equal(ibl_sh_plan_run(plan, cube.data, &sh), IBL_OK);
+                for (int i = 0; i < bands * bands; i++)
+                    for (int c = 0; c < 3; c++)
+                        assert_near(sh.c[i][c], ref[i][c], 1e-11 * (1 + fabs(ref[i][c])));
+            }
+            ibl_sh_plan_destroy(plan);
         }
         ibl_cubemap_free(ctx, &cube);
     }

@@ -74,7 +74,8 @@ ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int b
 typedef struct ibl_sh_plan ibl_sh_plan;
 ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh_plan **out);
 void ibl_sh_plan_destroy(ibl_sh_plan *plan);
-/* faces: six level-0 faces of plan's face size, RGBA float, +X -X +Y -Y +Z -Z. */
+/* faces: six level-0 faces of plan's face size, RGBA float, +X -X +Y -Y +Z -Z. One run at a
+ * time per plan (the plan holds the per-chunk partial sums); make one plan per thread. */
 ibl_status ibl_sh_plan_run(ibl_sh_plan *plan, const float *faces, ibl_sh *out);
 
 /* ---- convolution and forms ---------------------------------------------------------------- */

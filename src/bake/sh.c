@@ -6,6 +6,7 @@
 #include "ibl/sh.h"
 
 #include "ibl/cubemap.h"
+#include "sh_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -152,7 +153,7 @@ static const int face_axis[6][3] = {{2, 1, 0}, {2, 1, 0}, {0, 2, 1}, {0, 2, 1}, 
 static const int face_sign[6][3] = {{-1, -1, +1}, {+1, -1, -1}, {+1, +1, +1},
                                     {+1, -1, -1}, {+1, -1, +1}, {-1, -1, -1}};
 
-enum { SEG = 128, MAX_WEIGHTS = 15 };
+enum { SEG = 128, MAX_WEIGHTS = 15, MAX_CANON = 35 /* monomials of degree <= 4 */ };
 
 struct ibl_sh_plan {
     ibl_context *ctx;
@@ -287,6 +288,8 @@ static void cube_task(void *arg, int task)
     if (y1 > n) y1 = n;
     double w[SEG * MAX_WEIGHTS];
     double s[MAX_WEIGHTS][3];
+    double canon[6][MAX_CANON][3]; /* per face, canonical moments in (d, i, j) order */
+    memset(canon, 0, sizeof canon);
     for (int y = y0; y < y1; y++) {
         double tc = (2.0 * y + 1.0) / n - 1.0;
         double tcp[MOM_DIM];
@@ -319,30 +322,35 @@ static void cube_task(void *arg, int task)
             for (int face = 0; face < 6; face++) {
                 const float *px = p->faces + (((size_t)face * n + y) * n + x0) * 4;
                 row_sums(p->simd, w, px, count, nw, s);
-                /* canonical monomial a^i b^j c^(d-i-j) -> world monomial with signs */
-                const int *ax = face_axis[face], *sg = face_sign[face];
-                int k = 0;
-                for (int d = 0; d <= deg; d++) {
-                    for (int i = 0; i <= d; i++, k++) {
-                        for (int j = 0; j <= d - i; j++) {
-                            int c = d - i - j, e[3] = {0, 0, 0};
-                            e[ax[0]] += i;
-                            e[ax[1]] += j;
-                            e[ax[2]] += c;
-                            double sign = ((sg[0] < 0 && (i & 1)) ^ (sg[1] < 0 && (j & 1)) ^
-                                           (sg[2] < 0 && (c & 1)))
-                                              ? -1.0
-                                              : 1.0;
-                            double f = sign * tcp[j];
-                            double *m = mom + (size_t)mom_index(e[0], e[1], e[2]) * 4;
-                            m[0] += f * s[k][0];
-                            m[1] += f * s[k][1];
-                            m[2] += f * s[k][2];
+                /* canonical moments of this face: a^i b^j c^(d-i-j) = row sum (d, i) * tc^j */
+                double(*cm)[3] = canon[face];
+                int k = 0, q = 0;
+                for (int d = 0; d <= deg; d++)
+                    for (int i = 0; i <= d; i++, k++)
+                        for (int j = 0; j <= d - i; j++, q++) {
+                            cm[q][0] += tcp[j] * s[k][0];
+                            cm[q][1] += tcp[j] * s[k][1];
+                            cm[q][2] += tcp[j] * s[k][2];
                         }
-                    }
-                }
             }
         }
+    }
+    /* canonical -> world monomials, once per chunk: the face's axis permutation and signs */
+    for (int face = 0; face < 6; face++) {
+        const int *ax = face_axis[face], *sg = face_sign[face];
+        int q = 0;
+        for (int d = 0; d <= deg; d++)
+            for (int i = 0; i <= d; i++)
+                for (int j = 0; j <= d - i; j++, q++) {
+                    int c = d - i - j, e[3] = {0, 0, 0};
+                    e[ax[0]] += i;
+                    e[ax[1]] += j;
+                    e[ax[2]] += c;
+                    int odd = (sg[0] < 0 && (i & 1)) ^ (sg[1] < 0 && (j & 1)) ^ (sg[2] < 0 && (c & 1));
+                    double sign = odd ? -1.0 : 1.0;
+                    double *m = mom + (size_t)mom_index(e[0], e[1], e[2]) * 4;
+                    for (int ch = 0; ch < 3; ch++) m[ch] += sign * canon[face][q][ch];
+                }
     }
 }
 
@@ -417,6 +425,12 @@ ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh
     ibl_free(ctx, grid);
     *out = p;
     return IBL_OK;
+}
+
+int ibl__sh_plan_use_simd(ibl_sh_plan *p, int simd)
+{
+    p->simd = simd && cpu_has_avx2();
+    return p->simd;
 }
 
 void ibl_sh_plan_destroy(ibl_sh_plan *p)
