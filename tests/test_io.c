@@ -427,6 +427,11 @@ static void exr_windows_tiles_grey(void **state)
             assert_true(p[3] == exr_value(0, x, y));
         }
     ibl_texture_free(ctx, &t);
+    /* Absurd tiles (one 60000x60000 tile for a 5x3 image) would make OpenEXR allocate
+     * gigabytes for its tile buffer: refused from the header (found by fuzzing). */
+    n = build_exr(&e, ay, 2, data3, data3, 60000);
+    assert_int_equal(decode(ctx, e.b, n, &t, NULL), IBL_ERR_UNSUPPORTED);
+    assert_non_null(strstr(ibl_context_message(ctx), "tiles"));
     /* Channels that are neither colour nor grey are refused by name. */
     const char *const z[1] = {"Z"};
     n = build_exr(&e, z, 1, data3, data3, 0);

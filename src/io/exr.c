@@ -17,12 +17,19 @@
 
 /* ---- structural check ---------------------------------------------------------------- */
 
+/* Largest buffer OpenEXR may be led to allocate for one tile, tile row or scanline block
+ * (legitimate files need a few MiB; 65536 wide x 256 lines of 4 float channels is 256 MiB). */
+#define EXR_MAX_BUFFER ((uint64_t)256 << 20)
+
 typedef struct exr_shape {
     int32_t data[4], display[4]; /* xmin ymin xmax ymax */
     int has_data, has_display, has_tiles;
     int compression;
     uint32_t tile_w, tile_h;
     int tiled, multipart, deep;
+    int channels;          /* in part 0's channel list            */
+    uint64_t pixel_bytes;  /* bytes of one pixel of all channels  */
+    const char *chlist_problem;
 } exr_shape;
 
 static int32_t le32(const uint8_t *p)
@@ -33,6 +40,24 @@ static int32_t le32(const uint8_t *p)
 static uint64_t le64(const uint8_t *p)
 {
     return (uint64_t)(uint32_t)le32(p) | (uint64_t)(uint32_t)le32(p + 4) << 32;
+}
+
+/* Counts part 0's channels and their bytes per pixel (OpenEXR sizes its buffers by them). */
+static void scan_chlist(const uint8_t *v, size_t len, exr_shape *sh)
+{
+    size_t pos = 0;
+    while (pos < len && v[pos] != 0) {
+        const uint8_t *nul = memchr(v + pos, 0, len - pos);
+        if (!nul || (size_t)(nul - v) + 1 + 16 > len) {
+            sh->chlist_problem = "malformed channel list";
+            return;
+        }
+        pos = (size_t)(nul - v) + 1;
+        int32_t type = le32(v + pos);
+        sh->pixel_bytes += type == 1 ? 2 : 4; /* HALF, else UINT/FLOAT */
+        sh->channels++;
+        pos += 16;
+    }
 }
 
 /* A NUL-terminated string of at most max_len characters at b[*pos]; NULL if malformed. */
@@ -72,6 +97,8 @@ static const char *walk_header(const uint8_t *b, size_t size, size_t *pos, size_
                 for (int i = 0; i < 4; i++) box[i] = le32(v + 4 * i);
                 if (name[1] == 'a') sh->has_data = 1;
                 else sh->has_display = 1;
+            } else if (strcmp(name, "channels") == 0 && strcmp(type, "chlist") == 0) {
+                scan_chlist(v, (size_t)len, sh);
             } else if (strcmp(name, "compression") == 0 && len == 1) {
                 sh->compression = v[0];
             } else if (strcmp(name, "tiles") == 0 && strcmp(type, "tiledesc") == 0 && len == 9) {
@@ -126,6 +153,9 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
     if (problem) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: %s", name, problem);
     if (sh->deep)
         return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: deep OpenEXR data is not supported", name);
+    if (sh->chlist_problem || sh->channels == 0)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: %s", name,
+                        sh->chlist_problem ? sh->chlist_problem : "no channels");
     if (!sh->has_data || !sh->has_display)
         return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: no data or display window", name);
     for (int axis = 0; axis < 2; axis++) {
@@ -146,11 +176,21 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
         if (!sh->has_tiles || sh->tile_w == 0 || sh->tile_h == 0 || sh->tile_w > 0x7FFFFFFFu ||
             sh->tile_h > 0x7FFFFFFFu)
             return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR tile description", name);
+        /* OpenEXR allocates a tile (tile_w x tile_h pixels) per buffer and, reading through
+         * InputFile, a row of tiles (width x tile_h of every channel): keep both sane. */
+        uint64_t th = sh->tile_h;
+        if (sh->tile_w > IBL_MAX_DIMENSION || th > IBL_MAX_DIMENSION ||
+            (uint64_t)sh->tile_w * th * sh->pixel_bytes > EXR_MAX_BUFFER ||
+            w * th * 4 * (uint64_t)(sh->channels < 4 ? sh->channels : 4) > EXR_MAX_BUFFER)
+            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR tiles of %ux%u are too large",
+                            name, sh->tile_w, sh->tile_h);
         /* Level 0 comes first in the offset table; only its tiles are read. */
         chunks = ((w + sh->tile_w - 1) / sh->tile_w) * ((h + sh->tile_h - 1) / sh->tile_h);
     } else {
         uint64_t lpc = (uint64_t)lines_per_chunk[sh->compression];
         chunks = (h + lpc - 1) / lpc;
+        if (w * lpc * sh->pixel_bytes > EXR_MAX_BUFFER)
+            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR scanline blocks are too large", name);
     }
     /* Every chunk of level 0 must exist: offset in the file, its header and data inside. */
     if (chunks > (size - pos) / 8)
