@@ -29,7 +29,6 @@ typedef struct exr_shape {
     int tiled, multipart, deep;
     int channels;          /* in part 0's channel list            */
     uint64_t pixel_bytes;  /* bytes of one pixel of all channels  */
-    const char *chlist_problem;
 } exr_shape;
 
 static int32_t le32(const uint8_t *p)
@@ -42,22 +41,62 @@ static uint64_t le64(const uint8_t *p)
     return (uint64_t)(uint32_t)le32(p) | (uint64_t)(uint32_t)le32(p + 4) << 32;
 }
 
-/* Counts part 0's channels and their bytes per pixel (OpenEXR sizes its buffers by them). */
-static void scan_chlist(const uint8_t *v, size_t len, exr_shape *sh)
+/* Checks a channel list (name, pixel type, pLinear + 3 reserved, x/y sampling; an empty name
+ * ends it exactly at the attribute's end: OpenEXR reads it by structure, not by size) and,
+ * for part 0, counts channels and bytes per pixel (OpenEXR sizes its buffers by them). */
+static const char *scan_chlist(const uint8_t *v, size_t len, exr_shape *sh, int record)
 {
     size_t pos = 0;
     while (pos < len && v[pos] != 0) {
         const uint8_t *nul = memchr(v + pos, 0, len - pos);
-        if (!nul || (size_t)(nul - v) + 1 + 16 > len) {
-            sh->chlist_problem = "malformed channel list";
-            return;
-        }
+        if (!nul || (size_t)(nul - v) + 1 + 16 > len) return "malformed channel list";
         pos = (size_t)(nul - v) + 1;
-        int32_t type = le32(v + pos);
-        sh->pixel_bytes += type == 1 ? 2 : 4; /* HALF, else UINT/FLOAT */
-        sh->channels++;
+        int32_t type = le32(v + pos), xs = le32(v + pos + 8), ys = le32(v + pos + 12);
+        if (type < 0 || type > 2 || xs < 1 || ys < 1) return "malformed channel list";
+        if (record) {
+            sh->pixel_bytes += type == 1 ? 2 : 4; /* HALF, else UINT/FLOAT */
+            sh->channels++;
+        }
         pos += 16;
     }
+    if (pos + 1 != len) return "malformed channel list";
+    return NULL;
+}
+
+/* OpenEXR 3.1 reads typed attributes by their type, not by the declared size, so a size that
+ * disagrees with the type desynchronises its header parser from ours: refuse those. */
+static const char *check_value(const char *type, const uint8_t *v, size_t len)
+{
+    static const struct {
+        const char *type;
+        size_t size;
+    } fixed[] = {
+        {"box2i", 16}, {"box2f", 16}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16}, {"v3i", 12},
+        {"v3f", 12}, {"v3d", 24}, {"int", 4}, {"float", 4}, {"double", 8}, {"rational", 8},
+        {"timecode", 8}, {"keycode", 28}, {"chromaticities", 32}, {"m33f", 36}, {"m33d", 72},
+        {"m44f", 64}, {"m44d", 128}, {"compression", 1}, {"lineOrder", 1}, {"envmap", 1},
+        {"deepImageState", 1}, {"tiledesc", 9},
+    };
+    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
+        if (strcmp(type, fixed[i].type) == 0)
+            return len == fixed[i].size ? NULL : "attribute size does not match its type";
+    if (strcmp(type, "stringvector") == 0) { /* (int32 length, bytes)... filling the value */
+        size_t pos = 0;
+        while (pos < len) {
+            if (len - pos < 4) return "malformed string vector";
+            int32_t n = le32(v + pos);
+            pos += 4;
+            if (n < 0 || (size_t)n > len - pos) return "malformed string vector";
+            pos += (size_t)n;
+        }
+    } else if (strcmp(type, "preview") == 0) { /* width, height, then RGBA8 pixels */
+        if (len < 8) return "malformed preview";
+        uint64_t pw = (uint32_t)le32(v), ph = (uint32_t)le32(v + 4);
+        if (pw * ph * 4 != len - 8) return "malformed preview";
+    } else if (strcmp(type, "floatvector") == 0 && len % 4 != 0) {
+        return "malformed float vector";
+    }
+    return NULL;
 }
 
 /* A NUL-terminated string of at most max_len characters at b[*pos]; NULL if malformed. */
@@ -90,6 +129,10 @@ static const char *walk_header(const uint8_t *b, size_t size, size_t *pos, size_
         *pos += 4;
         if (len < 0 || (size_t)len > size - *pos) return "attribute size beyond the end of the file";
         const uint8_t *v = b + *pos;
+        const char *bad = strcmp(type, "chlist") == 0
+                              ? scan_chlist(v, (size_t)len, sh, record && strcmp(name, "channels") == 0)
+                              : check_value(type, v, (size_t)len);
+        if (bad) return bad;
         if (record) {
             if (strcmp(type, "box2i") == 0 && len == 16 &&
                 (strcmp(name, "dataWindow") == 0 || strcmp(name, "displayWindow") == 0)) {
@@ -97,8 +140,6 @@ static const char *walk_header(const uint8_t *b, size_t size, size_t *pos, size_
                 for (int i = 0; i < 4; i++) box[i] = le32(v + 4 * i);
                 if (name[1] == 'a') sh->has_data = 1;
                 else sh->has_display = 1;
-            } else if (strcmp(name, "channels") == 0 && strcmp(type, "chlist") == 0) {
-                scan_chlist(v, (size_t)len, sh);
             } else if (strcmp(name, "compression") == 0 && len == 1) {
                 sh->compression = v[0];
             } else if (strcmp(name, "tiles") == 0 && strcmp(type, "tiledesc") == 0 && len == 9) {
@@ -153,9 +194,7 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
     if (problem) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: %s", name, problem);
     if (sh->deep)
         return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: deep OpenEXR data is not supported", name);
-    if (sh->chlist_problem || sh->channels == 0)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: %s", name,
-                        sh->chlist_problem ? sh->chlist_problem : "no channels");
+    if (sh->channels == 0) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: no channels", name);
     if (!sh->has_data || !sh->has_display)
         return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: no data or display window", name);
     for (int axis = 0; axis < 2; axis++) {
