@@ -367,7 +367,7 @@ static void bad_arguments(void **state)
 static void cli_irradiance(void **state)
 {
     (void)state;
-    const char *in = test_data("studio.exr");
+    const char *in = test_data("uffizi_latlong_256x128.hdr");
     const char *ktx = test_path("irr.ktx2");
     assert_int_equal(test_run_cli(NULL, "irradiance '%s' -o '%s' --size 8 -q", in, ktx), 0);
     ibl_context *ctx = test_context(0);
