@@ -32,12 +32,12 @@ static const char *const coeff_names[IBL_SH_MAX_COEFFS] = {
     "4,-2", "4,-1", "4,0",  "4,1",  "4,2",  "4,3",  "4,4",
 };
 
-static void print_json_coeffs(const char *key, const ibl_sh *sh, int last)
+static void print_json_coeffs(FILE *f, const char *key, const ibl_sh *sh, int last)
 {
-    printf("  \"%s\": [", key);
+    fprintf(f, "  \"%s\": [", key);
     for (int i = 0; i < sh->bands * sh->bands; i++)
-        printf("%s[%.9g, %.9g, %.9g]", i ? ", " : "", sh->c[i][0], sh->c[i][1], sh->c[i][2]);
-    printf("]%s\n", last ? "" : ",");
+        fprintf(f, "%s[%.9g, %.9g, %.9g]", i ? ", " : "", sh->c[i][0], sh->c[i][1], sh->c[i][2]);
+    fprintf(f, "]%s\n", last ? "" : ",");
 }
 
 static void print_text_coeffs(const char *title, const char *sym, const ibl_sh *sh)
@@ -77,6 +77,58 @@ static int read_plain_equirect(ibl_context *ctx, const cli_common *common, const
     }
     ibl_texture_free(ctx, tex);
     return 0;
+}
+
+void cli_sh_write_json(FILE *f, const char *in, const char *method, int bands,
+                       ibl_sh_window window, const ibl_sh_window_report *rep,
+                       const ibl_sh *radiance)
+{
+    ibl_sh irr, over_pi;
+    ibl_sh_irradiance(radiance, &irr);
+    over_pi = irr;
+    ibl_sh_scale(&over_pi, 1.0 / 3.14159265358979323846);
+    double m[3][4][4];
+    ibl_sh_polynomial(radiance, m);
+    fprintf(f, "{\n");
+    fprintf(f, "  \"input\": \"");
+    for (const char *p = in; *p; p++) {
+        if (*p == '"' || *p == '\\') fputc('\\', f);
+        if ((unsigned char)*p >= 0x20) fputc(*p, f);
+    }
+    fprintf(f, "\",\n  \"projection\": \"%s\",\n", method);
+    fprintf(f, "  \"bands\": %d,\n", bands);
+    fprintf(f, "  \"basis\": \"%s\",\n", IBL_SH_BASIS_NAME);
+    fprintf(f, "  \"condon_shortley_phase\": false,\n");
+    fprintf(f, "  \"order\": \"index l*l+l+m: (0,0) (1,-1) (1,0) (1,1) (2,-2) (2,-1) (2,0) (2,1) "
+           "(2,2) ...\",\n");
+    fprintf(f, "  \"axes\": {\"up\": \"+y\", \"frame\": \"right-handed world frame, +Y up\", "
+           "\"formula_x\": \"+x\", \"formula_y\": \"+y\", \"formula_z\": \"+z\", "
+           "\"note\": \"the R&H formulas take the world x, y, z directly; their polar axis z is "
+           "the horizontal world +Z and up enters through y (L1-1, L2-2, L2-1)\"},\n");
+    fprintf(f, "  \"window\": {\"requested\": \"%s\", \"applied\": \"%s\", \"width\": %.9g, "
+           "\"factors\": [",
+           window_name(window), window_name(rep->applied), rep->width);
+    for (int l = 0; l < bands; l++) fprintf(f, "%s%.9g", l ? ", " : "", rep->factors[l]);
+    fprintf(f, "], \"min_irradiance_before\": %.9g, \"min_irradiance_after\": %.9g},\n",
+           rep->min_irradiance_before, rep->min_irradiance_after);
+    fprintf(f, "  \"cosine_factors\": [");
+    for (int l = 0; l < bands; l++) fprintf(f, "%s%.17g", l ? ", " : "", ibl_sh_cosine_factor(l));
+    fprintf(f, "],\n");
+    print_json_coeffs(f, "radiance", radiance, 0);
+    print_json_coeffs(f, "irradiance", &irr, 0);
+    print_json_coeffs(f, "irradiance_over_pi", &over_pi, 0);
+    fprintf(f, "  \"polynomial\": {\"form\": \"E(n) = [x y z 1] M [x y z 1]^T (irradiance, R&H 2001 "
+           "eq. 12, first 9 coefficients)\", \"constants\": [%g, %g, %g, %g, %g], \"matrix\": {",
+           IBL_SH_RH_C1, IBL_SH_RH_C2, IBL_SH_RH_C3, IBL_SH_RH_C4, IBL_SH_RH_C5);
+    static const char *const ch[3] = {"r", "g", "b"};
+    for (int c = 0; c < 3; c++) {
+        fprintf(f, "%s\"%s\": [", c ? ", " : "", ch[c]);
+        for (int i = 0; i < 4; i++)
+            fprintf(f, "%s[%.9g, %.9g, %.9g, %.9g]", i ? ", " : "", m[c][i][0], m[c][i][1],
+                   m[c][i][2], m[c][i][3]);
+        fprintf(f, "]");
+    }
+    fprintf(f, "}}\n}\n");
 }
 
 int cli_cmd_sh(int argc, char **argv)
@@ -155,46 +207,7 @@ int cli_cmd_sh(int argc, char **argv)
     double m[3][4][4];
     ibl_sh_polynomial(&radiance, m);
     if (json) {
-        printf("{\n");
-        printf("  \"input\": \"");
-        for (const char *p = in; *p; p++) {
-            if (*p == '"' || *p == '\\') putchar('\\');
-            if ((unsigned char)*p >= 0x20) putchar(*p);
-        }
-        printf("\",\n  \"projection\": \"%s\",\n", method);
-        printf("  \"bands\": %d,\n", bands);
-        printf("  \"basis\": \"%s\",\n", IBL_SH_BASIS_NAME);
-        printf("  \"condon_shortley_phase\": false,\n");
-        printf("  \"order\": \"index l*l+l+m: (0,0) (1,-1) (1,0) (1,1) (2,-2) (2,-1) (2,0) (2,1) "
-               "(2,2) ...\",\n");
-        printf("  \"axes\": {\"up\": \"+y\", \"frame\": \"right-handed world frame, +Y up\", "
-               "\"formula_x\": \"+x\", \"formula_y\": \"+y\", \"formula_z\": \"+z\", "
-               "\"note\": \"the R&H formulas take the world x, y, z directly; their polar axis z is "
-               "the horizontal world +Z and up enters through y (L1-1, L2-2, L2-1)\"},\n");
-        printf("  \"window\": {\"requested\": \"%s\", \"applied\": \"%s\", \"width\": %.9g, "
-               "\"factors\": [",
-               window_name(window), window_name(rep.applied), rep.width);
-        for (int l = 0; l < bands; l++) printf("%s%.9g", l ? ", " : "", rep.factors[l]);
-        printf("], \"min_irradiance_before\": %.9g, \"min_irradiance_after\": %.9g},\n",
-               rep.min_irradiance_before, rep.min_irradiance_after);
-        printf("  \"cosine_factors\": [");
-        for (int l = 0; l < bands; l++) printf("%s%.17g", l ? ", " : "", ibl_sh_cosine_factor(l));
-        printf("],\n");
-        print_json_coeffs("radiance", &radiance, 0);
-        print_json_coeffs("irradiance", &irr, 0);
-        print_json_coeffs("irradiance_over_pi", &over_pi, 0);
-        printf("  \"polynomial\": {\"form\": \"E(n) = [x y z 1] M [x y z 1]^T (irradiance, R&H 2001 "
-               "eq. 12, first 9 coefficients)\", \"constants\": [%g, %g, %g, %g, %g], \"matrix\": {",
-               IBL_SH_RH_C1, IBL_SH_RH_C2, IBL_SH_RH_C3, IBL_SH_RH_C4, IBL_SH_RH_C5);
-        static const char *const ch[3] = {"r", "g", "b"};
-        for (int c = 0; c < 3; c++) {
-            printf("%s\"%s\": [", c ? ", " : "", ch[c]);
-            for (int i = 0; i < 4; i++)
-                printf("%s[%.9g, %.9g, %.9g, %.9g]", i ? ", " : "", m[c][i][0], m[c][i][1],
-                       m[c][i][2], m[c][i][3]);
-            printf("]");
-        }
-        printf("}}\n}\n");
+        cli_sh_write_json(stdout, in, method, bands, window, &rep, &radiance);
     } else {
         printf("input: %s (%s projection, %d bands)\n", in, method, bands);
         printf("basis: %s\n", IBL_SH_BASIS_NAME);
