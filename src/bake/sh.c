@@ -284,8 +284,9 @@ static void cube_task(void *arg, int task)
     int n = p->n, deg = p->deg, nw = p->nw;
     double *mom = p->partial + (size_t)task * MOM_SIZE * 4;
     memset(mom, 0, sizeof(double) * MOM_SIZE * 4);
+    int half = (n + 1) / 2; /* tasks cover the top half; each row brings its mirror */
     int y0 = task * p->rows_per_task, y1 = y0 + p->rows_per_task;
-    if (y1 > n) y1 = n;
+    if (y1 > half) y1 = half;
     double w[SEG * MAX_WEIGHTS];
     double s[MAX_WEIGHTS][3];
     double canon[6][MAX_CANON][3]; /* per face, canonical moments in (d, i, j) order */
@@ -319,19 +320,25 @@ static void cube_task(void *arg, int task)
                     texel_weights(om[x], sc, inv_r, deg, w + (size_t)x * nw);
                 }
             }
-            for (int face = 0; face < 6; face++) {
-                const float *px = p->faces + (((size_t)face * n + y) * n + x0) * 4;
-                row_sums(p->simd, w, px, count, nw, s);
-                /* canonical moments of this face: a^i b^j c^(d-i-j) = row sum (d, i) * tc^j */
-                double(*cm)[3] = canon[face];
-                int k = 0, q = 0;
-                for (int d = 0; d <= deg; d++)
-                    for (int i = 0; i <= d; i++, k++)
-                        for (int j = 0; j <= d - i; j++, q++) {
-                            cm[q][0] += tcp[j] * s[k][0];
-                            cm[q][1] += tcp[j] * s[k][1];
-                            cm[q][2] += tcp[j] * s[k][2];
-                        }
+            /* row y and its mirror n-1-y (tc -> -tc) share every weight */
+            for (int mirror = 0; mirror < 2; mirror++) {
+                int row = mirror ? n - 1 - y : y;
+                if (mirror && row == y) break;
+                for (int face = 0; face < 6; face++) {
+                    const float *px = p->faces + (((size_t)face * n + row) * n + x0) * 4;
+                    row_sums(p->simd, w, px, count, nw, s);
+                    /* canonical moments of this face: a^i b^j c^(d-i-j) = sum (d, i) * tc^j */
+                    double(*cm)[3] = canon[face];
+                    int k = 0, q = 0;
+                    for (int d = 0; d <= deg; d++)
+                        for (int i = 0; i <= d; i++, k++)
+                            for (int j = 0; j <= d - i; j++, q++) {
+                                double t = (mirror && (j & 1)) ? -tcp[j] : tcp[j];
+                                cm[q][0] += t * s[k][0];
+                                cm[q][1] += t * s[k][1];
+                                cm[q][2] += t * s[k][2];
+                            }
+                }
             }
         }
     }
@@ -409,9 +416,10 @@ ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh
     p->nw = bands * (bands + 1) / 2;
     p->simd = cpu_has_avx2();
     /* chunking depends on the size only, never on the thread count */
-    p->tasks = face_size < 32 ? face_size : 32;
-    p->rows_per_task = (face_size + p->tasks - 1) / p->tasks;
-    p->tasks = (face_size + p->rows_per_task - 1) / p->rows_per_task;
+    int half = (face_size + 1) / 2;
+    p->tasks = half < 32 ? half : 32;
+    p->rows_per_task = (half + p->tasks - 1) / p->tasks;
+    p->tasks = (half + p->rows_per_task - 1) / p->rows_per_task;
     size_t n = (size_t)face_size;
     p->omega = ibl_alloc(ctx, n * n * sizeof(double));
     p->partial = ibl_alloc(ctx, (size_t)p->tasks * MOM_SIZE * 4 * sizeof(double));
