@@ -487,8 +487,9 @@ static void quad_radiance(const double *d, float *out)
 
 /* The seed's six-value path must recover such a radiance exactly (analytic coefficients): from
  * point values (the centre texel of an odd cube lies on the axis: float rounding, 1e-5) and
- * from face means (the 1x1 level of a 64-cube's area-correct mip chain: the texel
- * quadrature of the means, O(N^-2), 2e-3). */
+ * from face means (the 1x1 level of a 64-cube's area-correct mip chain, or
+ * ibl_sh_project_face_means on a 48-cube: the texel quadrature of the means, O(N^-2),
+ * 2e-3). */
 static void face_centres(void **state)
 {
     (void)state;
@@ -506,6 +507,15 @@ static void face_centres(void **state)
     assert_int_equal(ibl_cubemap_build_mips(ctx, &cube), IBL_OK);
     assert_int_equal(ibl_sh_project_face_centres(&cube, 6, 3, &sh), IBL_OK);
     for (int i = 0; i < 9; i++) assert_near(sh.c[i][1], quad_coeffs[i], 2e-3);
+    /* the exact face means of level 0 (any size, here 48): the same up to the texel
+     * quadrature of the means, 2e-3 */
+    ibl_cubemap c48;
+    assert_int_equal(ibl_cubemap_alloc(ctx, 48, 1, &c48), IBL_OK);
+    fill_cube(&c48, quad_radiance);
+    ibl_sh means;
+    assert_int_equal(ibl_sh_project_face_means(&c48, 0, 3, &means), IBL_OK);
+    for (int i = 0; i < 9; i++) assert_near(means.c[i][2], quad_coeffs[i], 2e-3);
+    ibl_cubemap_free(ctx, &c48);
     /* more bands cannot be estimated from six values: they stay zero */
     assert_int_equal(ibl_sh_project_face_centres(&cube, 6, 5, &sh), IBL_OK);
     assert_int_equal(sh.bands, 5);

@@ -590,20 +590,13 @@ ibl_status ibl_sh_project_samples(int bands, size_t count, const double *dirs,
 #define FACE_J001 1.7408395027342032 /* integral of the major-axis coordinate */
 #define FACE_J002 1.4679320597172241 /* ... of its square                   */
 
-ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int bands, ibl_sh *out)
+/* SH from six per-face values (+X -X +Y -Y +Z -Z; RGBA, 4 floats apart). */
+static ibl_status six_value_sh(const float *values, int means, int bands, ibl_sh *out)
 {
-    bands = clamp_bands(bands);
-    if (!cube || !cube->data || level < 0 || level >= cube->levels || !out || !valid_bands(bands))
-        return IBL_ERR_INVALID_ARGUMENT;
-    int means = ibl_level_size(cube->size, level) == 1;
     double dirs[18] = {0};
     double weights[6];
-    float values[24];
     for (int f = 0; f < 6; f++) {
-        double *d = dirs + 3 * f;
-        d[face_axis[f][2]] = face_sign[f][2];
-        ibl_vec3 v = {(float)d[0], (float)d[1], (float)d[2]};
-        ibl_cubemap_sample_bilinear(cube, level, v, values + 4 * f);
+        dirs[3 * f + face_axis[f][2]] = face_sign[f][2];
         weights[f] = 4.0 * PI / 6.0;
     }
     ibl_status st = ibl_sh_project_samples(bands < 3 ? bands : 3, 6, dirs, weights, values, 4, out);
@@ -615,8 +608,7 @@ ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int b
         band1 = 1.0 / mx;
         double y20_axis = 3.0 * mz2 - 1.0, y20_side = 3.0 * ms2 - 1.0;
         /* estimate / exact for Y20 = (2pi/3) K20^2 (2 * 2 * y20_axis + 4 * (-1) * y20_side) */
-        double k20sq = K20 * K20;
-        band2 = 1.0 / (FACE_J000 * k20sq * (4.0 * y20_axis - 4.0 * y20_side));
+        band2 = 1.0 / (FACE_J000 * K20 * K20 * (4.0 * y20_axis - 4.0 * y20_side));
     } else {
         band1 = 1.0;
         band2 = 1.0 / 2.5; /* (2pi/3) K20^2 (2*2*2 + 4*1) = 2.5 */
@@ -627,6 +619,43 @@ ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int b
         for (int c = 0; c < 3; c++) out->c[ibl_sh_index(2, m)][c] *= band2;
     out->bands = bands;
     return IBL_OK;
+}
+
+ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int bands, ibl_sh *out)
+{
+    bands = clamp_bands(bands);
+    if (!cube || !cube->data || level < 0 || level >= cube->levels || !out || !valid_bands(bands))
+        return IBL_ERR_INVALID_ARGUMENT;
+    float values[24];
+    for (int f = 0; f < 6; f++) {
+        float d[3] = {0, 0, 0};
+        d[face_axis[f][2]] = (float)face_sign[f][2];
+        ibl_vec3 v = {d[0], d[1], d[2]};
+        ibl_cubemap_sample_bilinear(cube, level, v, values + 4 * f);
+    }
+    return six_value_sh(values, ibl_level_size(cube->size, level) == 1, bands, out);
+}
+
+ibl_status ibl_sh_project_face_means(const ibl_cubemap *cube, int level, int bands, ibl_sh *out)
+{
+    bands = clamp_bands(bands);
+    if (!cube || !cube->data || level < 0 || level >= cube->levels || !out || !valid_bands(bands))
+        return IBL_ERR_INVALID_ARGUMENT;
+    int n = ibl_level_size(cube->size, level);
+    float values[24];
+    for (int f = 0; f < 6; f++) {
+        const float *p = ibl_cubemap_face(cube, level, f);
+        double acc[3] = {0, 0, 0}, wsum = 0;
+        for (int y = 0; y < n; y++)
+            for (int x = 0; x < n; x++, p += 4) {
+                double w = ibl_cube_texel_solid_angle(n, x, y);
+                for (int c = 0; c < 3; c++) acc[c] += w * p[c];
+                wsum += w;
+            }
+        for (int c = 0; c < 3; c++) values[4 * f + c] = (float)(acc[c] / wsum);
+        values[4 * f + 3] = 1.0f;
+    }
+    return six_value_sh(values, 1, bands, out);
 }
 
 /* ---- convolution and forms ---------------------------------------------------------------------- */
