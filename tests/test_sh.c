@@ -619,6 +619,8 @@ static void cli_sh(void **state)
     assert_non_null(strstr(out, "\"bands\": 5"));
     assert_int_equal(test_run_cli(&out, "sh '%s' -q --fast-centres", in), 0);
     assert_non_null(strstr(out, "face-centres"));
+    assert_int_equal(test_run_cli(&out, "sh '%s' -q --fast-means --json", in), 0);
+    assert_non_null(strstr(out, "\"projection\": \"face-means\""));
     assert_int_equal(test_run_cli(NULL, "sh"), 2);
     assert_int_equal(test_run_cli(NULL, "sh '%s' --bands 6", in), 2);
     assert_int_equal(test_run_cli(NULL, "sh '%s' --window sideways", in), 2);
