@@ -116,27 +116,36 @@ ibl_status ibl_atlas_unpack(ibl_context *ctx, const ibl_image *atlas, const ibl_
     ibl_status st = ibl_cubemap_alloc(ctx, size, layout->levels, out);
     if (st != IBL_OK) return st;
     int g = layout->gutter;
+    int n0 = layout->face_size[0];
+    float *tmp = ibl_alloc(ctx, (size_t)n0 * n0 * 4 * sizeof(float));
+    if (!tmp) {
+        ibl_cubemap_free(ctx, out);
+        return ibl_context_status(ctx);
+    }
     for (int k = 0; k < layout->levels; k++) {
-        int n = layout->face_size[k], native = ibl_level_size(size, k), ratio = n / native;
-        float inv = 1.0f / (float)(ratio * ratio);
+        int n = layout->face_size[k], native = ibl_level_size(size, k);
         for (int f = 0; f < 6; f++) {
             int ox, oy;
             face_origin(layout, k, f, &ox, &oy);
-            float *dst = ibl_cubemap_face(out, k, f);
-            for (int y = 0; y < native; y++)
-                for (int x = 0; x < native; x++) {
-                    float acc[4] = {0, 0, 0, 0};
-                    for (int j = 0; j < ratio; j++)
-                        for (int i = 0; i < ratio; i++) {
-                            const float *s = ibl_image_texel(atlas, ox + g + x * ratio + i,
-                                                             oy + g + y * ratio + j);
-                            for (int c = 0; c < 4; c++) acc[c] += s[c];
+            for (int y = 0; y < n; y++)
+                memcpy(tmp + (size_t)y * n * 4, ibl_image_texel(atlas, ox + g, oy + g + y),
+                       (size_t)n * 4 * sizeof(float));
+            /* halve 2x2 at a time, summing in pairs: the box average of an enlarged level, and
+             * exact for replicated texels (so a nearest-enlarged atlas round-trips bit for bit) */
+            for (int m = n; m > native; m /= 2) {
+                int h = m / 2;
+                for (int y = 0; y < h; y++)
+                    for (int x = 0; x < h; x++)
+                        for (int c = 0; c < 4; c++) {
+                            const float *r0 = tmp + ((size_t)(2 * y) * m + 2 * x) * 4 + c;
+                            const float *r1 = r0 + (size_t)m * 4;
+                            tmp[((size_t)y * h + x) * 4 + c] = ((r0[0] + r0[4]) + (r1[0] + r1[4])) * 0.25f;
                         }
-                    float *t = dst + ((size_t)y * native + x) * 4;
-                    for (int c = 0; c < 4; c++) t[c] = ratio == 1 ? acc[c] : acc[c] * inv;
-                }
+            }
+            memcpy(ibl_cubemap_face(out, k, f), tmp, (size_t)native * native * 4 * sizeof(float));
         }
     }
+    ibl_free(ctx, tmp);
     return IBL_OK;
 }
 

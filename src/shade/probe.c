@@ -37,8 +37,16 @@ ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *p)
     }
     if (!have_r && have_s)
         for (int k = 0; k < m->levels; k++) m->roughness[k] = ibl_roughness_from_shininess(m->shininess[k]);
+    /* floor at 1e-3: roughness 1 maps to shininess 0, and the lookup works in log2 */
     if (!have_s)
-        for (int k = 0; k < m->levels; k++) m->shininess[k] = ibl_shininess_from_roughness(m->roughness[k]);
+        for (int k = 0; k < m->levels; k++) {
+            float s = ibl_shininess_from_roughness(m->roughness[k]);
+            m->shininess[k] = s > 1e-3f ? s : 1e-3f;
+        }
+    for (int k = 0; k < m->levels; k++)
+        if (!(m->shininess[k] > 0.0f))
+            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: level %d has shininess %g", k,
+                            (double)m->shininess[k]);
     for (int k = 1; k < m->levels; k++) {
         if (!(m->roughness[k] > m->roughness[k - 1]))
             return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
@@ -92,7 +100,7 @@ float ibl_probe_lod_from_shininess(const ibl_probe *p, float shininess)
     const ibl_level_mapping *m = &p->mapping;
     if (m->lod_from_shininess) return m->lod_from_shininess(m->user, shininess);
     int last = m->levels - 1;
-    if (shininess < 1e-6f) shininess = 1e-6f;
+    if (shininess < 1e-3f) shininess = 1e-3f;
     if (shininess >= m->shininess[0]) {
         float ms = p->mirror_shininess > 0.0f ? p->mirror_shininess : 10000.0f;
         if (!p->mirror.data || ms <= m->shininess[0]) return 0.0f;
