@@ -14,5 +14,6 @@
 #include "io.h"
 #include "layout.h"
 #include "shade.h"
+#include "sky.h"
 
 #endif
