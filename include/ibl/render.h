@@ -64,7 +64,7 @@ int ibl_render_scene_objects(ibl_render_object *objects, int max_objects);
 ibl_status ibl_render(ibl_context *ctx, const ibl_probe *probe, const ibl_render_desc *desc,
                       ibl_image *out, int *ids);
 
-/* In place: scale by 2^exposure_ev and apply the filmic curve (ACES fit, Narkowicz 2015);
+/* In place: scale by 2^exposure_ev and apply the filmic curve of io.h (ibl_tonemap_apply);
  * the result is display-referred in [0, 1], before the sRGB transfer function. */
 void ibl_render_tonemap(ibl_image *image, float exposure_ev);
 

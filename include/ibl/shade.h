@@ -225,6 +225,9 @@ typedef struct ibl_shade_desc {
     ibl_bp_diffuse bp_diffuse;
     int no_mirror;              /* never use the mirror cube                                 */
     int nearest_level;          /* round the lod (no trilinear): to see the level steps      */
+    int mirror_direction;       /* ibl_shade: look up along R itself instead of the lobe's
+                                   dominant direction, which leans from R toward N with
+                                   roughness (Lagarde & de Rousiers 2014; the default)        */
 } ibl_shade_desc;
 
 typedef struct ibl_surface {

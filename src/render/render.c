@@ -5,6 +5,8 @@
  * Hammersley set), so the difference is the error of the whole baked pipeline. */
 #include "render_internal.h"
 
+#include "ibl/io.h"
+
 #include <float.h>
 #include <stdio.h>
 #include <string.h>
@@ -81,6 +83,7 @@ typedef struct render_job {
     int *ids;
     float half_w, half_h;
     int samples;
+    ibl__env_sampler *sampler;
 } render_job;
 
 static void env_radiance(const ibl_cubemap *env, float scale, ibl_vec3 d, float out[3])
@@ -90,62 +93,110 @@ static void env_radiance(const ibl_cubemap *env, float scale, ibl_vec3 d, float 
     for (int k = 0; k < 3; k++) out[k] = c[k] * scale;
 }
 
-/* Monte Carlo estimate of the reflected radiance (diffuse + specular lobes, each importance
- * sampled, no split sum, no prefiltering). */
+/* What the reference needs of a material at one pixel. */
+typedef struct lobe {
+    int bp;
+    float alpha, shininess, nv;
+    float f0[3], kd[3];
+} lobe;
+
+static lobe make_lobe(const ibl_material *m, float nv)
+{
+    lobe b;
+    b.bp = m->model == IBL_MATERIAL_BLINN_PHONG;
+    /* GGX at alpha = 0 is a delta; 1e-3 is far below what any cube level resolves */
+    b.alpha = fmaxf(m->roughness * m->roughness, 1e-3f);
+    b.shininess = m->shininess;
+    b.nv = nv;
+    int given = m->f0[0] != 0.0f || m->f0[1] != 0.0f || m->f0[2] != 0.0f;
+    for (int c = 0; c < 3; c++) {
+        if (b.bp) {
+            b.f0[c] = m->f0[c];
+            b.kd[c] = m->base_color[c] * (1.0f - m->f0[c]);
+        } else {
+            float fd = given ? m->f0[c] : 0.04f;
+            b.f0[c] = fd + (m->base_color[c] - fd) * m->metallic;
+            b.kd[c] = m->base_color[c] * (1.0f - m->metallic);
+        }
+    }
+    return b;
+}
+
+/* f(l) (RGB, diffuse + specular) and the densities of the two BRDF strategies at l. Returns
+ * n.l (0 when l is under the surface, with f and the densities 0). */
+static float eval_lobe(const lobe *b, ibl_vec3 n, ibl_vec3 v, ibl_vec3 l, float f[3],
+                       float *pdf_spec, float *pdf_diff)
+{
+    float nl = ibl__dot(n, l);
+    *pdf_spec = *pdf_diff = 0.0f;
+    f[0] = f[1] = f[2] = 0.0f;
+    if (nl <= 0.0f) return 0.0f;
+    ibl_vec3 h = ibl__norm(ibl__v3(v.x + l.x, v.y + l.y, v.z + l.z));
+    float nh = fmaxf(ibl__dot(n, h), 0.0f), vh = fmaxf(ibl__dot(v, h), 1e-6f);
+    float spec, pdf;
+    if (b->bp) {
+        /* tri-Ace 2010: (c1 s + c2) F (n.h)^s / max(n.l, n.v) */
+        float lobe_h = powf(nh, b->shininess);
+        spec = ibl_blinn_phong_norm(b->shininess) * lobe_h / fmaxf(nl, b->nv);
+        pdf = (b->shininess + 1.0f) / (2.0f * PI_F) * lobe_h / (4.0f * vh);
+    } else {
+        float d = ibl_ggx_d(b->alpha, nh);
+        spec = d * ibl_smith_ggx_v(b->alpha, b->nv, nl);
+        pdf = d * nh / (4.0f * vh);
+    }
+    for (int c = 0; c < 3; c++) f[c] = spec * ibl_fresnel_schlick(b->f0[c], vh) + b->kd[c] / PI_F;
+    *pdf_spec = pdf;
+    *pdf_diff = nl / PI_F;
+    return nl;
+}
+
+/* Monte Carlo estimate of the reflected radiance: three strategies (the specular lobe, the
+ * cosine lobe, the environment's luminance), one sample of each per iteration, combined with
+ * the balance heuristic (Veach 1997, multi-sample MIS): each adds f L n.l / sum of the three
+ * densities. No split sum, no prefiltering. */
 static void reference_shade(const render_job *job, const ibl_material *m, ibl_vec3 n, ibl_vec3 v,
                             uint32_t pixel, float out[3])
 {
-    const ibl_cubemap *env = job->env;
     float scale = job->probe->intensity > 0.0f ? job->probe->intensity : 1.0f;
     int ns = job->samples;
-    float nv = fmaxf(ibl__dot(n, v), 1e-4f);
+    lobe b = make_lobe(m, fmaxf(ibl__dot(n, v), 1e-4f));
     uint32_t h0 = ibl__hash(pixel * 2654435761u ^ job->desc->seed);
     uint32_t h1 = ibl__hash(h0 + 0x68bc21ebu);
     float r0 = (float)(h0 >> 8) * (1.0f / 16777216.0f), r1 = (float)(h1 >> 8) * (1.0f / 16777216.0f);
-    double spec[3] = {0, 0, 0}, diff[3] = {0, 0, 0};
-    float f0[3], kd[3];
-    int bp = m->model == IBL_MATERIAL_BLINN_PHONG;
-    for (int c = 0; c < 3; c++) {
-        if (bp) {
-            f0[c] = m->f0[c];
-            kd[c] = m->base_color[c] * (1.0f - m->f0[c]);
-        } else {
-            int given = m->f0[0] != 0.0f || m->f0[1] != 0.0f || m->f0[2] != 0.0f;
-            float fd = given ? m->f0[c] : 0.04f;
-            f0[c] = fd + (m->base_color[c] - fd) * m->metallic;
-            kd[c] = m->base_color[c] * (1.0f - m->metallic);
-        }
-    }
-    float alpha = m->roughness * m->roughness;
+    double acc[3] = {0, 0, 0};
+    ibl_vec3 t, bt;
+    ibl__frame(n, &t, &bt);
     for (int i = 0; i < ns; i++) {
-        float u0, u1, l_rad[3];
+        float u0, u1;
         ibl__hammersley((uint32_t)i, (uint32_t)ns, r0, r1, &u0, &u1);
+        ibl_vec3 dirs[3];
+        float env_pdf[3];
         /* specular lobe */
-        ibl_vec3 h = bp ? ibl__sample_phong(n, m->shininess, u0, u1) : ibl__sample_ggx(n, alpha, u0, u1);
-        float vh = ibl__dot(v, h), nh = ibl__dot(n, h);
-        ibl_vec3 l = ibl__v3(2.0f * vh * h.x - v.x, 2.0f * vh * h.y - v.y, 2.0f * vh * h.z - v.z);
-        float nl = ibl__dot(n, l);
-        if (nl > 0.0f && vh > 0.0f && nh > 0.0f) {
-            float w;
-            if (bp) /* f n.l / pdf with pdf = (s+1)/(2 pi) (n.h)^s / (4 v.h) */
-                w = ibl_blinn_phong_norm(m->shininess) * nl / fmaxf(nl, nv) * 8.0f * PI_F * vh /
-                    (m->shininess + 1.0f);
-            else /* pdf = D n.h / (4 v.h) */
-                w = ibl_smith_ggx_v(alpha, nv, nl) * 4.0f * vh * nl / nh;
-            env_radiance(env, scale, l, l_rad);
-            for (int c = 0; c < 3; c++) spec[c] += ibl_fresnel_schlick(f0[c], vh) * w * l_rad[c];
-        }
-        /* diffuse lobe: cosine-weighted directions, estimator kd L */
-        ibl_vec3 t, b;
-        ibl__frame(n, &t, &b);
+        ibl_vec3 h = b.bp ? ibl__sample_phong(n, b.shininess, u0, u1) : ibl__sample_ggx(n, b.alpha, u0, u1);
+        float vh = ibl__dot(v, h);
+        dirs[0] = ibl__v3(2.0f * vh * h.x - v.x, 2.0f * vh * h.y - v.y, 2.0f * vh * h.z - v.z);
+        env_pdf[0] = -1.0f;
+        /* cosine lobe */
         float rr = sqrtf(u1), phi = 2.0f * PI_F * u0;
         float x = rr * cosf(phi), y = rr * sinf(phi), z = sqrtf(fmaxf(0.0f, 1.0f - u1));
-        ibl_vec3 ld = ibl__v3(t.x * x + b.x * y + n.x * z, t.y * x + b.y * y + n.y * z,
-                              t.z * x + b.z * y + n.z * z);
-        env_radiance(env, scale, ld, l_rad);
-        for (int c = 0; c < 3; c++) diff[c] += kd[c] * l_rad[c];
+        dirs[1] = ibl__v3(t.x * x + bt.x * y + n.x * z, t.y * x + bt.y * y + n.y * z,
+                          t.z * x + bt.z * y + n.z * z);
+        env_pdf[1] = -1.0f;
+        /* environment */
+        dirs[2] = ibl__env_sampler_sample(job->sampler, u0, u1, &env_pdf[2]);
+        for (int k = 0; k < 3; k++) {
+            float f[3], ps, pd;
+            float nl = eval_lobe(&b, n, v, dirs[k], f, &ps, &pd);
+            if (nl <= 0.0f) continue;
+            float pe = env_pdf[k] >= 0.0f ? env_pdf[k] : ibl__env_sampler_pdf(job->sampler, dirs[k]);
+            float sum = ps + pd + pe;
+            if (!(sum > 0.0f)) continue;
+            float l_rad[3];
+            env_radiance(job->env, scale, dirs[k], l_rad);
+            for (int c = 0; c < 3; c++) acc[c] += (double)(f[c] * l_rad[c] * nl / sum);
+        }
     }
-    for (int c = 0; c < 3; c++) out[c] = (float)((spec[c] + diff[c]) / ns);
+    for (int c = 0; c < 3; c++) out[c] = (float)(acc[c] / ns);
 }
 
 static void render_row(void *arg, int y)
@@ -226,27 +277,28 @@ ibl_status ibl_render(ibl_context *ctx, const ibl_probe *probe, const ibl_render
     if (half_h * aspect < 4.3f) half_h = 4.3f / aspect;
     job->half_h = half_h;
     job->half_w = half_h * aspect;
-    ibl_status st = ibl_image_alloc(ctx, w, h, out);
+    ibl_status st = IBL_OK;
+    if (desc->reference) {
+        job->sampler = ibl__env_sampler_create(ctx, job->env);
+        if (!job->sampler) st = ibl_context_status(ctx);
+    }
+    if (st == IBL_OK) st = ibl_image_alloc(ctx, w, h, out);
     if (st == IBL_OK) {
         job->out = out;
         ibl_parallel_for(ctx, h, render_row, job);
     }
+    ibl__env_sampler_destroy(ctx, job->sampler);
     ibl_free(ctx, job);
     return st;
 }
 
-/* Narkowicz 2015, "ACES Filmic Tone Mapping Curve". */
-static float filmic(float x)
-{
-    if (!(x > 0.0f)) return 0.0f;
-    float y = x * (2.51f * x + 0.03f) / (x * (2.43f * x + 0.59f) + 0.14f);
-    return y > 1.0f ? 1.0f : y;
-}
-
+/* The library's filmic curve (io.h: Narkowicz's ACES fit), so a tone-mapped preview and a
+ * PNG written from the linear image look the same. */
 void ibl_render_tonemap(ibl_image *im, float exposure_ev)
 {
     float s = exp2f(exposure_ev);
     size_t n = (size_t)im->width * im->height;
     for (size_t i = 0; i < n; i++)
-        for (int c = 0; c < 3; c++) im->pixels[i * 4 + c] = filmic(im->pixels[i * 4 + c] * s);
+        for (int c = 0; c < 3; c++)
+            im->pixels[i * 4 + c] = ibl_tonemap_apply(IBL_TONEMAP_FILMIC, im->pixels[i * 4 + c] * s);
 }

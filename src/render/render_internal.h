@@ -35,4 +35,12 @@ ibl_vec3 ibl__sample_ggx(ibl_vec3 n, float alpha, float u0, float u1);
 /* Half vector sampled from the normalised Blinn-Phong NDF ((s + 1)/2pi (n.h)^s). */
 ibl_vec3 ibl__sample_phong(ibl_vec3 n, float shininess, float u0, float u1);
 
+/* Environment importance sampling (env_sampling.c). */
+typedef struct ibl__env_sampler ibl__env_sampler;
+ibl__env_sampler *ibl__env_sampler_create(ibl_context *ctx, const ibl_cubemap *env);
+void ibl__env_sampler_destroy(ibl_context *ctx, ibl__env_sampler *s);
+/* A direction and its density over solid angle. */
+ibl_vec3 ibl__env_sampler_sample(const ibl__env_sampler *s, float u0, float u1, float *pdf);
+float ibl__env_sampler_pdf(const ibl__env_sampler *s, ibl_vec3 d);
+
 #endif

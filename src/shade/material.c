@@ -134,6 +134,19 @@ void ibl_shade(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_mat
     float nv = dot3(s->n, s->v);
     ibl_vec3 r = {2.0f * nv * s->n.x - s->v.x, 2.0f * nv * s->n.y - s->v.y,
                   2.0f * nv * s->n.z - s->v.z};
+    if (!desc || !desc->mirror_direction) {
+        /* Lagarde & de Rousiers 2014 ("Moving Frostbite to PBR", specular dominant
+         * direction): rough lobes lean from R toward N, which the n = v = r prefilter
+         * cannot express; lerp(N, R, (1 - r)(sqrt(1 - r) + r)) */
+        float rough = m->model == IBL_MATERIAL_BLINN_PHONG ? ibl_roughness_from_shininess(m->shininess)
+                                                           : clamp01(m->roughness);
+        float smooth = 1.0f - rough;
+        float f = smooth * (sqrtf(smooth) + rough);
+        ibl_vec3 d = {s->n.x + (r.x - s->n.x) * f, s->n.y + (r.y - s->n.y) * f,
+                      s->n.z + (r.z - s->n.z) * f};
+        float len = sqrtf(dot3(d, d));
+        if (len > 0.0f) r = (ibl_vec3){d.x / len, d.y / len, d.z / len};
+    }
     ibl_shade_dir(probe, desc, m, s, r, out);
 }
 
