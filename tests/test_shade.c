@@ -168,7 +168,16 @@ static void so_conditions(void **state)
     assert_near(ibl_specular_occlusion(IBL_SO_TRIACE_FAST, 0, ao, 0, 0), 0.0, 1e-6);
     assert_true(ibl_specular_occlusion(IBL_SO_TRIACE_FAST, em, ao, 0, 0) > 0.9f);
     assert_near(ibl_specular_occlusion(IBL_SO_TRIACE_FAST, 1, ao, 0, 0), 1.0, 1e-6);
-    /* the cone formula: fully open (AO = 1) never occludes a view along n; no aperture occludes all */
+    /* the cone formula meets all three conditions at any AO while the specular cone is
+     * narrower than the visibility cone: at the boundary the lobe is centred on the cone's
+     * edge, and Oat & Sander's smoothstep gives exactly one half there */
+    for (int ai = 1; ai <= 3; ai++) {
+        float a = ai * 0.25f, mid = (float)sin(acos(sqrt(a)));
+        assert_near(ibl_specular_occlusion(IBL_SO_CONE, 0, a, 0.5f, 0), 0.0, 1e-6);
+        assert_near(ibl_specular_occlusion(IBL_SO_CONE, mid, a, 0.5f, 0), 0.5, 1e-4);
+        assert_near(ibl_specular_occlusion(IBL_SO_CONE, 1, a, 0.5f, 0), 1.0, 1e-6);
+    }
+    /* fully open (AO = 1) never occludes a view along n; no aperture occludes all */
     assert_near(ibl_specular_occlusion(IBL_SO_CONE, 1, 1.0f, 0.5f, 0), 1.0, 1e-5);
     assert_near(ibl_specular_occlusion(IBL_SO_CONE, 0.5f, 0.0f, 0.5f, 0), 0.0, 1e-6);
     assert_near(ibl_specular_occlusion(IBL_SO_NONE, 0.2f, 0.1f, 0, 0), 1.0, 0);

@@ -77,8 +77,8 @@ static float cone_so(float n_dot_e, float ao, float roughness)
     float c = powf(0.5f, 1.0f / (n + 1.0f));
     float spec = acosf(c);
     if (spec < 1e-4f) spec = 1e-4f;
-    /* the angle between n and R is twice the angle between n and E */
-    float d = 2.0f * acosf(saturate(n_dot_e));
+    /* R is E mirrored about n: both make the same angle with n */
+    float d = acosf(saturate(n_dot_e));
     float cap = 2.0f * PI_F * (1.0f - cosf(spec));
     return saturate(cap_intersection(vis, spec, d) / cap);
 }
