@@ -306,6 +306,39 @@ static void obj_mesh(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* The command line: a tiny preview, a labelled comparison, the reference, usage errors. */
+static void cli_render(void **state)
+{
+    (void)state;
+    const char *out = NULL;
+    const char *png = test_path("r.png"), *cmp = test_path("c.png"), *exr = test_path("r.exr");
+    int rc = test_run_cli(&out, "render '%s' -o '%s' --width 64 --specular-size 16 -q",
+                          test_data("studio.exr"), png);
+    assert_int_equal(rc, 0);
+    assert_true(test_file_exists(png));
+    rc = test_run_cli(&out, "render '%s' -o '%s' --width 64 --specular-size 16 -q --compare so=none "
+                            "so=triace-fast,sphere-ao=0.3,mix=lerp-ao",
+                      test_data("studio.exr"), cmp);
+    assert_int_equal(rc, 0);
+    ibl_context *ctx = test_context(1);
+    ibl_image im;
+    assert_int_equal(ibl_read_image(ctx, cmp, NULL, &im, NULL), IBL_OK);
+    assert_int_equal(im.height, 32);
+    assert_true(im.width > 128);
+    ibl_image_free(ctx, &im);
+    rc = test_run_cli(&out, "render '%s' -o '%s' --width 32 --specular-size 8 --reference --samples 8 -q",
+                      test_data("studio.exr"), exr);
+    assert_int_equal(rc, 0);
+    assert_int_equal(ibl_read_image(ctx, exr, NULL, &im, NULL), IBL_OK);
+    assert_int_equal(im.width, 32);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+    assert_int_equal(test_run_cli(&out, "render '%s' -o '%s' --so bogus", test_data("studio.exr"), png), 2);
+    assert_int_equal(test_run_cli(&out, "render '%s' -o '%s' --compare so=none", test_data("studio.exr"), png), 2);
+    assert_int_equal(test_run_cli(&out, "render '%s' -o '%s'", test_path("missing.exr"), png), 1);
+    assert_non_null(strstr(out, "missing.exr"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -315,6 +348,7 @@ int main(void)
         cmocka_unit_test(identical_at_any_thread_count),
         cmocka_unit_test(tonemap_and_labels),
         cmocka_unit_test(obj_mesh),
+        cmocka_unit_test(cli_render),
     };
     return cmocka_run_group_tests_name("render", tests, NULL, NULL);
 }
