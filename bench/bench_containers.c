@@ -38,10 +38,10 @@ static double median(double *v)
 
 int main(int argc, char **argv)
 {
-    (void)argc;
-    (void)argv;
+    ibl_context_desc cd = {0};
+    cd.threads = argc > 2 ? atoi(argv[2]) : 0;
     ibl_context *ctx = NULL;
-    if (ibl_context_create(NULL, &ctx) != IBL_OK) return 1;
+    if (ibl_context_create(&cd, &ctx) != IBL_OK) return 1;
     ibl_texture tex;
     if (ibl_texture_alloc(ctx, IBL_TEXTURE_CUBE, 256, 256, 1, 9, &tex) != IBL_OK) return 1;
     size_t floats = ibl_texture_floats(IBL_TEXTURE_CUBE, 256, 256, 1, 9);
@@ -58,7 +58,8 @@ int main(int argc, char **argv)
     };
     static const ibl_format fmts[] = {IBL_FORMAT_RGBA16F, IBL_FORMAT_RGBA32F, IBL_FORMAT_RG11B10F,
                                       IBL_FORMAT_RGB9E5, IBL_FORMAT_RG16F, IBL_FORMAT_RG32F};
-    printf("cube 256, 9 levels, %.1f MiB of float RGBA; median of %d runs\n", mib, RUNS);
+    printf("cube 256, 9 levels, %.1f MiB of float RGBA; %d threads; median of %d runs\n", mib,
+           ibl_context_threads(ctx), RUNS);
     printf("%-5s %-9s %10s %10s %12s %12s\n", "cont", "format", "enc ms", "dec ms", "enc MiB/s",
            "dec MiB/s");
     for (size_t c = 0; c < sizeof cs / sizeof cs[0]; c++) {

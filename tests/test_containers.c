@@ -490,7 +490,8 @@ static void ktx1_and_dds_bytes_by_hand(void **state)
     b = vb;
     assert_true(rd32(b + 8) & 0x800000u);
     assert_int_equal(rd32(b + 24), 2);
-    assert_int_equal(rd32(b + 112), 0x200000u);
+    assert_int_equal(rd32(b + 108), 0x1000u);   /* TEXTURE only: one surface */
+    assert_int_equal(rd32(b + 112), 0x200000u); /* VOLUME */
     assert_int_equal(rd32(b + 128), 16);
     assert_int_equal(rd32(b + 132), 4);
     assert_int_equal(size, 148 + 4 * 4 * 2 * 8);
@@ -741,6 +742,20 @@ static void encoder_refusals(void **state)
         assert_int_equal(ct->encode(ctx, &t, &d, ct->name, &vb, &size), IBL_ERR_UNSUPPORTED);
         assert_message_named(ctx, ct->name);
         assert_null(vb);
+        /* no format asked for: keep the texture's own, widen RGB32F, else RGBA16F */
+        ibl_format own[4][2] = {{IBL_FORMAT_RGB9E5, IBL_FORMAT_RGB9E5}, {IBL_FORMAT_RGB32F, IBL_FORMAT_RGBA32F},
+                                {IBL_FORMAT_RGB16F, IBL_FORMAT_RGBA16F}, {IBL_FORMAT_DEFAULT, IBL_FORMAT_RGBA16F}};
+        for (int i = 0; i < 4; i++) {
+            ibl_texture v = t;
+            v.format = own[i][0];
+            assert_int_equal(ct->encode(ctx, &v, NULL, ct->name, &vb, &size), IBL_OK);
+            ibl_texture out;
+            assert_int_equal(ct->decode(ctx, vb, size, ct->name, &out, NULL), IBL_OK);
+            assert_int_equal(out.format, own[i][1]);
+            ibl_texture_free(ctx, &out);
+            ibl_free(ctx, vb);
+            vb = NULL;
+        }
         ibl_texture bad = t;
         bad.levels = 9; /* more than log2(8) + 1 */
         assert_int_equal(ct->encode(ctx, &bad, NULL, ct->name, &vb, &size), IBL_ERR_INVALID_ARGUMENT);
@@ -758,6 +773,49 @@ static void encoder_refusals(void **state)
     assert_message_named(ctx, "many.ktx2");
     ibl_texture_free(ctx, &t);
     ibl_context_destroy(ctx);
+}
+
+/* Packing runs in fixed chunks of 65536 texels through the thread pool: the bytes and the
+ * decoded texels must be identical at 1, 2 and 8 threads. */
+static void thread_count_invariance(void **state)
+{
+    (void)state;
+    static const int threads[3] = {1, 2, 8};
+    void *first = NULL;
+    size_t first_size = 0;
+    ibl_texture first_out = {0};
+    for (int i = 0; i < 3; i++) {
+        ibl_context *ctx = test_context(threads[i]);
+        ibl_texture t;
+        /* level 0 of a 128 cube is 98,304 texels: two chunks, the second one partial */
+        assert_int_equal(ibl_texture_alloc(ctx, IBL_TEXTURE_CUBE, 128, 128, 1, 2, &t), IBL_OK);
+        rng = 99;
+        fill_random(&t, IBL_FORMAT_RGB9E5);
+        t.format = IBL_FORMAT_RGB9E5;
+        void *vb;
+        size_t size;
+        assert_int_equal(ibl__ktx2_encode(ctx, &t, NULL, "mt.ktx2", &vb, &size), IBL_OK);
+        ibl_texture out;
+        assert_int_equal(ibl__ktx2_decode(ctx, vb, size, "mt.ktx2", &out, NULL), IBL_OK);
+        size_t n = ibl_texture_floats(out.kind, out.width, out.height, out.depth, out.levels);
+        if (i == 0) {
+            first = malloc(size);
+            memcpy(first, vb, size);
+            first_size = size;
+            first_out.data = malloc(n * sizeof(float));
+            memcpy(first_out.data, out.data, n * sizeof(float));
+        } else {
+            assert_int_equal(size, first_size);
+            assert_memory_equal(vb, first, size);
+            assert_memory_equal(out.data, first_out.data, n * sizeof(float));
+        }
+        ibl_free(ctx, vb);
+        ibl_texture_free(ctx, &out);
+        ibl_texture_free(ctx, &t);
+        ibl_context_destroy(ctx);
+    }
+    free(first);
+    free(first_out.data);
 }
 
 /* If KTX-Software's `ktx` tool is installed (it is not packaged in Debian 12), it must accept
@@ -789,6 +847,53 @@ static void ktx_tool_validates(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* Cross-check with an independent KTX2 implementation, ktx-parse (npm; glTF-Transform's
+ * parser/serializer): it must read every file we write and, writing it back, produce the very
+ * same bytes (layout, alignment, level order, DFD, sorted KVD and padding). Runs when
+ * IBL_KTX_PARSE_DIR names a folder where `npm install ktx-parse` was run; skipped otherwise
+ * (the project's dependencies are Debian packages only). */
+static void ktx_parse_cross_check(void **state)
+{
+    (void)state;
+    const char *dir = getenv("IBL_KTX_PARSE_DIR");
+    char probe[600];
+    if (!dir || snprintf(probe, sizeof probe, "%s/node_modules/ktx-parse/package.json", dir) <= 0 ||
+        !test_file_exists(probe) || system("command -v node >/dev/null 2>&1") != 0) {
+        skip();
+        return;
+    }
+    ibl_context *ctx = test_context(1);
+    static const ibl_texture_kind kinds[] = {IBL_TEXTURE_2D, IBL_TEXTURE_3D, IBL_TEXTURE_CUBE};
+    for (size_t fi = 0; fi < sizeof FORMATS / sizeof FORMATS[0]; fi++) {
+        for (int k = 0; k < 3; k++) {
+            ibl_texture t = make_texture(ctx, kinds[k], 1, FORMATS[fi]);
+            add_metadata(ctx, &t);
+            void *vb;
+            size_t size;
+            assert_int_equal(ibl__ktx2_encode(ctx, &t, NULL, "x.ktx2", &vb, &size), IBL_OK);
+            const char *path = test_path("cross.ktx2");
+            FILE *f = fopen(path, "wb");
+            assert_non_null(f);
+            assert_int_equal(fwrite(vb, 1, size, f), size);
+            fclose(f);
+            char cmd[1600];
+            snprintf(cmd, sizeof cmd,
+                     "cd '%s' && node --input-type=module -e \"import {read, write} from 'ktx-parse';"
+                     "import fs from 'fs'; const b = new Uint8Array(fs.readFileSync(process.argv[1]));"
+                     "const c = read(b); const r = write(c, {keepWriter: true});"
+                     "const same = r.length === b.length && r.every((v, i) => v === b[i]);"
+                     "process.exit(same && c.vkFormat === %u && c.levels.length === %d ? 0 : 3);\" '%s'",
+                     dir, (unsigned)((const uint8_t *)vb)[12] | ((unsigned)((const uint8_t *)vb)[13] << 8),
+                     t.levels, path);
+            if (system(cmd) != 0)
+                fail_msg("ktx-parse disagrees on the %s kind %d file", ibl_format_name(FORMATS[fi]), k);
+            ibl_free(ctx, vb);
+            ibl_texture_free(ctx, &t);
+        }
+    }
+    ibl_context_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -798,7 +903,9 @@ int main(void)
         cmocka_unit_test(orientation_and_legacy),
         cmocka_unit_test(malformed_inputs),
         cmocka_unit_test(encoder_refusals),
+        cmocka_unit_test(thread_count_invariance),
         cmocka_unit_test(ktx_tool_validates),
+        cmocka_unit_test(ktx_parse_cross_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -9,9 +9,18 @@
 
 ibl_format ibl__container_format(const ibl_texture *tex, const ibl_write_desc *desc)
 {
-    if (desc && desc->format != IBL_FORMAT_DEFAULT) return desc->format;
-    if (tex && tex->format != IBL_FORMAT_DEFAULT) return tex->format;
-    return IBL_FORMAT_RGBA16F;
+    if (desc && desc->format != IBL_FORMAT_DEFAULT) return desc->format; /* asked for: exact */
+    ibl_format f = tex ? tex->format : IBL_FORMAT_DEFAULT;
+    switch (f) {
+    case IBL_FORMAT_RGBA16F:
+    case IBL_FORMAT_RGBA32F:
+    case IBL_FORMAT_RG11B10F:
+    case IBL_FORMAT_RGB9E5:
+    case IBL_FORMAT_RG16F:
+    case IBL_FORMAT_RG32F: return f; /* keep what the texture was read as */
+    case IBL_FORMAT_RGB32F: return IBL_FORMAT_RGBA32F; /* e.g. from PFM or float EXR */
+    default: return IBL_FORMAT_RGBA16F;
+    }
 }
 
 uint64_t ibl__level_texels(ibl_texture_kind kind, int width, int height, int depth, int level)
@@ -228,6 +237,60 @@ void ibl__flip_texture(ibl_texture *tex, int flip_x, int flip_y, int flip_z)
                         swap_texels(base + (z * w * h + i) * 4, base + ((d - 1 - z) * w * h + i) * 4);
         }
     }
+}
+
+/* ---- chunked conversion ---- */
+
+enum { CHUNK_TEXELS = 1 << 16 };
+
+typedef struct convert_job {
+    ibl_format format;
+    size_t count, texel_bytes;
+    const float *src_f;
+    uint8_t *dst_b;
+    const uint8_t *src_b;
+    float *dst_f;
+} convert_job;
+
+static void pack_chunk(void *arg, int index)
+{
+    const convert_job *j = arg;
+    size_t first = (size_t)index * CHUNK_TEXELS;
+    size_t n = j->count - first < CHUNK_TEXELS ? j->count - first : CHUNK_TEXELS;
+    ibl_pack_texels(j->format, j->src_f + first * 4, n, j->dst_b + first * j->texel_bytes);
+}
+
+static void unpack_chunk(void *arg, int index)
+{
+    const convert_job *j = arg;
+    size_t first = (size_t)index * CHUNK_TEXELS;
+    size_t n = j->count - first < CHUNK_TEXELS ? j->count - first : CHUNK_TEXELS;
+    ibl_unpack_texels(j->format, j->src_b + first * j->texel_bytes, n, j->dst_f + first * 4);
+}
+
+static int chunk_count(size_t count)
+{
+    /* count <= 6 * 65536^3 would overflow int chunks only past 2^47 texels; files that large
+     * are refused long before (memory limit). Fall back to one call if it ever happens. */
+    size_t chunks = (count + CHUNK_TEXELS - 1) / CHUNK_TEXELS;
+    return chunks > 0x7fffffff ? 0 : (int)chunks;
+}
+
+void ibl__pack(ibl_context *ctx, ibl_format format, const float *rgba, size_t count, uint8_t *dst)
+{
+    convert_job j = {format, count, ibl_format_texel_bytes(format), rgba, dst, NULL, NULL};
+    int chunks = chunk_count(count);
+    if (chunks <= 1) ibl_pack_texels(format, rgba, count, dst);
+    else ibl_parallel_for(ctx, chunks, pack_chunk, &j);
+}
+
+void ibl__unpack(ibl_context *ctx, ibl_format format, const uint8_t *src, size_t count,
+                 float *rgba)
+{
+    convert_job j = {format, count, ibl_format_texel_bytes(format), NULL, NULL, src, rgba};
+    int chunks = chunk_count(count);
+    if (chunks <= 1) ibl_unpack_texels(format, src, count, rgba);
+    else ibl_parallel_for(ctx, chunks, unpack_chunk, &j);
 }
 
 void ibl__fill_info(ibl_file_info *info, ibl_file_type type, const ibl_texture *tex)

@@ -26,7 +26,9 @@ static inline void ibl__wr64(uint8_t *p, uint64_t v)
     ibl__wr32(p + 4, (uint32_t)(v >> 32));
 }
 
-/* The storage format an encoder writes: desc->format, else tex->format, else RGBA16F. */
+/* The storage format an encoder writes: desc->format if set (refused later if the container
+ * cannot store it); else tex->format if it is one of the six container formats; else
+ * RGBA32F for RGB32F textures (keeps float precision) and RGBA16F for anything else. */
 ibl_format ibl__container_format(const ibl_texture *tex, const ibl_write_desc *desc);
 
 /* Validates a texture handed to an encoder (kind, dimensions, levels, data). */
@@ -61,6 +63,12 @@ ibl_status ibl__kv_parse(ibl_context *ctx, const char *name, const uint8_t *byte
 
 /* Mirrors every level/face of a texture along x, y and/or z (slices). */
 void ibl__flip_texture(ibl_texture *tex, int flip_x, int flip_y, int flip_z);
+
+/* ibl_pack_texels / ibl_unpack_texels split into fixed chunks of texels run through
+ * ibl_parallel_for: the output does not depend on the thread count. */
+void ibl__pack(ibl_context *ctx, ibl_format format, const float *rgba, size_t count, uint8_t *dst);
+void ibl__unpack(ibl_context *ctx, ibl_format format, const uint8_t *src, size_t count,
+                 float *rgba);
 
 /* Fills the file info of a decoded texture. */
 void ibl__fill_info(ibl_file_info *info, ibl_file_type type, const ibl_texture *tex);

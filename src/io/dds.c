@@ -128,10 +128,9 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
         caps |= DDSCAPS_COMPLEX;
         caps2 |= DDSCAPS2_CUBEMAP | DDSCAPS2_CUBEMAP_ALLFACES;
     }
-    if (is3d) {
-        caps |= DDSCAPS_COMPLEX;
-        caps2 |= DDSCAPS2_VOLUME;
-    }
+    /* COMPLEX marks files with more than one surface: mips or cube faces (a volume without
+     * mips is one surface) */
+    if (is3d) caps2 |= DDSCAPS2_VOLUME;
     uint8_t *h = buf + 4;
     ibl__wr32(buf, DDS_MAGIC);
     ibl__wr32(h + 0, HEADER_SIZE);
@@ -159,7 +158,7 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
         for (int l = 0; l < tex->levels; l++) {
             size_t count =
                 (size_t)ibl__level_texels(tex->kind, tex->width, tex->height, tex->depth, l);
-            ibl_pack_texels(fmt, ibl_texture_level(tex, l, f), count, buf + at);
+            ibl__pack(ctx, fmt, ibl_texture_level(tex, l, f), count, buf + at);
             at += count * texel;
         }
     }
@@ -266,7 +265,7 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     for (int f = 0; f < faces; f++) {
         for (int l = 0; l < (int)levels; l++) {
             size_t count = (size_t)ibl__level_texels(kind, w, hh, d, l);
-            ibl_unpack_texels(dx->format, p, count, ibl_texture_level(out, l, f));
+            ibl__unpack(ctx, dx->format, p, count, ibl_texture_level(out, l, f));
             p += count * texel;
         }
     }

@@ -143,7 +143,7 @@ ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
         ibl__wr32(buf + at, (uint32_t)(cube ? face : face * (size_t)faces));
         at += 4;
         for (int f = 0; f < faces; f++) {
-            ibl_pack_texels(fmt, ibl_texture_level(tex, l, f), count, buf + at);
+            ibl__pack(ctx, fmt, ibl_texture_level(tex, l, f), count, buf + at);
             at += pad4(face);
         }
     }
@@ -269,7 +269,7 @@ ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
         size_t count = (size_t)ibl__level_texels(kind, w, h, d, (int)l);
         size_t face = pad4(count * texel);
         for (uint32_t f = 0; f < faces; f++)
-            ibl_unpack_texels(gl->format, bytes + level_at[l] + f * face, count,
+            ibl__unpack(ctx, gl->format, bytes + level_at[l] + f * face, count,
                               ibl_texture_level(out, (int)l, (int)f));
     }
     ibl__flip_texture(out, flips[0], flips[1], flips[2]);

@@ -249,7 +249,7 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     ibl_free(ctx, kvd);
     /* A level's images are layer, face, slice, row: exactly our in-memory level block. */
     for (int l = 0; l < tex->levels; l++)
-        ibl_pack_texels(fmt, ibl_texture_level(tex, l, 0), level_len[l] / texel, buf + level_off[l]);
+        ibl__pack(ctx, fmt, ibl_texture_level(tex, l, 0), level_len[l] / texel, buf + level_off[l]);
     *bytes = buf;
     *size = (size_t)total;
     return IBL_OK;
@@ -429,7 +429,7 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
         return st;
     }
     for (uint64_t l = 0; l < levels; l++)
-        ibl_unpack_texels(vk->format, bytes + level_offset[l], (size_t)(level_bytes[l] / texel),
+        ibl__unpack(ctx, vk->format, bytes + level_offset[l], (size_t)(level_bytes[l] / texel),
                           ibl_texture_level(out, (int)l, 0));
     ibl__flip_texture(out, flips[0], flips[1], flips[2]);
     if (flips[0] || flips[1] || flips[2]) {
