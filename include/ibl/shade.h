@@ -43,25 +43,25 @@ typedef struct ibl_table_axis {
 /* The split-sum GGX table (Karis 2013): for n.v and roughness, A and B such that the
  * directional albedo of the specular lobe is F0 * A + B (single scattering). Laid out
  * [roughness][n_dot_v][channel]; channel 0 = A, channel 1 = B, further channels ignored. */
-typedef struct ibl_splitsum_table {
+typedef struct ibl_splitsum_view {
     const float *data;
     int channels; /* floats per sample, >= 2; 0: 2 */
     ibl_table_axis n_dot_v, roughness;
-} ibl_splitsum_table;
+} ibl_splitsum_view;
 
 /* The seed's AmbientBRDF volume (tri-Ace 2010, "AmbientBRDF texture usage"): the integral of
  * the normalised Blinn-Phong specular lobe times n.l for (n.v, shininess, F0). Laid out
  * [f0][shininess][n_dot_v][channel]; channel 0 is used. */
-typedef struct ibl_ambient_brdf_table {
+typedef struct ibl_ambient_brdf_view {
     const float *data;
     int channels; /* 0: 1 */
     ibl_table_axis n_dot_v, shininess, f0;
-} ibl_ambient_brdf_table;
+} ibl_ambient_brdf_view;
 
 /* Interpolated lookups (clamped to the table's range). */
-void ibl_splitsum_lookup(const ibl_splitsum_table *t, float n_dot_v, float roughness, float *a,
+void ibl_splitsum_lookup(const ibl_splitsum_view *t, float n_dot_v, float roughness, float *a,
                          float *b);
-float ibl_ambient_brdf_lookup(const ibl_ambient_brdf_table *t, float n_dot_v, float shininess,
+float ibl_ambient_brdf_lookup(const ibl_ambient_brdf_view *t, float n_dot_v, float shininess,
                               float f0);
 /* Value of sample i of an axis, and the fractional sample index of a value (clamped). */
 float ibl_table_axis_value(const ibl_table_axis *axis, int i);
@@ -110,8 +110,8 @@ typedef struct ibl_probe {
     ibl_sh_kind sh_kind;
     float sh[9][3];             /* real SH, order (0,0) (1,-1) (1,0) (1,1) (2,-2) (2,-1) (2,0)
                                    (2,1) (2,2); basis 0.282095, 0.488603 (y, z, x), ...        */
-    ibl_splitsum_table splitsum;
-    ibl_ambient_brdf_table ambient_brdf;
+    ibl_splitsum_view splitsum;
+    ibl_ambient_brdf_view ambient_brdf;
     float intensity;            /* scales every radiance read from the probe; 0: 1             */
     /* owned storage when loaded (internal) */
     void *owned[8];

@@ -1,22 +1,20 @@
-/* FALLBACK, slow and simple: builds a probe from an environment in memory so `ibl render`
- * works on a plain environment image before the bake stages (specular.h, sh.h, brdf.h) and
- * `ibl bake` exist in this build. Each piece is the textbook estimator, nothing tuned:
- *  - GGX prefilter with N = V = R (Karis 2013) by importance sampling with filtered lookups
- *    (Krivanek & Colbert 2008: lod from the ratio of sample and texel solid angles);
- *  - irradiance as 9 SH coefficients of the radiance (projection with exact texel solid
- *    angles; Ramamoorthi & Hanrahan 2001 convolve them at lookup);
- *  - the split-sum table (Karis 2013) and the seed's AmbientBRDF volume (tri-Ace 2010) by
- *    importance sampling.
- * When the bake stages land, this file is replaced by calls to them. */
+/* Builds a probe from an environment in memory, so `ibl render` works on a plain environment
+ * image: the irradiance SH (sh.h) and the BRDF tables (brdf.h) come from the library's bake
+ * stages; the GGX prefilter is a FALLBACK, slow and simple, until specular.h exists in this
+ * build: N = V = R (Karis 2013) by importance sampling with filtered lookups (Krivanek &
+ * Colbert 2008: lod from the ratio of sample and texel solid angles). */
 #include "render_internal.h"
+
+#include "ibl/brdf.h"
+#include "ibl/sh.h"
 
 #include <stdlib.h>
 #include <string.h>
 
 static const float PI_F = 3.14159265358979f;
 
-enum { PREFILTER_SAMPLES = 96, TABLE_SAMPLES = 256 };
-enum { SS_NV = 32, SS_R = 32, AB_NV = 16, AB_S = 20, AB_F0 = 8 };
+enum { PREFILTER_SAMPLES = 96 };
+enum { SS_SIZE = 128, AB_NV = 16, AB_S = 24, AB_F0 = 8 };
 
 typedef struct prefilter_job {
     const ibl_cubemap *env; /* full mip chain */
@@ -60,76 +58,6 @@ static void prefilter_task(void *arg, int index)
             for (int k = 0; k < 3; k++) t[k] = wsum > 0.0f ? acc[k] / wsum : 0.0f;
             t[3] = 1.0f;
         }
-}
-
-static void project_sh9(const ibl_cubemap *env, int level, float sh[9][3])
-{
-    int n = ibl_level_size(env->size, level);
-    double acc[9][3];
-    memset(acc, 0, sizeof acc);
-    for (int f = 0; f < 6; f++) {
-        const float *face = ibl_cubemap_face(env, level, f);
-        for (int y = 0; y < n; y++)
-            for (int x = 0; x < n; x++) {
-                ibl_vec3 d = ibl_cube_texel_direction(f, n, x, y);
-                double sa = ibl_cube_texel_solid_angle(n, x, y);
-                double b[9] = {0.282095,
-                               0.488603 * d.y,
-                               0.488603 * d.z,
-                               0.488603 * d.x,
-                               1.092548 * d.x * d.y,
-                               1.092548 * d.y * d.z,
-                               0.315392 * (3.0 * d.z * d.z - 1.0),
-                               1.092548 * d.x * d.z,
-                               0.546274 * (d.x * d.x - d.y * d.y)};
-                const float *t = face + ((size_t)y * n + x) * 4;
-                for (int i = 0; i < 9; i++)
-                    for (int c = 0; c < 3; c++) acc[i][c] += t[c] * b[i] * sa;
-            }
-    }
-    for (int i = 0; i < 9; i++)
-        for (int c = 0; c < 3; c++) sh[i][c] = (float)acc[i][c];
-}
-
-static void splitsum_entry(float nv, float roughness, float *a, float *b)
-{
-    float alpha = roughness * roughness;
-    ibl_vec3 n = {0, 0, 1}, v = {sqrtf(1.0f - nv * nv), 0.0f, nv};
-    double sa = 0.0, sb = 0.0;
-    for (int i = 0; i < TABLE_SAMPLES; i++) {
-        float u0, u1;
-        ibl__hammersley((uint32_t)i, TABLE_SAMPLES, 0.0f, 0.0f, &u0, &u1);
-        ibl_vec3 h = ibl__sample_ggx(n, alpha, u0, u1);
-        float vh = ibl__dot(v, h);
-        float nl = 2.0f * vh * h.z - v.z;
-        if (nl <= 0.0f || vh <= 0.0f) continue;
-        /* f n.l / pdf with pdf = D n.h / (4 v.h): V 4 v.h n.l / n.h */
-        float w = ibl_smith_ggx_v(alpha, nv, nl) * 4.0f * vh * nl / h.z;
-        float fc = powf(1.0f - vh, 5.0f);
-        sa += (1.0f - fc) * w;
-        sb += fc * w;
-    }
-    *a = (float)(sa / TABLE_SAMPLES);
-    *b = (float)(sb / TABLE_SAMPLES);
-}
-
-/* White-environment albedo of the seed's specular term:
- * (c1 s + c2) F (n.h)^s n.l / max(n.l, n.v), sampled with pdf (s+1)/(2pi) (n.h)^s / (4 v.h). */
-static float ambient_entry(float nv, float s, float f0)
-{
-    ibl_vec3 n = {0, 0, 1}, v = {sqrtf(1.0f - nv * nv), 0.0f, nv};
-    double acc = 0.0;
-    for (int i = 0; i < TABLE_SAMPLES; i++) {
-        float u0, u1;
-        ibl__hammersley((uint32_t)i, TABLE_SAMPLES, 0.0f, 0.0f, &u0, &u1);
-        ibl_vec3 h = ibl__sample_phong(n, s, u0, u1);
-        float vh = ibl__dot(v, h);
-        float nl = 2.0f * vh * h.z - v.z;
-        if (nl <= 0.0f || vh <= 0.0f) continue;
-        float f = ibl_fresnel_schlick(f0, vh);
-        acc += ibl_blinn_phong_norm(s) * f * nl / fmaxf(nl, nv) * 8.0f * PI_F * vh / (s + 1.0f);
-    }
-    return (float)(acc / TABLE_SAMPLES);
 }
 
 static float *own(ibl_probe *p, void *mem)
@@ -176,32 +104,33 @@ ibl_status ibl_render_probe_from_environment(ibl_context *ctx, const ibl_cubemap
 
     int sh_level = 0;
     while (ibl_level_size(env->size, sh_level) > 32) sh_level++;
-    project_sh9(chain, sh_level, out->sh);
+    ibl_sh sh;
+    if ((st = ibl_sh_project_cubemap(ctx, chain, sh_level, 3, &sh)) != IBL_OK) goto fail;
+    for (int i = 0; i < 9; i++)
+        for (int c = 0; c < 3; c++) out->sh[i][c] = (float)sh.c[i][c];
     out->sh_kind = IBL_SH_RADIANCE;
 
-    float *ss = own(out, ibl_alloc(ctx, sizeof(float) * SS_NV * SS_R * 2));
-    float *ab = own(out, ibl_alloc(ctx, sizeof(float) * AB_NV * AB_S * AB_F0));
-    if (!ss || !ab) {
-        st = ibl_context_status(ctx);
-        goto fail;
-    }
-    ibl_table_axis nv_axis = {SS_NV, 0.5f / SS_NV, 1.0f - 0.5f / SS_NV, 0};
-    ibl_table_axis r_axis = {SS_R, 0.0f, 1.0f, 0};
-    for (int j = 0; j < SS_R; j++)
-        for (int i = 0; i < SS_NV; i++)
-            splitsum_entry(ibl_table_axis_value(&nv_axis, i), ibl_table_axis_value(&r_axis, j),
-                           &ss[(j * SS_NV + i) * 2], &ss[(j * SS_NV + i) * 2 + 1]);
-    out->splitsum = (ibl_splitsum_table){ss, 2, nv_axis, r_axis};
+    /* brdf.h tables, texel-centred on every axis (docs/BRDF.md): [r][n.v] RGBA with A, B */
+    ibl_image lut;
+    ibl_brdf_lut_desc ld = {.size = SS_SIZE};
+    if ((st = ibl_brdf_lut(ctx, &ld, &lut)) != IBL_OK) goto fail;
+    own(out, lut.pixels);
+    ibl_table_axis centred = {SS_SIZE, 0.5f / SS_SIZE, 1.0f - 0.5f / SS_SIZE, 0};
+    out->splitsum = (ibl_splitsum_view){lut.pixels, 4, centred, centred};
+    /* the AmbientBRDF volume [F0][shininess][n.v] RGBA, R the albedo; shininess rows at
+     * min (max/min)^((j + 0.5)/n), i.e. a log axis from row 0's value to the last row's */
+    ibl_ambient_brdf_desc ad = {.size_nv = AB_NV, .size_shininess = AB_S, .size_f0 = AB_F0,
+                                .shininess_min = 1.0, .shininess_max = 100000.0};
+    ibl_texture vol;
+    if ((st = ibl_ambient_brdf_volume(ctx, &ad, &vol)) != IBL_OK) goto fail;
+    float *vol_data = own(out, vol.data);
+    vol.owns_data = 0;
+    ibl_texture_free(ctx, &vol); /* its metadata, if any */
     ibl_table_axis abv = {AB_NV, 0.5f / AB_NV, 1.0f - 0.5f / AB_NV, 0};
-    ibl_table_axis abs_ = {AB_S, 1.0f, 100000.0f, 1};
-    ibl_table_axis abf = {AB_F0, 0.0f, 1.0f, 0};
-    for (int k = 0; k < AB_F0; k++)
-        for (int j = 0; j < AB_S; j++)
-            for (int i = 0; i < AB_NV; i++)
-                ab[(k * AB_S + j) * AB_NV + i] =
-                    ambient_entry(ibl_table_axis_value(&abv, i), ibl_table_axis_value(&abs_, j),
-                                  ibl_table_axis_value(&abf, k));
-    out->ambient_brdf = (ibl_ambient_brdf_table){ab, 1, abv, abs_, abf};
+    ibl_table_axis abs_ = {AB_S, (float)ibl_ambient_brdf_row_shininess(&ad, 0),
+                           (float)ibl_ambient_brdf_row_shininess(&ad, AB_S - 1), 1};
+    ibl_table_axis abf = {AB_F0, 0.5f / AB_F0, 1.0f - 0.5f / AB_F0, 0};
+    out->ambient_brdf = (ibl_ambient_brdf_view){vol_data, 4, abv, abs_, abf};
 
     out->specular = *spec;
     out->specular.owns_data = 0;

@@ -43,7 +43,7 @@ static void split_index(float f, int count, int *i0, float *w)
     *w = count > 1 ? f - (float)i : 0.0f;
 }
 
-void ibl_splitsum_lookup(const ibl_splitsum_table *t, float n_dot_v, float roughness, float *a,
+void ibl_splitsum_lookup(const ibl_splitsum_view *t, float n_dot_v, float roughness, float *a,
                          float *b)
 {
     int ch = t->channels > 0 ? t->channels : 2;
@@ -64,7 +64,7 @@ void ibl_splitsum_lookup(const ibl_splitsum_table *t, float n_dot_v, float rough
     }
 }
 
-float ibl_ambient_brdf_lookup(const ibl_ambient_brdf_table *t, float n_dot_v, float shininess,
+float ibl_ambient_brdf_lookup(const ibl_ambient_brdf_view *t, float n_dot_v, float shininess,
                               float f0)
 {
     int ch = t->channels > 0 ? t->channels : 1;

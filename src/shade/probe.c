@@ -61,11 +61,11 @@ ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *p)
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad mirror cube");
     if (p->sh_kind == IBL_SH_NONE && !cube_ok(&p->irradiance))
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: neither irradiance cube nor SH");
-    const ibl_splitsum_table *ss = &p->splitsum;
+    const ibl_splitsum_view *ss = &p->splitsum;
     if (ss->data && (!axis_ok(&ss->n_dot_v) || !axis_ok(&ss->roughness) || ss->channels == 1 ||
                      ss->channels < 0))
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad split-sum table");
-    const ibl_ambient_brdf_table *ab = &p->ambient_brdf;
+    const ibl_ambient_brdf_view *ab = &p->ambient_brdf;
     if (ab->data && (!axis_ok(&ab->n_dot_v) || !axis_ok(&ab->shininess) || !axis_ok(&ab->f0) ||
                      ab->channels < 0))
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad AmbientBRDF table");
