@@ -39,7 +39,10 @@ static const char usage[] =
     "  --sphere-ao MIN       synthetic AO on the spheres from MIN (bottom) to 1 (top)\n"
     "  --reference           Monte Carlo reference of the same scene (no split sum)\n"
     "  --samples N           reference samples per pixel and lobe (default 256)\n"
+    "  --supersample N       N x N rays per pixel for the runtime shading (default 1; the\n"
+    "                        reference spreads its samples over each pixel anyway)\n"
     "  --report              also render the reference and print the error per sphere\n"
+    "                        (the runtime image then uses at least 4 x 4 rays per pixel)\n"
     "  --compare A B         two variants side by side, labelled; each is a comma-separated\n"
     "                        list of the options above without dashes, e.g.\n"
     "                        --compare so=none so=triace-fast,sphere-ao=0.2\n"
@@ -199,6 +202,7 @@ int cli_cmd_render(int argc, char **argv)
         else if (cli_is(&a, arg, "--samples", NULL)) base.reference_samples = cli_int(&a, arg, 1, 1 << 20);
         else if (cli_is(&a, arg, "--reference", NULL)) base.reference = 1;
         else if (cli_is(&a, arg, "--report", NULL)) report = 1;
+        else if (cli_is(&a, arg, "--supersample", NULL)) base.supersample = cli_int(&a, arg, 1, 16);
         else if (cli_is(&a, arg, "--horizon", NULL)) base.shade.horizon_occlusion = 1;
         else if (cli_is(&a, arg, "--mirror-direction", NULL)) base.shade.mirror_direction = 1;
         else if (cli_is(&a, arg, "--sphere-ao", NULL)) base.sphere_ao_min = (float)cli_double(&a, arg, 0, 1);
@@ -261,6 +265,7 @@ int cli_cmd_render(int argc, char **argv)
         snprintf(v[i].label, sizeof v[i].label, "%s", cmp[i] && cmp[i][0] ? cmp[i] : "default");
         if (cmp[i]) apply_spec(&a, &v[i].desc, cmp[i]);
     }
+    if (report && v[0].desc.supersample < 4 && !v[0].desc.reference) v[0].desc.supersample = 4;
     if (report && st == IBL_OK) {
         int w = width ? width : 1024, h = height ? height : (width ? (w + 1) / 2 : 512);
         ids = malloc(sizeof(int) * (size_t)w * h);
@@ -276,6 +281,7 @@ int cli_cmd_render(int argc, char **argv)
     if (st == IBL_OK && report) {
         ibl_render_desc rd = v[0].desc;
         rd.reference = !rd.reference;
+        if (!rd.reference && rd.supersample < 4) rd.supersample = 4;
         ibl_image other;
         st = ibl_render(ctx, &probe, &rd, &other, NULL);
         if (st == IBL_OK) {

@@ -43,7 +43,9 @@ typedef struct ibl_render_desc {
     const ibl_cubemap *environment; /* unfiltered environment: background and reference;
                                        NULL: the probe's mirror, else its level 0              */
     const ibl_mesh *mesh;        /* draw this mesh instead of the spheres                    */
-    int reference;               /* Monte Carlo reference instead of the runtime shading      */
+    int reference;               /* Monte Carlo reference instead of the runtime shading; its
+                                    samples also spread over the pixel's footprint            */
+    int supersample;             /* runtime shading: n x n rays per pixel; 0: 1               */
     int reference_samples;       /* per pixel and lobe; 0: 256                                */
     unsigned seed;               /* of the per-pixel sample rotation                          */
     float sphere_ao_min;         /* > 0: synthetic AO on the spheres, from this value at the

@@ -150,53 +150,91 @@ static float eval_lobe(const lobe *b, ibl_vec3 n, ibl_vec3 v, ibl_vec3 l, float 
     return nl;
 }
 
-/* Monte Carlo estimate of the reflected radiance: three strategies (the specular lobe, the
- * cosine lobe, the environment's luminance), one sample of each per iteration, combined with
- * the balance heuristic (Veach 1997, multi-sample MIS): each adds f L n.l / sum of the three
- * densities. No split sum, no prefiltering. */
-static void reference_shade(const render_job *job, const ibl_material *m, ibl_vec3 n, ibl_vec3 v,
-                            uint32_t pixel, float out[3])
+/* One iteration of the Monte Carlo estimate of the reflected radiance: three strategies (the
+ * specular lobe, the cosine lobe, the environment's luminance), one sample of each, combined
+ * with the balance heuristic (Veach 1997, multi-sample MIS): each adds f L n.l / the sum of
+ * the three densities. No split sum, no prefiltering. */
+static void reference_sample(const render_job *job, const lobe *b, ibl_vec3 n, ibl_vec3 v,
+                             float u0, float u1, double acc[3])
 {
     float scale = job->probe->intensity > 0.0f ? job->probe->intensity : 1.0f;
-    int ns = job->samples;
-    lobe b = make_lobe(m, fmaxf(ibl__dot(n, v), 1e-4f));
-    uint32_t h0 = ibl__hash(pixel * 2654435761u ^ job->desc->seed);
-    uint32_t h1 = ibl__hash(h0 + 0x68bc21ebu);
-    float r0 = (float)(h0 >> 8) * (1.0f / 16777216.0f), r1 = (float)(h1 >> 8) * (1.0f / 16777216.0f);
-    double acc[3] = {0, 0, 0};
     ibl_vec3 t, bt;
     ibl__frame(n, &t, &bt);
-    for (int i = 0; i < ns; i++) {
-        float u0, u1;
-        ibl__hammersley((uint32_t)i, (uint32_t)ns, r0, r1, &u0, &u1);
-        ibl_vec3 dirs[3];
-        float env_pdf[3];
-        /* specular lobe */
-        ibl_vec3 h = b.bp ? ibl__sample_phong(n, b.shininess, u0, u1) : ibl__sample_ggx(n, b.alpha, u0, u1);
-        float vh = ibl__dot(v, h);
-        dirs[0] = ibl__v3(2.0f * vh * h.x - v.x, 2.0f * vh * h.y - v.y, 2.0f * vh * h.z - v.z);
-        env_pdf[0] = -1.0f;
-        /* cosine lobe */
-        float rr = sqrtf(u1), phi = 2.0f * PI_F * u0;
-        float x = rr * cosf(phi), y = rr * sinf(phi), z = sqrtf(fmaxf(0.0f, 1.0f - u1));
-        dirs[1] = ibl__v3(t.x * x + bt.x * y + n.x * z, t.y * x + bt.y * y + n.y * z,
-                          t.z * x + bt.z * y + n.z * z);
-        env_pdf[1] = -1.0f;
-        /* environment */
-        dirs[2] = ibl__env_sampler_sample(job->sampler, u0, u1, &env_pdf[2]);
-        for (int k = 0; k < 3; k++) {
-            float f[3], ps, pd;
-            float nl = eval_lobe(&b, n, v, dirs[k], f, &ps, &pd);
-            if (nl <= 0.0f) continue;
-            float pe = env_pdf[k] >= 0.0f ? env_pdf[k] : ibl__env_sampler_pdf(job->sampler, dirs[k]);
-            float sum = ps + pd + pe;
-            if (!(sum > 0.0f)) continue;
-            float l_rad[3];
-            env_radiance(job->env, scale, dirs[k], l_rad);
-            for (int c = 0; c < 3; c++) acc[c] += (double)(f[c] * l_rad[c] * nl / sum);
+    ibl_vec3 dirs[3];
+    float env_pdf[3] = {-1.0f, -1.0f, 0.0f};
+    /* specular lobe */
+    ibl_vec3 h = b->bp ? ibl__sample_phong(n, b->shininess, u0, u1) : ibl__sample_ggx(n, b->alpha, u0, u1);
+    float vh = ibl__dot(v, h);
+    dirs[0] = ibl__v3(2.0f * vh * h.x - v.x, 2.0f * vh * h.y - v.y, 2.0f * vh * h.z - v.z);
+    /* cosine lobe */
+    float rr = sqrtf(u1), phi = 2.0f * PI_F * u0;
+    float x = rr * cosf(phi), y = rr * sinf(phi), z = sqrtf(fmaxf(0.0f, 1.0f - u1));
+    dirs[1] = ibl__v3(t.x * x + bt.x * y + n.x * z, t.y * x + bt.y * y + n.y * z,
+                      t.z * x + bt.z * y + n.z * z);
+    /* environment */
+    dirs[2] = ibl__env_sampler_sample(job->sampler, u0, u1, &env_pdf[2]);
+    for (int k = 0; k < 3; k++) {
+        float f[3], ps, pd;
+        float nl = eval_lobe(b, n, v, dirs[k], f, &ps, &pd);
+        if (nl <= 0.0f) continue;
+        float pe = env_pdf[k] >= 0.0f ? env_pdf[k] : ibl__env_sampler_pdf(job->sampler, dirs[k]);
+        float sum = ps + pd + pe;
+        if (!(sum > 0.0f)) continue;
+        float l_rad[3];
+        env_radiance(job->env, scale, dirs[k], l_rad);
+        for (int c = 0; c < 3; c++) acc[c] += (double)(f[c] * l_rad[c] * nl / sum);
+    }
+}
+
+typedef struct hit {
+    int id;
+    ibl_vec3 d, n;
+    ibl_material mat;
+} hit;
+
+/* The primary ray through the continuous pixel position (fx, fy) (pixel x covers [x, x+1)). */
+static void trace_primary(const render_job *job, float fx, float fy, hit *h)
+{
+    const ibl_render_desc *desc = job->desc;
+    const ibl_image *im = job->out;
+    ibl_vec3 eye = {0.0f, 0.0f, EYE_Z};
+    float px = fx / (float)im->width * 2.0f - 1.0f;
+    float py = 1.0f - fy / (float)im->height * 2.0f;
+    h->d = ibl__norm(ibl__v3(px * job->half_w, py * job->half_h, -EYE_Z));
+    float t, ao = 1.0f;
+    if (desc->mesh) {
+        h->id = ibl__mesh_intersect(desc->mesh, eye, h->d, &t, &h->n, &ao) ? 0 : -1;
+        static const float grey[3] = {0.9f, 0.9f, 0.9f};
+        h->mat = ibl_material_gltf(grey, 1.0f, 0.3f);
+    } else {
+        h->id = hit_spheres(eye, h->d, &t);
+        if (h->id >= 0) {
+            ibl_vec3 c = sphere_center(h->id);
+            h->n = ibl__norm(ibl__v3(eye.x + t * h->d.x - c.x, eye.y + t * h->d.y - c.y,
+                                     eye.z + t * h->d.z - c.z));
+            h->mat = job->objects[h->id].material;
+            if (desc->sphere_ao_min > 0.0f)
+                ao = desc->sphere_ao_min + (1.0f - desc->sphere_ao_min) * 0.5f * (h->n.y + 1.0f);
         }
     }
-    for (int c = 0; c < 3; c++) out[c] = (float)(acc[c] / ns);
+    h->mat.ao = ao;
+}
+
+/* Van der Corput radical inverse in a prime base (the pixel-footprint dimensions). */
+static float radical_inverse(uint32_t i, uint32_t base)
+{
+    float inv = 1.0f / (float)base, f = inv, r = 0.0f;
+    while (i > 0) {
+        r += f * (float)(i % base);
+        i /= base;
+        f *= inv;
+    }
+    return r;
+}
+
+static float frac(float x)
+{
+    return x - floorf(x);
 }
 
 static void render_row(void *arg, int y)
@@ -204,50 +242,73 @@ static void render_row(void *arg, int y)
     render_job *job = arg;
     const ibl_render_desc *desc = job->desc;
     ibl_image *im = job->out;
-    ibl_vec3 eye = {0.0f, 0.0f, EYE_Z};
     float scale = job->probe->intensity > 0.0f ? job->probe->intensity : 1.0f;
+    int ss = desc->supersample > 0 ? desc->supersample : 1;
     for (int x = 0; x < im->width; x++) {
-        float px = ((float)x + 0.5f) / (float)im->width * 2.0f - 1.0f;
-        float py = 1.0f - ((float)y + 0.5f) / (float)im->height * 2.0f;
-        ibl_vec3 d = ibl__norm(ibl__v3(px * job->half_w, py * job->half_h, -EYE_Z));
         float *dst = ibl_image_texel(im, x, y);
-        float t, ao = 1.0f;
-        ibl_vec3 n;
-        int id;
-        ibl_material mat;
-        if (desc->mesh) {
-            id = ibl__mesh_intersect(desc->mesh, eye, d, &t, &n, &ao) ? 0 : -1;
-            static const float grey[3] = {0.9f, 0.9f, 0.9f};
-            mat = ibl_material_gltf(grey, 1.0f, 0.3f);
-        } else {
-            id = hit_spheres(eye, d, &t);
-            if (id >= 0) {
-                ibl_vec3 c = sphere_center(id);
-                n = ibl__norm(ibl__v3(eye.x + t * d.x - c.x, eye.y + t * d.y - c.y, eye.z + t * d.z - c.z));
-                mat = job->objects[id].material;
-                if (desc->sphere_ao_min > 0.0f)
-                    ao = desc->sphere_ao_min + (1.0f - desc->sphere_ao_min) * 0.5f * (n.y + 1.0f);
-            }
-        }
-        if (job->ids) job->ids[(size_t)y * im->width + x] = id;
-        if (id < 0) {
-            env_radiance(job->env, scale, d, dst);
-            dst[3] = 1.0f;
-            continue;
-        }
-        ibl_vec3 v = ibl__v3(-d.x, -d.y, -d.z);
-        mat.ao = ao;
+        uint32_t pixel = (uint32_t)((size_t)y * im->width + x);
+        hit h;
+        trace_primary(job, (float)x + 0.5f, (float)y + 0.5f, &h);
+        if (job->ids) job->ids[pixel] = h.id;
+        double acc[3] = {0, 0, 0};
+        int count;
         if (desc->reference) {
-            reference_shade(job, &mat, n, v, (uint32_t)((size_t)y * im->width + x), dst);
+            /* each sample its own point of the pixel: the reference integrates the footprint */
+            uint32_t h0 = ibl__hash(pixel * 2654435761u ^ desc->seed);
+            uint32_t h1 = ibl__hash(h0 + 0x68bc21ebu), h2 = ibl__hash(h1 + 0x02e5be93u);
+            uint32_t h3 = ibl__hash(h2 + 0x967a889bu);
+            float r[4] = {(float)(h0 >> 8), (float)(h1 >> 8), (float)(h2 >> 8), (float)(h3 >> 8)};
+            for (int k = 0; k < 4; k++) r[k] *= 1.0f / 16777216.0f;
+            count = job->samples;
+            int last_id = -2;
+            lobe b;
+            memset(&b, 0, sizeof b);
+            for (int i = 0; i < count; i++) {
+                float jx = frac(radical_inverse((uint32_t)i + 1, 3) + r[2]);
+                float jy = frac(radical_inverse((uint32_t)i + 1, 5) + r[3]);
+                hit s;
+                trace_primary(job, (float)x + jx, (float)y + jy, &s);
+                if (s.id < 0) {
+                    float bg[3];
+                    env_radiance(job->env, scale, s.d, bg);
+                    for (int c = 0; c < 3; c++) acc[c] += bg[c];
+                    continue;
+                }
+                ibl_vec3 v = ibl__v3(-s.d.x, -s.d.y, -s.d.z);
+                float nv = fmaxf(ibl__dot(s.n, v), 1e-4f);
+                if (s.id != last_id || desc->mesh) {
+                    b = make_lobe(&s.mat, nv);
+                    last_id = s.id;
+                }
+                b.nv = nv;
+                float u0, u1;
+                ibl__hammersley((uint32_t)i, (uint32_t)count, r[0], r[1], &u0, &u1);
+                reference_sample(job, &b, s.n, v, u0, u1, acc);
+            }
         } else {
-            ibl_surface s;
-            memset(&s, 0, sizeof s);
-            s.n = n;
-            s.v = v;
-            ibl_shade_result r;
-            ibl_shade(job->probe, &desc->shade, &mat, &s, &r);
-            memcpy(dst, r.color, 3 * sizeof(float));
+            count = ss * ss;
+            for (int sy = 0; sy < ss; sy++)
+                for (int sx = 0; sx < ss; sx++) {
+                    hit s = h;
+                    if (ss > 1)
+                        trace_primary(job, (float)x + ((float)sx + 0.5f) / (float)ss,
+                                      (float)y + ((float)sy + 0.5f) / (float)ss, &s);
+                    float c3[3];
+                    if (s.id < 0) {
+                        env_radiance(job->env, scale, s.d, c3);
+                    } else {
+                        ibl_surface surf;
+                        memset(&surf, 0, sizeof surf);
+                        surf.n = s.n;
+                        surf.v = ibl__v3(-s.d.x, -s.d.y, -s.d.z);
+                        ibl_shade_result r;
+                        ibl_shade(job->probe, &desc->shade, &s.mat, &surf, &r);
+                        memcpy(c3, r.color, sizeof c3);
+                    }
+                    for (int c = 0; c < 3; c++) acc[c] += c3[c];
+                }
         }
+        for (int c = 0; c < 3; c++) dst[c] = (float)(acc[c] / count);
         dst[3] = 1.0f;
     }
 }
