@@ -248,7 +248,10 @@ int cli_cmd_render(int argc, char **argv)
         st = ibl_probe_load(ctx, input, &probe);
     } else {
         st = load_environment(ctx, &a, input, layout, &env);
-        if (st == IBL_OK) st = ibl_render_probe_from_environment(ctx, &env, specular_size, &probe);
+        if (st == IBL_OK) {
+            ibl_render_probe_desc pd = {.specular_size = specular_size};
+            st = ibl_render_probe_from_environment(ctx, &env, &pd, &probe);
+        }
         if (st == IBL_OK) base.environment = &env;
     }
     if (st == IBL_OK && scene && strcmp(scene, "balls") != 0) {

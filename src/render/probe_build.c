@@ -14,7 +14,7 @@
 static const float PI_F = 3.14159265358979f;
 
 enum { PREFILTER_SAMPLES = 96 };
-enum { SS_SIZE = 128, AB_NV = 16, AB_S = 24, AB_F0 = 8 };
+enum { AB_NV = 16, AB_S = 24, AB_F0 = 8 };
 
 typedef struct prefilter_job {
     const ibl_cubemap *env; /* full mip chain */
@@ -67,8 +67,10 @@ static float *own(ibl_probe *p, void *mem)
 }
 
 ibl_status ibl_render_probe_from_environment(ibl_context *ctx, const ibl_cubemap *env,
-                                             int specular_size, ibl_probe *out)
+                                             const ibl_render_probe_desc *desc, ibl_probe *out)
 {
+    int specular_size = desc ? desc->specular_size : 0;
+    int table_size = desc && desc->table_size > 0 ? desc->table_size : 128;
     memset(out, 0, sizeof *out);
     if (!env || !env->data || env->size <= 0)
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "render: no environment");
@@ -112,10 +114,11 @@ ibl_status ibl_render_probe_from_environment(ibl_context *ctx, const ibl_cubemap
 
     /* brdf.h tables, texel-centred on every axis (docs/BRDF.md): [r][n.v] RGBA with A, B */
     ibl_image lut;
-    ibl_brdf_lut_desc ld = {.size = SS_SIZE};
+    ibl_brdf_lut_desc ld = {.size = table_size};
     if ((st = ibl_brdf_lut(ctx, &ld, &lut)) != IBL_OK) goto fail;
     own(out, lut.pixels);
-    ibl_table_axis centred = {SS_SIZE, 0.5f / SS_SIZE, 1.0f - 0.5f / SS_SIZE, 0};
+    float ts = (float)table_size;
+    ibl_table_axis centred = {table_size, 0.5f / ts, 1.0f - 0.5f / ts, 0};
     out->splitsum = (ibl_splitsum_view){lut.pixels, 4, centred, centred};
     /* the AmbientBRDF volume [F0][shininess][n.v] RGBA, R the albedo; shininess rows at
      * min (max/min)^((j + 0.5)/n), i.e. a log axis from row 0's value to the last row's */
