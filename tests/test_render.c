@@ -310,6 +310,40 @@ static void obj_mesh(void **state)
     for (int i = 0; i < 8; i++) assert_near(m.ao[i], 0.25, 0);
     ibl_mesh_free(ctx, &m);
     assert_int_equal(ibl_mesh_load_obj(ctx, test_path("missing.obj"), 0, &m), IBL_ERR_IO);
+
+    /* A floor (y = 0, |x|, |z| <= 1, fanned around a centre vertex) and a wall at z = -1
+     * (|x| <= 1, 0 <= y <= 2) facing +Z. The centre vertex's AO is the cosine-weighted
+     * fraction of its hemisphere that misses the wall, computed here on a grid of the
+     * measure du dphi / 2pi with u = sin^2(theta). Loading rescales the mesh uniformly, which
+     * changes no angle. 256 rays: the estimate's error is ~1/sqrt(256) of the occluded part
+     * at worst, so 0.05. */
+    const char *corner = test_path("corner.obj");
+    f = fopen(corner, "w");
+    assert_non_null(f);
+    fputs("v 0 0 0\nv -1 0 1\nv 1 0 1\nv 1 0 -1\nv -1 0 -1\n"
+          "v -1 0 -1.001\nv 1 0 -1.001\nv 1 2 -1.001\nv -1 2 -1.001\n"
+          "f 1 2 3\nf 1 3 4\nf 1 4 5\nf 1 5 2\nf 6 7 8 9\n", f);
+    fclose(f);
+    assert_int_equal(ibl_mesh_load_obj(ctx, corner, 256, &m), IBL_OK);
+    double open = 0;
+    int steps = 400;
+    for (int i = 0; i < steps; i++)
+        for (int j = 0; j < steps; j++) {
+            double u = (i + 0.5) / steps, phi = 2 * 3.14159265358979 * (j + 0.5) / steps;
+            double st = sqrt(u), ct = sqrt(1 - u);
+            double dx = st * cos(phi), dy = ct, dz = st * sin(phi);
+            int blocked = 0;
+            if (dz < 0) {
+                double t = -1.001 / dz, x = t * dx, y = t * dy;
+                blocked = fabs(x) <= 1 && y <= 2;
+            }
+            open += !blocked;
+        }
+    open /= (double)steps * steps;
+    assert_true(open < 0.95); /* the wall matters */
+    print_message("corner AO: ray-cast %.4f, grid %.4f\n", m.ao[0], open);
+    assert_near(m.ao[0], open, 0.05);
+    ibl_mesh_free(ctx, &m);
     ibl_probe_free(ctx, &probe);
     ibl_cubemap_free(ctx, &env);
     ibl_context_destroy(ctx);
