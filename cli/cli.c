@@ -11,9 +11,11 @@
 
 static volatile sig_atomic_t interrupted;
 
+/* The first Ctrl-C asks the library to stop at its next progress check (at the latest before
+ * an output is renamed into place, so nothing partial is left); a second one exits at once. */
 static void on_signal(int sig)
 {
-    (void)sig;
+    if (interrupted) _exit(128 + sig);
     interrupted = 1;
 }
 
@@ -152,6 +154,7 @@ void cli_positional_or_unknown(cli_args *a, const char *arg)
 int cli_exit_code(ibl_status status)
 {
     if (status == IBL_OK) return CLI_EXIT_OK;
+    if (status == IBL_ERR_CANCELLED) return 130;
     if (status == IBL_ERR_INVALID_ARGUMENT) return CLI_EXIT_USAGE;
     return CLI_EXIT_BAD_INPUT;
 }

@@ -74,6 +74,13 @@ double cli_seconds(void);
 /* Installs SIGINT/SIGTERM handlers so that Ctrl-C cancels through the progress callback. */
 void cli_install_signal_handlers(void);
 
+/* The JSON object `ibl sh --json` prints (also the bake's sh.json). window: what was asked. */
+#include <stdio.h>
+#include "ibl/sh.h"
+void cli_sh_write_json(FILE *f, const char *input, const char *method, int bands,
+                       ibl_sh_window window, const ibl_sh_window_report *rep,
+                       const ibl_sh *radiance);
+
 /* Every subcommand: int cli_cmd_NAME(int argc, char **argv); */
 #define IBL_COMMAND(name, summary) int cli_cmd_##name(int argc, char **argv);
 #include "commands.def"

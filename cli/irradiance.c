@@ -1,5 +1,6 @@
 /* ibl irradiance: the irradiance environment map (diffuse cubemap) of an environment. */
 #include "cli.h"
+#include "input.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,8 +24,8 @@ static const char usage[] =
     "  --bands N            sh: 1..5 (default 3)\n"
     "  --window W           sh: none (default), auto, or a Hanning width\n"
     "  --format F           storage format (rgba16f, rgba32f, rg11b10f, rgb9e5, ...)\n"
-    "  --layout NAME        input layout when not detectable\n"
-    "  --out-layout NAME    flat outputs: hcross (default), vcross, hstrip, vstrip, equirect\n";
+    "  --out-layout NAME    flat outputs: hcross (default), vcross, hstrip, vstrip, equirect\n"
+    "  --layout NAME --yaw DEG --mirror --z-up   how to read a flat input\n";
 
 int cli_cmd_irradiance(int argc, char **argv)
 {
@@ -32,10 +33,11 @@ int cli_cmd_irradiance(int argc, char **argv)
     const char *out_path = NULL;
     ibl_irradiance_desc d = {0};
     ibl_write_desc wd = {0};
-    ibl_layout layout = IBL_LAYOUT_AUTO, out_layout = IBL_LAYOUT_HCROSS;
+    cli_input_options io = {0};
+    ibl_layout out_layout = IBL_LAYOUT_HCROSS;
     const char *arg;
     while ((arg = cli_next(&a))) {
-        if (cli_common_option(&a, arg)) continue;
+        if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io)) continue;
         if (cli_is(&a, arg, "--output", "-o")) {
             out_path = cli_value(&a, arg);
         } else if (cli_is(&a, arg, "--size", NULL)) {
@@ -73,11 +75,6 @@ int cli_cmd_irradiance(int argc, char **argv)
             int ok = 0;
             wd.format = ibl_format_from_name(v, &ok);
             if (!ok) cli_usage_error(&a, "unknown format '%s'", v);
-        } else if (cli_is(&a, arg, "--layout", NULL)) {
-            const char *v = cli_value(&a, arg);
-            layout = ibl_layout_from_name(v);
-            if (layout == IBL_LAYOUT_AUTO || layout == IBL_LAYOUT_FACES || layout == IBL_LAYOUT_CUBE)
-                cli_usage_error(&a, "unknown layout '%s'", v);
         } else if (cli_is(&a, arg, "--out-layout", NULL)) {
             const char *v = cli_value(&a, arg);
             out_layout = ibl_layout_from_name(v);
@@ -94,30 +91,17 @@ int cli_cmd_irradiance(int argc, char **argv)
     if (out_type == IBL_FILE_UNKNOWN)
         cli_usage_error(&a, "cannot tell the output container from '%s'", out_path);
     const char *in = a.positional[0];
+    cli_check_distinct(&a, in, out_path);
     ibl_context *ctx = cli_context(&a.common);
     double t0 = cli_seconds();
-
-    ibl_read_desc rd = {0};
-    rd.clamp_infinite = a.common.clamp;
-    ibl_file_info info;
-    ibl_texture tex = {0};
     ibl_cubemap cube = {0}, result = {0};
     ibl_image flat = {0};
-    ibl_status st = ibl_read_texture(ctx, in, &rd, &tex, &info);
-    if (st == IBL_OK) {
-        cli_report_pixels(&a.common, in, &info.pixels);
-        if (tex.kind == IBL_TEXTURE_CUBE) {
-            st = ibl_cubemap_from_texture(&tex, &cube);
-        } else if (tex.kind == IBL_TEXTURE_2D) {
-            ibl_image image = {tex.width, tex.height, ibl_texture_level(&tex, 0, 0)};
-            ibl_to_cube_desc cd = {0};
-            cd.layout = layout;
-            st = ibl_image_to_cubemap(ctx, &image, &cd, &cube);
-        } else {
-            st = ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: a 3D texture is not an environment", in);
-        }
+    int rc = cli_read_cubemap(ctx, &a.common, in, &io, &cube, NULL);
+    if (rc != CLI_EXIT_OK) {
+        ibl_context_destroy(ctx);
+        return rc;
     }
-    if (st == IBL_OK) st = ibl_irradiance_cubemap(ctx, &cube, &d, &result);
+    ibl_status st = ibl_irradiance_cubemap(ctx, &cube, &d, &result);
     if (st == IBL_OK) {
         if (ibl_file_type_is_container(out_type)) {
             ibl_texture t = ibl_texture_from_cubemap(&result);
@@ -137,8 +121,7 @@ int cli_cmd_irradiance(int argc, char **argv)
             if (st == IBL_OK) st = ibl_write_image(ctx, out_path, &flat, &wd);
         }
     }
-    if (cube.owns_data) ibl_cubemap_free(ctx, &cube);
-    ibl_texture_free(ctx, &tex);
+    ibl_cubemap_free(ctx, &cube);
     ibl_cubemap_free(ctx, &result);
     ibl_image_free(ctx, &flat);
     if (st != IBL_OK) {

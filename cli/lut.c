@@ -160,12 +160,7 @@ int cli_cmd_lut(int argc, char **argv)
     memset(&wd, 0, sizeof wd);
     if (format_name) {
         int ok = 0;
-        if (strcmp(format_name, "rgba16") == 0) {
-            wd.format = IBL_FORMAT_RGBA16_UNORM;
-            ok = 1;
-        } else {
-            wd.format = ibl_format_from_name(format_name, &ok);
-        }
+        wd.format = ibl_format_from_name(format_name, &ok);
         if (!ok) cli_usage_error(&a, "unknown --format '%s'", format_name);
         if (text) cli_usage_error(&a, "--format does not apply to C headers and text tables");
     }

@@ -245,6 +245,27 @@ static void memory_limit(void **state)
     assert_false(test_file_exists(out));
 }
 
+/* Ctrl-C during a long run leaves no output and no temporary file (exit 130). */
+static void interrupt_leaves_nothing(void **state)
+{
+    (void)state;
+    const char *out = test_path("interrupted.exr");
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd,
+             "'%s' sky -q -o '%s' --size 4096 & pid=$!; sleep 0.3; kill -INT $pid; wait $pid; "
+             "echo \"rc=$?\"; ls -a '%s' | grep -c interrupted",
+             IBL_CLI_PATH, out, test_tmpdir());
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    char buf[4096];
+    size_t n = fread(buf, 1, sizeof buf - 1, p);
+    buf[n] = 0;
+    pclose(p);
+    if (!strstr(buf, "rc=130")) fail_msg("expected exit 130 after SIGINT, got: %s", buf);
+    assert_non_null(strstr(buf, "\n0\n"));
+    assert_false(test_file_exists(out));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -255,6 +276,7 @@ int main(void)
         cmocka_unit_test(sky_and_round_trips),
         cmocka_unit_test(outputs_identical_across_threads),
         cmocka_unit_test(memory_limit),
+        cmocka_unit_test(interrupt_leaves_nothing),
     };
     return cmocka_run_group_tests_name("cli", tests, NULL, NULL);
 }

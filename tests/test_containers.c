@@ -1,6 +1,7 @@
 /* KTX2, KTX1 and DDS: round trips of every format x texture kind x mip chain, byte-level
  * checks against values worked out by hand from the specifications, and malformed inputs.
- * Goes through the internal encoders/decoders (io/io_internal.h) directly. */
+ * Goes through the internal encoders/decoders (io/io_internal.h) directly, and once through
+ * the public file API (ibl_write_texture / ibl_read_texture). */
 #include "test_support.h"
 
 #include <math.h>
@@ -818,6 +819,58 @@ static void thread_count_invariance(void **state)
     free(first_out.data);
 }
 
+/* Through the public API (io/file.c): write to a file, read it back; the reader applies the
+ * pixel policy (NaN and negatives become 0 and are counted) and names the file. */
+static void public_api_files(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    static const char *names[3] = {"api.ktx2", "api.ktx", "api.dds"};
+    static const ibl_file_type types[3] = {IBL_FILE_KTX2, IBL_FILE_KTX1, IBL_FILE_DDS};
+    for (int c = 0; c < 3; c++) {
+        ibl_texture t = cube8(ctx, IBL_FORMAT_RGBA32F);
+        float *p = ibl_texture_level(&t, 2, 3);
+        p[0] = NAN;
+        p[5] = -2.0f;
+        const char *path = test_path(names[c]);
+        assert_int_equal(ibl_write_texture(ctx, path, &t, NULL), IBL_OK);
+        ibl_texture out;
+        ibl_file_info info;
+        assert_int_equal(ibl_read_texture(ctx, path, NULL, &out, &info), IBL_OK);
+        assert_int_equal(info.type, types[c]);
+        assert_int_equal(info.format, IBL_FORMAT_RGBA32F);
+        assert_int_equal(info.kind, IBL_TEXTURE_CUBE);
+        assert_int_equal(info.levels, 4);
+        assert_int_equal(info.pixels.nan_count, 1);
+        assert_int_equal(info.pixels.negative_count, 1);
+        float *q = ibl_texture_level(&out, 2, 3);
+        assert_true(q[0] == 0.0f && q[5] == 0.0f);
+        assert_true(q[1] == 4.0f); /* face 3 + 1: untouched */
+        if (types[c] != IBL_FILE_DDS) assert_string_equal(ibl_texture_get_metadata(&out, "ibl.sh_order"), "3");
+        ibl_texture_free(ctx, &out);
+        /* a flat image from a cube container is refused with the path in the message */
+        ibl_image im;
+        assert_int_not_equal(ibl_read_image(ctx, path, NULL, &im, NULL), IBL_OK);
+        assert_message_named(ctx, path);
+        ibl_texture_free(ctx, &t);
+    }
+    /* a one-level 2D KTX2 read as a flat image */
+    ibl_image im;
+    assert_int_equal(ibl_image_alloc(ctx, 5, 3, &im), IBL_OK);
+    for (int i = 0; i < 15 * 4; i++) im.pixels[i] = (float)i * 0.25f;
+    const char *path = test_path("flat.ktx2");
+    ibl_write_desc d = {.format = IBL_FORMAT_RGBA32F};
+    assert_int_equal(ibl_write_image(ctx, path, &im, &d), IBL_OK);
+    ibl_image back;
+    assert_int_equal(ibl_read_image(ctx, path, NULL, &back, NULL), IBL_OK);
+    assert_int_equal(back.width, 5);
+    assert_int_equal(back.height, 3);
+    assert_memory_equal(back.pixels, im.pixels, 15 * 4 * sizeof(float));
+    ibl_image_free(ctx, &back);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
 /* If KTX-Software's `ktx` tool is installed (it is not packaged in Debian 12), it must accept
  * what we write; otherwise the check is skipped. */
 static void ktx_tool_validates(void **state)
@@ -904,6 +957,7 @@ int main(void)
         cmocka_unit_test(malformed_inputs),
         cmocka_unit_test(encoder_refusals),
         cmocka_unit_test(thread_count_invariance),
+        cmocka_unit_test(public_api_files),
         cmocka_unit_test(ktx_tool_validates),
         cmocka_unit_test(ktx_parse_cross_check),
     };

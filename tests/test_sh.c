@@ -3,6 +3,8 @@
  * brute-force double sums written here, the published Uffizi table). */
 #include "test_support.h"
 
+#include "bake/sh_internal.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -213,6 +215,17 @@ static void cube_projection_matches_brute_force(void **state)
                 for (int c = 0; c < 3; c++)
                     assert_near(sh.c[i][c], i < bands * bands ? ref[i][c] : 0.0,
                                 1e-11 * (1 + fabs(ref[i][c])));
+            /* both row-sum paths (portable C and, where the CPU has it, AVX2) */
+            ibl_sh_plan *plan;
+            assert_int_equal(ibl_sh_plan_create(ctx, n, bands, &plan), IBL_OK);
+            for (int simd = 0; simd < 2; simd++) {
+                ibl__sh_plan_use_simd(plan, simd);
+                assert_int_equal(ibl_sh_plan_run(plan, cube.data, &sh), IBL_OK);
+                for (int i = 0; i < bands * bands; i++)
+                    for (int c = 0; c < 3; c++)
+                        assert_near(sh.c[i][c], ref[i][c], 1e-11 * (1 + fabs(ref[i][c])));
+            }
+            ibl_sh_plan_destroy(plan);
         }
         ibl_cubemap_free(ctx, &cube);
     }
@@ -461,36 +474,44 @@ static void windowing(void **state)
 
 /* ---- face centres -------------------------------------------------------------------------- */
 
-static void linear_radiance(const double *d, float *out)
+/* Radiance in span{Y00, Y1m, Y20, Y22}: what six face values can determine. */
+static const double quad_coeffs[9] = {2.0, 0.3, -0.4, 0.5, 0.0, 0.0, 0.6, 0.0, -0.7};
+static void quad_radiance(const double *d, float *out)
 {
-    out[0] = (float)(2 + d[0]);
-    out[1] = (float)(2 + d[1]);
-    out[2] = (float)(2 - d[2]);
+    double y[9], v = 0;
+    ibl_sh_eval_basis(3, d, y);
+    for (int i = 0; i < 9; i++) v += quad_coeffs[i] * y[i];
+    out[0] = out[1] = out[2] = (float)v;
 }
 
-/* The 6-point rule is exact for bands 0 and 1 of a radiance of degree <= 1 (its degree-3
- * exactness): compare with the analytic L00 = 2 * 2 sqrt(pi), L1 = sqrt(4 pi / 3) * slope.
- * On an odd cube the face-centre texel lies exactly on the axis: float rounding only, 1e-5. */
+/* The seed's six-value path must recover such a radiance exactly (analytic coefficients): from
+ * point values (the centre texel of an odd cube lies on the axis: float rounding, 1e-5) and
+ * from face means (the 1x1 level of a 64-cube's area-correct mip chain: the texel
+ * quadrature of the means, O(N^-2), 2e-3). */
 static void face_centres(void **state)
 {
     (void)state;
     ibl_context *ctx = test_context(1);
     ibl_cubemap cube;
     assert_int_equal(ibl_cubemap_alloc(ctx, 15, 1, &cube), IBL_OK);
-    fill_cube(&cube, linear_radiance);
+    fill_cube(&cube, quad_radiance);
     ibl_sh sh;
     assert_int_equal(ibl_sh_project_face_centres(&cube, 0, 3, &sh), IBL_OK);
-    double k1 = sqrt(4 * PI / 3);
-    assert_near(sh.c[0][0], 4 * sqrt(PI), 1e-5);
-    assert_near(sh.c[3][0], k1, 1e-5);  /* x */
-    assert_near(sh.c[1][1], k1, 1e-5);  /* y */
-    assert_near(sh.c[2][2], -k1, 1e-5); /* z */
-    assert_near(sh.c[1][0], 0, 1e-5);
+    for (int i = 0; i < 9; i++) assert_near(sh.c[i][0], quad_coeffs[i], 1e-5);
+    ibl_cubemap_free(ctx, &cube);
+
+    assert_int_equal(ibl_cubemap_alloc(ctx, 64, 7, &cube), IBL_OK);
+    fill_cube(&cube, quad_radiance);
+    assert_int_equal(ibl_cubemap_build_mips(ctx, &cube), IBL_OK);
+    assert_int_equal(ibl_sh_project_face_centres(&cube, 6, 3, &sh), IBL_OK);
+    for (int i = 0; i < 9; i++) assert_near(sh.c[i][1], quad_coeffs[i], 2e-3);
+    /* more bands cannot be estimated from six values: they stay zero */
+    assert_int_equal(ibl_sh_project_face_centres(&cube, 6, 5, &sh), IBL_OK);
+    assert_int_equal(sh.bands, 5);
+    for (int i = 9; i < 25; i++) assert_true(sh.c[i][0] == 0.0);
     ibl_cubemap_free(ctx, &cube);
     ibl_context_destroy(ctx);
 }
-
-/* ---- the published Uffizi table -------------------------------------------------------------- */
 
 /* testdata README: pixel (row i, column j) looks along theta = pi (i + 0.5) / 128 from +Y,
  * phi = 2 pi (j + 0.5) / 256, d = (sin t cos p, cos t, -sin t sin p); after the global scale
@@ -556,6 +577,44 @@ static void uffizi_table(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* ibl sh: one JSON object with the issue's keys; its radiance equals the library's direct
+ * equirect projection (printed with 9 significant digits: 1e-7 relative); usage errors exit 2,
+ * unreadable input exits 1. */
+static void cli_sh(void **state)
+{
+    (void)state;
+    const char *out;
+    const char *in = test_data("uffizi_latlong_256x128.hdr");
+    assert_int_equal(test_run_cli(&out, "sh '%s' --json -q", in), 0);
+    assert_true(out[0] == '{');
+    static const char *const keys[] = {"\"radiance\": [[", "\"irradiance\": [[",
+                                       "\"irradiance_over_pi\": [[", "\"polynomial\"",
+                                       "\"basis\"", "\"axes\"", "\"up\": \"+y\"", "\"window\""};
+    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) assert_non_null(strstr(out, keys[i]));
+    double r, g, b;
+    assert_int_equal(sscanf(strstr(out, "\"radiance\": [[") + 14, "%lf, %lf, %lf", &r, &g, &b), 3);
+    ibl_context *ctx = test_context(1);
+    ibl_image im;
+    assert_int_equal(ibl_read_image(ctx, in, NULL, &im, NULL), IBL_OK);
+    ibl_sh sh;
+    assert_int_equal(ibl_sh_project_equirect(ctx, &im, 3, &sh), IBL_OK);
+    assert_near(r, sh.c[0][0], 1e-7 * sh.c[0][0]);
+    assert_near(g, sh.c[0][1], 1e-7 * sh.c[0][1]);
+    assert_near(b, sh.c[0][2], 1e-7 * sh.c[0][2]);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+    /* nine radiance coefficients for 3 bands, twenty-five for 5 */
+    assert_int_equal(test_run_cli(&out, "sh '%s' --json -q --bands 5 --window auto", in), 0);
+    assert_non_null(strstr(out, "\"bands\": 5"));
+    assert_int_equal(test_run_cli(&out, "sh '%s' -q --fast-centres", in), 0);
+    assert_non_null(strstr(out, "face-centres"));
+    assert_int_equal(test_run_cli(NULL, "sh"), 2);
+    assert_int_equal(test_run_cli(NULL, "sh '%s' --bands 6", in), 2);
+    assert_int_equal(test_run_cli(NULL, "sh '%s' --window sideways", in), 2);
+    assert_int_equal(test_run_cli(&out, "sh '%s'", test_path("missing.hdr")), 1);
+    assert_non_null(strstr(out, "missing.hdr"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -571,6 +630,7 @@ int main(void)
         cmocka_unit_test(windowing),
         cmocka_unit_test(face_centres),
         cmocka_unit_test(uffizi_table),
+        cmocka_unit_test(cli_sh),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -61,8 +61,11 @@ ibl_status ibl_sh_project_equirect(ibl_context *ctx, const ibl_image *image, int
 ibl_status ibl_sh_project_samples(int bands, size_t count, const double *dirs,
                                   const double *weights, const float *rgb, size_t stride,
                                   ibl_sh *out);
-/* The seed's cheap dynamic path: only the six face-centre values of one level (bilinear at
- * the face centre; at the 1x1 level these are the face means), each weighted 4 pi / 6. */
+/* The seed's cheap dynamic path: SH from six values only, the face-centre samples of one level
+ * (bilinear at each face centre). On a 1x1 level they are the face means, on larger levels
+ * point values at the axes; either way each band is corrected so that a radiance in
+ * span{Y00, Y1m, Y20, Y22} is recovered exactly. The xy, yz, xz terms and bands >= 3 cannot
+ * be seen by six values and are zero. Errors on real HDRIs: docs/DIFFUSE.md. */
 ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int bands,
                                        ibl_sh *out);
 
@@ -71,7 +74,8 @@ ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int b
 typedef struct ibl_sh_plan ibl_sh_plan;
 ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh_plan **out);
 void ibl_sh_plan_destroy(ibl_sh_plan *plan);
-/* faces: six level-0 faces of plan's face size, RGBA float, +X -X +Y -Y +Z -Z. */
+/* faces: six level-0 faces of plan's face size, RGBA float, +X -X +Y -Y +Z -Z. One run at a
+ * time per plan (the plan holds the per-chunk partial sums); make one plan per thread. */
 ibl_status ibl_sh_plan_run(ibl_sh_plan *plan, const float *faces, ibl_sh *out);
 
 /* ---- convolution and forms ---------------------------------------------------------------- */

@@ -129,44 +129,53 @@ static inline double cos_0_pi(double phi)
 enum { MAX_PHI = 2 * IBL__GL_MAX };
 
 /* Integrand per unit weight measure at the n phi nodes of one theta_h node, times the node
- * weights wgt[]; writes g * w into wgt[] and the Schlick factor (1 - v.h)^5 into fc[]. */
+ * weights wgt[]; writes g * w into wgt[] and the Schlick factor (1 - v.h)^5 into fc[]. One
+ * branch-free loop per lobe so the compiler can vectorise it. */
 static void evaluate(const ibl__lobe_params *p, double mu, double sv, double ch, double sh,
                      const double *cphi, double *wgt, double *fc, int n)
 {
-    double a2 = p->alpha * p->alpha;
-    double lv = sqrt(mu * mu * (1.0 - a2) + a2);
+    double a2 = p->alpha * p->alpha, b2 = 1.0 - a2, inv_ch = 1.0 / ch, svsh = sv * sh;
+    double lv = sqrt(mu * mu * b2 + a2);
     double k = 0.5 * p->alpha, g1v = mu / (mu * (1.0 - k) + k);
+    double nlv[MAX_PHI], vhv[MAX_PHI];
     for (int j = 0; j < n; j++) {
-        double vh = sv * sh * cphi[j] + mu * ch;
+        double vh = svsh * cphi[j] + mu * ch;
         double nl = 2.0 * vh * ch - mu;
-        if (nl < 0) nl = 0; /* round-off at the exact cut */
-        double g;
-        switch (p->lobe) {
-        case IBL__LOBE_GGX_CORRELATED: {
-            /* Heitz 2014 height-correlated Smith as Vis = G2 / (4 nl nv); with D (n.h) dh
-             * the measure, f (n.l) dl = D Vis F nl 4 (v.h) dh. */
-            double vis = 0.5 / (nl * lv + mu * sqrt(nl * nl * (1.0 - a2) + a2));
-            g = 4.0 * vis * nl * vh / ch;
-            break;
-        }
-        case IBL__LOBE_GGX_SEPARABLE:
-            /* Karis 2013: Schlick-GGX G1(l) G1(v), k = alpha / 2 for image-based lighting. */
-            g = g1v * (nl / (nl * (1.0 - k) + k)) * vh / (mu * ch);
-            break;
-        case IBL__LOBE_CHARLIE:
-            /* Neubelt & Pettineo 2013 visibility 1 / (4 (nl + nv - nl nv)). */
-            g = nl * vh / ((nl + mu - nl * mu) * ch);
-            break;
-        default: {
-            /* Seed 000: norm (n.h)^s F / max(n.l, n.v), with (n.h)^s dh the measure. */
-            double m = nl > mu ? nl : mu;
-            g = p->norm * nl / m * 4.0 * vh;
-            break;
-        }
-        }
+        nlv[j] = nl > 0 ? nl : 0; /* round-off at the exact cut */
+        vhv[j] = vh;
         double t = 1.0 - vh, t2 = t * t;
         fc[j] = t2 * t2 * t;
-        wgt[j] *= g;
+    }
+    switch (p->lobe) {
+    case IBL__LOBE_GGX_CORRELATED:
+        /* Heitz 2014 height-correlated Smith as Vis = G2 / (4 nl nv); with D (n.h) dh the
+         * measure, f (n.l) dl = D Vis F nl 4 (v.h) dh, so g = 4 Vis nl (v.h) / (n.h). */
+        for (int j = 0; j < n; j++) {
+            double nl = nlv[j];
+            wgt[j] *= 2.0 * nl * vhv[j] * inv_ch / (nl * lv + mu * sqrt(nl * nl * b2 + a2));
+        }
+        break;
+    case IBL__LOBE_GGX_SEPARABLE:
+        /* Karis 2013: Schlick-GGX G1(l) G1(v), k = alpha / 2 for image-based lighting. */
+        for (int j = 0; j < n; j++) {
+            double nl = nlv[j];
+            wgt[j] *= g1v * nl * vhv[j] * inv_ch / (mu * (nl * (1.0 - k) + k));
+        }
+        break;
+    case IBL__LOBE_CHARLIE:
+        /* Neubelt & Pettineo 2013 visibility 1 / (4 (nl + nv - nl nv)). */
+        for (int j = 0; j < n; j++) {
+            double nl = nlv[j];
+            wgt[j] *= nl * vhv[j] * inv_ch / (nl + mu - nl * mu);
+        }
+        break;
+    default:
+        /* Seed 000: norm (n.h)^s F / max(n.l, n.v), with (n.h)^s dh the measure. */
+        for (int j = 0; j < n; j++) {
+            double nl = nlv[j], m = nl > mu ? nl : mu;
+            wgt[j] *= 4.0 * p->norm * nl * vhv[j] / m;
+        }
+        break;
     }
 }
 
@@ -204,10 +213,11 @@ static void integrate(const ibl__lobe_params *p, double mu, const ibl__quadratur
         double za = lobe_zeta(p, th[seg + 1]), zb = lobe_zeta(p, th[seg]);
         double dz = zb - za;
         if (!(dz > 0)) continue;
-        /* Where only part of the phi circle is valid the phi-integrated function has
-         * (t - t0)^(3/2)-type end points; the cubic smoothstep t = x^2 (3 - 2x) makes
-         * them O(x^3) so Gauss-Legendre keeps converging fast. */
-        int partial = th[seg] >= th1 - 1e-15;
+        /* Where the phi circle is cut (n.l = 0, or Blinn's n.l = n.v) the phi-integrated
+         * function has (t - t0)^(3/2)-type end points; the cubic smoothstep
+         * t = x^2 (3 - 2x) makes them O(x^3) so Gauss-Legendre keeps converging fast. */
+        int whole = th[seg + 1] <= th1 + 1e-15 && (p->lobe != IBL__LOBE_BLINN || th[seg] >= tv - 1e-15);
+        int partial = !whole;
         const ibl__rule *ru = partial ? &q->u_part : &q->u_full, *rphi = &q->phi;
         for (int i = 0; i < ru->n; i++) {
             double x = ru->x[i], wx = ru->w[i];

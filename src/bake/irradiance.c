@@ -205,6 +205,7 @@ typedef struct reference_job {
     const double *ddir;  /* output texel directions */
     ibl_cubemap *dst;
     double target;
+    int face; /* the face being written */
 } reference_job;
 
 /* Face frames of cubemap.h: direction = major + sc s_axis + tc t_axis. */
@@ -219,7 +220,7 @@ static void reference_task(void *arg, int index)
     const reference_job *job = arg;
     int n = job->src->size, m = job->dst->size;
     size_t nn = (size_t)n * n;
-    int face = index / m, y = index % m;
+    int face = job->face, y = index;
     for (int x = 0; x < m; x++) {
         const double *nrm = job->ddir + (((size_t)face * m + y) * m + x) * 3;
         double acc[3] = {0, 0, 0}, sum = 0;
@@ -275,8 +276,14 @@ static ibl_status reference_iem(ibl_context *ctx, const ibl_cubemap *src, int si
     texel_tables(size, ddir, domega);
     st = ibl_cubemap_alloc(ctx, size, 1, out);
     if (st != IBL_OK) goto done;
-    reference_job job = {src, canon, ddir, out, target};
-    ibl_parallel_for(ctx, 6 * size, reference_task, &job);
+    reference_job job = {src, canon, ddir, out, target, 0};
+    /* one face at a time so that a long run reports progress and can be cancelled */
+    for (int f = 0; f < 6 && st == IBL_OK; f++) {
+        job.face = f;
+        ibl_parallel_for(ctx, size, reference_task, &job);
+        st = ibl_progress(ctx, "irradiance reference", (f + 1) / 6.0);
+    }
+    if (st != IBL_OK) ibl_cubemap_free(ctx, out);
 done:
     ibl_free(ctx, canon);
     ibl_free(ctx, ddir);

@@ -6,6 +6,7 @@
 #include "ibl/sh.h"
 
 #include "ibl/cubemap.h"
+#include "sh_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -152,7 +153,7 @@ static const int face_axis[6][3] = {{2, 1, 0}, {2, 1, 0}, {0, 2, 1}, {0, 2, 1}, 
 static const int face_sign[6][3] = {{-1, -1, +1}, {+1, -1, -1}, {+1, +1, +1},
                                     {+1, -1, -1}, {+1, -1, +1}, {-1, -1, -1}};
 
-enum { SEG = 128, MAX_WEIGHTS = 15 };
+enum { SEG = 128, MAX_WEIGHTS = 15, MAX_CANON = 35 /* monomials of degree <= 4 */ };
 
 struct ibl_sh_plan {
     ibl_context *ctx;
@@ -206,9 +207,20 @@ static inline void row_sums_c(const double *w, const float *px, int count, int n
     __attribute__((target("avx2,fma"))) static void row_sums_avx2_##KB(                       \
         const double *w, const float *px, int count, int nw, int k0, double (*s)[3])          \
     {                                                                                          \
-        __m256d acc[KB];                                                                       \
-        for (int k = 0; k < KB; k++) acc[k] = _mm256_setzero_pd();                             \
-        for (int x = 0; x < count; x++) {                                                      \
+        /* two texels per step into two accumulator sets: hides the FMA latency */             \
+        __m256d acc[KB], acc2[KB];                                                             \
+        for (int k = 0; k < KB; k++) acc[k] = acc2[k] = _mm256_setzero_pd();                   \
+        int x = 0;                                                                             \
+        for (; x + 1 < count; x += 2) {                                                        \
+            __m256d v = _mm256_cvtps_pd(_mm_loadu_ps(px + 4 * x));                             \
+            __m256d v2 = _mm256_cvtps_pd(_mm_loadu_ps(px + 4 * x + 4));                        \
+            const double *wx = w + (size_t)x * nw + k0;                                        \
+            for (int k = 0; k < KB; k++) {                                                     \
+                acc[k] = _mm256_fmadd_pd(_mm256_broadcast_sd(wx + k), v, acc[k]);              \
+                acc2[k] = _mm256_fmadd_pd(_mm256_broadcast_sd(wx + nw + k), v2, acc2[k]);      \
+            }                                                                                  \
+        }                                                                                      \
+        if (x < count) {                                                                       \
             __m256d v = _mm256_cvtps_pd(_mm_loadu_ps(px + 4 * x));                             \
             const double *wx = w + (size_t)x * nw + k0;                                        \
             for (int k = 0; k < KB; k++)                                                       \
@@ -216,7 +228,7 @@ static inline void row_sums_c(const double *w, const float *px, int count, int n
         }                                                                                      \
         for (int k = 0; k < KB; k++) {                                                         \
             double t[4];                                                                       \
-            _mm256_storeu_pd(t, acc[k]);                                                       \
+            _mm256_storeu_pd(t, _mm256_add_pd(acc[k], acc2[k]));                               \
             s[k0 + k][0] = t[0];                                                               \
             s[k0 + k][1] = t[1];                                                               \
             s[k0 + k][2] = t[2];                                                               \
@@ -276,6 +288,8 @@ static void cube_task(void *arg, int task)
     if (y1 > n) y1 = n;
     double w[SEG * MAX_WEIGHTS];
     double s[MAX_WEIGHTS][3];
+    double canon[6][MAX_CANON][3]; /* per face, canonical moments in (d, i, j) order */
+    memset(canon, 0, sizeof canon);
     for (int y = y0; y < y1; y++) {
         double tc = (2.0 * y + 1.0) / n - 1.0;
         double tcp[MOM_DIM];
@@ -283,38 +297,60 @@ static void cube_task(void *arg, int task)
         for (int j = 1; j < MOM_DIM; j++) tcp[j] = tcp[j - 1] * tc;
         for (int x0 = 0; x0 < n; x0 += SEG) {
             int count = n - x0 < SEG ? n - x0 : SEG;
-            for (int x = 0; x < count; x++) {
-                double sc = (2.0 * (x0 + x) + 1.0) / n - 1.0;
-                double inv_r = 1.0 / sqrt(1.0 + sc * sc + tc * tc);
-                texel_weights(p->omega[(size_t)y * n + x0 + x], sc, inv_r, deg, w + (size_t)x * nw);
+            const double *om = p->omega + (size_t)y * n + x0;
+            if (deg == 2) {
+                /* the default 3 bands, written out so the loop vectorises */
+                for (int x = 0; x < count; x++) {
+                    double sc = (2.0 * (x0 + x) + 1.0) / n - 1.0;
+                    double inv_r = 1.0 / sqrt(1.0 + sc * sc + tc * tc);
+                    double w1 = om[x] * inv_r, w2 = w1 * inv_r;
+                    double *wx = w + (size_t)x * 6;
+                    wx[0] = om[x];
+                    wx[1] = w1;
+                    wx[2] = w1 * sc;
+                    wx[3] = w2;
+                    wx[4] = w2 * sc;
+                    wx[5] = w2 * sc * sc;
+                }
+            } else {
+                for (int x = 0; x < count; x++) {
+                    double sc = (2.0 * (x0 + x) + 1.0) / n - 1.0;
+                    double inv_r = 1.0 / sqrt(1.0 + sc * sc + tc * tc);
+                    texel_weights(om[x], sc, inv_r, deg, w + (size_t)x * nw);
+                }
             }
             for (int face = 0; face < 6; face++) {
                 const float *px = p->faces + (((size_t)face * n + y) * n + x0) * 4;
                 row_sums(p->simd, w, px, count, nw, s);
-                /* canonical monomial a^i b^j c^(d-i-j) -> world monomial with signs */
-                const int *ax = face_axis[face], *sg = face_sign[face];
-                int k = 0;
-                for (int d = 0; d <= deg; d++) {
-                    for (int i = 0; i <= d; i++, k++) {
-                        for (int j = 0; j <= d - i; j++) {
-                            int c = d - i - j, e[3] = {0, 0, 0};
-                            e[ax[0]] += i;
-                            e[ax[1]] += j;
-                            e[ax[2]] += c;
-                            double sign = ((sg[0] < 0 && (i & 1)) ^ (sg[1] < 0 && (j & 1)) ^
-                                           (sg[2] < 0 && (c & 1)))
-                                              ? -1.0
-                                              : 1.0;
-                            double f = sign * tcp[j];
-                            double *m = mom + (size_t)mom_index(e[0], e[1], e[2]) * 4;
-                            m[0] += f * s[k][0];
-                            m[1] += f * s[k][1];
-                            m[2] += f * s[k][2];
+                /* canonical moments of this face: a^i b^j c^(d-i-j) = row sum (d, i) * tc^j */
+                double(*cm)[3] = canon[face];
+                int k = 0, q = 0;
+                for (int d = 0; d <= deg; d++)
+                    for (int i = 0; i <= d; i++, k++)
+                        for (int j = 0; j <= d - i; j++, q++) {
+                            cm[q][0] += tcp[j] * s[k][0];
+                            cm[q][1] += tcp[j] * s[k][1];
+                            cm[q][2] += tcp[j] * s[k][2];
                         }
-                    }
-                }
             }
         }
+    }
+    /* canonical -> world monomials, once per chunk: the face's axis permutation and signs */
+    for (int face = 0; face < 6; face++) {
+        const int *ax = face_axis[face], *sg = face_sign[face];
+        int q = 0;
+        for (int d = 0; d <= deg; d++)
+            for (int i = 0; i <= d; i++)
+                for (int j = 0; j <= d - i; j++, q++) {
+                    int c = d - i - j, e[3] = {0, 0, 0};
+                    e[ax[0]] += i;
+                    e[ax[1]] += j;
+                    e[ax[2]] += c;
+                    int odd = (sg[0] < 0 && (i & 1)) ^ (sg[1] < 0 && (j & 1)) ^ (sg[2] < 0 && (c & 1));
+                    double sign = odd ? -1.0 : 1.0;
+                    double *m = mom + (size_t)mom_index(e[0], e[1], e[2]) * 4;
+                    for (int ch = 0; ch < 3; ch++) m[ch] += sign * canon[face][q][ch];
+                }
     }
 }
 
@@ -389,6 +425,12 @@ ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh
     ibl_free(ctx, grid);
     *out = p;
     return IBL_OK;
+}
+
+int ibl__sh_plan_use_simd(ibl_sh_plan *p, int simd)
+{
+    p->simd = simd && cpu_has_avx2();
+    return p->simd;
 }
 
 void ibl_sh_plan_destroy(ibl_sh_plan *p)
@@ -528,9 +570,24 @@ ibl_status ibl_sh_project_samples(int bands, size_t count, const double *dirs,
     return IBL_OK;
 }
 
+/* The six values determine bands 0 and 1 and the two band-2 functions that are even in every
+ * axis (Y20, Y22); xy, yz, xz average to zero over every face and are lost. A plain 6-point
+ * rule (weight 4 pi / 6 at each axis) is exact for bands 0 and 1 of point values but
+ * overestimates band 2 by 2.5x; for face means it underestimates band 1 (x averages 0.8312
+ * over its face) and overestimates band 2 by 1.378x. Dividing each band by that factor makes
+ * the estimate exact for any radiance in span{Y00, Y1m, Y20, Y22} (docs/DIFFUSE.md). The
+ * factors come from the face integrals J(p,q,n) = int u^p v^q (1+u^2+v^2)^(-(n+3)/2) du dv over
+ * [-1,1]^2 (two-dimensional Gauss-Legendre, 120 nodes, converged to 1e-14). */
+#define FACE_J000 2.0943951023931953 /* 2 pi / 3: a face's solid angle */
+#define FACE_J001 1.7408395027342032 /* integral of the major-axis coordinate */
+#define FACE_J002 1.4679320597172241 /* ... of its square                   */
+
 ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int bands, ibl_sh *out)
 {
-    if (!cube || !cube->data || level < 0 || level >= cube->levels) return IBL_ERR_INVALID_ARGUMENT;
+    bands = clamp_bands(bands);
+    if (!cube || !cube->data || level < 0 || level >= cube->levels || !out || !valid_bands(bands))
+        return IBL_ERR_INVALID_ARGUMENT;
+    int means = ibl_level_size(cube->size, level) == 1;
     double dirs[18] = {0};
     double weights[6];
     float values[24];
@@ -541,7 +598,27 @@ ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int b
         ibl_cubemap_sample_bilinear(cube, level, v, values + 4 * f);
         weights[f] = 4.0 * PI / 6.0;
     }
-    return ibl_sh_project_samples(bands, 6, dirs, weights, values, 4, out);
+    ibl_status st = ibl_sh_project_samples(bands < 3 ? bands : 3, 6, dirs, weights, values, 4, out);
+    if (st != IBL_OK) return st;
+    double band1, band2;
+    if (means) {
+        /* face mean of x on the +X face: J001 / J000; of Y20 on the z and side faces */
+        double mx = FACE_J001 / FACE_J000, mz2 = FACE_J002 / FACE_J000, ms2 = (1.0 - mz2) / 2.0;
+        band1 = 1.0 / mx;
+        double y20_axis = 3.0 * mz2 - 1.0, y20_side = 3.0 * ms2 - 1.0;
+        /* estimate / exact for Y20 = (2pi/3) K20^2 (2 * 2 * y20_axis + 4 * (-1) * y20_side) */
+        double k20sq = K20 * K20;
+        band2 = 1.0 / (FACE_J000 * k20sq * (4.0 * y20_axis - 4.0 * y20_side));
+    } else {
+        band1 = 1.0;
+        band2 = 1.0 / 2.5; /* (2pi/3) K20^2 (2*2*2 + 4*1) = 2.5 */
+    }
+    for (int m = -1; m <= 1; m++)
+        for (int c = 0; c < 3; c++) out->c[ibl_sh_index(1, m)][c] *= band1;
+    for (int m = -2; m <= 2; m++)
+        for (int c = 0; c < 3; c++) out->c[ibl_sh_index(2, m)][c] *= band2;
+    out->bands = bands;
+    return IBL_OK;
 }
 
 /* ---- convolution and forms ---------------------------------------------------------------------- */

@@ -26,6 +26,8 @@ static inline void ibl__wr64(uint8_t *p, uint64_t v)
     ibl__wr32(p + 4, (uint32_t)(v >> 32));
 }
 
+/* ibl__fail_named is declared in io_internal.h (defined in file.c). */
+
 /* The storage format an encoder writes: desc->format if set (refused later if the container
  * cannot store it); else tex->format if it is one of the six container formats; else
  * RGBA32F for RGB32F textures (keeps float precision) and RGBA16F for anything else. */

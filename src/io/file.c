@@ -257,6 +257,12 @@ ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void 
         err = errno;
         what = "close";
     }
+    /* last chance to cancel (Ctrl-C in the CLI): the target is still untouched */
+    if (s == IBL_OK && ibl_progress(ctx, "write", 1.0) == IBL_ERR_CANCELLED) {
+        unlink(tmp);
+        ibl_free(ctx, tmp);
+        return ibl_fail(ctx, IBL_ERR_CANCELLED, "%s: cancelled; nothing written", path);
+    }
     if (s == IBL_OK && rename(tmp, path) != 0) {
         s = IBL_ERR_IO;
         err = errno;

@@ -235,26 +235,30 @@ ibl_status ibl__hdr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
  * half a step: 2^-8 of the largest channel. */
 static void float_to_rgbe(const float *c, uint8_t *o)
 {
-    double v[3];
-    double m = 0.0;
+    float v[3];
+    float m = 0.0f;
     for (int k = 0; k < 3; k++) {
-        v[k] = c[k] > 0.0f ? (double)c[k] : 0.0; /* negatives and NaN */
+        v[k] = c[k] > 0.0f ? c[k] : 0.0f; /* negatives and NaN */
         if (v[k] > m) m = v[k];
     }
-    if (!(m > 0.0)) {
+    if (!(m > 0.0f)) {
         memset(o, 0, 4);
         return;
     }
     int e = 128; /* +Inf: clamp to the largest representable value */
-    if (isfinite(m)) (void)frexp(m, &e);
+    if (isfinite(m)) (void)frexpf(m, &e);
     if (e < -127) { /* below the smallest exponent: black */
         memset(o, 0, 4);
         return;
     }
     if (e > 127) e = 127;
+    /* 2^(8 - e) built from its bits (exact; the double range covers every e). */
+    uint64_t bits = (uint64_t)(1023 + 8 - e) << 52;
+    double scale;
+    memcpy(&scale, &bits, sizeof scale);
     for (int k = 0; k < 3; k++) {
-        double q = isfinite(v[k]) ? floor(ldexp(v[k], 8 - e)) : 255.0;
-        o[k] = (uint8_t)(q > 255.0 ? 255.0 : q);
+        double q = (double)v[k] * scale; /* < 256 unless clamped; truncation = floor */
+        o[k] = q >= 255.0 ? 255 : (uint8_t)q;
     }
     o[3] = (uint8_t)(e + 128);
 }

@@ -173,10 +173,34 @@ ibl_status ibl__sphere_to_cube(ibl_context *ctx, ibl_layout layout, const ibl_im
     memset(&job, 0, sizeof job);
     job.layout = layout;
     job.im = image;
+    ibl_image padded = {0, 0, NULL};
+    if (layout == IBL_LAYOUT_ANGULAR) {
+        /* bilinear taps at the rim must not read the unused corners: continue the disk
+         * outward (each outside pixel takes the nearest pixel inside along its radius) */
+        int W = image->width, H = image->height;
+        ibl_status st = ibl_image_alloc(ctx, W, H, &padded);
+        if (st != IBL_OK) return st;
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                double a = 2.0 * (x + 0.5) / W - 1.0, b = 2.0 * (y + 0.5) / H - 1.0;
+                double r = sqrt(a * a + b * b);
+                int sx = x, sy = y;
+                for (double rr = 1.0 - 1.0 / W; r > 1.0 && rr > 0.0; rr -= 1.0 / W) {
+                    sx = (int)floor((a / r * rr + 1.0) * 0.5 * W);
+                    sy = (int)floor((b / r * rr + 1.0) * 0.5 * H);
+                    double ca = 2.0 * (sx + 0.5) / W - 1.0, cb = 2.0 * (sy + 0.5) / H - 1.0;
+                    if (ca * ca + cb * cb <= 1.0) break;
+                }
+                memcpy(ibl_image_texel(&padded, x, y), ibl_image_texel(image, sx, sy),
+                       4 * sizeof(float));
+            }
+        job.im = &padded;
+    }
     job.out = out;
     job.fixed_k = samples_per_axis;
     picture_basis(frame, job.basis);
     ibl_parallel_for(ctx, 6 * out->size, to_cube_row, &job);
+    ibl_image_free(ctx, &padded);
     return IBL_OK;
 }
 
