@@ -156,10 +156,14 @@ static int is_display_output(const char *path)
 }
 
 /* Mean relative error of the runtime image against the reference over each sphere. */
-static void report_errors(const ibl_image *fast, const ibl_image *ref, const int *ids)
+static void report_errors(const ibl_image *fast, const ibl_image *ref, const int *ids, int mesh)
 {
     ibl_render_object objs[64];
     int n = ibl_render_scene_objects(objs, 64);
+    if (mesh) {
+        n = 1;
+        snprintf(objs[0].label, sizeof objs[0].label, "mesh");
+    }
     printf("%-22s %10s %10s %8s\n", "sphere", "split-sum", "reference", "error");
     double worst = 0;
     for (int o = 0; o < n; o++) {
@@ -288,7 +292,8 @@ int cli_cmd_render(int argc, char **argv)
         ibl_image other;
         st = ibl_render(ctx, &probe, &rd, &other, NULL);
         if (st == IBL_OK) {
-            report_errors(rd.reference ? &images[0] : &other, rd.reference ? &other : &images[0], ids);
+            report_errors(rd.reference ? &images[0] : &other, rd.reference ? &other : &images[0], ids,
+                          rd.mesh != NULL);
             ibl_image_free(ctx, &other);
         }
     }
