@@ -340,7 +340,7 @@ ibl_status ibl_mesh_load_obj(ibl_context *ctx, const char *path, int ao_rays, ib
             hi[k] = fmaxf(hi[k], p4[4 * i + k]);
         }
     float extent = fmaxf(hi[0] - lo[0], fmaxf(hi[1] - lo[1], hi[2] - lo[2]));
-    float s = extent > 0.0f ? 3.6f / extent : 1.0f;
+    float s = extent > 0.0f ? 3.2f / extent : 1.0f;
     for (int i = 0; i < nv; i++) {
         for (int k = 0; k < 3; k++) out->positions[3 * i + k] = (p4[4 * i + k] - 0.5f * (lo[k] + hi[k])) * s;
         out->ao[i] = fminf(1.0f, fmaxf(0.0f, p4[4 * i + 3]));
