@@ -202,6 +202,68 @@ static double row_share(int H, long r, double py0, double py1, double c, double 
     return flat + t * (s_c + s_d * (centre - c)) + s_d * mom;
 }
 
+/* The same mean as window_value for the common case of a window at most two pixels wide and
+ * tall away from the polar bands, in closed form: such a window holds at most two pixel
+ * centres per axis, so the interpolant is linear on at most three pieces per axis. In longitude each
+ * piece's mean is the interpolant at its middle; in latitude the integral of a linear value
+ * times the linear sin(theta) over a piece of length l is l (L(m) s(m) + L' s' l^2 / 12). */
+static void narrow_window(const eq_job *job, double px0, double w, double py0, double py1,
+                          double c, double s_c, double s_d, float out[4])
+{
+    int W = job->im->width;
+    /* longitude: up to two pieces, each read by linear interpolation (two taps) */
+    long tap_at[6];
+    float tap_w[6];
+    int taps = 0;
+    double a = px0 - floor(px0 / W) * W, b = a + w;
+    /* split at the pixel centres inside (at most two for a window up to two pixels wide) */
+    double cut[4];
+    int ncut = 0;
+    cut[ncut++] = a;
+    for (double knot = floor(a - 0.5) + 1.5; knot < b && ncut < 3; knot += 1.0) cut[ncut++] = knot;
+    cut[ncut++] = b;
+    for (int k = 0; k + 1 < ncut; k++) {
+        double len = cut[k + 1] - cut[k], x = 0.5 * (cut[k] + cut[k + 1]) - 0.5;
+        double fl = floor(x), f = x - fl;
+        long i0 = (long)fl, i1 = i0 + 1;
+        i0 = i0 < 0 ? i0 + W : i0 >= W ? i0 - W : i0;
+        i1 = i1 < 0 ? i1 + W : i1 >= W ? i1 - W : i1;
+        tap_at[taps] = i0 * 4;
+        tap_w[taps++] = (float)(len * (1.0 - f));
+        tap_at[taps] = i1 * 4;
+        tap_w[taps++] = (float)(len * f);
+    }
+    /* latitude: the same pieces, each shared by the two rows around it */
+    double acc[4] = {0, 0, 0, 0}, wsum = 0;
+    double ycut[4];
+    int nycut = 0;
+    ycut[nycut++] = py0;
+    for (double knot = floor(py0 - 0.5) + 1.5; knot < py1 && nycut < 3; knot += 1.0)
+        ycut[nycut++] = knot;
+    ycut[nycut++] = py1;
+    for (int k = 0; k + 1 < nycut; k++) {
+        double len = ycut[k + 1] - ycut[k], m = 0.5 * (ycut[k] + ycut[k + 1]);
+        double y = m - 0.5, fl = floor(y), g = y - fl;
+        double sm = s_c + s_d * (m - c), corr = s_d * len * len / 12.0;
+        double wr[2] = {len * ((1.0 - g) * sm - corr), len * (g * sm + corr)};
+        for (int e = 0; e < 2; e++) {
+            const float *row = job->im->pixels + ((size_t)fl + e) * W * 4;
+            float v[4] = {0, 0, 0, 0};
+            for (int t = 0; t < taps; t++) {
+                const float *p = row + tap_at[t];
+                v[0] += tap_w[t] * p[0];
+                v[1] += tap_w[t] * p[1];
+                v[2] += tap_w[t] * p[2];
+                v[3] += tap_w[t] * p[3];
+            }
+            for (int ch = 0; ch < 4; ch++) acc[ch] += wr[e] * v[ch];
+            wsum += wr[e];
+        }
+    }
+    double inv = 1.0 / (wsum * w);
+    for (int ch = 0; ch < 4; ch++) out[ch] = (float)(acc[ch] * inv);
+}
+
 /* Mean of the bilinear interpolant of the picture over the window [px0, px1] x [py0, py1]
  * (pixel units). Rows past a pole continue on the opposite meridian (row -1 is row 0 turned
  * by half a revolution). */
@@ -222,6 +284,13 @@ static void window_value(const eq_job *job, double px0, double px1, double py0, 
     double c_cut = 0.5 * (py0 + py1);
     s_c += s_d * (c_cut - c); /* the cut moved the centre */
     c = c_cut;
+    long R = POLAR_BOX_ROWS < H / 4 ? POLAR_BOX_ROWS : H / 4;
+    double w = px1 - px0;
+    if (h >= 1e-6 && h <= 2.0 && w >= 1e-6 && w <= 2.0 && py0 - 0.5 >= R + 1 &&
+        py1 + 0.5 <= H - R - 1) {
+        narrow_window(job, px0, w, py0, py1, c, s_c, s_d, out);
+        return;
+    }
     long lo = (long)floor(py0 - 0.5), hi = (long)floor(py1 + 0.5);
     if (h < 1e-6) {
         /* a point in latitude: the two rows around it */
