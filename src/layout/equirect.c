@@ -25,8 +25,8 @@
 #include <string.h>
 
 /* Samples per axis: this many per source row / column the texel spans (at least 1). */
-static const double SAMPLES_PER_ROW = 0.75;
-static const double SAMPLES_PER_COLUMN = 0.75;
+static const double SAMPLES_PER_ROW = 0.6;
+static const double SAMPLES_PER_COLUMN = 0.6;
 /* The polar region handled by direct integration: at least 3 texels and this many rows. */
 static const double POLE_ROWS = 4.0;
 /* Cells per texel there (their solid angle is a texel's / POLE_CELLS). */
