@@ -68,13 +68,17 @@ ibl_status ibl_sh_project_samples(int bands, size_t count, const double *dirs,
  * be seen by six values and are zero. Errors on real HDRIs: docs/DIFFUSE.md. */
 ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int bands,
                                        ibl_sh *out);
+/* The same estimator from the six exact face means (solid-angle-weighted, in double) of one
+ * level: what the 1x1 level of an area-correct mip chain holds. */
+ibl_status ibl_sh_project_face_means(const ibl_cubemap *cube, int level, int bands, ibl_sh *out);
 
 /* A reusable projection of cubes of one face size: tables made once, then every run
  * allocates nothing (the per-frame path). */
 typedef struct ibl_sh_plan ibl_sh_plan;
 ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh_plan **out);
 void ibl_sh_plan_destroy(ibl_sh_plan *plan);
-/* faces: six level-0 faces of plan's face size, RGBA float, +X -X +Y -Y +Z -Z. */
+/* faces: six level-0 faces of plan's face size, RGBA float, +X -X +Y -Y +Z -Z. One run at a
+ * time per plan (the plan holds the per-chunk partial sums); make one plan per thread. */
 ibl_status ibl_sh_plan_run(ibl_sh_plan *plan, const float *faces, ibl_sh *out);
 
 /* ---- convolution and forms ---------------------------------------------------------------- */

@@ -213,10 +213,11 @@ static void integrate(const ibl__lobe_params *p, double mu, const ibl__quadratur
         double za = lobe_zeta(p, th[seg + 1]), zb = lobe_zeta(p, th[seg]);
         double dz = zb - za;
         if (!(dz > 0)) continue;
-        /* Where only part of the phi circle is valid the phi-integrated function has
-         * (t - t0)^(3/2)-type end points; the cubic smoothstep t = x^2 (3 - 2x) makes
-         * them O(x^3) so Gauss-Legendre keeps converging fast. */
-        int partial = th[seg] >= th1 - 1e-15;
+        /* Where the phi circle is cut (n.l = 0, or Blinn's n.l = n.v) the phi-integrated
+         * function has (t - t0)^(3/2)-type end points; the cubic smoothstep
+         * t = x^2 (3 - 2x) makes them O(x^3) so Gauss-Legendre keeps converging fast. */
+        int whole = th[seg + 1] <= th1 + 1e-15 && (p->lobe != IBL__LOBE_BLINN || th[seg] >= tv - 1e-15);
+        int partial = !whole;
         const ibl__rule *ru = partial ? &q->u_part : &q->u_full, *rphi = &q->phi;
         for (int i = 0; i < ru->n; i++) {
             double x = ru->x[i], wx = ru->w[i];

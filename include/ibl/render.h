@@ -1,0 +1,96 @@
+/*
+ * ibl/render.h - the preview renderer behind `ibl render`: a small CPU ray tracer that shows
+ * a probe on a grid of spheres (GGX roughness x metalness, and a row of Blinn-Phong
+ * shininess values) or on an OBJ mesh with per-vertex AO, in front of the environment, using
+ * the runtime shading of shade.h. A Monte Carlo reference of the same scene (the full BRDF
+ * against the unfiltered environment, no split sum) measures the approximation error.
+ *
+ * Output images are linear radiance (RGBA float, alpha 1); ibl_render_tonemap turns them
+ * into display values. Every pixel depends only on its own index, so the output is
+ * bit-identical at any thread count.
+ */
+#ifndef IBL_RENDER_H
+#define IBL_RENDER_H
+
+#include "core.h"
+#include "cubemap.h"
+#include "shade.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* A triangle mesh with per-vertex normals and ambient occlusion. */
+typedef struct ibl_mesh {
+    int vertex_count, triangle_count;
+    float *positions; /* 3 per vertex                                         */
+    float *normals;   /* 3 per vertex                                         */
+    float *ao;        /* 1 per vertex, in [0, 1]                              */
+    int *indices;     /* 3 per triangle                                       */
+    void *accel;      /* internal bounding volume hierarchy (built on load)   */
+} ibl_mesh;
+
+/* Reads a Wavefront OBJ (v, vn, f; polygons are fanned). Per-vertex AO comes from vertex
+ * colours ("v x y z r g b": the red channel) when present, otherwise it is computed by ray
+ * casting the mesh against itself (ao_rays rays per vertex; 0: 64). Missing normals are
+ * computed from the faces. */
+ibl_status ibl_mesh_load_obj(ibl_context *ctx, const char *path, int ao_rays, ibl_mesh *out);
+void ibl_mesh_free(ibl_context *ctx, ibl_mesh *mesh);
+
+typedef struct ibl_render_desc {
+    int width, height;           /* 0: 1024 x 512                                            */
+    ibl_shade_desc shade;        /* specular occlusion, mix, energy compensation, ...         */
+    const ibl_cubemap *environment; /* unfiltered environment: background and reference;
+                                       NULL: the probe's mirror, else its level 0              */
+    const ibl_mesh *mesh;        /* draw this mesh instead of the spheres                    */
+    int reference;               /* Monte Carlo reference instead of the runtime shading; its
+                                    samples also spread over the pixel's footprint            */
+    int supersample;             /* runtime shading: n x n rays per pixel; 0: 1               */
+    int reference_samples;       /* per pixel and lobe; 0: 256                                */
+    unsigned seed;               /* of the per-pixel sample rotation                          */
+    float sphere_ao_min;         /* > 0: synthetic AO on the spheres, from this value at the
+                                    bottom to 1 at the top (to see specular occlusion)        */
+} ibl_render_desc;
+
+/* One object of the scene, for per-object measurements. */
+typedef struct ibl_render_object {
+    ibl_material material;
+    char label[32];
+} ibl_render_object;
+
+/* The objects of the sphere scene (at most 64): fills objects and returns their count. */
+int ibl_render_scene_objects(ibl_render_object *objects, int max_objects);
+
+/* Renders into a new linear image. ids (optional, width * height ints) receives the object
+ * index hit by each pixel's centre ray, -1 for the background. */
+ibl_status ibl_render(ibl_context *ctx, const ibl_probe *probe, const ibl_render_desc *desc,
+                      ibl_image *out, int *ids);
+
+/* In place: scale by 2^exposure_ev and apply the filmic curve of io.h (ibl_tonemap_apply);
+ * the result is display-referred in [0, 1], before the sRGB transfer function. */
+void ibl_render_tonemap(ibl_image *image, float exposure_ev);
+
+/* Draws text with the built-in 5x7 bitmap font (upper case, digits, common punctuation;
+ * lower case is drawn as upper case), each font pixel scale x scale image pixels, on a
+ * dark box for legibility. */
+void ibl_render_text(ibl_image *image, int x, int y, int scale, const char *text,
+                     const float rgba[4]);
+/* A new image with a and b (same height) side by side, separated by a gap, each labelled. */
+ibl_status ibl_render_side_by_side(ibl_context *ctx, const ibl_image *a, const char *label_a,
+                                   const ibl_image *b, const char *label_b, ibl_image *out);
+
+typedef struct ibl_render_probe_desc {
+    int specular_size; /* face edge of the prefiltered chain; 0: min(128, the environment's) */
+    int table_size;    /* edge of the split-sum table; 0: 128                                */
+} ibl_render_probe_desc;
+
+/* Builds a probe from an unfiltered environment in memory: the prefiltered GGX chain, the
+ * irradiance SH and the BRDF tables (what `ibl bake` would write). The probe owns its parts
+ * (ibl_probe_free); its mirror is a copy of the environment. desc may be NULL. */
+ibl_status ibl_render_probe_from_environment(ibl_context *ctx, const ibl_cubemap *environment,
+                                             const ibl_render_probe_desc *desc, ibl_probe *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,46 @@
+/* Internal pieces shared by the preview renderer's files. */
+#ifndef IBL_RENDER_INTERNAL_H
+#define IBL_RENDER_INTERNAL_H
+
+#include "ibl/render.h"
+
+#include <math.h>
+#include <stdint.h>
+
+static inline ibl_vec3 ibl__v3(float x, float y, float z)
+{
+    ibl_vec3 v = {x, y, z};
+    return v;
+}
+static inline float ibl__dot(ibl_vec3 a, ibl_vec3 b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+static inline ibl_vec3 ibl__norm(ibl_vec3 a)
+{
+    float l = sqrtf(ibl__dot(a, a));
+    return l > 0.0f ? ibl__v3(a.x / l, a.y / l, a.z / l) : a;
+}
+
+/* Orthonormal tangent frame around a unit vector (Duff et al. 2017, "Building an
+ * Orthonormal Basis, Revisited"). */
+void ibl__frame(ibl_vec3 n, ibl_vec3 *t, ibl_vec3 *b);
+/* Point i of an n-point Hammersley set in [0, 1)^2, rotated by (r0, r1) modulo 1
+ * (Cranley-Patterson rotation). */
+void ibl__hammersley(uint32_t i, uint32_t n, float r0, float r1, float *u0, float *u1);
+/* A well-mixed 32-bit hash (for per-pixel rotations that do not depend on threads). */
+uint32_t ibl__hash(uint32_t x);
+/* Half vector sampled from the GGX NDF (pdf D(h) n.h), in the frame of n. */
+ibl_vec3 ibl__sample_ggx(ibl_vec3 n, float alpha, float u0, float u1);
+/* Half vector sampled from the normalised Blinn-Phong NDF ((s + 1)/2pi (n.h)^s). */
+ibl_vec3 ibl__sample_phong(ibl_vec3 n, float shininess, float u0, float u1);
+
+/* Environment importance sampling (env_sampling.c). */
+typedef struct ibl__env_sampler ibl__env_sampler;
+ibl__env_sampler *ibl__env_sampler_create(ibl_context *ctx, const ibl_cubemap *env);
+void ibl__env_sampler_destroy(ibl_context *ctx, ibl__env_sampler *s);
+/* A direction and its density over solid angle. */
+ibl_vec3 ibl__env_sampler_sample(const ibl__env_sampler *s, float u0, float u1, float *pdf);
+float ibl__env_sampler_pdf(const ibl__env_sampler *s, ibl_vec3 d);
+
+#endif
