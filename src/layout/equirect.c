@@ -584,7 +584,7 @@ ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const
         /* The polar region: 3 texels, and at least POLE_ROWS source rows. */
         int N = out->size;
         double cell = 2.0 / N;
-        double radius = fmax(atan(3.0 * cell), POLE_ROWS * PI / H);
+        double radius = fmin(fmax(atan(3.0 * cell), POLE_ROWS * PI / H), 0.5 * PI);
         job.pole_radius2 = sin(radius) * sin(radius);
         /* How finely the pixels are cut there: cells of about 1/POLE_CELLS of a texel. */
         job.pole_cell_area = cell * cell / POLE_CELLS;
