@@ -663,12 +663,9 @@ static void equirect_energy_kept(void **state)
 
 /* ---- aliasing ---- */
 
-static void checker_fn(const double d[3], float out[4]) { (void)d; (void)out; }
-
 static void no_aliasing(void **state)
 {
     (void)state;
-    (void)checker_fn;
     ibl_context *ctx = test_context(2);
     /* a pixel checkerboard equirect -> small cube: every texel is about the mean 0.5 */
     ibl_image im;
