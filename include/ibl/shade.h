@@ -116,15 +116,38 @@ typedef struct ibl_probe {
     /* owned storage when loaded (internal) */
     void *owned[8];
     int owned_count;
-    ibl_cubemap owned_cubes[3];
+    ibl_cubemap owned_cubes[4];
 } ibl_probe;
 
 /* Checks the probe's parts (sizes, monotonic mapping, tables) and fills a missing shininess
  * table; records the reason on failure. */
 ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *probe);
 /* Loads a bake directory (manifest.json, the specular chain, irradiance/SH, BRDF tables).
- * IBL_ERR_UNSUPPORTED until the bake format exists in this build. */
+ * IBL_ERR_UNSUPPORTED until the bake format exists in this build; ibl_probe_load_files
+ * loads the same parts from files named one by one. */
 ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out);
+
+/* The parts of a probe as files (what the bake stages and `ibl lut` write). */
+typedef struct ibl_probe_files {
+    const char *specular;      /* required: cube texture with its chain (.ktx2 .dds .ktx)      */
+    ibl_level_mapping mapping; /* what each level was filtered for; levels 0 (all zero):
+                                  the whole chain at roughness k / (levels - 1)               */
+    const char *mirror;        /* optional: the unfiltered environment (cube texture, or an
+                                  image in any layout ibl_image_to_cubemap detects)           */
+    const char *irradiance;    /* optional: IEM = E/pi as a cube texture or image; without it
+                                  the probe gets 9 SH coefficients projected from the mirror
+                                  (or from the chain's level 0)                              */
+    const char *splitsum;      /* optional: brdf.h split-sum table (2D, R = A, G = B, texels at
+                                  ((i + 0.5)/N, (j + 0.5)/N), row 0 r ~ 0), e.g. `ibl lut`     */
+    const char *ambient_brdf;  /* optional: brdf.h AmbientBRDF volume (3D, R = the albedo)      */
+    float ambient_shininess_min, ambient_shininess_max; /* its shininess range; 0: 1, 2000  */
+    int ambient_linear;        /* its shininess rows are linearly spaced (default: log)       */
+    int clamp_infinite;        /* reading: accept infinite texels and clamp them              */
+} ibl_probe_files;
+
+/* Reads the files into a probe that owns them (ibl_probe_free) and validates it. Messages
+ * name the file at fault. */
+ibl_status ibl_probe_load_files(ibl_context *ctx, const ibl_probe_files *files, ibl_probe *out);
 void ibl_probe_free(ibl_context *ctx, ibl_probe *probe);
 
 /* Fractional level for a roughness / shininess through the probe's own mapping (exact level
