@@ -98,8 +98,9 @@ typedef enum ibl_sh_kind {
 } ibl_sh_kind;
 
 /* Everything the runtime needs about one environment. Non-owning unless loaded by
- * ibl_probe_load (then ibl_probe_free releases it). Fill it by hand from in-memory parts
- * and call ibl_probe_validate once. */
+ * ibl_probe_load_files or built by ibl_render_probe_from_environment (then ibl_probe_free
+ * releases it). Fill it by hand from in-memory parts and call ibl_probe_validate once. The
+ * SH basis and axes are sh.h's (IBL_SH_BASIS_NAME, world x y z, +Y up). */
 typedef struct ibl_probe {
     ibl_cubemap specular;       /* prefiltered chain, level 0 the sharpest                      */
     ibl_level_mapping mapping;
