@@ -4,6 +4,7 @@
 #include "test_support.h"
 
 #include "ibl/render.h"
+#include "render/render_internal.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -382,6 +383,49 @@ static void cli_render(void **state)
     assert_non_null(strstr(out, "missing.exr"));
 }
 
+/* The reference's environment sampler: its density integrates to 1 over the sphere (grid of
+ * exact texel solid angles, 8x8 points per texel of a 16 cube: the density is smooth within a
+ * texel, so 1e-3), and the mean of 1/pdf over its own samples is 4 pi (an unbiased estimate of
+ * the sphere's area; 4096 stratified samples: 2%). */
+static void environment_sampler(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_cubemap env;
+    face_coloured_cube(ctx, &env);
+    /* a bright spot so the density is far from uniform */
+    ibl_cubemap_face(&env, 0, IBL_FACE_POS_Y)[(5 * 16 + 7) * 4 + 1] = 500.0f;
+    ibl__env_sampler *es = ibl__env_sampler_create(ctx, &env);
+    assert_non_null(es);
+    double total = 0;
+    int sub = 8;
+    for (int f = 0; f < 6; f++)
+        for (int y = 0; y < 16 * sub; y++)
+            for (int x = 0; x < 16 * sub; x++) {
+                int n = 16 * sub;
+                ibl_vec3 d = ibl_cube_texel_direction(f, n, x, y);
+                total += ibl__env_sampler_pdf(es, d) * ibl_cube_texel_solid_angle(n, x, y);
+            }
+    assert_near(total, 1.0, 1e-3);
+    double inv = 0;
+    int hits_spot = 0;
+    for (int i = 0; i < 4096; i++) {
+        float u0 = (i + 0.5f) / 4096.0f, u1 = (float)((i * 0.6180339887) - floor(i * 0.6180339887)), pdf;
+        ibl_vec3 d = ibl__env_sampler_sample(es, u0, u1, &pdf);
+        assert_near(pdf, ibl__env_sampler_pdf(es, d), 1e-3 * pdf);
+        inv += 1.0 / pdf;
+        float s, t;
+        if (ibl_cube_face_st(d, &s, &t) == IBL_FACE_POS_Y && (int)(s * 16) == 7 && (int)(t * 16) == 5)
+            hits_spot++;
+    }
+    assert_near(inv / 4096, 4 * 3.14159265358979, 0.02 * 4 * 3.14159265358979);
+    /* the spot (3x3 dilated) holds most of the weight */
+    assert_true(hits_spot > 4096 / 20);
+    ibl__env_sampler_destroy(ctx, es);
+    ibl_cubemap_free(ctx, &env);
+    ibl_context_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -392,6 +436,7 @@ int main(void)
         cmocka_unit_test(tonemap_and_labels),
         cmocka_unit_test(obj_mesh),
         cmocka_unit_test(cli_render),
+        cmocka_unit_test(environment_sampler),
     };
     return cmocka_run_group_tests_name("render", tests, NULL, NULL);
 }
