@@ -19,7 +19,8 @@ static const char usage[] =
     "  --method M           convolve (default: reduce to --source-size, then direct\n"
     "                       convolution with exact texel solid angles), sh (SH irradiance\n"
     "                       evaluated per texel), reference (full-resolution double sum: slow)\n"
-    "  --source-size N      convolve: reduced radiance face edge, 1..64 (default 8)\n"
+    "  --source-size N      convolve: reduced radiance face edge, 1..64 (default 8); the\n"
+    "                       input is first read as a cube of 8 times that edge\n"
     "  --scale S            over-pi (default) or full (E itself)\n"
     "  --bands N            sh: 1..5 (default 3)\n"
     "  --window W           sh: none (default), auto, or a Hanning width\n"
@@ -96,6 +97,9 @@ int cli_cmd_irradiance(int argc, char **argv)
     double t0 = cli_seconds();
     ibl_cubemap cube = {0}, result = {0};
     ibl_image flat = {0};
+    /* convolve only needs the radiance at its reduced size: reading the input at 8x that edge
+     * (64 by default) keeps the area-correct reduction and skips most of the conversion */
+    if (d.method == IBL_IRRADIANCE_CONVOLVE) io.size = 8 * (d.source_size ? d.source_size : 8);
     int rc = cli_read_cubemap(ctx, &a.common, in, &io, &cube, NULL);
     if (rc != CLI_EXIT_OK) {
         ibl_context_destroy(ctx);

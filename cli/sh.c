@@ -19,6 +19,8 @@ static const char usage[] =
     "  --window W         none (default), auto (weakest Hanning window keeping the\n"
     "                     irradiance non-negative), or a number: Hanning width W\n"
     "  --fast-centres     the cheap dynamic path: only the six face-centre texels\n"
+    "  --fast-means       the same from the six face means (what a 1x1 mip level holds);\n"
+    "                     docs/DIFFUSE.md has the errors of both\n"
     "  --layout NAME --yaw DEG --mirror --z-up   how to read a flat input (with an\n"
     "                     orientation, equirect inputs are projected through a cube)\n"
     "  --json             one JSON object instead of text\n"
@@ -160,6 +162,8 @@ int cli_cmd_sh(int argc, char **argv)
             json = 1;
         } else if (cli_is(&a, arg, "--fast-centres", "--fast-centers")) {
             fast = 1;
+        } else if (cli_is(&a, arg, "--fast-means", NULL)) {
+            fast = 2;
         } else {
             cli_positional_or_unknown(&a, arg);
         }
@@ -185,8 +189,12 @@ int cli_cmd_sh(int argc, char **argv)
             return rc;
         }
     }
-    const char *method = fast ? "face-centres" : plain ? "equirect" : "cube";
-    if (fast) st = ibl_sh_project_face_centres(&cube, 0, bands, &radiance);
+    const char *method = fast == 1   ? "face-centres"
+                         : fast == 2 ? "face-means"
+                         : plain     ? "equirect"
+                                     : "cube";
+    if (fast == 1) st = ibl_sh_project_face_centres(&cube, 0, bands, &radiance);
+    else if (fast == 2) st = ibl_sh_project_face_means(&cube, 0, bands, &radiance);
     else if (plain) st = ibl_sh_project_equirect(ctx, &equirect, bands, &radiance);
     else st = ibl_sh_project_cubemap(ctx, &cube, 0, bands, &radiance);
     ibl_sh_window_report rep;

@@ -427,6 +427,29 @@ static void exr_windows_tiles_grey(void **state)
             assert_true(p[3] == exr_value(0, x, y));
         }
     ibl_texture_free(ctx, &t);
+    /* Absurd tiles (one 60000x60000 tile for a 5x3 image) would make OpenEXR allocate
+     * gigabytes for its tile buffer: refused from the header (found by fuzzing). */
+    n = build_exr(&e, ay, 2, data3, data3, 60000);
+    assert_int_equal(decode(ctx, e.b, n, &t, NULL), IBL_ERR_UNSUPPORTED);
+    assert_non_null(strstr(ibl_context_message(ctx), "tiles"));
+    /* Inputs found by fuzzing, each of which made OpenEXR ask for gigabytes: a huge tile, and
+     * a channel list shorter than its declared size (OpenEXR reads it by structure and lost
+     * track of the header). */
+    ibl_image im;
+    assert_int_equal(ibl_read_image(ctx, test_data("fuzz_exr_huge_tile.exr"), NULL, &im, NULL),
+                     IBL_ERR_UNSUPPORTED);
+    assert_int_equal(ibl_read_image(ctx, test_data("fuzz_exr_chlist_desync.exr"), NULL, &im, NULL),
+                     IBL_ERR_FORMAT);
+    assert_non_null(strstr(ibl_context_message(ctx), "channel list"));
+    /* Same for a fixed-size attribute declared with another size. */
+    n = build_exr(&e, bgr, 3, data, disp, 0);
+    for (size_t i = 8; i + 12 < n; i++)
+        if (memcmp(e.b + i, "compression\0compression\0", 24) == 0) {
+            e.b[i + 24] = 2; /* declared size 2 for a 1-byte value */
+            break;
+        }
+    assert_int_equal(decode(ctx, e.b, n, &t, NULL), IBL_ERR_FORMAT);
+    assert_non_null(strstr(ibl_context_message(ctx), "does not match its type"));
     /* Channels that are neither colour nor grey are refused by name. */
     const char *const z[1] = {"Z"};
     n = build_exr(&e, z, 1, data3, data3, 0);

@@ -68,6 +68,9 @@ ibl_status ibl_sh_project_samples(int bands, size_t count, const double *dirs,
  * be seen by six values and are zero. Errors on real HDRIs: docs/DIFFUSE.md. */
 ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int bands,
                                        ibl_sh *out);
+/* The same estimator from the six exact face means (solid-angle-weighted, in double) of one
+ * level: what the 1x1 level of an area-correct mip chain holds. */
+ibl_status ibl_sh_project_face_means(const ibl_cubemap *cube, int level, int bands, ibl_sh *out);
 
 /* A reusable projection of cubes of one face size: tables made once, then every run
  * allocates nothing (the per-frame path). */

@@ -31,7 +31,7 @@ extern "C" {
 typedef struct ibl_sky_desc {
     float sun_elevation_deg; /* degrees above the horizon, (0, 90]; 0: 35                        */
     float sun_azimuth_deg;   /* degrees from -Z toward +X (any value, taken modulo 360)           */
-    float turbidity;         /* Preetham turbidity in [2, 10] (2: very clear, 10: hazy); 0: 3     */
+    float turbidity;         /* Preetham turbidity in [1.7, 10] (2: very clear, 10: hazy); 0: 3   */
     int width;               /* equirect width (height = width / 2), even, >= 8; 0: 1024          */
     float ground_albedo;     /* Lambertian albedo of the ground in [0, 1]; 0: 0.3; < 0: black     */
     int no_sun_disk;         /* non-zero: leave the disk out (sky and ground are still sunlit),

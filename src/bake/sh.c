@@ -284,8 +284,9 @@ static void cube_task(void *arg, int task)
     int n = p->n, deg = p->deg, nw = p->nw;
     double *mom = p->partial + (size_t)task * MOM_SIZE * 4;
     memset(mom, 0, sizeof(double) * MOM_SIZE * 4);
+    int half = (n + 1) / 2; /* tasks cover the top half; each row brings its mirror */
     int y0 = task * p->rows_per_task, y1 = y0 + p->rows_per_task;
-    if (y1 > n) y1 = n;
+    if (y1 > half) y1 = half;
     double w[SEG * MAX_WEIGHTS];
     double s[MAX_WEIGHTS][3];
     double canon[6][MAX_CANON][3]; /* per face, canonical moments in (d, i, j) order */
@@ -319,19 +320,25 @@ static void cube_task(void *arg, int task)
                     texel_weights(om[x], sc, inv_r, deg, w + (size_t)x * nw);
                 }
             }
-            for (int face = 0; face < 6; face++) {
-                const float *px = p->faces + (((size_t)face * n + y) * n + x0) * 4;
-                row_sums(p->simd, w, px, count, nw, s);
-                /* canonical moments of this face: a^i b^j c^(d-i-j) = row sum (d, i) * tc^j */
-                double(*cm)[3] = canon[face];
-                int k = 0, q = 0;
-                for (int d = 0; d <= deg; d++)
-                    for (int i = 0; i <= d; i++, k++)
-                        for (int j = 0; j <= d - i; j++, q++) {
-                            cm[q][0] += tcp[j] * s[k][0];
-                            cm[q][1] += tcp[j] * s[k][1];
-                            cm[q][2] += tcp[j] * s[k][2];
-                        }
+            /* row y and its mirror n-1-y (tc -> -tc) share every weight */
+            for (int mirror = 0; mirror < 2; mirror++) {
+                int row = mirror ? n - 1 - y : y;
+                if (mirror && row == y) break;
+                for (int face = 0; face < 6; face++) {
+                    const float *px = p->faces + (((size_t)face * n + row) * n + x0) * 4;
+                    row_sums(p->simd, w, px, count, nw, s);
+                    /* canonical moments of this face: a^i b^j c^(d-i-j) = sum (d, i) * tc^j */
+                    double(*cm)[3] = canon[face];
+                    int k = 0, q = 0;
+                    for (int d = 0; d <= deg; d++)
+                        for (int i = 0; i <= d; i++, k++)
+                            for (int j = 0; j <= d - i; j++, q++) {
+                                double t = (mirror && (j & 1)) ? -tcp[j] : tcp[j];
+                                cm[q][0] += t * s[k][0];
+                                cm[q][1] += t * s[k][1];
+                                cm[q][2] += t * s[k][2];
+                            }
+                }
             }
         }
     }
@@ -409,9 +416,10 @@ ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh
     p->nw = bands * (bands + 1) / 2;
     p->simd = cpu_has_avx2();
     /* chunking depends on the size only, never on the thread count */
-    p->tasks = face_size < 32 ? face_size : 32;
-    p->rows_per_task = (face_size + p->tasks - 1) / p->tasks;
-    p->tasks = (face_size + p->rows_per_task - 1) / p->rows_per_task;
+    int half = (face_size + 1) / 2;
+    p->tasks = half < 32 ? half : 32;
+    p->rows_per_task = (half + p->tasks - 1) / p->tasks;
+    p->tasks = (half + p->rows_per_task - 1) / p->rows_per_task;
     size_t n = (size_t)face_size;
     p->omega = ibl_alloc(ctx, n * n * sizeof(double));
     p->partial = ibl_alloc(ctx, (size_t)p->tasks * MOM_SIZE * 4 * sizeof(double));
@@ -582,20 +590,13 @@ ibl_status ibl_sh_project_samples(int bands, size_t count, const double *dirs,
 #define FACE_J001 1.7408395027342032 /* integral of the major-axis coordinate */
 #define FACE_J002 1.4679320597172241 /* ... of its square                   */
 
-ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int bands, ibl_sh *out)
+/* SH from six per-face values (+X -X +Y -Y +Z -Z; RGBA, 4 floats apart). */
+static ibl_status six_value_sh(const float *values, int means, int bands, ibl_sh *out)
 {
-    bands = clamp_bands(bands);
-    if (!cube || !cube->data || level < 0 || level >= cube->levels || !out || !valid_bands(bands))
-        return IBL_ERR_INVALID_ARGUMENT;
-    int means = ibl_level_size(cube->size, level) == 1;
     double dirs[18] = {0};
     double weights[6];
-    float values[24];
     for (int f = 0; f < 6; f++) {
-        double *d = dirs + 3 * f;
-        d[face_axis[f][2]] = face_sign[f][2];
-        ibl_vec3 v = {(float)d[0], (float)d[1], (float)d[2]};
-        ibl_cubemap_sample_bilinear(cube, level, v, values + 4 * f);
+        dirs[3 * f + face_axis[f][2]] = face_sign[f][2];
         weights[f] = 4.0 * PI / 6.0;
     }
     ibl_status st = ibl_sh_project_samples(bands < 3 ? bands : 3, 6, dirs, weights, values, 4, out);
@@ -607,8 +608,7 @@ ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int b
         band1 = 1.0 / mx;
         double y20_axis = 3.0 * mz2 - 1.0, y20_side = 3.0 * ms2 - 1.0;
         /* estimate / exact for Y20 = (2pi/3) K20^2 (2 * 2 * y20_axis + 4 * (-1) * y20_side) */
-        double k20sq = K20 * K20;
-        band2 = 1.0 / (FACE_J000 * k20sq * (4.0 * y20_axis - 4.0 * y20_side));
+        band2 = 1.0 / (FACE_J000 * K20 * K20 * (4.0 * y20_axis - 4.0 * y20_side));
     } else {
         band1 = 1.0;
         band2 = 1.0 / 2.5; /* (2pi/3) K20^2 (2*2*2 + 4*1) = 2.5 */
@@ -619,6 +619,43 @@ ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int b
         for (int c = 0; c < 3; c++) out->c[ibl_sh_index(2, m)][c] *= band2;
     out->bands = bands;
     return IBL_OK;
+}
+
+ibl_status ibl_sh_project_face_centres(const ibl_cubemap *cube, int level, int bands, ibl_sh *out)
+{
+    bands = clamp_bands(bands);
+    if (!cube || !cube->data || level < 0 || level >= cube->levels || !out || !valid_bands(bands))
+        return IBL_ERR_INVALID_ARGUMENT;
+    float values[24];
+    for (int f = 0; f < 6; f++) {
+        float d[3] = {0, 0, 0};
+        d[face_axis[f][2]] = (float)face_sign[f][2];
+        ibl_vec3 v = {d[0], d[1], d[2]};
+        ibl_cubemap_sample_bilinear(cube, level, v, values + 4 * f);
+    }
+    return six_value_sh(values, ibl_level_size(cube->size, level) == 1, bands, out);
+}
+
+ibl_status ibl_sh_project_face_means(const ibl_cubemap *cube, int level, int bands, ibl_sh *out)
+{
+    bands = clamp_bands(bands);
+    if (!cube || !cube->data || level < 0 || level >= cube->levels || !out || !valid_bands(bands))
+        return IBL_ERR_INVALID_ARGUMENT;
+    int n = ibl_level_size(cube->size, level);
+    float values[24];
+    for (int f = 0; f < 6; f++) {
+        const float *p = ibl_cubemap_face(cube, level, f);
+        double acc[3] = {0, 0, 0}, wsum = 0;
+        for (int y = 0; y < n; y++)
+            for (int x = 0; x < n; x++, p += 4) {
+                double w = ibl_cube_texel_solid_angle(n, x, y);
+                for (int c = 0; c < 3; c++) acc[c] += w * p[c];
+                wsum += w;
+            }
+        for (int c = 0; c < 3; c++) values[4 * f + c] = (float)(acc[c] / wsum);
+        values[4 * f + 3] = 1.0f;
+    }
+    return six_value_sh(values, 1, bands, out);
 }
 
 /* ---- convolution and forms ---------------------------------------------------------------------- */

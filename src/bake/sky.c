@@ -100,9 +100,9 @@ ibl_status ibl_sky_model_init(ibl_context *ctx, const ibl_sky_desc *desc, ibl_sk
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "sky: sun elevation %g is outside (0, 90] degrees (the model needs the "
                         "sun above the horizon)", d.sun_elevation_deg);
-    if (!(d.turbidity >= 2.0f && d.turbidity <= 10.0f))
+    if (!(d.turbidity >= 1.7f && d.turbidity <= 10.0f))
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
-                        "sky: turbidity %g is outside [2, 10], the range of the model's fit",
+                        "sky: turbidity %g is outside [1.7, 10], the range of the model's fit",
                         d.turbidity);
     if (!isfinite(d.sun_azimuth_deg))
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sky: sun azimuth is not finite");

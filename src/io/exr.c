@@ -17,12 +17,18 @@
 
 /* ---- structural check ---------------------------------------------------------------- */
 
+/* Largest buffer OpenEXR may be led to allocate for one tile, tile row or scanline block
+ * (legitimate files need a few MiB; 65536 wide x 256 lines of 4 float channels is 256 MiB). */
+#define EXR_MAX_BUFFER ((uint64_t)256 << 20)
+
 typedef struct exr_shape {
     int32_t data[4], display[4]; /* xmin ymin xmax ymax */
     int has_data, has_display, has_tiles;
     int compression;
     uint32_t tile_w, tile_h;
     int tiled, multipart, deep;
+    int channels;          /* in part 0's channel list            */
+    uint64_t pixel_bytes;  /* bytes of one pixel of all channels  */
 } exr_shape;
 
 static int32_t le32(const uint8_t *p)
@@ -33,6 +39,64 @@ static int32_t le32(const uint8_t *p)
 static uint64_t le64(const uint8_t *p)
 {
     return (uint64_t)(uint32_t)le32(p) | (uint64_t)(uint32_t)le32(p + 4) << 32;
+}
+
+/* Checks a channel list (name, pixel type, pLinear + 3 reserved, x/y sampling; an empty name
+ * ends it exactly at the attribute's end: OpenEXR reads it by structure, not by size) and,
+ * for part 0, counts channels and bytes per pixel (OpenEXR sizes its buffers by them). */
+static const char *scan_chlist(const uint8_t *v, size_t len, exr_shape *sh, int record)
+{
+    size_t pos = 0;
+    while (pos < len && v[pos] != 0) {
+        const uint8_t *nul = memchr(v + pos, 0, len - pos);
+        if (!nul || (size_t)(nul - v) + 1 + 16 > len) return "malformed channel list";
+        pos = (size_t)(nul - v) + 1;
+        int32_t type = le32(v + pos), xs = le32(v + pos + 8), ys = le32(v + pos + 12);
+        if (type < 0 || type > 2 || xs < 1 || ys < 1) return "malformed channel list";
+        if (record) {
+            sh->pixel_bytes += type == 1 ? 2 : 4; /* HALF, else UINT/FLOAT */
+            sh->channels++;
+        }
+        pos += 16;
+    }
+    if (pos + 1 != len) return "malformed channel list";
+    return NULL;
+}
+
+/* OpenEXR 3.1 reads typed attributes by their type, not by the declared size, so a size that
+ * disagrees with the type desynchronises its header parser from ours: refuse those. */
+static const char *check_value(const char *type, const uint8_t *v, size_t len)
+{
+    static const struct {
+        const char *type;
+        size_t size;
+    } fixed[] = {
+        {"box2i", 16}, {"box2f", 16}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16}, {"v3i", 12},
+        {"v3f", 12}, {"v3d", 24}, {"int", 4}, {"float", 4}, {"double", 8}, {"rational", 8},
+        {"timecode", 8}, {"keycode", 28}, {"chromaticities", 32}, {"m33f", 36}, {"m33d", 72},
+        {"m44f", 64}, {"m44d", 128}, {"compression", 1}, {"lineOrder", 1}, {"envmap", 1},
+        {"deepImageState", 1}, {"tiledesc", 9},
+    };
+    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
+        if (strcmp(type, fixed[i].type) == 0)
+            return len == fixed[i].size ? NULL : "attribute size does not match its type";
+    if (strcmp(type, "stringvector") == 0) { /* (int32 length, bytes)... filling the value */
+        size_t pos = 0;
+        while (pos < len) {
+            if (len - pos < 4) return "malformed string vector";
+            int32_t n = le32(v + pos);
+            pos += 4;
+            if (n < 0 || (size_t)n > len - pos) return "malformed string vector";
+            pos += (size_t)n;
+        }
+    } else if (strcmp(type, "preview") == 0) { /* width, height, then RGBA8 pixels */
+        if (len < 8) return "malformed preview";
+        uint64_t pw = (uint32_t)le32(v), ph = (uint32_t)le32(v + 4);
+        if (pw * ph * 4 != len - 8) return "malformed preview";
+    } else if (strcmp(type, "floatvector") == 0 && len % 4 != 0) {
+        return "malformed float vector";
+    }
+    return NULL;
 }
 
 /* A NUL-terminated string of at most max_len characters at b[*pos]; NULL if malformed. */
@@ -65,6 +129,10 @@ static const char *walk_header(const uint8_t *b, size_t size, size_t *pos, size_
         *pos += 4;
         if (len < 0 || (size_t)len > size - *pos) return "attribute size beyond the end of the file";
         const uint8_t *v = b + *pos;
+        const char *bad = strcmp(type, "chlist") == 0
+                              ? scan_chlist(v, (size_t)len, sh, record && strcmp(name, "channels") == 0)
+                              : check_value(type, v, (size_t)len);
+        if (bad) return bad;
         if (record) {
             if (strcmp(type, "box2i") == 0 && len == 16 &&
                 (strcmp(name, "dataWindow") == 0 || strcmp(name, "displayWindow") == 0)) {
@@ -126,6 +194,7 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
     if (problem) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: %s", name, problem);
     if (sh->deep)
         return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: deep OpenEXR data is not supported", name);
+    if (sh->channels == 0) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: no channels", name);
     if (!sh->has_data || !sh->has_display)
         return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: no data or display window", name);
     for (int axis = 0; axis < 2; axis++) {
@@ -146,11 +215,21 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
         if (!sh->has_tiles || sh->tile_w == 0 || sh->tile_h == 0 || sh->tile_w > 0x7FFFFFFFu ||
             sh->tile_h > 0x7FFFFFFFu)
             return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR tile description", name);
+        /* OpenEXR allocates a tile (tile_w x tile_h pixels) per buffer and, reading through
+         * InputFile, a row of tiles (width x tile_h of every channel): keep both sane. */
+        uint64_t th = sh->tile_h;
+        if (sh->tile_w > IBL_MAX_DIMENSION || th > IBL_MAX_DIMENSION ||
+            (uint64_t)sh->tile_w * th * sh->pixel_bytes > EXR_MAX_BUFFER ||
+            w * th * 4 * (uint64_t)(sh->channels < 4 ? sh->channels : 4) > EXR_MAX_BUFFER)
+            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR tiles of %ux%u are too large",
+                            name, sh->tile_w, sh->tile_h);
         /* Level 0 comes first in the offset table; only its tiles are read. */
         chunks = ((w + sh->tile_w - 1) / sh->tile_w) * ((h + sh->tile_h - 1) / sh->tile_h);
     } else {
         uint64_t lpc = (uint64_t)lines_per_chunk[sh->compression];
         chunks = (h + lpc - 1) / lpc;
+        if (w * lpc * sh->pixel_bytes > EXR_MAX_BUFFER)
+            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR scanline blocks are too large", name);
     }
     /* Every chunk of level 0 must exist: offset in the file, its header and data inside. */
     if (chunks > (size - pos) / 8)

@@ -5,22 +5,30 @@
  *   d = (sin theta sin phi, cos theta, -sin theta cos phi):
  * the centre column looks toward -Z, u = 3/4 toward +X, u = 0 and 1 toward +Z, the top row is +Y.
  *
- * To a cube: every cube texel is the solid-angle-weighted mean of k x k samples spread over
- * its footprint on the face plane (weights dA / |d|^3, the solid angle of each small cell).
- * k is chosen per texel so that consecutive samples are at most half a source row apart, so
- * every row contributes. Along a row each sample averages the source over the longitude
- * extent of its own cell (a box over whole and partial pixels), so near the poles, where a
- * texel spans many pixels of a row, every pixel is still reached; where the cell is narrower
- * than a pixel the row is interpolated linearly (wrapping around in longitude). Rows beyond
- * the poles continue on the opposite meridian (row -1 is row 0 shifted by half a turn). */
+ * To a cube. The source is reconstructed by linear interpolation between pixel centres
+ * (wrapping in longitude); near the poles the rows are constant bands instead (row_share
+ * explains why). Each cube texel is the solid-angle-weighted mean of k x k sample cells on its
+ * face-plane footprint (weights dA / |d|^3). k follows the texel's extent in source rows and
+ * columns (SAMPLES_PER_PIXEL samples per pixel crossed), so every source pixel is reached.
+ * Each sample does not read a point but the mean of the reconstruction over its cell's
+ * longitude/latitude extent, weighted by solid angle: where the cells line up with the
+ * meridians these windows tile the sphere, so a small bright source keeps its energy exactly
+ * wherever it falls, and a texel much larger than a pixel is a true area average (no
+ * aliasing). Within a few texels of each pole, where texels turn against the meridians and
+ * such windows would overlap, the texel integrates the source pixels directly instead
+ * (eq_texel_near_pole). Measured accuracy of the energy of a 3x3-pixel sun: tests/test_layout.c
+ * and docs/CONVENTIONS.md. */
 #include "layout_internal.h"
 
 #include <math.h>
 #include <string.h>
 
-
-#define POLE_ROWS 8.0
-#define POLE_CELLS 4096.0
+/* Samples per axis: this many per source pixel the texel spans (at least 1). */
+static const double SAMPLES_PER_PIXEL = 0.75;
+/* The polar region handled by direct integration: at least 3 texels and this many rows. */
+static const double POLE_ROWS = 4.0;
+/* Cells per texel there (their solid angle is a texel's / POLE_CELLS). */
+static const double POLE_CELLS = 4096.0;
 static const double PI = 3.14159265358979323846;
 
 int ibl__equirect_dir(double u, double v, double d[3])
@@ -44,7 +52,7 @@ typedef struct eq_job {
     const ibl_image *im;
     double basis[6][3][3]; /* per face: major, s axis, t axis, in the picture frame */
     double world[3][3];    /* world = world * picture */
-    int pole_cells;        /* cells per pixel side in the texels near the poles */
+    double pole_cell_area; /* solid angle of the cells near the poles (about 1/POLE_CELLS texel) */
     double pole_radius2;   /* sin^2 of the polar region's angular radius */
     const float *row_mean; /* height x 4 */
     ibl_cubemap *out;
@@ -81,8 +89,8 @@ static void row_window(const eq_job *job, int r, double a, double b, float out[4
         double x = 0.5 * (a + b) - 0.5, fl = floor(x);
         float f = (float)(x - fl);
         long i0 = (long)fl, i1 = i0 + 1;
-        i0 = i0 < 0 ? i0 + W : i0 % W;
-        i1 = i1 % W;
+        i0 = i0 < 0 ? i0 + W : i0 >= W ? i0 - W : i0;
+        i1 = i1 >= W ? i1 - W : i1;
         const float *p = row + i0 * 4, *q = row + i1 * 4;
         for (int c = 0; c < 4; c++) out[c] = p[c] + (q[c] - p[c]) * f;
         return;
@@ -99,7 +107,7 @@ static void row_window(const eq_job *job, int r, double a, double b, float out[4
     for (long i = lo; i <= hi; i++) {
         if (i == full_lo) {
             float sum[4] = {0, 0, 0, 0};
-            long j = full_lo % W;
+            long j = full_lo >= W ? full_lo - W : full_lo;
             for (long n = full_lo; n <= full_hi; n++) {
                 const float *p = row + j * 4;
                 for (int c = 0; c < 4; c++) sum[c] += p[c];
@@ -112,8 +120,7 @@ static void row_window(const eq_job *job, int r, double a, double b, float out[4
         double centre = i + 0.5;
         double wt = tent_cdf(b - centre) - tent_cdf(a - centre);
         if (wt <= 0.0) continue;
-        long j = i % W;
-        if (j < 0) j += W;
+        long j = i < 0 ? i + W : i >= W ? i - W : i; /* a in [0, W), the window < W */
         const float *p = row + j * 4;
         for (int c = 0; c < 4; c++) acc[c] += wt * p[c];
     }
@@ -175,9 +182,12 @@ static double row_share(int H, long r, double py0, double py1, double c, double 
  * (pixel units). Rows past a pole continue on the opposite meridian (row -1 is row 0 turned
  * by half a revolution). */
 static void window_value(const eq_job *job, double px0, double px1, double py0, double py1,
-                         float out[4])
+                         double sin_t, double cos_t, float out[4])
 {
     int W = job->im->width, H = job->im->height;
+    /* sin(theta) and its slope at the window's centre (given by the caller, who has them) */
+    double k_rad = PI / H, c = 0.5 * (py0 + py1);
+    double s_c = sin_t, s_d = k_rad * cos_t;
     /* a window reaching past a pole is cut there: the far side is already covered by the
      * neighbouring cells across the pole, and counting it twice would add energy */
     if (py0 < 0.0) py0 = 0.0;
@@ -185,14 +195,32 @@ static void window_value(const eq_job *job, double px0, double px1, double py0, 
     if (py1 < py0) py1 = py0;
     double h = py1 - py0;
     double acc[4] = {0, 0, 0, 0}, wsum = 0;
-    double c = 0.5 * (py0 + py1), k_rad = PI / H;
-    double s_c = sin(k_rad * c), s_d = k_rad * cos(k_rad * c);
+    double c_cut = 0.5 * (py0 + py1);
+    s_c += s_d * (c_cut - c); /* the cut moved the centre */
+    c = c_cut;
     long lo = (long)floor(py0 - 0.5), hi = (long)floor(py1 + 0.5);
     if (h < 1e-6) {
         /* a point in latitude: the two rows around it */
         double y = 0.5 * (py0 + py1) - 0.5;
         lo = (long)floor(y);
         hi = lo + 1;
+    }
+    /* narrow windows (the common case): the longitude weights once for all rows */
+    enum { MAX_TAPS = 12 };
+    long taps_at[MAX_TAPS];
+    float taps_w[MAX_TAPS];
+    int taps = -1;
+    if (h >= 1e-6 && px1 - px0 >= 1e-6 && px1 - px0 < MAX_TAPS - 3) {
+        double a = px0 - floor(px0 / W) * W, b = a + (px1 - px0), inv_w = 1.0 / (px1 - px0);
+        long first = (long)floor(a - 0.5), last = (long)floor(b + 0.5);
+        taps = 0;
+        for (long i = first; i <= last; i++) {
+            double centre = i + 0.5;
+            double wt = tent_cdf(b - centre) - tent_cdf(a - centre);
+            if (wt <= 0.0) continue;
+            taps_at[taps] = (i < 0 ? i + W : i >= W ? i - W : i) * 4;
+            taps_w[taps++] = (float)(wt * inv_w);
+        }
     }
     for (long r = lo; r <= hi; r++) {
         double wt;
@@ -216,7 +244,20 @@ static void window_value(const eq_job *job, double px0, double px1, double py0, 
         if (rr < 0) rr = 0; /* only for images a pixel or two high */
         if (rr >= H) rr = H - 1;
         float v[4];
-        row_window(job, (int)rr, px0 + shift, px1 + shift, v);
+        if (taps >= 0 && shift == 0.0) {
+            const float *row = job->im->pixels + (size_t)rr * W * 4;
+            v[0] = v[1] = v[2] = v[3] = 0.0f;
+            for (int t = 0; t < taps; t++) {
+                const float *p = row + taps_at[t];
+                float tw = taps_w[t];
+                v[0] += tw * p[0];
+                v[1] += tw * p[1];
+                v[2] += tw * p[2];
+                v[3] += tw * p[3];
+            }
+        } else {
+            row_window(job, (int)rr, px0 + shift, px1 + shift, v);
+        }
         for (int c = 0; c < 4; c++) acc[c] += wt * v[c];
         wsum += wt;
     }
@@ -285,27 +326,48 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
         }
     }
     int r0 = (int)ylo, r1 = (int)yhi;
-    int mm = job->pole_cells;
     double acc[4] = {0, 0, 0, 0}, wsum = 0;
+    const double half = 0.5 * N;
     for (int r = r0; r < r1; r++) {
         const float *row = job->im->pixels + (size_t)r * W * 4;
+        /* cells per pixel side: a function of the row alone, so every texel cuts the pixels
+         * the same way and each cell is counted by exactly one texel */
+        double pixel = 2.0 * PI / W * fabs(cos(PI * r / H) - cos(PI * (r + 1) / H));
+        int mm = (int)ceil(sqrt(pixel / job->pole_cell_area));
+        if (mm < 1) mm = 1;
+        if (mm > 16) mm = 16;
+        const double dphi = 2.0 * PI / ((double)W * mm), cd = cos(dphi), sd = sin(dphi);
+        const double phi0 = 2.0 * PI * ((c0 + 0.5 / mm) / W - 0.5);
+        const double cos0 = cos(phi0), sin0 = sin(phi0);
         for (int j = 0; j < mm; j++) {
             double th0 = PI * (r + (double)j / mm) / H, th1 = PI * (r + (j + 1.0) / mm) / H;
             double th = 0.5 * (th0 + th1), st = sin(th), ct = cos(th);
             double w = (cos(th0) - cos(th1)) * (2.0 * PI / W / mm);
+            /* the cell centres' longitudes advance by a fixed step: rotate instead of sin/cos */
+            double cp = cos0, sp = sin0;
+            /* the texel test in the face plane: sc = p.a / p.m, tc = p.b / p.m */
+            double mz = m[1] * ct, az = a[1] * ct, bz = b[1] * ct;
+            long wc = c0 % W;
+            if (wc < 0) wc += W;
             for (long col = c0; col < c1; col++) {
-                long wc = col % W;
-                if (wc < 0) wc += W;
                 const float *p = row + wc * 4;
                 for (int i = 0; i < mm; i++) {
-                    double phi = 2.0 * PI * ((col + (i + 0.5) / mm) / W - 0.5);
-                    double pd[3] = {st * sin(phi), ct, -st * cos(phi)}, wd[3], s, t;
-                    ibl__mul3(job->world, pd, wd);
-                    if (ibl_cube_face_st_d(wd, &s, &t) != face) continue;
-                    if ((int)floor(s * N) != tx || (int)floor(t * N) != ty) continue;
-                    for (int c = 0; c < 4; c++) acc[c] += w * p[c];
-                    wsum += w;
+                    double px = st * sp, pz = -st * cp;
+                    double pm = m[0] * px + mz + m[2] * pz;
+                    if (pm > 0.0) {
+                        double inv = half / pm;
+                        double fx = ((a[0] * px + az + a[2] * pz) * inv + half);
+                        double fy = ((b[0] * px + bz + b[2] * pz) * inv + half);
+                        if (fx >= tx && fx < tx + 1 && fy >= ty && fy < ty + 1) {
+                            for (int c = 0; c < 4; c++) acc[c] += w * p[c];
+                            wsum += w;
+                        }
+                    }
+                    double ncp = cp * cd - sp * sd;
+                    sp = sp * cd + cp * sd;
+                    cp = ncp;
                 }
+                if (++wc == W) wc = 0;
             }
         }
     }
@@ -315,7 +377,7 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
         /* a texel smaller than any cell: the picture at its centre */
         double py = atan2(sqrt(cx * cx + cz * cz), cy) / PI * H;
         double px = (centre / (2.0 * PI) + 0.5) * W;
-        window_value(job, px, px, py, py, out);
+        window_value(job, px, px, py, py, 0.0, 1.0, out);
     }
 }
 
@@ -361,8 +423,8 @@ static void eq_row_task(void *arg, int index)
             /* and its longitude extent in source columns */
             double cols = (fabs(d[0] * a[2] - d[2] * a[0]) + fabs(d[0] * b[2] - d[2] * b[0])) /
                           rho2 * cell * px_per_rad_u;
-            k = (int)ceil(fmax(rows, cols));
-            if (k < 2) k = 2;
+            k = (int)ceil(SAMPLES_PER_PIXEL * fmax(rows, cols));
+            if (k < 1) k = 1;
             if (k > 64) k = 64;
         }
         double acc[4] = {0, 0, 0, 0}, wsum = 0;
@@ -392,7 +454,9 @@ static void eq_row_task(void *arg, int index)
                     hpx = 2.0 / sqrt(r2) * sub * px_per_rad_v;
                 }
                 float val[4];
-                window_value(job, px - 0.5 * wpx, px + 0.5 * wpx, py - 0.5 * hpx, py + 0.5 * hpx, val);
+                double inv = 1.0 / sqrt(r2);
+                window_value(job, px - 0.5 * wpx, px + 0.5 * wpx, py - 0.5 * hpx, py + 0.5 * hpx,
+                             rho * inv, y * inv, val);
                 for (int c = 0; c < 4; c++) acc[c] += wt * val[c];
                 wsum += wt;
             }
@@ -422,28 +486,20 @@ ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const
     job.fixed_k = samples_per_axis;
     memcpy(job.world, frame->m, sizeof job.world);
     {
-        /* One cell size for every texel near a pole, so that all of them cut the pixels the
-         * same way and each cell is counted by exactly one texel; thousands of cells per
-         * texel at the edge of the polar region (its largest pixels). */
+        /* The polar region: 3 texels, and at least POLE_ROWS source rows. */
         int N = out->size;
         double cell = 2.0 / N;
-        /* the polar region: 3 texels, and at least POLE_ROWS source rows */
         double radius = fmax(atan(3.0 * cell), POLE_ROWS * PI / H);
         job.pole_radius2 = sin(radius) * sin(radius);
-        double theta = radius + 1.5 * cell;
-        int r = (int)(theta / PI * H);
-        if (r >= H) r = H - 1;
-        double pixel = 2.0 * PI / W * (cos(PI * r / H) - cos(PI * (r + 1) / H));
-        int mm = (int)ceil(sqrt(POLE_CELLS * pixel / (cell * cell)));
-        job.pole_cells = mm < 1 ? 1 : mm > 16 ? 16 : mm;
+        /* How finely the pixels are cut there: cells of about 1/POLE_CELLS of a texel. */
+        job.pole_cell_area = cell * cell / POLE_CELLS;
     }
     /* face axes in the picture frame: picture = M^T world */
     for (int f = 0; f < 6; f++) {
-        double o[3], sx[3], tx[3];
+        double o[3], sx[3], tx[3], axes[3][3];
         ibl_cube_direction_d(f, 0.5, 0.5, o);
         ibl_cube_direction_d(f, 1.0, 0.5, sx);
         ibl_cube_direction_d(f, 0.5, 1.0, tx);
-        double axes[3][3];
         for (int i = 0; i < 3; i++) {
             axes[0][i] = o[i];
             axes[1][i] = sx[i] - o[i];
