@@ -28,6 +28,11 @@ static const char usage[] =
     "  --width W             image width (default 1024); --height H (default W/2)\n"
     "  --layout L            layout of INPUT (equirect, hcross, ...; default: detect)\n"
     "  --specular-size N     face size of the in-memory prefiltered chain (default 128)\n"
+    "  --chain FILE          use this prefiltered chain (cube .ktx2/.dds, level k at roughness\n"
+    "                        k/(levels-1)) instead of prefiltering INPUT, which stays the\n"
+    "                        background, mirror and SH source; with --lut FILE (split-sum\n"
+    "                        table) and --ambient FILE (AmbientBRDF volume, as `ibl lut`\n"
+    "                        writes them; --ambient-range A:B, default 1:2000)\n"
     "  --so FORMULA          specular occlusion: none ao triace triace-shininess triace-fast\n"
     "                        frostbite cone (default none)\n"
     "  --mix MODE            ambient composition: multiply lerp-albedo lerp-ao ao-lerp-ao\n"
@@ -193,6 +198,7 @@ int cli_cmd_render(int argc, char **argv)
     double exposure = 0;
     int width = 0, height = 0, specular_size = 0, report = 0;
     ibl_layout layout = IBL_LAYOUT_AUTO;
+    ibl_probe_files files = {0};
     ibl_render_desc base = {0};
     const char *arg;
     while ((arg = cli_next(&a))) {
@@ -206,6 +212,18 @@ int cli_cmd_render(int argc, char **argv)
         else if (cli_is(&a, arg, "--samples", NULL)) base.reference_samples = cli_int(&a, arg, 1, 1 << 20);
         else if (cli_is(&a, arg, "--reference", NULL)) base.reference = 1;
         else if (cli_is(&a, arg, "--report", NULL)) report = 1;
+        else if (cli_is(&a, arg, "--chain", NULL)) files.specular = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--lut", NULL)) files.splitsum = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--ambient", NULL)) files.ambient_brdf = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--ambient-range", NULL)) {
+            const char *v = cli_value(&a, arg);
+            char *end = NULL;
+            double lo = strtod(v, &end), hi = end && *end == ':' ? strtod(end + 1, &end) : -1;
+            if (!end || *end || !(lo > 0 && hi > lo))
+                cli_usage_error(&a, "--ambient-range wants A:B with 0 < A < B, not '%s'", v);
+            files.ambient_shininess_min = (float)lo;
+            files.ambient_shininess_max = (float)hi;
+        }
         else if (cli_is(&a, arg, "--supersample", NULL)) base.supersample = cli_int(&a, arg, 1, 16);
         else if (cli_is(&a, arg, "--horizon", NULL)) base.shade.horizon_occlusion = 1;
         else if (cli_is(&a, arg, "--mirror-direction", NULL)) base.shade.mirror_direction = 1;
@@ -252,7 +270,12 @@ int cli_cmd_render(int argc, char **argv)
         st = ibl_probe_load(ctx, input, &probe);
     } else {
         st = load_environment(ctx, &a, input, layout, &env);
-        if (st == IBL_OK) {
+        if (st == IBL_OK && files.specular) {
+            files.mirror = input;
+            files.clamp_infinite = a.common.clamp;
+            if (strcmp(input, "sky") == 0) files.mirror = NULL;
+            st = ibl_probe_load_files(ctx, &files, &probe);
+        } else if (st == IBL_OK) {
             ibl_render_probe_desc pd = {.specular_size = specular_size};
             st = ibl_render_probe_from_environment(ctx, &env, &pd, &probe);
         }

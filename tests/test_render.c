@@ -5,6 +5,7 @@
 
 #include "ibl/render.h"
 #include "render/render_internal.h"
+#include "ibl/brdf.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -377,6 +378,28 @@ static void cli_render(void **state)
     assert_int_equal(im.width, 32);
     ibl_image_free(ctx, &im);
     ibl_context_destroy(ctx);
+    /* a chain and a table from files (what the bake stages write) */
+    ibl_context *c2 = test_context(1);
+    ibl_cubemap env;
+    face_coloured_cube(c2, &env);
+    ibl_probe probe;
+    assert_int_equal(build_probe(c2, &env, 16, 16, &probe), IBL_OK);
+    ibl_texture chain = ibl_texture_from_cubemap(&probe.specular);
+    assert_int_equal(ibl_write_texture(c2, test_path("chain.ktx2"), &chain, NULL), IBL_OK);
+    ibl_image lutimg;
+    ibl_brdf_lut_desc ld = {.size = 16};
+    assert_int_equal(ibl_brdf_lut(c2, &ld, &lutimg), IBL_OK);
+    assert_int_equal(ibl_write_image(c2, test_path("lut.exr"), &lutimg, NULL), IBL_OK);
+    rc = test_run_cli(&out, "render '%s' -o '%s' --width 64 -q --chain '%s' --lut '%s'",
+                      test_data("studio.exr"), png, test_path("chain.ktx2"), test_path("lut.exr"));
+    assert_int_equal(rc, 0);
+    rc = test_run_cli(&out, "render '%s' -o '%s' --width 64 -q --chain '%s'", test_data("studio.exr"),
+                      png, test_path("lut.exr"));
+    assert_int_equal(rc, 1);
+    ibl_image_free(c2, &lutimg);
+    ibl_probe_free(c2, &probe);
+    ibl_cubemap_free(c2, &env);
+    ibl_context_destroy(c2);
     assert_int_equal(test_run_cli(&out, "render '%s' -o '%s' --so bogus", test_data("studio.exr"), png), 2);
     assert_int_equal(test_run_cli(&out, "render '%s' -o '%s' --compare so=none", test_data("studio.exr"), png), 2);
     assert_int_equal(test_run_cli(&out, "render '%s' -o '%s'", test_path("missing.exr"), png), 1);
