@@ -60,10 +60,14 @@ typedef struct variant {
 
 static int energy_from_name(const char *s, ibl_energy_compensation *out)
 {
-    if (strcmp(s, "none") == 0) *out = IBL_ENERGY_NONE;
-    else if (strcmp(s, "fdez-aguera") == 0) *out = IBL_ENERGY_FDEZ_AGUERA;
-    else if (strcmp(s, "turquin") == 0) *out = IBL_ENERGY_TURQUIN;
-    else return 0;
+    if (strcmp(s, "none") == 0)
+        *out = IBL_ENERGY_NONE;
+    else if (strcmp(s, "fdez-aguera") == 0)
+        *out = IBL_ENERGY_FDEZ_AGUERA;
+    else if (strcmp(s, "turquin") == 0)
+        *out = IBL_ENERGY_TURQUIN;
+    else
+        return 0;
     return 1;
 }
 
@@ -79,9 +83,12 @@ static int apply_setting(ibl_render_desc *d, const char *key, const char *value)
     if (strcmp(key, "reference") == 0) return d->reference = 1;
     if (strcmp(key, "bp-diffuse") == 0) {
         if (!value) return 0;
-        if (strcmp(value, "seed") == 0) d->shade.bp_diffuse = IBL_BP_DIFFUSE_SEED;
-        else if (strcmp(value, "f0") == 0) d->shade.bp_diffuse = IBL_BP_DIFFUSE_F0;
-        else return 0;
+        if (strcmp(value, "seed") == 0)
+            d->shade.bp_diffuse = IBL_BP_DIFFUSE_SEED;
+        else if (strcmp(value, "f0") == 0)
+            d->shade.bp_diffuse = IBL_BP_DIFFUSE_F0;
+        else
+            return 0;
         return 1;
     }
     if (strcmp(key, "samples") == 0 || strcmp(key, "sphere-ao") == 0) {
@@ -89,8 +96,10 @@ static int apply_setting(ibl_render_desc *d, const char *key, const char *value)
         char *end;
         double x = strtod(value, &end);
         if (*end || !(x >= 0)) return 0;
-        if (key[1] == 'a') d->reference_samples = x > 1 << 20 ? 1 << 20 : (int)x;
-        else d->sphere_ao_min = x > 1 ? 1.0f : (float)x;
+        if (key[1] == 'a')
+            d->reference_samples = x > 1 << 20 ? 1 << 20 : (int)x;
+        else
+            d->sphere_ao_min = x > 1 ? 1.0f : (float)x;
         return 1;
     }
     return 0;
@@ -105,7 +114,8 @@ static void apply_spec(cli_args *a, ibl_render_desc *d, const char *spec)
         char *eq = strchr(tok, '=');
         if (eq) *eq = 0;
         if (!apply_setting(d, tok, eq ? eq + 1 : NULL))
-            cli_usage_error(a, "bad --compare setting '%s%s%s'", tok, eq ? "=" : "", eq ? eq + 1 : "");
+            cli_usage_error(a, "bad --compare setting '%s%s%s'", tok, eq ? "=" : "",
+                            eq ? eq + 1 : "");
     }
 }
 
@@ -203,18 +213,30 @@ int cli_cmd_render(int argc, char **argv)
     const char *arg;
     while ((arg = cli_next(&a))) {
         if (cli_common_option(&a, arg)) continue;
-        if (cli_is(&a, arg, "--output", "-o")) output = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--scene", NULL)) scene = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--exposure", NULL)) exposure = cli_double(&a, arg, -40, 40);
-        else if (cli_is(&a, arg, "--width", NULL)) width = cli_int(&a, arg, 8, 16384);
-        else if (cli_is(&a, arg, "--height", NULL)) height = cli_int(&a, arg, 4, 16384);
-        else if (cli_is(&a, arg, "--specular-size", NULL)) specular_size = cli_int(&a, arg, 4, 1024);
-        else if (cli_is(&a, arg, "--samples", NULL)) base.reference_samples = cli_int(&a, arg, 1, 1 << 20);
-        else if (cli_is(&a, arg, "--reference", NULL)) base.reference = 1;
-        else if (cli_is(&a, arg, "--report", NULL)) report = 1;
-        else if (cli_is(&a, arg, "--chain", NULL)) files.specular = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--lut", NULL)) files.splitsum = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--ambient", NULL)) files.ambient_brdf = cli_value(&a, arg);
+        if (cli_is(&a, arg, "--output", "-o"))
+            output = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--scene", NULL))
+            scene = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--exposure", NULL))
+            exposure = cli_double(&a, arg, -40, 40);
+        else if (cli_is(&a, arg, "--width", NULL))
+            width = cli_int(&a, arg, 8, 16384);
+        else if (cli_is(&a, arg, "--height", NULL))
+            height = cli_int(&a, arg, 4, 16384);
+        else if (cli_is(&a, arg, "--specular-size", NULL))
+            specular_size = cli_int(&a, arg, 4, 1024);
+        else if (cli_is(&a, arg, "--samples", NULL))
+            base.reference_samples = cli_int(&a, arg, 1, 1 << 20);
+        else if (cli_is(&a, arg, "--reference", NULL))
+            base.reference = 1;
+        else if (cli_is(&a, arg, "--report", NULL))
+            report = 1;
+        else if (cli_is(&a, arg, "--chain", NULL))
+            files.specular = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--lut", NULL))
+            files.splitsum = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--ambient", NULL))
+            files.ambient_brdf = cli_value(&a, arg);
         else if (cli_is(&a, arg, "--ambient-range", NULL)) {
             const char *v = cli_value(&a, arg);
             char *end = NULL;
@@ -223,11 +245,14 @@ int cli_cmd_render(int argc, char **argv)
                 cli_usage_error(&a, "--ambient-range wants A:B with 0 < A < B, not '%s'", v);
             files.ambient_shininess_min = (float)lo;
             files.ambient_shininess_max = (float)hi;
-        }
-        else if (cli_is(&a, arg, "--supersample", NULL)) base.supersample = cli_int(&a, arg, 1, 16);
-        else if (cli_is(&a, arg, "--horizon", NULL)) base.shade.horizon_occlusion = 1;
-        else if (cli_is(&a, arg, "--mirror-direction", NULL)) base.shade.mirror_direction = 1;
-        else if (cli_is(&a, arg, "--sphere-ao", NULL)) base.sphere_ao_min = (float)cli_double(&a, arg, 0, 1);
+        } else if (cli_is(&a, arg, "--supersample", NULL))
+            base.supersample = cli_int(&a, arg, 1, 16);
+        else if (cli_is(&a, arg, "--horizon", NULL))
+            base.shade.horizon_occlusion = 1;
+        else if (cli_is(&a, arg, "--mirror-direction", NULL))
+            base.shade.mirror_direction = 1;
+        else if (cli_is(&a, arg, "--sphere-ao", NULL))
+            base.sphere_ao_min = (float)cli_double(&a, arg, 0, 1);
         else if (cli_is(&a, arg, "--layout", NULL)) {
             const char *v = cli_value(&a, arg);
             layout = ibl_layout_from_name(v);
@@ -235,13 +260,16 @@ int cli_cmd_render(int argc, char **argv)
                 cli_usage_error(&a, "unknown layout '%s'", v);
         } else if (cli_is(&a, arg, "--so", NULL)) {
             const char *v = cli_value(&a, arg);
-            if (!ibl_so_formula_from_name(v, &base.shade.so)) cli_usage_error(&a, "unknown --so '%s'", v);
+            if (!ibl_so_formula_from_name(v, &base.shade.so))
+                cli_usage_error(&a, "unknown --so '%s'", v);
         } else if (cli_is(&a, arg, "--mix", NULL)) {
             const char *v = cli_value(&a, arg);
-            if (!ibl_ambient_mix_from_name(v, &base.shade.mix)) cli_usage_error(&a, "unknown --mix '%s'", v);
+            if (!ibl_ambient_mix_from_name(v, &base.shade.mix))
+                cli_usage_error(&a, "unknown --mix '%s'", v);
         } else if (cli_is(&a, arg, "--energy", NULL)) {
             const char *v = cli_value(&a, arg);
-            if (!energy_from_name(v, &base.shade.energy)) cli_usage_error(&a, "unknown --energy '%s'", v);
+            if (!energy_from_name(v, &base.shade.energy))
+                cli_usage_error(&a, "unknown --energy '%s'", v);
         } else if (cli_is(&a, arg, "--compare", NULL)) {
             cmp[0] = cli_value(&a, arg);
             if (a.index >= a.argc) cli_usage_error(&a, "--compare needs two variants");
@@ -315,8 +343,8 @@ int cli_cmd_render(int argc, char **argv)
         ibl_image other;
         st = ibl_render(ctx, &probe, &rd, &other, NULL);
         if (st == IBL_OK) {
-            report_errors(rd.reference ? &images[0] : &other, rd.reference ? &other : &images[0], ids,
-                          rd.mesh != NULL);
+            report_errors(rd.reference ? &images[0] : &other, rd.reference ? &other : &images[0],
+                          ids, rd.mesh != NULL);
             ibl_image_free(ctx, &other);
         }
     }

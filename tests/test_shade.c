@@ -31,7 +31,8 @@ static void reference_ab(double nv, double r, int steps, double *a_out, double *
             double vh = vx * hx + vz * hz;
             double nl = 2.0 * vh * hz - vz;
             if (nl <= 0.0 || vh <= 0.0) continue;
-            double lv = nl * sqrt(nv * nv * (1.0 - a2) + a2), ll = nv * sqrt(nl * nl * (1.0 - a2) + a2);
+            double lv = nl * sqrt(nv * nv * (1.0 - a2) + a2),
+                   ll = nv * sqrt(nl * nl * (1.0 - a2) + a2);
             double vis = 0.5 / (lv + ll);
             double w = vis * 4.0 * vh * nl / hz; /* D V F n.l 4 v.h / (D n.h) */
             double fc = pow(1.0 - vh, 5.0);
@@ -140,9 +141,11 @@ static void so_conditions(void **state)
         double mid = acos(sqrt(ao));
         float e0 = 0.0f, em = (float)sin(mid), e1 = 1.0f;
         /* (1): saturate(sin^2 + 2AO - 1) -> 2AO - 1, AO, 2AO */
-        assert_near(ibl_specular_occlusion(IBL_SO_TRIACE, e0, (float)ao, 0, 0), fmax(0, 2 * ao - 1), 1e-6);
+        assert_near(ibl_specular_occlusion(IBL_SO_TRIACE, e0, (float)ao, 0, 0), fmax(0, 2 * ao - 1),
+                    1e-6);
         assert_near(ibl_specular_occlusion(IBL_SO_TRIACE, em, (float)ao, 0, 0), ao, 1e-6);
-        assert_near(ibl_specular_occlusion(IBL_SO_TRIACE, e1, (float)ao, 0, 0), fmin(1, 2 * ao), 1e-6);
+        assert_near(ibl_specular_occlusion(IBL_SO_TRIACE, e1, (float)ao, 0, 0), fmin(1, 2 * ao),
+                    1e-6);
         /* (3): saturate((sin + AO)^2 - 1 + AO) */
         double s0 = fmin(1, fmax(0, ao * ao + ao - 1));
         double sm = fmin(1, fmax(0, pow(sqrt(1 - ao) + ao, 2) - 1 + ao));
@@ -196,12 +199,12 @@ static void compositions(void **state)
     float ao = 0.5f, so = 0.2f, out[3];
     /* hand values: lerp(x, y, t) = x + (y - x) t */
     const double expect[IBL_MIX_COUNT] = {
-        0.5 + 10 * 0.2,                      /* multiply              */
-        0.5 + (0.5 + (10 - 0.5) * 0.2),      /* (1) da*albedo = 0.5   */
-        0.5 + (1.0 + (10 - 1.0) * 0.2),      /* (2) da*AO = 1         */
+        0.5 + 10 * 0.2,                       /* multiply              */
+        0.5 + (0.5 + (10 - 0.5) * 0.2),       /* (1) da*albedo = 0.5   */
+        0.5 + (1.0 + (10 - 1.0) * 0.2),       /* (2) da*AO = 1         */
         0.5 + 0.5 * (1.0 + (10 - 1.0) * 0.2), /* (3)                  */
-        0.5 + (0.5 + (10 - 0.5) * 0.2),      /* (4) da*AO^2 = 0.5     */
-        0.5 * 0.2 + 0.5 * (1.0 + 9.0 * 0.2), /* entire                */
+        0.5 + (0.5 + (10 - 0.5) * 0.2),       /* (4) da*AO^2 = 0.5     */
+        0.5 * 0.2 + 0.5 * (1.0 + 9.0 * 0.2),  /* entire                */
     };
     for (int m = 0; m < IBL_MIX_COUNT; m++) {
         ibl_ambient_mix_apply((ibl_ambient_mix)m, sd, da, sa, alb, ao, so, out);
@@ -227,12 +230,14 @@ static void shininess_hack_and_offset(void **state)
     assert_near(ibl_shininess_hack(400, 120, 1.0f), 0.0, 1e-6);
 
     /* R' = normalize(c (P_obj - P_IBL) + R): (2 * (1, 0, 0) - 0 + (0, 0, 1)) / sqrt(5) */
-    ibl_vec3 r = ibl_offset_reflection((ibl_vec3){0, 0, 1}, (ibl_vec3){3, 2, 0}, (ibl_vec3){2, 2, 0}, 2.0f);
+    ibl_vec3 r =
+        ibl_offset_reflection((ibl_vec3){0, 0, 1}, (ibl_vec3){3, 2, 0}, (ibl_vec3){2, 2, 0}, 2.0f);
     assert_near(r.x, 2.0 / sqrt(5.0), 1e-6);
     assert_near(r.y, 0.0, 1e-7);
     assert_near(r.z, 1.0 / sqrt(5.0), 1e-6);
     /* c = 0 leaves R as is */
-    r = ibl_offset_reflection((ibl_vec3){0, 0.6f, 0.8f}, (ibl_vec3){3, 2, 0}, (ibl_vec3){0, 0, 0}, 0.0f);
+    r = ibl_offset_reflection((ibl_vec3){0, 0.6f, 0.8f}, (ibl_vec3){3, 2, 0}, (ibl_vec3){0, 0, 0},
+                              0.0f);
     assert_near(r.y, 0.6, 1e-6);
 
     /* environment switch: object centred on the border is half in, a whole extent away is out */
@@ -249,13 +254,14 @@ static void parallax(void **state)
     ibl_vec3 c = {0, 0, 0};
     /* a ray from the capture point is unchanged, in any direction */
     for (int i = 0; i < 50; i++) {
-        ibl_vec3 r = {sinf(i * 0.7f) * cosf(i * 1.3f), cosf(i * 0.7f), sinf(i * 0.7f) * sinf(i * 1.3f)};
+        ibl_vec3 r = {sinf(i * 0.7f) * cosf(i * 1.3f), cosf(i * 0.7f),
+                      sinf(i * 0.7f) * sinf(i * 1.3f)};
         ibl_vec3 o = ibl_parallax_correct(&box, c, c, r);
         assert_near(o.x, r.x, 1e-5);
         assert_near(o.y, r.y, 1e-5);
         assert_near(o.z, r.z, 1e-5);
     }
-    /* from (1, 0, 0) straight up hits the top at (1, 1, 0): seen from the centre, (1, 1, 0)/sqrt2 */
+    /* from (1, 0, 0) straight up: the top at (1, 1, 0), seen from the centre (1, 1, 0)/sqrt2 */
     ibl_vec3 o = ibl_parallax_correct(&box, c, (ibl_vec3){1, 0, 0}, (ibl_vec3){0, 1, 0});
     assert_near(o.x, 1 / sqrt(2.0), 1e-6);
     assert_near(o.y, 1 / sqrt(2.0), 1e-6);
@@ -279,8 +285,8 @@ static void influence_blending(void **state)
 {
     (void)state;
     ibl_volume v[3] = {
-        {IBL_VOLUME_BOX, {0, 0, 0}, {10, 5, 10}, 0, 2},    /* big room        */
-        {IBL_VOLUME_SPHERE, {2, 0, 0}, {0, 0, 0}, 3, 1},   /* medium, inside  */
+        {IBL_VOLUME_BOX, {0, 0, 0}, {10, 5, 10}, 0, 2},     /* big room        */
+        {IBL_VOLUME_SPHERE, {2, 0, 0}, {0, 0, 0}, 3, 1},    /* medium, inside  */
         {IBL_VOLUME_SPHERE, {3, 0, 0}, {0, 0, 0}, 1, 0.5f}, /* small, inside  */
     };
     int order[3];
@@ -498,8 +504,10 @@ static void atlas_round_trip(void **state)
         int n = ibl_level_size(32, k);
         const float *a = ibl_cubemap_face(&chain, k, 0), *b = ibl_cubemap_face(&back, k, 0);
         for (size_t i = 0; i < (size_t)6 * n * n * 4; i++) {
-            if (k <= 2) assert_true(a[i] == b[i]);
-            else assert_near(b[i], a[i], 0.5);
+            if (k <= 2)
+                assert_true(a[i] == b[i]);
+            else
+                assert_near(b[i], a[i], 0.5);
         }
     }
     /* shader emulation: away from face edges the atlas's 2D bilinear equals the cube's seamless
@@ -535,7 +543,8 @@ static void channel_packing(void **state)
         assert_int_equal(ibl_image_alloc(ctx, 5, 3, &in[i]), IBL_OK);
         for (int p = 0; p < 15; p++) in[i].pixels[p * 4] = (float)(i * 100 + p);
     }
-    assert_int_equal(ibl_pack_material_channels(ctx, &in[0], &in[1], &in[2], &in[3], &packed), IBL_OK);
+    assert_int_equal(ibl_pack_material_channels(ctx, &in[0], &in[1], &in[2], &in[3], &packed),
+                     IBL_OK);
     assert_near(packed.pixels[7 * 4 + 2], 207, 0); /* AO of pixel 7 in blue */
     assert_int_equal(ibl_unpack_material_channels(ctx, &packed, out), IBL_OK);
     for (int i = 0; i < 4; i++) {
@@ -613,7 +622,8 @@ static void load_files(void **state)
     assert_int_equal(ibl_ambient_brdf_volume(ctx, &ad, &vol), IBL_OK);
     assert_int_equal(ibl_write_texture(ctx, test_path("amb.ktx2"), &vol, &wd), IBL_OK);
 
-    ibl_probe_files files = {.specular = test_path("spec.ktx2"), .splitsum = test_path("lut.ktx2"),
+    ibl_probe_files files = {.specular = test_path("spec.ktx2"),
+                             .splitsum = test_path("lut.ktx2"),
                              .ambient_brdf = test_path("amb.ktx2")};
     ibl_probe p;
     assert_int_equal(ibl_probe_load_files(ctx, &files, &p), IBL_OK);

@@ -32,15 +32,16 @@ ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *p)
     ibl_level_mapping *m = &p->mapping;
     if (m->levels <= 0 || m->levels > p->specular.levels)
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
-                        "probe: the level mapping describes %d levels, the chain has %d",
-                        m->levels, p->specular.levels);
+                        "probe: the level mapping describes %d levels, the chain has %d", m->levels,
+                        p->specular.levels);
     int have_r = 0, have_s = 0;
     for (int k = 0; k < m->levels; k++) {
         if (m->roughness[k] != 0.0f) have_r = 1;
         if (m->shininess[k] != 0.0f) have_s = 1;
     }
     if (!have_r && have_s)
-        for (int k = 0; k < m->levels; k++) m->roughness[k] = ibl_roughness_from_shininess(m->shininess[k]);
+        for (int k = 0; k < m->levels; k++)
+            m->roughness[k] = ibl_roughness_from_shininess(m->shininess[k]);
     /* floor at 1e-3: roughness 1 maps to shininess 0, and the lookup works in log2 */
     if (!have_s)
         for (int k = 0; k < m->levels; k++) {
@@ -153,9 +154,8 @@ void ibl_sh9_irradiance(const float sh[9][3], ibl_sh_kind kind, ibl_vec3 n, floa
                       0.315392f * (3.0f * z * z - 1.0f),
                       1.092548f * x * z,
                       0.546274f * (x * x - y * y)};
-    static const float band[9] = {3.14159265f, 2.09439510f, 2.09439510f, 2.09439510f,
-                                  0.78539816f, 0.78539816f, 0.78539816f, 0.78539816f,
-                                  0.78539816f};
+    static const float band[9] = {3.14159265f, 2.09439510f, 2.09439510f, 2.09439510f, 0.78539816f,
+                                  0.78539816f, 0.78539816f, 0.78539816f, 0.78539816f};
     for (int c = 0; c < 3; c++) {
         float e = 0.0f;
         for (int i = 0; i < 9; i++)
@@ -249,7 +249,8 @@ ibl_status ibl_probe_load_files(ibl_context *ctx, const ibl_probe_files *f, ibl_
         int n = out->specular.levels;
         memset(&out->mapping, 0, sizeof out->mapping);
         out->mapping.levels = n;
-        for (int k = 0; k < n; k++) out->mapping.roughness[k] = n > 1 ? (float)k / (float)(n - 1) : 0.0f;
+        for (int k = 0; k < n; k++)
+            out->mapping.roughness[k] = n > 1 ? (float)k / (float)(n - 1) : 0.0f;
     }
     if (f->mirror) {
         if ((st = read_cube(ctx, f->mirror, &rd, 1, &out->owned_cubes[1])) != IBL_OK) goto fail;
@@ -274,15 +275,19 @@ ibl_status ibl_probe_load_files(ibl_context *ctx, const ibl_probe_files *f, ibl_
     if (f->splitsum) {
         ibl_texture shape;
         float *data;
-        if ((st = read_table(ctx, out, f->splitsum, &rd, IBL_TEXTURE_2D, &shape, &data)) != IBL_OK) goto fail;
+        if ((st = read_table(ctx, out, f->splitsum, &rd, IBL_TEXTURE_2D, &shape, &data)) != IBL_OK)
+            goto fail;
         float w = (float)shape.width, h = (float)shape.height;
-        out->splitsum = (ibl_splitsum_view){data, 4, {shape.width, 0.5f / w, 1.0f - 0.5f / w, 0},
+        out->splitsum = (ibl_splitsum_view){data,
+                                            4,
+                                            {shape.width, 0.5f / w, 1.0f - 0.5f / w, 0},
                                             {shape.height, 0.5f / h, 1.0f - 0.5f / h, 0}};
     }
     if (f->ambient_brdf) {
         ibl_texture shape;
         float *data;
-        if ((st = read_table(ctx, out, f->ambient_brdf, &rd, IBL_TEXTURE_3D, &shape, &data)) != IBL_OK)
+        if ((st = read_table(ctx, out, f->ambient_brdf, &rd, IBL_TEXTURE_3D, &shape, &data)) !=
+            IBL_OK)
             goto fail;
         double lo = f->ambient_shininess_min > 0 ? f->ambient_shininess_min : 1.0;
         double hi = f->ambient_shininess_max > 0 ? f->ambient_shininess_max : 2000.0;
@@ -290,12 +295,17 @@ ibl_status ibl_probe_load_files(ibl_context *ctx, const ibl_probe_files *f, ibl_
         double t0 = 0.5 / n, t1 = 1.0 - 0.5 / n;
         ibl_table_axis s_axis;
         if (f->ambient_linear)
-            s_axis = (ibl_table_axis){n, (float)(lo + (hi - lo) * t0), (float)(lo + (hi - lo) * t1), 0};
+            s_axis =
+                (ibl_table_axis){n, (float)(lo + (hi - lo) * t0), (float)(lo + (hi - lo) * t1), 0};
         else
-            s_axis = (ibl_table_axis){n, (float)(lo * pow(hi / lo, t0)), (float)(lo * pow(hi / lo, t1)), 1};
+            s_axis = (ibl_table_axis){n, (float)(lo * pow(hi / lo, t0)),
+                                      (float)(lo * pow(hi / lo, t1)), 1};
         float w = (float)shape.width, d = (float)shape.depth;
-        out->ambient_brdf = (ibl_ambient_brdf_view){data, 4, {shape.width, 0.5f / w, 1.0f - 0.5f / w, 0},
-                                                    s_axis, {shape.depth, 0.5f / d, 1.0f - 0.5f / d, 0}};
+        out->ambient_brdf = (ibl_ambient_brdf_view){data,
+                                                    4,
+                                                    {shape.width, 0.5f / w, 1.0f - 0.5f / w, 0},
+                                                    s_axis,
+                                                    {shape.depth, 0.5f / d, 1.0f - 0.5f / d, 0}};
     }
     if ((st = ibl_probe_validate(ctx, out)) != IBL_OK) goto fail;
     return IBL_OK;
