@@ -668,6 +668,39 @@ static void load_files(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* Two constant probes blended by weight: the sum of their results by weight, by hand. */
+static void probe_blending(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_probe p[2];
+    ibl_cubemap cube[2];
+    for (int i = 0; i < 2; i++) {
+        memset(&p[i], 0, sizeof p[i]);
+        assert_int_equal(ibl_cubemap_alloc(ctx, 4, 2, &cube[i]), IBL_OK);
+        test_fill_cube(&cube[i], 2.0f + 4.0f * i, 2.0f + 4.0f * i, 2.0f + 4.0f * i);
+        p[i].specular = cube[i];
+        p[i].mapping.levels = 2;
+        p[i].mapping.roughness[1] = 1.0f;
+        p[i].sh_kind = IBL_SH_IRRADIANCE;
+        assert_int_equal(ibl_probe_validate(ctx, &p[i]), IBL_OK);
+    }
+    const ibl_probe *list[2] = {&p[0], &p[1]};
+    const float w[2] = {0.25f, 0.75f}, one[3] = {1, 1, 1};
+    ibl_material m = ibl_material_gltf(one, 1.0f, 0.3f);
+    ibl_surface s = surface_at(0.5);
+    ibl_shade_result r;
+    ibl_shade_blend(list, w, 2, NULL, NULL, &m, &s, &r);
+    /* no table: A = 1, B = 0, F0 = 1: specular = the probe's value; 0.25 * 2 + 0.75 * 6 */
+    assert_near(r.specular[0], 5.0, 1e-5);
+    assert_near(r.color[0], 5.0, 1e-5);
+    ibl_vec3 dirs[2] = {{0, 1, 0}, {1, 0, 0}};
+    ibl_shade_blend(list, w, 2, dirs, NULL, &m, &s, &r);
+    assert_near(r.r.x, 1.0, 0); /* the heaviest probe's direction */
+    for (int i = 0; i < 2; i++) ibl_cubemap_free(ctx, &cube[i]);
+    ibl_context_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -683,6 +716,7 @@ int main(void)
         cmocka_unit_test(channel_packing),
         cmocka_unit_test(ambient_brdf_usage),
         cmocka_unit_test(load_files),
+        cmocka_unit_test(probe_blending),
     };
     return cmocka_run_group_tests_name("shade", tests, NULL, NULL);
 }

@@ -278,6 +278,14 @@ void ibl_shade(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_mat
 void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_material *m,
                    const ibl_surface *s, ibl_vec3 lookup_dir, ibl_shade_result *out);
 
+/* Several probes at one point, summed by weight (tri-Ace 2010 "IBL Blending": each radiance
+ * map fetched once; JAGE 2015: weights from ibl_volume_blend, its remainder for the global
+ * probe). lookup_dirs: one direction per probe (e.g. parallax-corrected), or NULL for the
+ * dominant direction / R of ibl_shade. so and lod in out are those of the heaviest probe. */
+void ibl_shade_blend(const ibl_probe *const *probes, const float *weights, int count,
+                     const ibl_vec3 *lookup_dirs, const ibl_shade_desc *desc,
+                     const ibl_material *m, const ibl_surface *s, ibl_shade_result *out);
+
 /* ------------------------------------------------------------------------------------------ */
 /* Analytic BRDF pieces (src/shade/brdf_eval.c), shared by the reference renderer.           */
 

@@ -232,3 +232,28 @@ void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl
     out->lod = lod;
     out->r = dir;
 }
+
+void ibl_shade_blend(const ibl_probe *const *probes, const float *weights, int count,
+                     const ibl_vec3 *lookup_dirs, const ibl_shade_desc *desc,
+                     const ibl_material *m, const ibl_surface *s, ibl_shade_result *out)
+{
+    memset(out, 0, sizeof *out);
+    float heaviest = -1.0f;
+    for (int i = 0; i < count; i++) {
+        if (weights[i] <= 0.0f) continue;
+        ibl_shade_result r;
+        if (lookup_dirs) ibl_shade_dir(probes[i], desc, m, s, lookup_dirs[i], &r);
+        else ibl_shade(probes[i], desc, m, s, &r);
+        for (int c = 0; c < 3; c++) {
+            out->color[c] += weights[i] * r.color[c];
+            out->diffuse[c] += weights[i] * r.diffuse[c];
+            out->specular[c] += weights[i] * r.specular[c];
+        }
+        if (weights[i] > heaviest) {
+            heaviest = weights[i];
+            out->so = r.so;
+            out->lod = r.lod;
+            out->r = r.r;
+        }
+    }
+}
