@@ -43,13 +43,15 @@ static const char usage[] =
     "                        direction (shows the split sum's error at high roughness)\n"
     "  --sphere-ao MIN       synthetic AO on the spheres from MIN (bottom) to 1 (top)\n"
     "  --reference           Monte Carlo reference of the same scene (no split sum)\n"
-    "  --samples N           reference samples per pixel and lobe (default 256)\n"
+    "  --samples N           reference iterations per pixel, 3 directions each (default 256)\n"
     "  --supersample N       N x N rays per pixel for the runtime shading (default 1; the\n"
     "                        reference spreads its samples over each pixel anyway)\n"
     "  --report              also render the reference and print the error per sphere\n"
     "                        (the runtime image then uses at least 4 x 4 rays per pixel)\n"
     "  --compare A B         two variants side by side, labelled; each is a comma-separated\n"
-    "                        list of the options above without dashes, e.g.\n"
+    "                        list of so=, mix=, energy=, bp-diffuse=seed|f0, samples=,\n"
+    "                        sphere-ao=, horizon, mirror-direction, nearest-level,\n"
+    "                        reference, applied over the other options, e.g.\n"
     "                        --compare so=none so=triace-fast,sphere-ao=0.2\n"
     "                        --compare '' reference,samples=512\n";
 
