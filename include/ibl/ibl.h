@@ -13,5 +13,6 @@
 #include "cubemap.h"
 #include "io.h"
 #include "layout.h"
+#include "specular.h"
 
 #endif
