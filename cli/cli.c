@@ -1,5 +1,6 @@
 #include "cli.h"
 
+#include <math.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -10,9 +11,11 @@
 
 static volatile sig_atomic_t interrupted;
 
+/* The first Ctrl-C asks the library to stop at its next progress check (at the latest before
+ * an output is renamed into place, so nothing partial is left); a second one exits at once. */
 static void on_signal(int sig)
 {
-    (void)sig;
+    if (interrupted) _exit(128 + sig);
     interrupted = 1;
 }
 
@@ -151,6 +154,7 @@ void cli_positional_or_unknown(cli_args *a, const char *arg)
 int cli_exit_code(ibl_status status)
 {
     if (status == IBL_OK) return CLI_EXIT_OK;
+    if (status == IBL_ERR_CANCELLED) return 130;
     if (status == IBL_ERR_INVALID_ARGUMENT) return CLI_EXIT_USAGE;
     return CLI_EXIT_BAD_INPUT;
 }
@@ -213,4 +217,24 @@ void cli_report_pixels(const cli_common *c, const char *path, const ibl_pixel_re
     if (r->inf_count)
         cli_info(c, "ibl: warning: %s: %llu texels were infinite, clamped\n", path,
                  (unsigned long long)r->inf_count);
+}
+
+float cli_auto_exposure(const ibl_image *image)
+{
+    double sum = 0;
+    size_t n = (size_t)image->width * image->height;
+    for (size_t i = 0; i < n; i++) {
+        const float *p = image->pixels + i * 4;
+        /* Rec.709 luminance; log-average would favour dark images, the mean is steadier */
+        sum += 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    }
+    double mean = n ? sum / (double)n : 0;
+    if (!(mean > 0)) return 0.0f;
+    return (float)log2(0.18 / mean);
+}
+
+int cli_is_display_format(const char *path)
+{
+    ibl_file_type t = ibl_file_type_from_path(path);
+    return t == IBL_FILE_PNG || t == IBL_FILE_JPEG;
 }

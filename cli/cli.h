@@ -64,10 +64,22 @@ int cli_exit_code(ibl_status status);
 ibl_context *cli_context(const cli_common *c);
 /* Prints warnings about sanitised pixels of a file that was read. */
 void cli_report_pixels(const cli_common *c, const char *path, const ibl_pixel_report *r);
+/* Exposure (EV) that maps the image's mean luminance to middle grey (0.18): the default for
+ * 8-bit previews when the user gives no --exposure. */
+float cli_auto_exposure(const ibl_image *image);
+/* Non-zero if the path's container stores 8-bit display values (PNG, JPEG). */
+int cli_is_display_format(const char *path);
 /* Seconds since an arbitrary start (monotonic). */
 double cli_seconds(void);
 /* Installs SIGINT/SIGTERM handlers so that Ctrl-C cancels through the progress callback. */
 void cli_install_signal_handlers(void);
+
+/* The JSON object `ibl sh --json` prints (also the bake's sh.json). window: what was asked. */
+#include <stdio.h>
+#include "ibl/sh.h"
+void cli_sh_write_json(FILE *f, const char *input, const char *method, int bands,
+                       ibl_sh_window window, const ibl_sh_window_report *rep,
+                       const ibl_sh *radiance);
 
 /* Every subcommand: int cli_cmd_NAME(int argc, char **argv); */
 #define IBL_COMMAND(name, summary) int cli_cmd_##name(int argc, char **argv);

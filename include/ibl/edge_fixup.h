@@ -38,11 +38,14 @@ typedef struct ibl_bent_desc {
 
 /* The (normalised) direction the prefilter should centre its kernel on for texel (x, y) of a
  * face of edge n, for a kernel of angular radius blur_radius (radians, e.g. the angle where
- * the lobe falls to half). NONE, OVERLAP and OVERLAP2 return the texel centre direction. */
+ * the lobe falls to half). NONE, OVERLAP and OVERLAP2 return the texel centre direction.
+ * Returns (0, 0, 0) for a face, n or texel out of range. */
 ibl_vec3 ibl_edge_fixup_texel_direction(ibl_edge_fixup fixup, const ibl_bent_desc *bent, int face,
                                         int n, int x, int y, float blur_radius);
 
-/* Post-process of one level in place (OVERLAP, OVERLAP2; the others do nothing here). */
+/* Post-process of one level in place (OVERLAP, OVERLAP2). For every method but NONE a 1x1
+ * level becomes the mean of its six faces (a 1x1 face has no direction to bend or warp);
+ * BENT and WARP change nothing on larger levels. Call it on every level after filtering. */
 ibl_status ibl_edge_fixup_apply(ibl_context *ctx, ibl_edge_fixup fixup, ibl_cubemap *cube,
                                 int level);
 

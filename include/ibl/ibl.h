@@ -9,10 +9,15 @@
 #ifndef IBL_IBL_H
 #define IBL_IBL_H
 
+#include "brdf.h"
 #include "core.h"
 #include "cubemap.h"
 #include "io.h"
 #include "layout.h"
+#include "sh.h"
+#include "irradiance.h"
+#include "edge_fixup.h"
+#include "sky.h"
 #include "specular.h"
 
 #endif

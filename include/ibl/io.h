@@ -67,7 +67,7 @@ ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, 
 typedef enum ibl_tonemap {
     IBL_TONEMAP_DEFAULT = 0, /* filmic for 8-bit outputs, none otherwise */
     IBL_TONEMAP_NONE,        /* clamp to [0, 1]                          */
-    IBL_TONEMAP_FILMIC       /* ACES fitted curve (Narkowicz 2015)        */
+    IBL_TONEMAP_FILMIC       /* ACES fitted curve (Narkowicz 2016)        */
 } ibl_tonemap;
 
 typedef enum ibl_exr_compression {

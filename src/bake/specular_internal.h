@@ -11,6 +11,8 @@
 ibl_status ibl__specular_box(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst);
 ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst,
                                const float *shininess_per_level);
+/* The box chain's fitted Phong shininess of a level (specular_box.c). */
+float ibl__box_level_shininess(int size, int level);
 
 /* A radially symmetric lobe f(x) of x = cos(angle between the lobe axis and l), normalised to
  * f(1) = 1; zero for x <= 0. */

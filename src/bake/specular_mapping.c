@@ -105,10 +105,9 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
             continue;
         }
         if (desc->filter == IBL_FILTER_BOX && m == IBL_MAPPING_SEED) {
-            /* box: variance match of a texel-wide box (h^2 / 12 per axis, h = 2 / edge) with
-             * the Phong lobe's 1 / n, clamped to the range: n = 3 edge^2 */
-            double e = ibl_level_size(size, l);
-            double s = 3.0 * e * e;
+            /* box: the chain's own fitted shininess (specular_box.c, least-squares fit of
+             * the box-plus-bilinear kernel to a Phong lobe), clamped to the range */
+            double s = ibl__box_level_shininess(size, l);
             if (s > info->shininess_max) s = info->shininess_max;
             if (s < info->shininess_min) s = info->shininess_min;
             info->shininess[l] = (float)s;

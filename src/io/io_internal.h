@@ -45,6 +45,10 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
 ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size);
 
+/* Re-records the context's last message as "name: <message>" with status (for failures
+ * reported by core calls such as ibl_alloc, whose messages do not name the file). */
+ibl_status ibl__fail_named(ibl_context *ctx, ibl_status status, const char *name);
+
 /* Largest edge any reader accepts before allocating (absurd sizes are refused). */
 enum { IBL_MAX_DIMENSION = 65536 };
 

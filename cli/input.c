@@ -1,0 +1,109 @@
+#include "input.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+
+int cli_input_option(cli_args *a, const char *arg, cli_input_options *o)
+{
+    if (cli_is(a, arg, "--layout", NULL)) {
+        const char *v = cli_value(a, arg);
+        o->layout = ibl_layout_from_name(v);
+        if (o->layout == IBL_LAYOUT_AUTO && strcmp(v, "auto") != 0)
+            cli_usage_error(a, "unknown layout '%s' (equirect, hcross, vcross, hstrip, vstrip, "
+                               "angular, octahedral, auto)", v);
+        return 1;
+    }
+    if (cli_is(a, arg, "--yaw", NULL)) {
+        o->orientation.yaw_degrees = (float)cli_double(a, arg, -3600, 3600);
+        return 1;
+    }
+    if (cli_is(a, arg, "--mirror", NULL)) {
+        o->orientation.mirror = 1;
+        return 1;
+    }
+    if (cli_is(a, arg, "--z-up", NULL)) {
+        o->orientation.z_up = 1;
+        return 1;
+    }
+    return 0;
+}
+
+int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
+                     const cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out)
+{
+    ibl_read_desc rd = {c->clamp, 0};
+    ibl_texture tex;
+    ibl_file_info info;
+    memset(out, 0, sizeof *out);
+    ibl_status st = ibl_read_texture(ctx, path, &rd, &tex, &info);
+    if (st != IBL_OK) {
+        cli_error("%s", ibl_context_message(ctx));
+        return cli_exit_code(st) == CLI_EXIT_USAGE ? CLI_EXIT_BAD_INPUT : cli_exit_code(st);
+    }
+    cli_report_pixels(c, path, &info.pixels);
+    if (tex.kind == IBL_TEXTURE_CUBE) {
+        ibl_cubemap view;
+        ibl_cubemap_from_texture(&tex, &view);
+        int size = o->size > 0 ? o->size : view.size;
+        st = ibl_cubemap_alloc(ctx, size, 1, out);
+        int reoriented = o->orientation.mirror || o->orientation.z_up ||
+                         o->orientation.yaw_degrees != 0.0f;
+        if (st == IBL_OK && !reoriented) {
+            if (size == view.size) memcpy(out->data, view.data, ibl_cubemap_floats(size, 1) * sizeof(float));
+            else st = ibl_cubemap_resample(ctx, &view, out);
+        } else if (st == IBL_OK) {
+            /* a rotated or mirrored cube: bilinear samples of the source at each texel */
+            for (int f = 0; f < 6; f++) {
+                float *p = ibl_cubemap_face(out, 0, f);
+                for (int y = 0; y < size; y++)
+                    for (int x = 0; x < size; x++, p += 4) {
+                        ibl_vec3 d = ibl_cube_texel_direction(f, size, x, y);
+                        ibl_cubemap_sample_bilinear(&view, 0, ibl_orientation_invert(&o->orientation, d), p);
+                    }
+            }
+        }
+        if (layout_out) *layout_out = IBL_LAYOUT_CUBE;
+        ibl_texture_free(ctx, &tex);
+        if (st != IBL_OK) {
+            cli_error("%s: %s", path, ibl_context_message(ctx));
+            return CLI_EXIT_BAD_INPUT;
+        }
+        return CLI_EXIT_OK;
+    }
+    if (tex.kind != IBL_TEXTURE_2D) {
+        ibl_texture_free(ctx, &tex);
+        cli_error("%s: a 3D texture is not an environment", path);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    ibl_image image = {tex.width, tex.height, ibl_texture_level(&tex, 0, 0)};
+    ibl_to_cube_desc d;
+    memset(&d, 0, sizeof d);
+    d.layout = o->layout ? o->layout : ibl_layout_detect(image.width, image.height);
+    d.size = o->size;
+    d.orientation = o->orientation;
+    if (d.layout == IBL_LAYOUT_AUTO) {
+        ibl_texture_free(ctx, &tex);
+        cli_error("%s: cannot tell the layout of a %dx%d image (use --layout)", path, image.width,
+                  image.height);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    st = ibl_image_to_cubemap(ctx, &image, &d, out);
+    ibl_texture_free(ctx, &tex);
+    if (st != IBL_OK) {
+        cli_error("%s: %s", path, ibl_context_message(ctx));
+        return CLI_EXIT_BAD_INPUT;
+    }
+    if (layout_out) *layout_out = d.layout;
+    return CLI_EXIT_OK;
+}
+
+void cli_check_distinct(const cli_args *a, const char *input, const char *output)
+{
+    struct stat si, so;
+    if (strcmp(input, output) == 0 ||
+        (stat(input, &si) == 0 && stat(output, &so) == 0 && si.st_dev == so.st_dev &&
+         si.st_ino == so.st_ino))
+        cli_usage_error(a, "the output %s is the input file; choose another name", output);
+}

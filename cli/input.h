@@ -1,0 +1,25 @@
+/* Reading any supported input as a cubemap, shared by the commands that take an environment. */
+#ifndef IBL_CLI_INPUT_H
+#define IBL_CLI_INPUT_H
+
+#include "cli.h"
+
+typedef struct cli_input_options {
+    ibl_layout layout;        /* --layout (0: detect)        */
+    ibl_orientation orientation; /* --yaw --mirror --z-up    */
+    int size;                 /* --size of the cube (0: auto) */
+} cli_input_options;
+
+/* Parses --layout, --yaw, --mirror, --z-up into o; returns 1 if arg was one of them. */
+int cli_input_option(cli_args *a, const char *arg, cli_input_options *o);
+
+/* Reads path (flat image in any layout, or a cube texture) into a one-level cubemap (level 0
+ * of a cube texture; other levels are dropped). Prints the error and returns the exit code
+ * (0 on success). If layout_out is not NULL it receives the layout used. */
+int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
+                     const cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out);
+
+/* Refuses (usage error, exit 2) an output path that names the same file as the input. */
+void cli_check_distinct(const cli_args *a, const char *input, const char *output);
+
+#endif

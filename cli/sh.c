@@ -1,0 +1,239 @@
+/* ibl sh: spherical-harmonic coefficients of an environment, in every normalisation. */
+#include "cli.h"
+#include "input.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char usage[] =
+    "usage: ibl sh IN [options]\n"
+    "\n"
+    "Projects an environment (equirect, cross, strip, angular, octahedral image, or a cube\n"
+    "texture .ktx2/.ktx/.dds) on real spherical harmonics and prints the radiance\n"
+    "coefficients, the irradiance coefficients, irradiance/pi and the Ramamoorthi-Hanrahan\n"
+    "9-term matrices. Equirect images are projected directly with exact pixel solid angles;\n"
+    "everything else as a cube at its native resolution with exact texel solid angles.\n"
+    "\n"
+    "  --bands N          1..5 (default 3: 9 coefficients)\n"
+    "  --window W         none (default), auto (weakest Hanning window keeping the\n"
+    "                     irradiance non-negative), or a number: Hanning width W\n"
+    "  --fast-centres     the cheap dynamic path: only the six face-centre texels\n"
+    "  --layout NAME --yaw DEG --mirror --z-up   how to read a flat input (with an\n"
+    "                     orientation, equirect inputs are projected through a cube)\n"
+    "  --json             one JSON object instead of text\n"
+    "\n"
+    "Basis: real, orthonormal, no Condon-Shortley phase, order (l,m) = (0,0) (1,-1) (1,0)\n"
+    "(1,1) (2,-2) ...; the formula's x, y, z are the world axes (+Y up). See docs/DIFFUSE.md.\n";
+
+static const char *const coeff_names[IBL_SH_MAX_COEFFS] = {
+    "0,0",  "1,-1", "1,0",  "1,1",  "2,-2", "2,-1", "2,0",  "2,1",  "2,2",
+    "3,-3", "3,-2", "3,-1", "3,0",  "3,1",  "3,2",  "3,3",  "4,-4", "4,-3",
+    "4,-2", "4,-1", "4,0",  "4,1",  "4,2",  "4,3",  "4,4",
+};
+
+static void print_json_coeffs(FILE *f, const char *key, const ibl_sh *sh, int last)
+{
+    fprintf(f, "  \"%s\": [", key);
+    for (int i = 0; i < sh->bands * sh->bands; i++)
+        fprintf(f, "%s[%.9g, %.9g, %.9g]", i ? ", " : "", sh->c[i][0], sh->c[i][1], sh->c[i][2]);
+    fprintf(f, "]%s\n", last ? "" : ",");
+}
+
+static void print_text_coeffs(const char *title, const char *sym, const ibl_sh *sh)
+{
+    printf("%s\n", title);
+    for (int i = 0; i < sh->bands * sh->bands; i++)
+        printf("  %s(%-5s) %14.7g %14.7g %14.7g\n", sym, coeff_names[i], sh->c[i][0], sh->c[i][1],
+               sh->c[i][2]);
+}
+
+static const char *window_name(ibl_sh_window w)
+{
+    return w == IBL_SH_WINDOW_HANNING ? "hanning" : w == IBL_SH_WINDOW_AUTO ? "auto" : "none";
+}
+
+/* An equirect image read as it is: projected directly with exact pixel solid angles. Returns
+ * 1 and fills *image (pixels owned by *tex) if IN is such an image and no orientation is asked
+ * for; 0 if IN must go through a cube (then tex is left empty); -1 on a read error. */
+static int read_plain_equirect(ibl_context *ctx, const cli_common *common, const char *path,
+                               const cli_input_options *o, ibl_texture *tex, ibl_image *image)
+{
+    if (o->orientation.yaw_degrees != 0 || o->orientation.mirror || o->orientation.z_up ||
+        (o->layout != IBL_LAYOUT_AUTO && o->layout != IBL_LAYOUT_EQUIRECT))
+        return 0;
+    ibl_read_desc rd = {0};
+    rd.clamp_infinite = common->clamp;
+    ibl_file_info info;
+    if (ibl_read_texture(ctx, path, &rd, tex, &info) != IBL_OK) return -1;
+    if (tex->kind == IBL_TEXTURE_2D &&
+        (o->layout == IBL_LAYOUT_EQUIRECT ||
+         ibl_layout_detect(tex->width, tex->height) == IBL_LAYOUT_EQUIRECT)) {
+        cli_report_pixels(common, path, &info.pixels);
+        image->width = tex->width;
+        image->height = tex->height;
+        image->pixels = ibl_texture_level(tex, 0, 0);
+        return 1;
+    }
+    ibl_texture_free(ctx, tex);
+    return 0;
+}
+
+void cli_sh_write_json(FILE *f, const char *in, const char *method, int bands,
+                       ibl_sh_window window, const ibl_sh_window_report *rep,
+                       const ibl_sh *radiance)
+{
+    ibl_sh irr, over_pi;
+    ibl_sh_irradiance(radiance, &irr);
+    over_pi = irr;
+    ibl_sh_scale(&over_pi, 1.0 / 3.14159265358979323846);
+    double m[3][4][4];
+    ibl_sh_polynomial(radiance, m);
+    fprintf(f, "{\n");
+    fprintf(f, "  \"input\": \"");
+    for (const char *p = in; *p; p++) {
+        if (*p == '"' || *p == '\\') fputc('\\', f);
+        if ((unsigned char)*p >= 0x20) fputc(*p, f);
+    }
+    fprintf(f, "\",\n  \"projection\": \"%s\",\n", method);
+    fprintf(f, "  \"bands\": %d,\n", bands);
+    fprintf(f, "  \"basis\": \"%s\",\n", IBL_SH_BASIS_NAME);
+    fprintf(f, "  \"condon_shortley_phase\": false,\n");
+    fprintf(f, "  \"order\": \"index l*l+l+m: (0,0) (1,-1) (1,0) (1,1) (2,-2) (2,-1) (2,0) (2,1) "
+           "(2,2) ...\",\n");
+    fprintf(f, "  \"axes\": {\"up\": \"+y\", \"frame\": \"right-handed world frame, +Y up\", "
+           "\"formula_x\": \"+x\", \"formula_y\": \"+y\", \"formula_z\": \"+z\", "
+           "\"note\": \"the R&H formulas take the world x, y, z directly; their polar axis z is "
+           "the horizontal world +Z and up enters through y (L1-1, L2-2, L2-1)\"},\n");
+    fprintf(f, "  \"window\": {\"requested\": \"%s\", \"applied\": \"%s\", \"width\": %.9g, "
+           "\"factors\": [",
+           window_name(window), window_name(rep->applied), rep->width);
+    for (int l = 0; l < bands; l++) fprintf(f, "%s%.9g", l ? ", " : "", rep->factors[l]);
+    fprintf(f, "], \"min_irradiance_before\": %.9g, \"min_irradiance_after\": %.9g},\n",
+           rep->min_irradiance_before, rep->min_irradiance_after);
+    fprintf(f, "  \"cosine_factors\": [");
+    for (int l = 0; l < bands; l++) fprintf(f, "%s%.17g", l ? ", " : "", ibl_sh_cosine_factor(l));
+    fprintf(f, "],\n");
+    print_json_coeffs(f, "radiance", radiance, 0);
+    print_json_coeffs(f, "irradiance", &irr, 0);
+    print_json_coeffs(f, "irradiance_over_pi", &over_pi, 0);
+    fprintf(f, "  \"polynomial\": {\"form\": \"E(n) = [x y z 1] M [x y z 1]^T (irradiance, R&H 2001 "
+           "eq. 12, first 9 coefficients)\", \"constants\": [%g, %g, %g, %g, %g], \"matrix\": {",
+           IBL_SH_RH_C1, IBL_SH_RH_C2, IBL_SH_RH_C3, IBL_SH_RH_C4, IBL_SH_RH_C5);
+    static const char *const ch[3] = {"r", "g", "b"};
+    for (int c = 0; c < 3; c++) {
+        fprintf(f, "%s\"%s\": [", c ? ", " : "", ch[c]);
+        for (int i = 0; i < 4; i++)
+            fprintf(f, "%s[%.9g, %.9g, %.9g, %.9g]", i ? ", " : "", m[c][i][0], m[c][i][1],
+                   m[c][i][2], m[c][i][3]);
+        fprintf(f, "]");
+    }
+    fprintf(f, "}}\n}\n");
+}
+
+int cli_cmd_sh(int argc, char **argv)
+{
+    cli_args a = {argc, argv, 0, "sh", usage, {0}, {0}, 0};
+    int bands = 3, json = 0, fast = 0;
+    ibl_sh_window window = IBL_SH_WINDOW_NONE;
+    double width = 0;
+    cli_input_options io = {0};
+    const char *arg;
+    while ((arg = cli_next(&a))) {
+        if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io)) continue;
+        if (cli_is(&a, arg, "--bands", NULL)) {
+            bands = cli_int(&a, arg, 1, IBL_SH_MAX_BANDS);
+        } else if (cli_is(&a, arg, "--window", NULL)) {
+            const char *v = cli_value(&a, arg);
+            if (strcmp(v, "none") == 0) {
+                window = IBL_SH_WINDOW_NONE;
+            } else if (strcmp(v, "auto") == 0) {
+                window = IBL_SH_WINDOW_AUTO;
+            } else {
+                char *end = NULL;
+                width = strtod(v, &end);
+                if (!*v || *end || !(width > 0 && width < 1e6))
+                    cli_usage_error(&a, "--window wants auto, none or a positive width, not '%s'", v);
+                window = IBL_SH_WINDOW_HANNING;
+            }
+        } else if (cli_is(&a, arg, "--json", NULL)) {
+            json = 1;
+        } else if (cli_is(&a, arg, "--fast-centres", "--fast-centers")) {
+            fast = 1;
+        } else {
+            cli_positional_or_unknown(&a, arg);
+        }
+    }
+    if (a.positional_count != 1) cli_usage_error(&a, "wants exactly one input file");
+    const char *in = a.positional[0];
+    ibl_context *ctx = cli_context(&a.common);
+    ibl_texture tex = {0};
+    ibl_cubemap cube = {0};
+    ibl_image equirect = {0};
+    ibl_sh radiance;
+    ibl_status st = IBL_OK;
+    int plain = fast ? 0 : read_plain_equirect(ctx, &a.common, in, &io, &tex, &equirect);
+    if (plain < 0) {
+        cli_error("%s", ibl_context_message(ctx));
+        ibl_context_destroy(ctx);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    if (!plain) {
+        int rc = cli_read_cubemap(ctx, &a.common, in, &io, &cube, NULL);
+        if (rc != CLI_EXIT_OK) {
+            ibl_context_destroy(ctx);
+            return rc;
+        }
+    }
+    const char *method = fast ? "face-centres" : plain ? "equirect" : "cube";
+    if (fast) st = ibl_sh_project_face_centres(&cube, 0, bands, &radiance);
+    else if (plain) st = ibl_sh_project_equirect(ctx, &equirect, bands, &radiance);
+    else st = ibl_sh_project_cubemap(ctx, &cube, 0, bands, &radiance);
+    ibl_sh_window_report rep;
+    if (st == IBL_OK) st = ibl_sh_apply_window(&radiance, window, width, &rep);
+    ibl_cubemap_free(ctx, &cube);
+    ibl_texture_free(ctx, &tex);
+    if (st != IBL_OK) {
+        const char *msg = ibl_context_message(ctx);
+        if (msg && *msg) cli_error("%s", msg);
+        else cli_error("%s: %s", in, ibl_status_name(st));
+        ibl_context_destroy(ctx);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    ibl_sh irr, over_pi;
+    ibl_sh_irradiance(&radiance, &irr);
+    over_pi = irr;
+    ibl_sh_scale(&over_pi, 1.0 / 3.14159265358979323846);
+    double m[3][4][4];
+    ibl_sh_polynomial(&radiance, m);
+    if (json) {
+        cli_sh_write_json(stdout, in, method, bands, window, &rep, &radiance);
+    } else {
+        printf("input: %s (%s projection, %d bands)\n", in, method, bands);
+        printf("basis: %s\n", IBL_SH_BASIS_NAME);
+        printf("axes: world frame +Y up; the formulas take world x, y, z directly\n");
+        if (rep.applied == IBL_SH_WINDOW_HANNING) {
+            printf("window: hanning W = %.6g (requested %s), factors", rep.width, window_name(window));
+            for (int l = 0; l < bands; l++) printf(" %.6g", rep.factors[l]);
+            printf("; min irradiance %.6g -> %.6g\n", rep.min_irradiance_before,
+                   rep.min_irradiance_after);
+        } else {
+            printf("window: none (requested %s); min irradiance %.6g\n", window_name(window),
+                   rep.min_irradiance_before);
+        }
+        print_text_coeffs("radiance L_lm:", "L", &radiance);
+        print_text_coeffs("irradiance E_lm = A_l L_lm (A = pi, 2pi/3, pi/4, 0, -pi/24):", "E", &irr);
+        print_text_coeffs("irradiance / pi (white Lambertian exitance):", "E/pi", &over_pi);
+        printf("polynomial (R&H 2001): E(n) = [x y z 1] M [x y z 1]^T, c1..c5 = %g %g %g %g %g\n",
+               IBL_SH_RH_C1, IBL_SH_RH_C2, IBL_SH_RH_C3, IBL_SH_RH_C4, IBL_SH_RH_C5);
+        static const char *const ch[3] = {"red", "green", "blue"};
+        for (int c = 0; c < 3; c++) {
+            printf("  M %s:\n", ch[c]);
+            for (int i = 0; i < 4; i++)
+                printf("    %14.7g %14.7g %14.7g %14.7g\n", m[c][i][0], m[c][i][1], m[c][i][2],
+                       m[c][i][3]);
+        }
+    }
+    ibl_context_destroy(ctx);
+    return CLI_EXIT_OK;
+}

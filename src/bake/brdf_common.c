@@ -1,0 +1,303 @@
+/* Half-vector quadrature for BRDF directional albedos; see brdf_common.h and docs/BRDF.md. */
+#include "bake/brdf_common.h"
+
+#include <math.h>
+
+static const double PI = 3.14159265358979323846;
+
+void ibl__gauss_legendre(int n, ibl__rule *rule)
+{
+    if (n < 1) n = 1;
+    if (n > IBL__GL_MAX) n = IBL__GL_MAX;
+    rule->n = n;
+    /* Roots of P_n by Newton from the Tricomi initial guess; symmetric pairs. */
+    for (int i = 0; i < (n + 1) / 2; i++) {
+        double z = cos(PI * (i + 0.75) / (n + 0.5)), dp = 1;
+        for (int it = 0; it < 100; it++) {
+            double p0 = 1, p1 = 0;
+            for (int k = 1; k <= n; k++) {
+                double p2 = p1;
+                p1 = p0;
+                p0 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p2) / k;
+            }
+            dp = n * (z * p0 - p1) / (z * z - 1.0);
+            double dz = p0 / dp;
+            z -= dz;
+            if (fabs(dz) < 1e-16) break;
+        }
+        double w = 2.0 / ((1.0 - z * z) * dp * dp);
+        /* map [-1, 1] -> [0, 1] */
+        rule->x[i] = 0.5 * (1.0 - z);
+        rule->x[n - 1 - i] = 0.5 * (1.0 + z);
+        rule->w[i] = rule->w[n - 1 - i] = 0.5 * w;
+    }
+}
+
+void ibl__quadrature_init(ibl__quadrature *q, int order)
+{
+    if (order <= 0) order = IBL__DEFAULT_ORDER;
+    if (order < 4) order = 4;
+    if (order > IBL__GL_MAX) order = IBL__GL_MAX;
+    ibl__gauss_legendre(order, &q->u_part);
+    ibl__gauss_legendre(order * 2 / 3, &q->u_full);
+    ibl__gauss_legendre((order + 1) / 2, &q->phi);
+    q->circle = order * 2 / 3;
+}
+
+/* Exact importance maps of each lobe's weight measure, written in zeta = sqrt(1 - u) where u
+ * is the measure's CDF in theta_h. u itself is the textbook importance map; zeta also
+ * removes the 1/sqrt(1 - u) end-point singularity that 1/(n.h) factors have at the horizon
+ * (GGX and Charlie), so Gauss-Legendre stays fast at grazing n.v. cos^2 and sin^2 are
+ * returned separately to keep precision at both ends. */
+static void lobe_angle(const ibl__lobe_params *p, double z, double *c2, double *s2)
+{
+    double z2 = z * z;
+    switch (p->lobe) {
+    case IBL__LOBE_GGX_CORRELATED:
+    case IBL__LOBE_GGX_SEPARABLE: {
+        /* Walter et al. 2007: tan^2 theta = alpha^2 u / (1 - u) samples D(h)(n.h). */
+        double a2 = p->alpha * p->alpha, den = a2 + (1.0 - a2) * z2;
+        *c2 = z2 / den;
+        *s2 = a2 * (1.0 - z2) / den;
+        break;
+    }
+    case IBL__LOBE_CHARLIE: {
+        /* Estevez-Kulla 2017: CDF of D(h)(n.h) in theta is sin^(2 + 1/alpha) theta. */
+        double l = 2.0 / (2.0 + 1.0 / p->alpha) * log1p(-z2);
+        *s2 = exp(l);
+        *c2 = -expm1(l);
+        break;
+    }
+    default: {
+        /* (n.h)^s dw_h: 1 - CDF = cos^(s+1) theta. */
+        double l = 4.0 * log(z) / (p->shininess + 1.0);
+        *c2 = exp(l);
+        *s2 = -expm1(l);
+        break;
+    }
+    }
+}
+
+static double lobe_zeta(const ibl__lobe_params *p, double theta)
+{
+    if (theta <= 0) return 1;
+    if (theta >= 0.5 * PI) return 0;
+    double s = sin(theta), c = cos(theta);
+    switch (p->lobe) {
+    case IBL__LOBE_GGX_CORRELATED:
+    case IBL__LOBE_GGX_SEPARABLE: {
+        double a2 = p->alpha * p->alpha;
+        return sqrt(a2 * c * c / (s * s + a2 * c * c));
+    }
+    case IBL__LOBE_CHARLIE:
+        return sqrt(-expm1((2.0 + 1.0 / p->alpha) * log(s)));
+    default:
+        return exp(0.25 * (p->shininess + 1.0) * log(c * c));
+    }
+}
+
+/* Total mass of the weight measure (the integral the importance map normalises away). */
+static double lobe_mass(const ibl__lobe_params *p)
+{
+    if (p->lobe == IBL__LOBE_BLINN) return 2.0 * PI / (p->shininess + 1.0);
+    return 1.0;
+}
+
+typedef struct sink {
+    double *out; /* 2 moments, or nf0 values */
+    const double *f0;
+    int nf0;
+} sink;
+
+/* cos(phi) for phi in [0, pi] as sin(pi/2 - phi) by its Taylor series to t^17 (truncation
+ * below 5e-14): cheaper than libm's cos in the innermost loop, and the same on every
+ * platform, which keeps tables bit-identical across C libraries. */
+static inline double cos_0_pi(double phi)
+{
+    double t = 0.5 * PI - phi, t2 = t * t;
+    double q = -1.0 / 355687428096000.0;                /* -1/17! */
+    q = q * t2 + 1.0 / 1307674368000.0;                 /* 1/15!  */
+    q = q * t2 - 1.0 / 6227020800.0;                    /* -1/13! */
+    q = q * t2 + 1.0 / 39916800.0;                      /* 1/11!  */
+    q = q * t2 - 1.0 / 362880.0;                        /* -1/9!  */
+    q = q * t2 + 1.0 / 5040.0;                          /* 1/7!   */
+    q = q * t2 - 1.0 / 120.0;                           /* -1/5!  */
+    q = q * t2 + 1.0 / 6.0;                             /* 1/3!   */
+    return t - t * t2 * q;
+}
+
+enum { MAX_PHI = 2 * IBL__GL_MAX };
+
+/* Integrand per unit weight measure at the n phi nodes of one theta_h node, times the node
+ * weights wgt[]; writes g * w into wgt[] and the Schlick factor (1 - v.h)^5 into fc[]. One
+ * branch-free loop per lobe so the compiler can vectorise it. */
+static void evaluate(const ibl__lobe_params *p, double mu, double sv, double ch, double sh,
+                     const double *cphi, double *wgt, double *fc, int n)
+{
+    double a2 = p->alpha * p->alpha, b2 = 1.0 - a2, inv_ch = 1.0 / ch, svsh = sv * sh;
+    double lv = sqrt(mu * mu * b2 + a2);
+    double k = 0.5 * p->alpha, g1v = mu / (mu * (1.0 - k) + k);
+    double nlv[MAX_PHI], vhv[MAX_PHI];
+    for (int j = 0; j < n; j++) {
+        double vh = svsh * cphi[j] + mu * ch;
+        double nl = 2.0 * vh * ch - mu;
+        nlv[j] = nl > 0 ? nl : 0; /* round-off at the exact cut */
+        vhv[j] = vh;
+        double t = 1.0 - vh, t2 = t * t;
+        fc[j] = t2 * t2 * t;
+    }
+    switch (p->lobe) {
+    case IBL__LOBE_GGX_CORRELATED:
+        /* Heitz 2014 height-correlated Smith as Vis = G2 / (4 nl nv); with D (n.h) dh the
+         * measure, f (n.l) dl = D Vis F nl 4 (v.h) dh, so g = 4 Vis nl (v.h) / (n.h). */
+        for (int j = 0; j < n; j++) {
+            double nl = nlv[j];
+            wgt[j] *= 2.0 * nl * vhv[j] * inv_ch / (nl * lv + mu * sqrt(nl * nl * b2 + a2));
+        }
+        break;
+    case IBL__LOBE_GGX_SEPARABLE:
+        /* Karis 2013: Schlick-GGX G1(l) G1(v), k = alpha / 2 for image-based lighting. */
+        for (int j = 0; j < n; j++) {
+            double nl = nlv[j];
+            wgt[j] *= g1v * nl * vhv[j] * inv_ch / (mu * (nl * (1.0 - k) + k));
+        }
+        break;
+    case IBL__LOBE_CHARLIE:
+        /* Neubelt & Pettineo 2013 visibility 1 / (4 (nl + nv - nl nv)). */
+        for (int j = 0; j < n; j++) {
+            double nl = nlv[j];
+            wgt[j] *= nl * vhv[j] * inv_ch / (nl + mu - nl * mu);
+        }
+        break;
+    default:
+        /* Seed 000: norm (n.h)^s F / max(n.l, n.v), with (n.h)^s dh the measure. */
+        for (int j = 0; j < n; j++) {
+            double nl = nlv[j], m = nl > mu ? nl : mu;
+            wgt[j] *= 4.0 * p->norm * nl * vhv[j] / m;
+        }
+        break;
+    }
+}
+
+static void sort_small(double *v, int n)
+{
+    for (int i = 1; i < n; i++)
+        for (int j = i; j > 0 && v[j] < v[j - 1]; j--) {
+            double t = v[j];
+            v[j] = v[j - 1];
+            v[j - 1] = t;
+        }
+}
+
+static void integrate(const ibl__lobe_params *p, double mu, const ibl__quadrature *q, sink *s)
+{
+    if (mu > 1.0) mu = 1.0;
+    double sv = sqrt((1.0 - mu) * (1.0 + mu)), tv = acos(mu);
+    /* Kinks in theta_h: below th1 every phi gives n.l > 0, above th2 none does (the
+     * reflected direction's polar angle spans |2 th - tv| .. 2 th + tv); Blinn also has the
+     * max(n.l, n.v) switch, which exists for phi in some range only while th < tv. */
+    double th[5];
+    int nth = 0;
+    th[nth++] = 0;
+    double th1 = 0.5 * (0.5 * PI - tv);
+    th[nth++] = th1;
+    double th2 = 0.5 * (0.5 * PI + tv);
+    th[nth++] = th2;
+    if (p->lobe == IBL__LOBE_BLINN && tv < th2) th[nth++] = tv;
+    sort_small(th, nth);
+    double mass = lobe_mass(p);
+    double cphi[MAX_PHI], wgt[MAX_PHI], fc[MAX_PHI];
+    for (int seg = 0; seg + 1 < nth; seg++) {
+        if (th[seg] >= th2) break;
+        /* zeta decreases with theta; du = 2 zeta dzeta */
+        double za = lobe_zeta(p, th[seg + 1]), zb = lobe_zeta(p, th[seg]);
+        double dz = zb - za;
+        if (!(dz > 0)) continue;
+        /* Where the phi circle is cut (n.l = 0, or Blinn's n.l = n.v) the phi-integrated
+         * function has (t - t0)^(3/2)-type end points; the cubic smoothstep
+         * t = x^2 (3 - 2x) makes them O(x^3) so Gauss-Legendre keeps converging fast. */
+        int whole = th[seg + 1] <= th1 + 1e-15 && (p->lobe != IBL__LOBE_BLINN || th[seg] >= tv - 1e-15);
+        int partial = !whole;
+        const ibl__rule *ru = partial ? &q->u_part : &q->u_full, *rphi = &q->phi;
+        for (int i = 0; i < ru->n; i++) {
+            double x = ru->x[i], wx = ru->w[i];
+            if (partial) {
+                wx *= 6.0 * x * (1.0 - x);
+                x = x * x * (3.0 - 2.0 * x);
+            }
+            double z = za + dz * x, c2, s2;
+            lobe_angle(p, z, &c2, &s2);
+            double ch = sqrt(c2), sh = sqrt(s2);
+            /* n.l = 2 (v.h) ch - mu > 0  <=>  cos phi > -cot(tv) cot(2 th) */
+            double num = -mu * (c2 - s2), den = sv * 2.0 * sh * ch;
+            double cmax = den > 0 ? num / den : (num > 0 ? 2.0 : -2.0);
+            if (cmax >= 1.0) continue;
+            double phimax = cmax <= -1.0 ? PI : acos(cmax);
+            double cuts[3] = {0, phimax, phimax};
+            int ncut = 2;
+            if (p->lobe == IBL__LOBE_BLINN) {
+                /* n.l = mu  <=>  cos phi = cot(tv) tan(th) */
+                double ceq = den > 0 ? mu * s2 / (sv * sh * ch) : 2.0;
+                if (ceq < 1.0) {
+                    double pe = ceq <= -1.0 ? PI : acos(ceq);
+                    if (pe > 0 && pe < phimax) {
+                        cuts[1] = pe;
+                        ncut = 3;
+                    }
+                }
+            }
+            double wu = 2.0 * z * dz * wx * mass / PI; /* (1/2pi) * 2 sides of phi */
+            int n = 0;
+            if (ncut == 2 && phimax >= PI) {
+                /* The whole circle: the integrand is smooth, even and 2 pi periodic, where
+                 * the midpoint rule converges geometrically (exact for cos(k phi), k < 2m). */
+                int m = q->circle;
+                for (int j = 0; j < m; j++) {
+                    cphi[n] = cos_0_pi((j + 0.5) * PI / m);
+                    wgt[n++] = wu * PI / m;
+                }
+                ncut = 0;
+            }
+            for (int c = 0; c + 1 < ncut; c++) {
+                double pa = cuts[c], dp = cuts[c + 1] - pa;
+                if (!(dp > 0)) continue;
+                for (int j = 0; j < rphi->n; j++) {
+                    cphi[n] = cos_0_pi(pa + dp * rphi->x[j]);
+                    wgt[n++] = wu * dp * rphi->w[j];
+                }
+            }
+            evaluate(p, mu, sv, ch, sh, cphi, wgt, fc, n);
+            if (!s->nf0) {
+                double a = 0, b = 0;
+                for (int j = 0; j < n; j++) {
+                    a += wgt[j] * (1.0 - fc[j]);
+                    b += wgt[j] * fc[j];
+                }
+                s->out[0] += a;
+                s->out[1] += b;
+            } else {
+                for (int k = 0; k < s->nf0; k++) {
+                    double f0 = s->f0[k], a = 0;
+                    for (int j = 0; j < n; j++) a += wgt[j] * (f0 + (1.0 - f0) * fc[j]);
+                    s->out[k] += a;
+                }
+            }
+        }
+    }
+}
+
+void ibl__albedo_moments(const ibl__lobe_params *p, double mu, const ibl__quadrature *q,
+                         double out[2])
+{
+    out[0] = out[1] = 0;
+    sink s = {out, NULL, 0};
+    integrate(p, mu, q, &s);
+}
+
+void ibl__albedo_f0(const ibl__lobe_params *p, double mu, const ibl__quadrature *q,
+                    const double *f0, int nf0, double *out)
+{
+    for (int k = 0; k < nf0; k++) out[k] = 0;
+    sink s = {out, f0, nf0};
+    integrate(p, mu, q, &s);
+}

@@ -1,0 +1,38 @@
+/* The tri-Ace seed's two fastest prefilter kernels (seeds 000/001 "Generate PMREM (1)" box,
+ * "Generate PMREM (2)" Gaussian, "Mipmap LOD"). Internal: the prefilter (specular.c) calls
+ * them for --filter box and --filter gauss. docs/EDGE_FIXUP.md ("Seed kernels") documents
+ * the fits and formulas. */
+#ifndef IBL_BAKE_SPECULAR_SEED_H
+#define IBL_BAKE_SPECULAR_SEED_H
+
+#include "ibl/core.h"
+#include "ibl/cubemap.h"
+
+/* also declared in specular_internal.h */
+/* dst->size and dst->levels given; fills every level: level 0 = src resampled to dst->size
+ * (the exact area mean of the covered source texels when src->size is a multiple of
+ * dst->size, ibl_cubemap_resample otherwise), then the area-correct box mip chain. */
+ibl_status ibl__specular_box(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst);
+
+/* also declared in specular_internal.h */
+/* A 2D Gaussian blur within each face of every level of the box chain (no filtering across
+ * face edges, as in the seed), with sigma from the level's shininess (ibl__gauss_sigma). */
+ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst,
+                               const float *shininess_per_level);
+
+/* also declared in specular_internal.h */
+/* The Phong shininess whose normalised lobe best matches, in least squares over the sphere,
+ * the box chain's effective kernel at `level` of a chain whose level 0 has edge `size`
+ * (area-mean texels read back with seamless bilinear filtering). */
+float ibl__box_level_shininess(int size, int level);
+
+/* The seed's lod = a - 0.5 * log2(shininess) for the box chain: a fitted by least squares
+ * over the levels whose fitted shininess lies in [shininess_min, shininess_max] (a bound
+ * <= 0 means none; all levels if no level lies in the range). */
+float ibl__box_lod_offset(int size, int levels, float shininess_min, float shininess_max);
+
+/* The Gaussian profile's per-axis sigma, in texels of a face of edge n, for a Phong lobe of
+ * the given shininess: sqrt(max(0, (n / 2)^2 / (shininess + 3) - 1/12)). */
+double ibl__gauss_sigma(float shininess, int n);
+
+#endif

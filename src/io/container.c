@@ -1,0 +1,308 @@
+/* Helpers shared by the texture containers: see container.h. */
+#include "io/container.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/pixel_format.h"
+
+ibl_format ibl__container_format(const ibl_texture *tex, const ibl_write_desc *desc)
+{
+    if (desc && desc->format != IBL_FORMAT_DEFAULT) return desc->format; /* asked for: exact */
+    ibl_format f = tex ? tex->format : IBL_FORMAT_DEFAULT;
+    switch (f) {
+    case IBL_FORMAT_RGBA16F:
+    case IBL_FORMAT_RGBA32F:
+    case IBL_FORMAT_RG11B10F:
+    case IBL_FORMAT_RGB9E5:
+    case IBL_FORMAT_RG16F:
+    case IBL_FORMAT_RG32F: return f; /* keep what the texture was read as */
+    case IBL_FORMAT_RGB32F: return IBL_FORMAT_RGBA32F; /* e.g. from PFM or float EXR */
+    default: return IBL_FORMAT_RGBA16F;
+    }
+}
+
+uint64_t ibl__level_texels(ibl_texture_kind kind, int width, int height, int depth, int level)
+{
+    uint64_t w = (uint64_t)ibl_level_size(width, level);
+    uint64_t h = (uint64_t)ibl_level_size(height, level);
+    uint64_t d = kind == IBL_TEXTURE_3D ? (uint64_t)ibl_level_size(depth, level) : 1;
+    return w * h * d;
+}
+
+ibl_status ibl__check_dimensions(ibl_context *ctx, const char *name, ibl_texture_kind kind,
+                                 uint64_t width, uint64_t height, uint64_t depth,
+                                 uint64_t levels)
+{
+    if (width == 0 || height == 0 || depth == 0)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: texture size %llux%llux%llu has a zero edge",
+                        name, (unsigned long long)width, (unsigned long long)height,
+                        (unsigned long long)depth);
+    if (width > IBL_MAX_DIMENSION || height > IBL_MAX_DIMENSION || depth > IBL_MAX_DIMENSION)
+        return ibl_fail(ctx, IBL_ERR_TOO_LARGE,
+                        "%s: texture size %llux%llux%llu exceeds the limit of %d texels per edge",
+                        name, (unsigned long long)width, (unsigned long long)height,
+                        (unsigned long long)depth, (int)IBL_MAX_DIMENSION);
+    if (kind == IBL_TEXTURE_CUBE && width != height)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: cube map faces are %llux%llu, not square", name,
+                        (unsigned long long)width, (unsigned long long)height);
+    uint64_t max_dim = width > height ? width : height;
+    if (kind == IBL_TEXTURE_3D && depth > max_dim) max_dim = depth;
+    int full = ibl_full_mip_count((int)max_dim);
+    if (levels == 0 || levels > (uint64_t)full)
+        return ibl_fail(ctx, IBL_ERR_FORMAT,
+                        "%s: %llu mip levels for a largest edge of %llu (at most %d possible)", name,
+                        (unsigned long long)levels, (unsigned long long)max_dim, full);
+    if (levels > IBL_MAX_LEVELS)
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: %llu mip levels (at most %d supported)",
+                        name, (unsigned long long)levels, (int)IBL_MAX_LEVELS);
+    return IBL_OK;
+}
+
+ibl_status ibl__check_texture(ibl_context *ctx, const ibl_texture *tex, const char *name)
+{
+    if (!tex || !tex->data)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no texture data to write", name);
+    if (tex->kind != IBL_TEXTURE_2D && tex->kind != IBL_TEXTURE_3D && tex->kind != IBL_TEXTURE_CUBE)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: unknown texture kind %d", name,
+                        (int)tex->kind);
+    if (tex->width <= 0 || tex->height <= 0 || tex->depth <= 0 || tex->levels <= 0 ||
+        tex->width > IBL_MAX_DIMENSION || tex->height > IBL_MAX_DIMENSION ||
+        tex->depth > IBL_MAX_DIMENSION ||
+        ibl_texture_floats(tex->kind, tex->width, tex->height, tex->depth, tex->levels) == 0)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                        "%s: invalid texture dimensions %dx%dx%d with %d levels", name, tex->width,
+                        tex->height, tex->depth, tex->levels);
+    if (tex->metadata_count < 0 || (tex->metadata_count > 0 && !tex->metadata))
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: invalid metadata list", name);
+    return IBL_OK;
+}
+
+/* ---- key/value data ---- */
+
+static int reserved_key(const char *key)
+{
+    return strncmp(key, "KTX", 3) == 0 || strncmp(key, "ktx", 3) == 0;
+}
+
+static int compare_pairs(const void *a, const void *b)
+{
+    const ibl_key_value *x = a, *y = b;
+    return strcmp(x->key, y->key); /* strcmp compares as unsigned char: code point order */
+}
+
+ibl_status ibl__kv_build(ibl_context *ctx, const char *name, const ibl_key_value *fixed,
+                         int fixed_count, const ibl_texture *tex, uint8_t **out, size_t *size)
+{
+    *out = NULL;
+    *size = 0;
+    int meta = tex ? tex->metadata_count : 0;
+    size_t cap = (size_t)fixed_count + (size_t)(meta > 0 ? meta : 0);
+    if (cap == 0) return IBL_OK;
+    ibl_key_value *pairs = ibl_alloc(ctx, cap * sizeof *pairs);
+    if (!pairs) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
+    size_t n = 0;
+    for (int i = 0; i < fixed_count; i++) pairs[n++] = fixed[i];
+    for (int i = 0; i < meta; i++) {
+        const ibl_key_value *kv = &tex->metadata[i];
+        if (!kv->key || !kv->value || !kv->key[0]) {
+            ibl_free(ctx, pairs);
+            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: metadata entry %d has no key",
+                            name, i);
+        }
+        if (!reserved_key(kv->key)) pairs[n++] = *kv;
+    }
+    if (n > IBL__MAX_KEY_VALUES) {
+        ibl_free(ctx, pairs);
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: %zu metadata entries (at most %d)",
+                        name, n, (int)IBL__MAX_KEY_VALUES);
+    }
+    qsort(pairs, n, sizeof *pairs, compare_pairs);
+    size_t total = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (i > 0 && strcmp(pairs[i - 1].key, pairs[i].key) == 0) {
+            ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: metadata key \"%s\" appears twice", name,
+                     pairs[i].key);
+            ibl_free(ctx, pairs);
+            return IBL_ERR_INVALID_ARGUMENT;
+        }
+        size_t len = strlen(pairs[i].key) + 1 + strlen(pairs[i].value) + 1;
+        if (len > 0x7fffffffu || total > (size_t)0x7fffffff) {
+            ibl_free(ctx, pairs);
+            return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: metadata is too large", name);
+        }
+        total += 4 + ((len + 3) & ~(size_t)3);
+    }
+    uint8_t *buf = total ? ibl_calloc(ctx, total, 1) : NULL;
+    if (total && !buf) {
+        ibl_free(ctx, pairs);
+        return ibl__fail_named(ctx, ibl_context_status(ctx), name);
+    }
+    size_t at = 0;
+    for (size_t i = 0; i < n; i++) {
+        size_t klen = strlen(pairs[i].key) + 1, vlen = strlen(pairs[i].value) + 1;
+        ibl__wr32(buf + at, (uint32_t)(klen + vlen));
+        memcpy(buf + at + 4, pairs[i].key, klen);
+        memcpy(buf + at + 4 + klen, pairs[i].value, vlen);
+        at += 4 + ((klen + vlen + 3) & ~(size_t)3);
+    }
+    ibl_free(ctx, pairs);
+    *out = buf;
+    *size = total;
+    return IBL_OK;
+}
+
+ibl_status ibl__kv_parse(ibl_context *ctx, const char *name, const uint8_t *bytes, size_t size,
+                         ibl_texture *tex)
+{
+    size_t at = 0;
+    int count = 0;
+    while (at < size) {
+        if (++count > IBL__MAX_KEY_VALUES)
+            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: more than %d key/value entries", name,
+                            (int)IBL__MAX_KEY_VALUES);
+        if (size - at < 4)
+            return ibl_fail(ctx, IBL_ERR_FORMAT,
+                            "%s: key/value data ends inside an entry's length at byte %zu", name, at);
+        uint32_t len = ibl__rd32(bytes + at);
+        at += 4;
+        if (len > size - at)
+            return ibl_fail(ctx, IBL_ERR_FORMAT,
+                            "%s: key/value entry of %u bytes runs past the key/value data", name,
+                            len);
+        const uint8_t *entry = bytes + at;
+        const uint8_t *nul = memchr(entry, 0, len);
+        if (!nul || nul == entry)
+            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: key/value entry at byte %zu has %s", name,
+                            at - 4, nul ? "an empty key" : "no NUL after its key");
+        size_t klen = (size_t)(nul - entry);
+        size_t vlen = len - klen - 1;
+        if (vlen > 0 && entry[klen + 1 + vlen - 1] == 0) vlen--; /* the string's own NUL */
+        char *key = ibl_alloc(ctx, klen + 1 + vlen + 1);
+        if (!key) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
+        memcpy(key, entry, klen + 1);
+        char *value = key + klen + 1;
+        memcpy(value, entry + klen + 1, vlen);
+        value[vlen] = 0;
+        ibl_status st = IBL_OK;
+        if (ibl_texture_get_metadata(tex, key))
+            st = ibl_fail(ctx, IBL_ERR_FORMAT, "%s: metadata key \"%s\" appears twice", name, key);
+        else if (ibl_texture_set_metadata(ctx, tex, key, value) != IBL_OK)
+            st = ibl_fail(ctx, IBL_ERR_OUT_OF_MEMORY, "%s: out of memory reading metadata", name);
+        ibl_free(ctx, key);
+        if (st != IBL_OK) return st;
+        size_t padded = ((size_t)len + 3) & ~(size_t)3;
+        if (padded > size - at)
+            return ibl_fail(ctx, IBL_ERR_FORMAT,
+                            "%s: key/value data ends inside the padding of an entry", name);
+        at += padded;
+    }
+    return IBL_OK;
+}
+
+/* ---- reorientation ---- */
+
+static void swap_texels(float *a, float *b)
+{
+    float t[4];
+    memcpy(t, a, sizeof t);
+    memcpy(a, b, sizeof t);
+    memcpy(b, t, sizeof t);
+}
+
+void ibl__flip_texture(ibl_texture *tex, int flip_x, int flip_y, int flip_z)
+{
+    if (!flip_x && !flip_y && !flip_z) return;
+    int faces = ibl_texture_faces(tex);
+    for (int l = 0; l < tex->levels; l++) {
+        size_t w = (size_t)ibl_level_size(tex->width, l), h = (size_t)ibl_level_size(tex->height, l);
+        size_t d = tex->kind == IBL_TEXTURE_3D ? (size_t)ibl_level_size(tex->depth, l) : 1;
+        for (int f = 0; f < faces; f++) {
+            float *base = ibl_texture_level(tex, l, f);
+            for (size_t z = 0; z < d; z++) {
+                float *slice = base + z * w * h * 4;
+                if (flip_y)
+                    for (size_t y = 0; y < h / 2; y++)
+                        for (size_t x = 0; x < w; x++)
+                            swap_texels(slice + (y * w + x) * 4, slice + ((h - 1 - y) * w + x) * 4);
+                if (flip_x)
+                    for (size_t y = 0; y < h; y++)
+                        for (size_t x = 0; x < w / 2; x++)
+                            swap_texels(slice + (y * w + x) * 4, slice + (y * w + w - 1 - x) * 4);
+            }
+            if (flip_z)
+                for (size_t z = 0; z < d / 2; z++)
+                    for (size_t i = 0; i < w * h; i++)
+                        swap_texels(base + (z * w * h + i) * 4, base + ((d - 1 - z) * w * h + i) * 4);
+        }
+    }
+}
+
+/* ---- chunked conversion ---- */
+
+enum { CHUNK_TEXELS = 1 << 16 };
+
+typedef struct convert_job {
+    ibl_format format;
+    size_t count, texel_bytes;
+    const float *src_f;
+    uint8_t *dst_b;
+    const uint8_t *src_b;
+    float *dst_f;
+} convert_job;
+
+static void pack_chunk(void *arg, int index)
+{
+    const convert_job *j = arg;
+    size_t first = (size_t)index * CHUNK_TEXELS;
+    size_t n = j->count - first < CHUNK_TEXELS ? j->count - first : CHUNK_TEXELS;
+    ibl_pack_texels(j->format, j->src_f + first * 4, n, j->dst_b + first * j->texel_bytes);
+}
+
+static void unpack_chunk(void *arg, int index)
+{
+    const convert_job *j = arg;
+    size_t first = (size_t)index * CHUNK_TEXELS;
+    size_t n = j->count - first < CHUNK_TEXELS ? j->count - first : CHUNK_TEXELS;
+    ibl_unpack_texels(j->format, j->src_b + first * j->texel_bytes, n, j->dst_f + first * 4);
+}
+
+static int chunk_count(size_t count)
+{
+    /* count <= 6 * 65536^3 would overflow int chunks only past 2^47 texels; files that large
+     * are refused long before (memory limit). Fall back to one call if it ever happens. */
+    size_t chunks = (count + CHUNK_TEXELS - 1) / CHUNK_TEXELS;
+    return chunks > 0x7fffffff ? 0 : (int)chunks;
+}
+
+void ibl__pack(ibl_context *ctx, ibl_format format, const float *rgba, size_t count, uint8_t *dst)
+{
+    convert_job j = {format, count, ibl_format_texel_bytes(format), rgba, dst, NULL, NULL};
+    int chunks = chunk_count(count);
+    if (chunks <= 1) ibl_pack_texels(format, rgba, count, dst);
+    else ibl_parallel_for(ctx, chunks, pack_chunk, &j);
+}
+
+void ibl__unpack(ibl_context *ctx, ibl_format format, const uint8_t *src, size_t count,
+                 float *rgba)
+{
+    convert_job j = {format, count, ibl_format_texel_bytes(format), NULL, NULL, src, rgba};
+    int chunks = chunk_count(count);
+    if (chunks <= 1) ibl_unpack_texels(format, src, count, rgba);
+    else ibl_parallel_for(ctx, chunks, unpack_chunk, &j);
+}
+
+void ibl__fill_info(ibl_file_info *info, ibl_file_type type, const ibl_texture *tex)
+{
+    if (!info) return;
+    memset(info, 0, sizeof *info);
+    info->type = type;
+    info->format = tex->format;
+    info->kind = tex->kind;
+    info->width = tex->width;
+    info->height = tex->height;
+    info->depth = tex->depth;
+    info->levels = tex->levels;
+    info->has_alpha = ibl_format_channels(tex->format) == 4;
+}

@@ -1,0 +1,78 @@
+/* Helpers shared by the texture containers (ktx2.c, ktx1.c, dds.c): little-endian fields,
+ * level sizes, the choice of storage format, key/value blocks and reorientation. Internal. */
+#ifndef IBL_IO_CONTAINER_H
+#define IBL_IO_CONTAINER_H
+
+#include "io/io_internal.h"
+
+static inline uint32_t ibl__rd32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+}
+static inline uint64_t ibl__rd64(const uint8_t *p)
+{
+    return (uint64_t)ibl__rd32(p) | ((uint64_t)ibl__rd32(p + 4) << 32);
+}
+static inline void ibl__wr32(uint8_t *p, uint32_t v)
+{
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+    p[2] = (uint8_t)(v >> 16);
+    p[3] = (uint8_t)(v >> 24);
+}
+static inline void ibl__wr64(uint8_t *p, uint64_t v)
+{
+    ibl__wr32(p, (uint32_t)v);
+    ibl__wr32(p + 4, (uint32_t)(v >> 32));
+}
+
+/* ibl__fail_named is declared in io_internal.h (defined in file.c). */
+
+/* The storage format an encoder writes: desc->format if set (refused later if the container
+ * cannot store it); else tex->format if it is one of the six container formats; else
+ * RGBA32F for RGB32F textures (keeps float precision) and RGBA16F for anything else. */
+ibl_format ibl__container_format(const ibl_texture *tex, const ibl_write_desc *desc);
+
+/* Validates a texture handed to an encoder (kind, dimensions, levels, data). */
+ibl_status ibl__check_texture(ibl_context *ctx, const ibl_texture *tex, const char *name);
+
+/* Texels of one face of one level (all slices of a 3D level). Dimensions must be at most
+ * IBL_MAX_DIMENSION, so the product fits in 64 bits. */
+uint64_t ibl__level_texels(ibl_texture_kind kind, int width, int height, int depth, int level);
+
+/* Validates dimensions read from a file before anything is allocated: every edge in
+ * 1..IBL_MAX_DIMENSION, cubes square, levels in 1..min(IBL_MAX_LEVELS, full chain). */
+ibl_status ibl__check_dimensions(ibl_context *ctx, const char *name, ibl_texture_kind kind,
+                                 uint64_t width, uint64_t height, uint64_t depth,
+                                 uint64_t levels);
+
+/* Most key/value pairs a container accepts (keeps metadata handling linear-ish for hostile
+ * files: duplicate detection is quadratic in the count). */
+enum { IBL__MAX_KEY_VALUES = 4096 };
+
+/* Builds a key/value block (KTX 1 and KTX 2 share the layout): for each pair sorted by the
+ * key's bytes (the Unicode code point order for UTF-8), UInt32 keyAndValueByteLength, the
+ * key, NUL, the value, NUL, then zero padding to 4 bytes. The `fixed` pairs are the ones
+ * the container itself writes (KTXorientation, KTXwriter); texture metadata whose key starts
+ * with "KTX" or "ktx" (reserved by the KTX specifications) is not copied, the rest is.
+ * *out is NULL when there are no pairs. */
+ibl_status ibl__kv_build(ibl_context *ctx, const char *name, const ibl_key_value *fixed,
+                         int fixed_count, const ibl_texture *tex, uint8_t **out, size_t *size);
+
+/* Parses a key/value block into tex->metadata (values lose one trailing NUL). */
+ibl_status ibl__kv_parse(ibl_context *ctx, const char *name, const uint8_t *bytes, size_t size,
+                         ibl_texture *tex);
+
+/* Mirrors every level/face of a texture along x, y and/or z (slices). */
+void ibl__flip_texture(ibl_texture *tex, int flip_x, int flip_y, int flip_z);
+
+/* ibl_pack_texels / ibl_unpack_texels split into fixed chunks of texels run through
+ * ibl_parallel_for: the output does not depend on the thread count. */
+void ibl__pack(ibl_context *ctx, ibl_format format, const float *rgba, size_t count, uint8_t *dst);
+void ibl__unpack(ibl_context *ctx, ibl_format format, const uint8_t *src, size_t count,
+                 float *rgba);
+
+/* Fills the file info of a decoded texture. */
+void ibl__fill_info(ibl_file_info *info, ibl_file_type type, const ibl_texture *tex);
+
+#endif

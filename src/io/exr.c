@@ -1,0 +1,292 @@
+/* OpenEXR: the decoding and encoding are OpenEXR's own (C++ API, in exr_cpp.cpp); this file
+ * checks the file's structure first (headers, windows, chunk offset table) so hostile sizes
+ * are refused before OpenEXR or we allocate, then places the pixels.
+ *
+ * Read: half, float (and uint) channels, scanline or tiled (level 0 of mip/rip-mapped files),
+ * every compression of OpenEXR 3.1 (NONE, RLE, ZIPS, ZIP, PIZ, PXR24, B44, B44A, DWAA, DWAB),
+ * part 0 of multi-part files. Channels: R,G,B(,A); else Y(,A) as grey; else Y,RY,BY
+ * (luminance/chroma, converted by OpenEXR); else the alphabetically first layer that has
+ * .R, .G and .B. Deep files are refused. The result covers the display window: pixels of the
+ * data window outside it are cropped, display pixels without data are 0 (alpha 0).
+ * Write: R,G,B(,A) as half or float, scanline, with the chosen lossless compression. */
+#include "io/exr_bridge.h"
+#include "io/io_internal.h"
+
+#include <stdio.h>
+#include <string.h>
+
+/* ---- structural check ---------------------------------------------------------------- */
+
+typedef struct exr_shape {
+    int32_t data[4], display[4]; /* xmin ymin xmax ymax */
+    int has_data, has_display, has_tiles;
+    int compression;
+    uint32_t tile_w, tile_h;
+    int tiled, multipart, deep;
+} exr_shape;
+
+static int32_t le32(const uint8_t *p)
+{
+    return (int32_t)((uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24);
+}
+
+static uint64_t le64(const uint8_t *p)
+{
+    return (uint64_t)(uint32_t)le32(p) | (uint64_t)(uint32_t)le32(p + 4) << 32;
+}
+
+/* A NUL-terminated string of at most max_len characters at b[*pos]; NULL if malformed. */
+static const char *read_name(const uint8_t *b, size_t size, size_t *pos, size_t max_len)
+{
+    const uint8_t *start = b + *pos;
+    size_t avail = size - *pos;
+    const uint8_t *nul = memchr(start, 0, avail < max_len + 1 ? avail : max_len + 1);
+    if (!nul) return NULL;
+    *pos += (size_t)(nul - start) + 1;
+    return (const char *)start;
+}
+
+/* Walks one header's attributes; records part 0's. Returns NULL or the problem. */
+static const char *walk_header(const uint8_t *b, size_t size, size_t *pos, size_t max_name,
+                               exr_shape *sh, int record)
+{
+    for (;;) {
+        if (*pos >= size) return "truncated header";
+        if (b[*pos] == 0) {
+            (*pos)++;
+            return NULL;
+        }
+        const char *name = read_name(b, size, pos, max_name);
+        if (!name) return "bad attribute name";
+        const char *type = read_name(b, size, pos, max_name);
+        if (!type) return "bad attribute type";
+        if (size - *pos < 4) return "truncated header";
+        int32_t len = le32(b + *pos);
+        *pos += 4;
+        if (len < 0 || (size_t)len > size - *pos) return "attribute size beyond the end of the file";
+        const uint8_t *v = b + *pos;
+        if (record) {
+            if (strcmp(type, "box2i") == 0 && len == 16 &&
+                (strcmp(name, "dataWindow") == 0 || strcmp(name, "displayWindow") == 0)) {
+                int32_t *box = name[1] == 'a' ? sh->data : sh->display;
+                for (int i = 0; i < 4; i++) box[i] = le32(v + 4 * i);
+                if (name[1] == 'a') sh->has_data = 1;
+                else sh->has_display = 1;
+            } else if (strcmp(name, "compression") == 0 && len == 1) {
+                sh->compression = v[0];
+            } else if (strcmp(name, "tiles") == 0 && strcmp(type, "tiledesc") == 0 && len == 9) {
+                sh->tile_w = (uint32_t)le32(v);
+                sh->tile_h = (uint32_t)le32(v + 4);
+                sh->has_tiles = 1;
+            } else if (strcmp(name, "type") == 0) {
+                if (len >= 4 && memcmp(v, "deep", 4) == 0) sh->deep = 1;
+                if (len == 10 && memcmp(v, "tiledimage", 10) == 0) sh->tiled = 1;
+            }
+        }
+        *pos += (size_t)len;
+    }
+}
+
+static int64_t box_extent(const int32_t *box, int axis)
+{
+    return (int64_t)box[2 + axis] - (int64_t)box[axis] + 1;
+}
+
+static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t size, const char *name,
+                                  exr_shape *sh)
+{
+    memset(sh, 0, sizeof *sh);
+    if (size < 8 || le32(b) != 20000630)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: not an OpenEXR file", name);
+    uint32_t version = (uint32_t)le32(b + 4);
+    if ((version & 0xFF) != 2)
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR version %u is not supported", name,
+                        version & 0xFF);
+    if (version & ~(uint32_t)0x1EFF)
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: unknown OpenEXR feature flags 0x%x", name,
+                        version);
+    sh->tiled = (version & 0x200) != 0;
+    sh->multipart = (version & 0x1000) != 0;
+    sh->deep = (version & 0x800) != 0;
+    size_t max_name = (version & 0x400) ? 255 : 31;
+    size_t pos = 8;
+    const char *problem = walk_header(b, size, &pos, max_name, sh, 1);
+    /* Multi-part: more headers follow, the list ends with an empty header. */
+    while (!problem && sh->multipart) {
+        if (pos >= size) {
+            problem = "truncated header list";
+            break;
+        }
+        if (b[pos] == 0) {
+            pos++;
+            break;
+        }
+        problem = walk_header(b, size, &pos, max_name, sh, 0);
+    }
+    if (problem) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: %s", name, problem);
+    if (sh->deep)
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: deep OpenEXR data is not supported", name);
+    if (!sh->has_data || !sh->has_display)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: no data or display window", name);
+    for (int axis = 0; axis < 2; axis++) {
+        int64_t d = box_extent(sh->data, axis), v = box_extent(sh->display, axis);
+        if (d <= 0 || v <= 0 || d > IBL_MAX_DIMENSION || v > IBL_MAX_DIMENSION)
+            return ibl_fail(ctx, IBL_ERR_FORMAT,
+                            "%s: absurd OpenEXR window (data %lldx%lld, display %lldx%lld)", name,
+                            (long long)box_extent(sh->data, 0), (long long)box_extent(sh->data, 1),
+                            (long long)box_extent(sh->display, 0), (long long)box_extent(sh->display, 1));
+    }
+    static const int lines_per_chunk[10] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
+    if (sh->compression < 0 || sh->compression > 9)
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: unknown OpenEXR compression %d", name,
+                        sh->compression);
+    uint64_t w = (uint64_t)box_extent(sh->data, 0), h = (uint64_t)box_extent(sh->data, 1);
+    uint64_t chunks;
+    if (sh->tiled) {
+        if (!sh->has_tiles || sh->tile_w == 0 || sh->tile_h == 0 || sh->tile_w > 0x7FFFFFFFu ||
+            sh->tile_h > 0x7FFFFFFFu)
+            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR tile description", name);
+        /* Level 0 comes first in the offset table; only its tiles are read. */
+        chunks = ((w + sh->tile_w - 1) / sh->tile_w) * ((h + sh->tile_h - 1) / sh->tile_h);
+    } else {
+        uint64_t lpc = (uint64_t)lines_per_chunk[sh->compression];
+        chunks = (h + lpc - 1) / lpc;
+    }
+    /* Every chunk of level 0 must exist: offset in the file, its header and data inside. */
+    if (chunks > (size - pos) / 8)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated OpenEXR (offset table)", name);
+    size_t table_end = pos + (size_t)chunks * 8;
+    size_t chunk_header = (sh->multipart ? 4u : 0u) + (sh->tiled ? 16u : 4u);
+    for (uint64_t i = 0; i < chunks; i++) {
+        uint64_t off = le64(b + pos + i * 8);
+        if (off < table_end || off > size || size - off < chunk_header + 4)
+            return ibl_fail(ctx, IBL_ERR_FORMAT,
+                            "%s: truncated or incomplete OpenEXR (chunk %llu of %llu missing)", name,
+                            (unsigned long long)i, (unsigned long long)chunks);
+        int32_t packed = le32(b + off + chunk_header);
+        if (packed < 0 || (uint64_t)packed > size - off - chunk_header - 4)
+            return ibl_fail(ctx, IBL_ERR_FORMAT,
+                            "%s: truncated OpenEXR (chunk %llu of %llu cut short)", name,
+                            (unsigned long long)i, (unsigned long long)chunks);
+    }
+    return IBL_OK;
+}
+
+/* ---- decode -------------------------------------------------------------------------- */
+
+ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                           ibl_texture *out, ibl_file_info *info)
+{
+    exr_shape sh;
+    ibl_status s = check_structure(ctx, bytes, size, name, &sh);
+    if (s != IBL_OK) return s;
+    char err[256] = "";
+    ibl__exr_reader *reader = NULL;
+    ibl__exr_header hd;
+    int rc = ibl__exr_open(bytes, size, &reader, &hd, err, sizeof err);
+    if (rc) return ibl_fail(ctx, (ibl_status)rc, "%s: %s", name, err);
+    /* OpenEXR parsed the same windows; trust only what was checked above. */
+    if (hd.data_min_x != sh.data[0] || hd.data_min_y != sh.data[1] || hd.data_max_x != sh.data[2] ||
+        hd.data_max_y != sh.data[3] || hd.display_min_x != sh.display[0] ||
+        hd.display_min_y != sh.display[1] || hd.display_max_x != sh.display[2] ||
+        hd.display_max_y != sh.display[3]) {
+        ibl__exr_close(reader);
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: inconsistent OpenEXR windows", name);
+    }
+    int dw = (int)box_extent(sh.data, 0), dh = (int)box_extent(sh.data, 1);
+    int vw = (int)box_extent(sh.display, 0), vh = (int)box_extent(sh.display, 1);
+    s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, vw, vh, 1, 1, out);
+    if (s != IBL_OK) {
+        ibl__exr_close(reader);
+        return ibl__fail_named(ctx, s, name);
+    }
+    int same = memcmp(sh.data, sh.display, sizeof sh.data) == 0;
+    float *target = out->data;
+    if (!same) {
+        target = ibl_alloc(ctx, (size_t)dw * (size_t)dh * 4 * sizeof(float));
+        if (!target) {
+            s = ibl_context_status(ctx);
+            ibl__exr_close(reader);
+            ibl_texture_free(ctx, out);
+            return ibl__fail_named(ctx, s, name);
+        }
+    }
+    rc = ibl__exr_read(reader, target, err, sizeof err);
+    ibl__exr_close(reader);
+    if (rc) {
+        if (!same) ibl_free(ctx, target);
+        ibl_texture_free(ctx, out);
+        return ibl_fail(ctx, (ibl_status)rc, "%s: %s", name, err);
+    }
+    if (!same) {
+        /* Copy the overlap of the data window into the display window. */
+        int64_t x0 = sh.data[0] > sh.display[0] ? sh.data[0] : sh.display[0];
+        int64_t x1 = sh.data[2] < sh.display[2] ? sh.data[2] : sh.display[2];
+        int64_t y0 = sh.data[1] > sh.display[1] ? sh.data[1] : sh.display[1];
+        int64_t y1 = sh.data[3] < sh.display[3] ? sh.data[3] : sh.display[3];
+        for (int64_t y = y0; y <= y1 && x0 <= x1; y++) {
+            const float *src = target + ((size_t)(y - sh.data[1]) * (size_t)dw + (size_t)(x0 - sh.data[0])) * 4;
+            float *dst = out->data + ((size_t)(y - sh.display[1]) * (size_t)vw + (size_t)(x0 - sh.display[0])) * 4;
+            memcpy(dst, src, (size_t)(x1 - x0 + 1) * 4 * sizeof(float));
+        }
+        ibl_free(ctx, target);
+    }
+    int alpha = hd.has_alpha;
+    out->format = hd.all_half ? (alpha ? IBL_FORMAT_RGBA16F : IBL_FORMAT_RGB16F)
+                              : (alpha ? IBL_FORMAT_RGBA32F : IBL_FORMAT_RGB32F);
+    info->format = out->format;
+    info->has_alpha = alpha;
+    return IBL_OK;
+}
+
+/* ---- encode -------------------------------------------------------------------------- */
+
+static void *exr_alloc(void *user, size_t bytes)
+{
+    return ibl_alloc(user, bytes);
+}
+
+ibl_status ibl__exr_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
+                           const char *name, void **bytes, size_t *size)
+{
+    int channels, half;
+    switch (desc->format) {
+    case IBL_FORMAT_DEFAULT: {
+        /* float (half would turn a bright sun infinite); RGB unless the alpha says something */
+        size_t n = (size_t)image->width * (size_t)image->height;
+        channels = 3;
+        for (size_t i = 0; i < n; i++)
+            if (image->pixels[i * 4 + 3] != 1.0f) {
+                channels = 4;
+                break;
+            }
+        half = 0;
+        break;
+    }
+    case IBL_FORMAT_RGBA16F: channels = 4; half = 1; break;
+    case IBL_FORMAT_RGB16F: channels = 3; half = 1; break;
+    case IBL_FORMAT_RGBA32F: channels = 4; half = 0; break;
+    case IBL_FORMAT_RGB32F: channels = 3; half = 0; break;
+    default:
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+                        "%s: OpenEXR output stores rgba16f, rgb16f, rgba32f or rgb32f, not %s", name,
+                        ibl_format_name(desc->format));
+    }
+    int compression;
+    switch (desc->exr_compression) {
+    case IBL_EXR_NONE: compression = 0; break;
+    case IBL_EXR_RLE: compression = 1; break;
+    case IBL_EXR_ZIPS: compression = 2; break;
+    case IBL_EXR_PIZ: compression = 4; break;
+    case IBL_EXR_DEFAULT:
+    case IBL_EXR_ZIP: compression = 3; break;
+    default:
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: unknown OpenEXR compression %d", name,
+                        (int)desc->exr_compression);
+    }
+    char err[256] = "";
+    int rc = ibl__exr_write(image->pixels, image->width, image->height, channels, half, compression,
+                            exr_alloc, ctx, bytes, size, err, sizeof err);
+    if (rc) return ibl_fail(ctx, (ibl_status)rc, "%s: cannot encode OpenEXR: %s", name, err);
+    return IBL_OK;
+}

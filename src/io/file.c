@@ -1,0 +1,548 @@
+/* Files and dispatch: type detection, whole-file reads, atomic writes, the readers'
+ * pixel policy and the writers' choice of container. The per-format code lives in
+ * hdr.c, exr.c, pfm.c, stb.c and the container files; see io_internal.h for the contract. */
+#include "io/io_internal.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* ---- file types ---------------------------------------------------------------------- */
+
+const char *ibl_file_type_name(ibl_file_type type)
+{
+    switch (type) {
+    case IBL_FILE_HDR: return "hdr";
+    case IBL_FILE_EXR: return "exr";
+    case IBL_FILE_PFM: return "pfm";
+    case IBL_FILE_PNG: return "png";
+    case IBL_FILE_JPEG: return "jpeg";
+    case IBL_FILE_KTX2: return "ktx2";
+    case IBL_FILE_KTX1: return "ktx";
+    case IBL_FILE_DDS: return "dds";
+    case IBL_FILE_UNKNOWN: break;
+    }
+    return "unknown";
+}
+
+ibl_file_type ibl_file_type_from_path(const char *path)
+{
+    static const struct {
+        const char *ext;
+        ibl_file_type type;
+    } table[] = {
+        {"hdr", IBL_FILE_HDR},   {"pic", IBL_FILE_HDR},   {"exr", IBL_FILE_EXR},
+        {"pfm", IBL_FILE_PFM},   {"png", IBL_FILE_PNG},   {"jpg", IBL_FILE_JPEG},
+        {"jpeg", IBL_FILE_JPEG}, {"ktx2", IBL_FILE_KTX2}, {"ktx", IBL_FILE_KTX1},
+        {"dds", IBL_FILE_DDS},
+    };
+    if (!path) return IBL_FILE_UNKNOWN;
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    const char *dot = strrchr(base, '.');
+    if (!dot || dot == base) return IBL_FILE_UNKNOWN;
+    for (size_t i = 0; i < sizeof table / sizeof table[0]; i++)
+        if (strcasecmp(dot + 1, table[i].ext) == 0) return table[i].type;
+    return IBL_FILE_UNKNOWN;
+}
+
+static int starts_with(const uint8_t *b, size_t size, const void *magic, size_t n)
+{
+    return size >= n && memcmp(b, magic, n) == 0;
+}
+
+ibl_file_type ibl_file_type_sniff(const void *bytes, size_t size)
+{
+    const uint8_t *b = bytes;
+    if (!b) return IBL_FILE_UNKNOWN;
+    static const uint8_t ktx2[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
+    static const uint8_t ktx1[12] = {0xAB, 'K', 'T', 'X', ' ', '1', '1', 0xBB, '\r', '\n', 0x1A, '\n'};
+    static const uint8_t png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    static const uint8_t exr[4] = {0x76, 0x2F, 0x31, 0x01};
+    static const uint8_t jpeg[3] = {0xFF, 0xD8, 0xFF};
+    if (starts_with(b, size, ktx2, sizeof ktx2)) return IBL_FILE_KTX2;
+    if (starts_with(b, size, ktx1, sizeof ktx1)) return IBL_FILE_KTX1;
+    if (starts_with(b, size, png, sizeof png)) return IBL_FILE_PNG;
+    if (starts_with(b, size, exr, sizeof exr)) return IBL_FILE_EXR;
+    if (starts_with(b, size, jpeg, sizeof jpeg)) return IBL_FILE_JPEG;
+    if (starts_with(b, size, "DDS ", 4)) return IBL_FILE_DDS;
+    /* Radiance files start with "#?" and the program name ("#?RADIANCE", "#?RGBE"). */
+    if (starts_with(b, size, "#?", 2)) return IBL_FILE_HDR;
+    /* PFM: "PF" (colour) or "Pf" (grey) followed by white space. */
+    if (size >= 3 && b[0] == 'P' && (b[1] == 'F' || b[1] == 'f') &&
+        (b[2] == '\n' || b[2] == '\r' || b[2] == ' ' || b[2] == '\t'))
+        return IBL_FILE_PFM;
+    return IBL_FILE_UNKNOWN;
+}
+
+int ibl_file_type_is_container(ibl_file_type type)
+{
+    return type == IBL_FILE_KTX2 || type == IBL_FILE_KTX1 || type == IBL_FILE_DDS;
+}
+
+/* ---- whole-file read ----------------------------------------------------------------- */
+
+ibl_status ibl__fail_named(ibl_context *ctx, ibl_status status, const char *name)
+{
+    char saved[400];
+    const char *m = ibl_context_message(ctx);
+    snprintf(saved, sizeof saved, "%s", m && m[0] ? m : ibl_status_name(status));
+    return ibl_fail(ctx, status, "%s: %s", name, saved);
+}
+
+static ibl_status read_all(ibl_context *ctx, int fd, const char *path, uint8_t *dst, size_t size,
+                           size_t *got)
+{
+    size_t done = 0;
+    while (done < size) {
+        ssize_t n = read(fd, dst + done, size - done);
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot read: %s", path, strerror(errno));
+        }
+        if (n == 0) break;
+        done += (size_t)n;
+    }
+    *got = done;
+    return IBL_OK;
+}
+
+ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_t *size)
+{
+    if (!path || !bytes || !size)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_file: missing argument");
+    *bytes = NULL;
+    *size = 0;
+    int fd;
+    do fd = open(path, O_RDONLY | O_CLOEXEC);
+    while (fd < 0 && errno == EINTR);
+    if (fd < 0) return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    struct stat st;
+    if (fstat(fd, &st) != 0) {
+        int e = errno;
+        close(fd);
+        return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(e));
+    }
+    if (S_ISDIR(st.st_mode)) {
+        close(fd);
+        return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(EISDIR));
+    }
+    ibl_status s = IBL_OK;
+    uint8_t *buf = NULL;
+    size_t used = 0;
+    if (S_ISREG(st.st_mode)) {
+        /* The size is known: one allocation, which the context's memory limit may refuse. */
+        if ((uint64_t)st.st_size > (uint64_t)SIZE_MAX) {
+            close(fd);
+            return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: file too large", path);
+        }
+        size_t want = (size_t)st.st_size;
+        buf = ibl_alloc(ctx, want ? want : 1);
+        if (!buf) {
+            s = ibl__fail_named(ctx, ibl_context_status(ctx), path);
+            close(fd);
+            return s;
+        }
+        s = read_all(ctx, fd, path, buf, want, &used);
+        if (s == IBL_OK && used != want)
+            s = ibl_fail(ctx, IBL_ERR_IO, "%s: file shrank while being read", path);
+    } else {
+        /* Pipes and devices: grow geometrically; the memory limit bounds the total. */
+        size_t cap = 0;
+        for (;;) {
+            if (used == cap) {
+                size_t ncap = cap ? cap * 2 : 65536;
+                if (ncap < cap) {
+                    s = ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: file too large", path);
+                    break;
+                }
+                uint8_t *grown = ibl_alloc(ctx, ncap);
+                if (!grown) {
+                    s = ibl__fail_named(ctx, ibl_context_status(ctx), path);
+                    break;
+                }
+                if (used) memcpy(grown, buf, used);
+                ibl_free(ctx, buf);
+                buf = grown;
+                cap = ncap;
+            }
+            size_t got = 0;
+            s = read_all(ctx, fd, path, buf + used, cap - used, &got);
+            if (s != IBL_OK) break;
+            used += got;
+            if (used < cap) break; /* end of stream */
+        }
+    }
+    close(fd);
+    if (s != IBL_OK) {
+        ibl_free(ctx, buf);
+        return s;
+    }
+    *bytes = buf;
+    *size = used;
+    return IBL_OK;
+}
+
+/* ---- atomic write -------------------------------------------------------------------- */
+
+static ibl_status write_fd_all(int fd, const uint8_t *p, size_t n, int *err)
+{
+    while (n > 0) {
+        size_t chunk = n > ((size_t)1 << 30) ? ((size_t)1 << 30) : n;
+        ssize_t w = write(fd, p, chunk);
+        if (w < 0) {
+            if (errno == EINTR) continue;
+            *err = errno;
+            return IBL_ERR_IO;
+        }
+        if (w == 0) {
+            *err = EIO;
+            return IBL_ERR_IO;
+        }
+        p += w;
+        n -= (size_t)w;
+    }
+    return IBL_OK;
+}
+
+ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void *bytes,
+                                 size_t size)
+{
+    if (!path || !path[0] || (!bytes && size))
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_file_atomic: missing argument");
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    if (!base[0]) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: not a file name", path);
+    size_t dir_len = slash ? (size_t)(slash - path) + 1 : 0;
+    /* "<dir>/.<base>.tmp-XXXXXX": same folder, so rename() stays on one file system. */
+    size_t tmp_len = dir_len + 1 + strlen(base) + 12;
+    char *tmp = ibl_alloc(ctx, tmp_len);
+    if (!tmp) return ibl__fail_named(ctx, ibl_context_status(ctx), path);
+    memcpy(tmp, path, dir_len);
+    snprintf(tmp + dir_len, tmp_len - dir_len, ".%s.tmp-XXXXXX", base);
+
+    int fd = mkstemp(tmp);
+    if (fd < 0) {
+        int e = errno;
+        ibl_free(ctx, tmp);
+        return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot create a temporary file next to it: %s", path,
+                        strerror(e));
+    }
+    /* mkstemp makes the file 0600; an output should look like any other: keep the mode of
+     * the file being replaced, or use rw-r--r-- for a new one. */
+    struct stat st;
+    mode_t mode = 0644;
+    if (stat(path, &st) == 0 && S_ISREG(st.st_mode)) mode = st.st_mode & 07777;
+    int err = 0;
+    const char *what = "write";
+    ibl_status s = write_fd_all(fd, bytes, size, &err);
+    if (s == IBL_OK && fchmod(fd, mode) != 0) {
+        s = IBL_ERR_IO;
+        err = errno;
+        what = "set the mode of";
+    }
+    if (s == IBL_OK && fsync(fd) != 0) {
+        s = IBL_ERR_IO;
+        err = errno;
+        what = "flush";
+    }
+    if (close(fd) != 0 && s == IBL_OK) {
+        s = IBL_ERR_IO;
+        err = errno;
+        what = "close";
+    }
+    /* last chance to cancel (Ctrl-C in the CLI): the target is still untouched */
+    if (s == IBL_OK && ibl_progress(ctx, "write", 1.0) == IBL_ERR_CANCELLED) {
+        unlink(tmp);
+        ibl_free(ctx, tmp);
+        return ibl_fail(ctx, IBL_ERR_CANCELLED, "%s: cancelled; nothing written", path);
+    }
+    if (s == IBL_OK && rename(tmp, path) != 0) {
+        s = IBL_ERR_IO;
+        err = errno;
+        what = "replace";
+    }
+    if (s != IBL_OK) {
+        unlink(tmp);
+        ibl_free(ctx, tmp);
+        return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot %s: %s", path, what, strerror(err));
+    }
+    ibl_free(ctx, tmp);
+    /* Make the rename itself durable (best effort: some file systems refuse fsync on a dir). */
+    char dir[4096];
+    if (dir_len == 0) snprintf(dir, sizeof dir, ".");
+    else if (dir_len < sizeof dir) snprintf(dir, sizeof dir, "%.*s", (int)dir_len, path);
+    else dir[0] = 0;
+    if (dir[0]) {
+        int dfd = open(dir, O_RDONLY | O_CLOEXEC);
+        if (dfd >= 0) {
+            (void)fsync(dfd);
+            close(dfd);
+        }
+    }
+    return IBL_OK;
+}
+
+/* ---- reading: dispatch and pixel policy ---------------------------------------------- */
+
+ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, const char *name,
+                              const ibl_read_desc *desc, ibl_texture *out, ibl_file_info *info)
+{
+    if (!name) name = "<memory>";
+    if (!out || (!bytes && size))
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: missing argument", name);
+    memset(out, 0, sizeof *out);
+    ibl_read_desc rd;
+    memset(&rd, 0, sizeof rd);
+    if (desc) rd = *desc;
+    ibl_file_info fi;
+    memset(&fi, 0, sizeof fi);
+    const uint8_t *b = bytes;
+    fi.type = ibl_file_type_sniff(b, size);
+    ibl_status s;
+    switch (fi.type) {
+    case IBL_FILE_HDR: s = ibl__hdr_decode(ctx, b, size, name, out, &fi); break;
+    case IBL_FILE_EXR: s = ibl__exr_decode(ctx, b, size, name, out, &fi); break;
+    case IBL_FILE_PFM: s = ibl__pfm_decode(ctx, b, size, name, out, &fi); break;
+    case IBL_FILE_PNG:
+    case IBL_FILE_JPEG: s = ibl__stb_decode(ctx, b, size, name, out, &fi); break;
+    case IBL_FILE_KTX2: s = ibl__ktx2_decode(ctx, b, size, name, out, &fi); break;
+    case IBL_FILE_KTX1: s = ibl__ktx1_decode(ctx, b, size, name, out, &fi); break;
+    case IBL_FILE_DDS: s = ibl__dds_decode(ctx, b, size, name, out, &fi); break;
+    default:
+        return ibl_fail(ctx, IBL_ERR_FORMAT,
+                        "%s: not a supported image file (%s; expected Radiance HDR, OpenEXR, "
+                        "PFM, PNG, JPEG, KTX2, KTX or DDS)",
+                        name, size < 4 ? "too short to identify" : "unknown magic bytes");
+    }
+    if (s != IBL_OK) {
+        ibl_texture_free(ctx, out);
+        return s;
+    }
+    fi.type = ibl_file_type_sniff(b, size);
+    fi.kind = out->kind;
+    fi.width = out->width;
+    fi.height = out->height;
+    fi.depth = out->depth;
+    fi.levels = out->levels;
+    if (fi.format == IBL_FORMAT_DEFAULT) fi.format = out->format;
+    if (out->format == IBL_FORMAT_DEFAULT) out->format = fi.format;
+    size_t texels = ibl_texture_floats(out->kind, out->width, out->height, out->depth, out->levels) / 4;
+    s = ibl_sanitize_pixels(ctx, out->data, texels, rd.clamp_infinite, rd.clamp_value, &fi.pixels);
+    if (info) *info = fi;
+    if (s != IBL_OK) {
+        ibl_texture_free(ctx, out);
+        return ibl__fail_named(ctx, s, name);
+    }
+    return IBL_OK;
+}
+
+ibl_status ibl_read_texture(ibl_context *ctx, const char *path, const ibl_read_desc *desc,
+                            ibl_texture *out, ibl_file_info *info)
+{
+    if (!out || !path)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_texture: missing argument");
+    memset(out, 0, sizeof *out);
+    void *bytes = NULL;
+    size_t size = 0;
+    ibl_status s = ibl_read_file(ctx, path, &bytes, &size);
+    if (s != IBL_OK) return s;
+    s = ibl_decode_texture(ctx, bytes, size, path, desc, out, info);
+    ibl_free(ctx, bytes);
+    return s;
+}
+
+ibl_status ibl_read_image(ibl_context *ctx, const char *path, const ibl_read_desc *desc,
+                          ibl_image *out, ibl_file_info *info)
+{
+    if (!out || !path)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_image: missing argument");
+    memset(out, 0, sizeof *out);
+    ibl_texture tex;
+    ibl_status s = ibl_read_texture(ctx, path, desc, &tex, info);
+    if (s != IBL_OK) return s;
+    if (tex.kind != IBL_TEXTURE_2D) {
+        ibl_texture_free(ctx, &tex);
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: holds a %s texture, not a flat image",
+                        path, tex.kind == IBL_TEXTURE_CUBE ? "cube" : "3D");
+    }
+    if (tex.levels == 1 && tex.owns_data) {
+        /* Level 0 is the whole block: hand it over without a copy. */
+        out->width = tex.width;
+        out->height = tex.height;
+        out->pixels = tex.data;
+        tex.owns_data = 0;
+    } else {
+        s = ibl_image_alloc(ctx, tex.width, tex.height, out);
+        if (s != IBL_OK) {
+            ibl_texture_free(ctx, &tex);
+            return ibl__fail_named(ctx, s, path);
+        }
+        memcpy(out->pixels, tex.data, (size_t)tex.width * (size_t)tex.height * 4 * sizeof(float));
+    }
+    ibl_texture_free(ctx, &tex);
+    return IBL_OK;
+}
+
+/* ---- writing ------------------------------------------------------------------------- */
+
+static ibl_status check_image(ibl_context *ctx, const char *name, const ibl_image *image)
+{
+    if (!image || !image->pixels || image->width <= 0 || image->height <= 0)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: empty image", name);
+    return IBL_OK;
+}
+
+/* A non-owning one-level 2D texture view of an image. */
+static ibl_texture texture_view(const ibl_image *image, const ibl_write_desc *desc)
+{
+    ibl_texture t;
+    memset(&t, 0, sizeof t);
+    t.kind = IBL_TEXTURE_2D;
+    t.width = image->width;
+    t.height = image->height;
+    t.depth = 1;
+    t.levels = 1;
+    t.format = desc ? desc->format : IBL_FORMAT_DEFAULT;
+    t.data = image->pixels;
+    return t;
+}
+
+static ibl_status encode_flat(ibl_context *ctx, ibl_file_type type, const ibl_image *image,
+                              const ibl_write_desc *desc, const char *name, void **bytes,
+                              size_t *size)
+{
+    switch (type) {
+    case IBL_FILE_HDR: return ibl__hdr_encode(ctx, image, desc, name, bytes, size);
+    case IBL_FILE_EXR: return ibl__exr_encode(ctx, image, desc, name, bytes, size);
+    case IBL_FILE_PFM: return ibl__pfm_encode(ctx, image, desc, name, bytes, size);
+    case IBL_FILE_PNG: return ibl__png_encode(ctx, image, desc, name, bytes, size);
+    case IBL_FILE_JPEG: return ibl__jpeg_encode(ctx, image, desc, name, bytes, size);
+    default: break;
+    }
+    return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: not a flat image type", name);
+}
+
+static ibl_status encode_container(ibl_context *ctx, ibl_file_type type, const ibl_texture *tex,
+                                   const ibl_write_desc *desc, const char *name, void **bytes,
+                                   size_t *size)
+{
+    switch (type) {
+    case IBL_FILE_KTX2: return ibl__ktx2_encode(ctx, tex, desc, name, bytes, size);
+    case IBL_FILE_KTX1: return ibl__ktx1_encode(ctx, tex, desc, name, bytes, size);
+    case IBL_FILE_DDS: return ibl__dds_encode(ctx, tex, desc, name, bytes, size);
+    default: break;
+    }
+    return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: not a texture container type", name);
+}
+
+static ibl_status unknown_extension(ibl_context *ctx, const char *path)
+{
+    return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                    "%s: unknown output extension (use .hdr .exr .pfm .png .jpg .ktx2 .ktx .dds)",
+                    path);
+}
+
+static ibl_status write_encoded(ibl_context *ctx, const char *path, ibl_status s, void *bytes,
+                                size_t size)
+{
+    if (s == IBL_OK) s = ibl_write_file_atomic(ctx, path, bytes, size);
+    ibl_free(ctx, bytes);
+    return s;
+}
+
+ibl_status ibl_write_image(ibl_context *ctx, const char *path, const ibl_image *image,
+                           const ibl_write_desc *desc)
+{
+    if (!path) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_image: missing path");
+    ibl_status s = check_image(ctx, path, image);
+    if (s != IBL_OK) return s;
+    ibl_write_desc wd;
+    memset(&wd, 0, sizeof wd);
+    if (desc) wd = *desc;
+    ibl_file_type type = ibl_file_type_from_path(path);
+    if (type == IBL_FILE_UNKNOWN) return unknown_extension(ctx, path);
+    void *bytes = NULL;
+    size_t size = 0;
+    if (ibl_file_type_is_container(type)) {
+        ibl_texture view = texture_view(image, &wd);
+        s = encode_container(ctx, type, &view, &wd, path, &bytes, &size);
+    } else {
+        s = encode_flat(ctx, type, image, &wd, path, &bytes, &size);
+    }
+    return write_encoded(ctx, path, s, bytes, size);
+}
+
+ibl_status ibl_encode_texture(ibl_context *ctx, ibl_file_type type, const ibl_texture *texture,
+                              const ibl_write_desc *desc, void **bytes, size_t *size)
+{
+    if (!texture || !texture->data || !bytes || !size)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_encode_texture: missing argument");
+    *bytes = NULL;
+    *size = 0;
+    ibl_write_desc wd;
+    memset(&wd, 0, sizeof wd);
+    if (desc) wd = *desc;
+    const char *name = ibl_file_type_name(type);
+    if (ibl_file_type_is_container(type))
+        return encode_container(ctx, type, texture, &wd, name, bytes, size);
+    if (type == IBL_FILE_UNKNOWN)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_encode_texture: unknown file type");
+    /* A flat format holds one 2D image: accept exactly that, never drop levels silently. */
+    if (texture->kind != IBL_TEXTURE_2D || texture->levels != 1)
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+                        "%s: holds one flat image; write cubes, 3D textures and mips to "
+                        ".ktx2, .ktx or .dds",
+                        name);
+    ibl_image view = {texture->width, texture->height, texture->data};
+    return encode_flat(ctx, type, &view, &wd, name, bytes, size);
+}
+
+ibl_status ibl_write_texture(ibl_context *ctx, const char *path, const ibl_texture *texture,
+                             const ibl_write_desc *desc)
+{
+    if (!path) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_texture: missing path");
+    if (!texture || !texture->data)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: empty texture", path);
+    ibl_file_type type = ibl_file_type_from_path(path);
+    if (type == IBL_FILE_UNKNOWN) return unknown_extension(ctx, path);
+    ibl_write_desc wd;
+    memset(&wd, 0, sizeof wd);
+    if (desc) wd = *desc;
+    void *bytes = NULL;
+    size_t size = 0;
+    ibl_status s;
+    if (ibl_file_type_is_container(type)) {
+        s = encode_container(ctx, type, texture, &wd, path, &bytes, &size);
+    } else if (texture->kind != IBL_TEXTURE_2D || texture->levels != 1) {
+        s = ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+                     "%s: .%s holds one flat image; write cubes, 3D textures and mips to "
+                     ".ktx2, .ktx or .dds",
+                     path, ibl_file_type_name(type));
+    } else {
+        ibl_image view = {texture->width, texture->height, texture->data};
+        s = encode_flat(ctx, type, &view, &wd, path, &bytes, &size);
+    }
+    return write_encoded(ctx, path, s, bytes, size);
+}
+
+/* ---- tone mapping -------------------------------------------------------------------- */
+
+float ibl_tonemap_apply(ibl_tonemap tonemap, float linear)
+{
+    float x = linear;
+    if (!(x > 0.0f)) return 0.0f; /* negatives and NaN */
+    if (tonemap == IBL_TONEMAP_NONE) return x < 1.0f ? x : 1.0f;
+    /* Narkowicz, "ACES Filmic Tone Mapping Curve" (2016): a rational fit of the ACES
+     * RRT+ODT, pre-exposed so that 1.0 maps to about 0.8. It reaches 1 at x = 7.24, so larger
+     * inputs (and those whose square would overflow) map straight to white. */
+    if (x >= 8.0f) return 1.0f;
+    float y = (x * (2.51f * x + 0.03f)) / (x * (2.43f * x + 0.59f) + 0.14f);
+    return y < 1.0f ? y : 1.0f;
+}

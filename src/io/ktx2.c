@@ -1,0 +1,446 @@
+/* KTX 2.0 read and write (Khronos KTX File Format Specification 2.0; the Data Format
+ * Descriptor from the Khronos Data Format Specification 1.3, "Khronos Basic Data Format
+ * Descriptor Block"). Uncompressed 2D, 3D and cube textures with full or partial mip chains,
+ * no arrays and no supercompression. Layout of what we write:
+ *   identifier, header, index, level index (levels[0] = base level), DFD (one basic block),
+ *   key/value data (sorted by key), then the level images from the smallest level to the
+ *   base level, each aligned to lcm(texel block size, 4) from the start of the file. */
+#include <string.h>
+
+#include "core/pixel_format.h"
+#include "io/container.h"
+
+static const uint8_t KTX2_IDENTIFIER[12] = {0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32,
+                                            0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A};
+
+enum {
+    HEADER_BYTES = 80, /* identifier 12 + 9 UInt32 + index (4 UInt32 + 2 UInt64) */
+    LEVEL_ENTRY_BYTES = 24,
+    /* VkFormat values (Vulkan 1.3 core, vulkan_core.h) */
+    VK_R16G16_SFLOAT = 83,
+    VK_R16G16B16A16_SFLOAT = 97,
+    VK_R32G32_SFLOAT = 103,
+    VK_R32G32B32A32_SFLOAT = 109,
+    VK_B10G11R11_UFLOAT_PACK32 = 122,
+    VK_E5B9G9R9_UFLOAT_PACK32 = 123,
+    /* Khronos Data Format Specification enumerants */
+    KHR_DF_MODEL_RGBSDA = 1,
+    KHR_DF_PRIMARIES_BT709 = 1,
+    KHR_DF_TRANSFER_LINEAR = 1,
+    KHR_DF_VERSION_1_3 = 2,
+    KHR_DF_CHANNEL_R = 0,
+    KHR_DF_CHANNEL_G = 1,
+    KHR_DF_CHANNEL_B = 2,
+    KHR_DF_CHANNEL_A = 15,
+    KHR_DF_EXPONENT = 0x20, /* qualifier bits in the channelType byte */
+    KHR_DF_SIGNED = 0x40,
+    KHR_DF_FLOAT = 0x80
+};
+
+typedef struct vk_map {
+    ibl_format format;
+    uint32_t vk;
+    uint32_t type_size; /* the spec's typeSize: component bytes, or xx/8 for _PACKxx */
+} vk_map;
+
+static const vk_map VK_FORMATS[] = {
+    {IBL_FORMAT_RGBA16F, VK_R16G16B16A16_SFLOAT, 2}, {IBL_FORMAT_RGBA32F, VK_R32G32B32A32_SFLOAT, 4},
+    {IBL_FORMAT_RG11B10F, VK_B10G11R11_UFLOAT_PACK32, 4},
+    {IBL_FORMAT_RGB9E5, VK_E5B9G9R9_UFLOAT_PACK32, 4}, {IBL_FORMAT_RG16F, VK_R16G16_SFLOAT, 2},
+    {IBL_FORMAT_RG32F, VK_R32G32_SFLOAT, 4},
+};
+
+static const vk_map *map_format(ibl_format f)
+{
+    for (size_t i = 0; i < sizeof VK_FORMATS / sizeof VK_FORMATS[0]; i++)
+        if (VK_FORMATS[i].format == f) return &VK_FORMATS[i];
+    return NULL;
+}
+
+static const vk_map *map_vk(uint32_t vk)
+{
+    for (size_t i = 0; i < sizeof VK_FORMATS / sizeof VK_FORMATS[0]; i++)
+        if (VK_FORMATS[i].vk == vk) return &VK_FORMATS[i];
+    return NULL;
+}
+
+/* ---- Data Format Descriptor ---- */
+
+typedef struct dfd_sample {
+    uint16_t bit_offset;
+    uint8_t bit_length; /* the real length; stored minus one */
+    uint8_t channel_type; /* channel id | qualifier bits */
+    uint32_t lower, upper;
+} dfd_sample;
+
+/* IEEE bit patterns of -1.0f, 0.0f and 1.0f: the float samples' sampleLower/sampleUpper. */
+enum { F32_MINUS_ONE = 0xBF800000u, F32_ZERO = 0u, F32_ONE = 0x3F800000u };
+
+static int dfd_samples(ibl_format f, dfd_sample s[6])
+{
+    static const uint8_t rgba[4] = {KHR_DF_CHANNEL_R, KHR_DF_CHANNEL_G, KHR_DF_CHANNEL_B,
+                                    KHR_DF_CHANNEL_A};
+    switch (f) {
+    case IBL_FORMAT_RGBA16F:
+    case IBL_FORMAT_RGBA32F:
+    case IBL_FORMAT_RG16F:
+    case IBL_FORMAT_RG32F: {
+        /* Signed floats: one sample per channel, FLOAT|SIGNED, range -1..1 as floats. */
+        int n = ibl_format_channels(f);
+        int bits = (f == IBL_FORMAT_RGBA16F || f == IBL_FORMAT_RG16F) ? 16 : 32;
+        for (int i = 0; i < n; i++) {
+            s[i].bit_offset = (uint16_t)(i * bits);
+            s[i].bit_length = (uint8_t)bits;
+            s[i].channel_type = (uint8_t)(rgba[i] | KHR_DF_FLOAT | KHR_DF_SIGNED);
+            s[i].lower = F32_MINUS_ONE;
+            s[i].upper = F32_ONE;
+        }
+        return n;
+    }
+    case IBL_FORMAT_RG11B10F: {
+        /* Unsigned floats: R in bits 0-10, G 11-21, B 22-31; FLOAT without SIGNED, 0..1. */
+        static const uint8_t off[3] = {0, 11, 22}, len[3] = {11, 11, 10};
+        for (int i = 0; i < 3; i++) {
+            s[i].bit_offset = off[i];
+            s[i].bit_length = len[i];
+            s[i].channel_type = (uint8_t)(rgba[i] | KHR_DF_FLOAT);
+            s[i].lower = F32_ZERO;
+            s[i].upper = F32_ONE;
+        }
+        return 3;
+    }
+    case IBL_FORMAT_RGB9E5:
+        /* The Data Format specification's shared-exponent example: per channel a 9-bit
+         * mantissa sample (lower 0, upper 8448) and an EXPONENT sample for the shared bits
+         * 27-31 (lower = the bias 15, upper = the largest exponent 31). */
+        for (int i = 0; i < 3; i++) {
+            s[2 * i].bit_offset = (uint16_t)(9 * i);
+            s[2 * i].bit_length = 9;
+            s[2 * i].channel_type = rgba[i];
+            s[2 * i].lower = 0;
+            s[2 * i].upper = 8448;
+            s[2 * i + 1].bit_offset = 27;
+            s[2 * i + 1].bit_length = 5;
+            s[2 * i + 1].channel_type = (uint8_t)(rgba[i] | KHR_DF_EXPONENT);
+            s[2 * i + 1].lower = 15;
+            s[2 * i + 1].upper = 31;
+        }
+        return 6;
+    default: return 0;
+    }
+}
+
+/* Writes dfdTotalSize and one basic descriptor block; returns the bytes written. */
+static size_t write_dfd(ibl_format f, uint8_t *out)
+{
+    dfd_sample s[6];
+    int n = dfd_samples(f, s);
+    size_t block = 24 + 16 * (size_t)n;
+    ibl__wr32(out, (uint32_t)(4 + block));
+    uint8_t *b = out + 4;
+    ibl__wr32(b + 0, 0); /* vendorId 0 (Khronos), descriptorType 0 (basic) */
+    ibl__wr32(b + 4, (uint32_t)KHR_DF_VERSION_1_3 | ((uint32_t)block << 16));
+    b[8] = KHR_DF_MODEL_RGBSDA;
+    b[9] = KHR_DF_PRIMARIES_BT709;
+    b[10] = KHR_DF_TRANSFER_LINEAR;
+    b[11] = 0;                          /* flags: KHR_DF_FLAG_ALPHA_STRAIGHT */
+    memset(b + 12, 0, 12);              /* texelBlockDimension0-3 = 0 (1x1x1x1), bytesPlane */
+    b[16] = (uint8_t)ibl_format_texel_bytes(f); /* bytesPlane0; planes 1-7 stay 0 */
+    for (int i = 0; i < n; i++) {
+        uint8_t *p = b + 24 + 16 * (size_t)i;
+        ibl__wr32(p, (uint32_t)s[i].bit_offset | ((uint32_t)(s[i].bit_length - 1) << 16) |
+                         ((uint32_t)s[i].channel_type << 24));
+        ibl__wr32(p + 4, 0); /* samplePosition0-3 */
+        ibl__wr32(p + 8, s[i].lower);
+        ibl__wr32(p + 12, s[i].upper);
+    }
+    return 4 + block;
+}
+
+static size_t lcm4(size_t texel)
+{
+    size_t a = texel, b = 4;
+    while (b) {
+        size_t t = a % b;
+        a = b;
+        b = t;
+    }
+    return texel / a * 4;
+}
+
+ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_write_desc *desc,
+                            const char *name, void **bytes, size_t *size)
+{
+    if (!name) name = "<ktx2>";
+    if (!bytes || !size) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output", name);
+    *bytes = NULL;
+    *size = 0;
+    ibl_status st = ibl__check_texture(ctx, tex, name);
+    if (st != IBL_OK) return st;
+    ibl_format fmt = ibl__container_format(tex, desc);
+    const vk_map *vk = map_format(fmt);
+    if (!vk)
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+                        "%s: KTX2 output does not support pixel format %s (use rgba16f, rgba32f, "
+                        "rg11b10f, rgb9e5, rg16f or rg32f)",
+                        name, ibl_format_name(fmt));
+    size_t texel = ibl_format_texel_bytes(fmt);
+    size_t align = lcm4(texel);
+    int faces = ibl_texture_faces(tex);
+
+    ibl_key_value fixed[2] = {
+        {(char *)"KTXorientation", (char *)(tex->kind == IBL_TEXTURE_3D ? "rdi" : "rd")},
+        {(char *)"KTXwriter", (char *)("ibl " IBL_VERSION_STRING)},
+    };
+    uint8_t *kvd = NULL;
+    size_t kvd_len = 0;
+    st = ibl__kv_build(ctx, name, fixed, 2, tex, &kvd, &kvd_len);
+    if (st != IBL_OK) return st;
+
+    size_t level_len[IBL_MAX_LEVELS], level_off[IBL_MAX_LEVELS];
+    size_t dfd_off = HEADER_BYTES + LEVEL_ENTRY_BYTES * (size_t)tex->levels;
+    uint8_t dfd[4 + 24 + 16 * 6];
+    size_t dfd_len = write_dfd(fmt, dfd);
+    size_t kvd_off = dfd_off + dfd_len;
+    size_t at = kvd_off + kvd_len;
+    /* ibl__check_texture bounded every edge by IBL_MAX_DIMENSION: no 64-bit overflow. */
+    uint64_t total = at;
+    for (int l = tex->levels - 1; l >= 0; l--) {
+        uint64_t n = ibl__level_texels(tex->kind, tex->width, tex->height, tex->depth, l) *
+                     (uint64_t)faces * texel;
+        total = (total + align - 1) / align * align;
+        if (n > SIZE_MAX || total > SIZE_MAX - n) {
+            ibl_free(ctx, kvd);
+            return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
+        }
+        level_off[l] = (size_t)total;
+        level_len[l] = (size_t)n;
+        total += n;
+    }
+    uint8_t *buf = ibl_calloc(ctx, (size_t)total, 1);
+    if (!buf) {
+        ibl_free(ctx, kvd);
+        return ibl__fail_named(ctx, ibl_context_status(ctx), name);
+    }
+    memcpy(buf, KTX2_IDENTIFIER, 12);
+    ibl__wr32(buf + 12, vk->vk);
+    ibl__wr32(buf + 16, vk->type_size);
+    ibl__wr32(buf + 20, (uint32_t)tex->width);
+    ibl__wr32(buf + 24, (uint32_t)tex->height);
+    ibl__wr32(buf + 28, tex->kind == IBL_TEXTURE_3D ? (uint32_t)tex->depth : 0);
+    ibl__wr32(buf + 32, 0); /* layerCount: not an array */
+    ibl__wr32(buf + 36, (uint32_t)faces);
+    ibl__wr32(buf + 40, (uint32_t)tex->levels);
+    ibl__wr32(buf + 44, 0); /* supercompressionScheme: none */
+    ibl__wr32(buf + 48, (uint32_t)dfd_off);
+    ibl__wr32(buf + 52, (uint32_t)dfd_len);
+    ibl__wr32(buf + 56, kvd_len ? (uint32_t)kvd_off : 0);
+    ibl__wr32(buf + 60, (uint32_t)kvd_len);
+    ibl__wr64(buf + 64, 0); /* sgdByteOffset */
+    ibl__wr64(buf + 72, 0); /* sgdByteLength */
+    for (int l = 0; l < tex->levels; l++) {
+        uint8_t *e = buf + HEADER_BYTES + LEVEL_ENTRY_BYTES * (size_t)l;
+        ibl__wr64(e, level_off[l]);
+        ibl__wr64(e + 8, level_len[l]);
+        ibl__wr64(e + 16, level_len[l]); /* uncompressedByteLength = byteLength (no scheme) */
+    }
+    memcpy(buf + dfd_off, dfd, dfd_len);
+    if (kvd_len) memcpy(buf + kvd_off, kvd, kvd_len);
+    ibl_free(ctx, kvd);
+    /* A level's images are layer, face, slice, row: exactly our in-memory level block. */
+    for (int l = 0; l < tex->levels; l++)
+        ibl__pack(ctx, fmt, ibl_texture_level(tex, l, 0), level_len[l] / texel, buf + level_off[l]);
+    *bytes = buf;
+    *size = (size_t)total;
+    return IBL_OK;
+}
+
+/* ---- reading ---- */
+
+/* Is [offset, offset + length) inside a file of `size` bytes? (overflow-safe) */
+static int in_file(uint64_t offset, uint64_t length, size_t size)
+{
+    return offset <= (uint64_t)size && length <= (uint64_t)size - offset;
+}
+
+static ibl_status check_dfd(ibl_context *ctx, const char *name, const uint8_t *dfd, uint32_t len,
+                            ibl_format fmt)
+{
+    if (len < 4 + 24)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: data format descriptor of %u bytes is too short",
+                        name, len);
+    if (ibl__rd32(dfd) != len)
+        return ibl_fail(ctx, IBL_ERR_FORMAT,
+                        "%s: dfdTotalSize %u differs from dfdByteLength %u", name, ibl__rd32(dfd),
+                        len);
+    const uint8_t *b = dfd + 4;
+    uint32_t w0 = ibl__rd32(b), block = ibl__rd32(b + 4) >> 16;
+    if ((w0 & 0x1ffffu) != 0 || (w0 >> 17) != 0)
+        return ibl_fail(ctx, IBL_ERR_FORMAT,
+                        "%s: the first descriptor block is not a Khronos basic descriptor block",
+                        name);
+    if (block < 24 || block > len - 4 || (block - 24) % 16 != 0)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: descriptor block size %u is inconsistent", name,
+                        block);
+    if (b[12] | b[13] | b[14] | b[15])
+        return ibl_fail(ctx, IBL_ERR_FORMAT,
+                        "%s: texel block dimensions in the descriptor are not 1x1x1x1", name);
+    if ((size_t)b[16] != ibl_format_texel_bytes(fmt))
+        return ibl_fail(ctx, IBL_ERR_FORMAT,
+                        "%s: descriptor says %u bytes per texel, the vkFormat has %zu", name, b[16],
+                        ibl_format_texel_bytes(fmt));
+    return IBL_OK;
+}
+
+/* Parses KTXorientation ("rd", "ru", "ld", "rdi", ...) into flips to our layout (rows top
+ * first, columns left first, slices in increasing R "into the screen"). */
+static ibl_status orientation(ibl_context *ctx, const char *name, const ibl_texture *tex,
+                              int one_d, int flips[3])
+{
+    flips[0] = flips[1] = flips[2] = 0;
+    const char *o = ibl_texture_get_metadata(tex, "KTXorientation");
+    if (!o) return IBL_OK;
+    size_t want = one_d ? 1 : tex->kind == IBL_TEXTURE_3D ? 3 : 2;
+    int ok = strlen(o) == want && (o[0] == 'r' || o[0] == 'l');
+    if (ok && want >= 2) ok = o[1] == 'd' || o[1] == 'u';
+    if (ok && want == 3) ok = o[2] == 'i' || o[2] == 'o';
+    if (!ok)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: invalid KTXorientation \"%s\" for this texture",
+                        name, o);
+    if (tex->kind == IBL_TEXTURE_CUBE && strcmp(o, "rd") != 0)
+        return ibl_fail(ctx, IBL_ERR_FORMAT,
+                        "%s: cube map orientation must be \"rd\", the file says \"%s\"", name, o);
+    flips[0] = o[0] == 'l';
+    flips[1] = want >= 2 && o[1] == 'u';
+    flips[2] = want == 3 && o[2] == 'o';
+    return IBL_OK;
+}
+
+ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                            ibl_texture *out, ibl_file_info *info)
+{
+    if (!name) name = "<ktx2>";
+    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
+    memset(out, 0, sizeof *out);
+    if (!bytes && size) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
+    if (size < 12 || memcmp(bytes, KTX2_IDENTIFIER, 12) != 0)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: not a KTX 2.0 file (wrong identifier)", name);
+    if (size < HEADER_BYTES)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated KTX2 header (%zu of %d bytes)", name,
+                        size, HEADER_BYTES);
+    uint32_t vkformat = ibl__rd32(bytes + 12), type_size = ibl__rd32(bytes + 16);
+    uint32_t width = ibl__rd32(bytes + 20), height = ibl__rd32(bytes + 24);
+    uint32_t depth = ibl__rd32(bytes + 28), layers = ibl__rd32(bytes + 32);
+    uint32_t faces = ibl__rd32(bytes + 36), level_count = ibl__rd32(bytes + 40);
+    uint32_t scheme = ibl__rd32(bytes + 44);
+    uint32_t dfd_off = ibl__rd32(bytes + 48), dfd_len = ibl__rd32(bytes + 52);
+    uint32_t kvd_off = ibl__rd32(bytes + 56), kvd_len = ibl__rd32(bytes + 60);
+    uint64_t sgd_len = ibl__rd64(bytes + 72);
+
+    const vk_map *vk = map_vk(vkformat);
+    if (!vk)
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+                        "%s: unsupported vkFormat %u (supported: 97 R16G16B16A16_SFLOAT, 109 "
+                        "R32G32B32A32_SFLOAT, 122 B10G11R11_UFLOAT_PACK32, 123 "
+                        "E5B9G9R9_UFLOAT_PACK32, 83 R16G16_SFLOAT, 103 R32G32_SFLOAT)",
+                        name, vkformat);
+    if (type_size != vk->type_size)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: typeSize %u, the vkFormat requires %u", name,
+                        type_size, vk->type_size);
+    if (scheme != 0)
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+                        "%s: supercompression scheme %u is not supported (only uncompressed files)",
+                        name, scheme);
+    if (sgd_len != 0)
+        return ibl_fail(ctx, IBL_ERR_FORMAT,
+                        "%s: supercompression global data present without a scheme", name);
+    if (layers != 0)
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: array textures (%u layers) are not supported",
+                        name, layers);
+    if (faces != 1 && faces != 6)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: faceCount %u (must be 1 or 6)", name, faces);
+    if (width == 0) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: pixelWidth is 0", name);
+    ibl_texture_kind kind = IBL_TEXTURE_2D;
+    int one_d = height == 0;
+    if (faces == 6) {
+        if (depth != 0)
+            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: a cube map with pixelDepth %u", name, depth);
+        kind = IBL_TEXTURE_CUBE;
+    } else if (depth > 0) {
+        if (one_d)
+            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: pixelDepth %u with pixelHeight 0", name,
+                            depth);
+        kind = IBL_TEXTURE_3D;
+    }
+    uint64_t levels = level_count ? level_count : 1; /* 0: base level only */
+    ibl_status st = ibl__check_dimensions(ctx, name, kind, width, one_d ? 1 : height,
+                                          depth ? depth : 1, levels);
+    if (st != IBL_OK) return st;
+    int w = (int)width, h = one_d ? 1 : (int)height, d = depth ? (int)depth : 1;
+    if (size < HEADER_BYTES + LEVEL_ENTRY_BYTES * levels)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated level index", name);
+
+    if (!in_file(dfd_off, dfd_len, size))
+        return ibl_fail(ctx, IBL_ERR_FORMAT,
+                        "%s: data format descriptor (%u bytes at %u) lies outside the file", name,
+                        dfd_len, dfd_off);
+    st = check_dfd(ctx, name, bytes + dfd_off, dfd_len, vk->format);
+    if (st != IBL_OK) return st;
+    if (!in_file(kvd_off, kvd_len, size))
+        return ibl_fail(ctx, IBL_ERR_FORMAT,
+                        "%s: key/value data (%u bytes at %u) lies outside the file", name, kvd_len,
+                        kvd_off);
+    if (kvd_len && (uint64_t)kvd_off != (uint64_t)dfd_off + dfd_len)
+        return ibl_fail(ctx, IBL_ERR_FORMAT,
+                        "%s: dfdTotalSize %u differs from kvdByteOffset - dfdByteOffset", name,
+                        dfd_len);
+
+    size_t texel = ibl_format_texel_bytes(vk->format);
+    uint64_t level_bytes[IBL_MAX_LEVELS], level_offset[IBL_MAX_LEVELS];
+    for (uint64_t l = 0; l < levels; l++) {
+        const uint8_t *e = bytes + HEADER_BYTES + LEVEL_ENTRY_BYTES * l;
+        uint64_t off = ibl__rd64(e), len = ibl__rd64(e + 8), raw = ibl__rd64(e + 16);
+        /* at most 65536^3 texels * 6 faces * 16 bytes < 2^64 */
+        uint64_t expect = ibl__level_texels(kind, w, h, d, (int)l) * faces * texel;
+        if (len != expect || raw != expect)
+            return ibl_fail(ctx, IBL_ERR_FORMAT,
+                            "%s: level %llu holds %llu bytes (uncompressed %llu), its dimensions "
+                            "need %llu",
+                            name, (unsigned long long)l, (unsigned long long)len,
+                            (unsigned long long)raw, (unsigned long long)expect);
+        if (!in_file(off, len, size))
+            return ibl_fail(ctx, IBL_ERR_FORMAT,
+                            "%s: level %llu (%llu bytes at offset %llu) runs past the end of the "
+                            "file (%zu bytes)",
+                            name, (unsigned long long)l, (unsigned long long)len,
+                            (unsigned long long)off, size);
+        level_bytes[l] = len;
+        level_offset[l] = off;
+    }
+
+    st = ibl_texture_alloc(ctx, kind, w, h, d, (int)levels, out);
+    if (st != IBL_OK) return ibl__fail_named(ctx, st, name);
+    out->format = vk->format;
+    st = ibl__kv_parse(ctx, name, bytes + kvd_off, kvd_len, out);
+    int flips[3];
+    if (st == IBL_OK) st = orientation(ctx, name, out, one_d, flips);
+    if (st != IBL_OK) {
+        ibl_texture_free(ctx, out);
+        return st;
+    }
+    for (uint64_t l = 0; l < levels; l++)
+        ibl__unpack(ctx, vk->format, bytes + level_offset[l], (size_t)(level_bytes[l] / texel),
+                          ibl_texture_level(out, (int)l, 0));
+    ibl__flip_texture(out, flips[0], flips[1], flips[2]);
+    if (flips[0] || flips[1] || flips[2]) {
+        /* the texels now follow our layout; say so */
+        st = ibl_texture_set_metadata(ctx, out, "KTXorientation",
+                                      kind == IBL_TEXTURE_3D ? "rdi" : one_d ? "r" : "rd");
+        if (st != IBL_OK) {
+            ibl_texture_free(ctx, out);
+            return ibl__fail_named(ctx, st, name);
+        }
+    }
+    ibl__fill_info(info, IBL_FILE_KTX2, out);
+    return IBL_OK;
+}

@@ -1,0 +1,382 @@
+/* PNG and JPEG. Reading goes through the system stb_image (libstb, which already holds the
+ * implementation): 8-bit and 16-bit PNG, baseline and progressive JPEG. Writing PNG goes
+ * through libpng (stb_image_write cannot write 16-bit PNG), JPEG through stb_image_write.
+ *
+ * Transfer functions on read: JPEG is sRGB. A PNG with an sRGB chunk is sRGB; one with only
+ * a gAMA chunk uses that power law (gAMA 1.0 = linear, which is how the 16-bit tables are
+ * written); one with neither is sRGB. iCCP profiles are not interpreted. Alpha is linear.
+ * The sRGB curve is the exact piecewise function of IEC 61966-2-1. */
+#include "io/io_internal.h"
+
+#include <limits.h>
+#include <math.h>
+#include <png.h>
+#include <stb_image.h>
+#include <stb_image_write.h>
+#include <stdio.h>
+#include <string.h>
+
+/* IEC 61966-2-1 decoding (EOTF). */
+static double srgb_to_linear(double v)
+{
+    return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
+}
+
+static uint32_t be32(const uint8_t *p)
+{
+    return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | (uint32_t)p[3];
+}
+
+/* The PNG's declared encoding from the chunks before the image data: returns the decoding
+ * exponent for a gAMA-only file, or 0 for sRGB. */
+static double png_decoding_power(const uint8_t *b, size_t size)
+{
+    size_t pos = 8;
+    int has_srgb = 0;
+    uint32_t gama = 0;
+    while (size - pos >= 12) {
+        uint32_t len = be32(b + pos);
+        const uint8_t *type = b + pos + 4;
+        if (len > size - pos - 12) break;
+        if (memcmp(type, "IDAT", 4) == 0 || memcmp(type, "IEND", 4) == 0) break;
+        if (memcmp(type, "sRGB", 4) == 0) has_srgb = 1;
+        if (memcmp(type, "gAMA", 4) == 0 && len == 4) gama = be32(b + pos + 8);
+        pos += 12 + (size_t)len;
+    }
+    if (has_srgb || gama == 0) return 0.0;
+    /* gAMA stores the encoding exponent times 100000 (45455 for 1/2.2). */
+    return 100000.0 / (double)gama;
+}
+
+ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                           ibl_texture *out, ibl_file_info *info)
+{
+    int is_png = size >= 8 && bytes[0] == 0x89 && bytes[1] == 'P';
+    const char *kind = is_png ? "PNG" : "JPEG";
+    if (size > INT_MAX) return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: %s file too large", name, kind);
+    int w = 0, h = 0, comp = 0;
+    if (!stbi_info_from_memory(bytes, (int)size, &w, &h, &comp))
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: bad %s header (%s)", name, kind,
+                        stbi_failure_reason());
+    if (w <= 0 || h <= 0 || w > IBL_MAX_DIMENSION || h > IBL_MAX_DIMENSION)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: absurd %s image size %dx%d", name, kind, w, h);
+    int is16 = is_png && stbi_is_16_bit_from_memory(bytes, (int)size);
+    /* Allocate ours first: the memory limit refuses huge images before stb decodes them. */
+    ibl_status s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, w, h, 1, 1, out);
+    if (s != IBL_OK) return ibl__fail_named(ctx, s, name);
+    int lw = 0, lh = 0, lc = 0;
+    void *pix = is16 ? (void *)stbi_load_16_from_memory(bytes, (int)size, &lw, &lh, &lc, 4)
+                     : (void *)stbi_load_from_memory(bytes, (int)size, &lw, &lh, &lc, 4);
+    if (!pix || lw != w || lh != h) {
+        if (pix) stbi_image_free(pix);
+        ibl_texture_free(ctx, out);
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: corrupt %s data (%s)", name, kind,
+                        pix ? "size changed" : stbi_failure_reason());
+    }
+    double power = is_png ? png_decoding_power(bytes, size) : 0.0;
+    size_t texels = (size_t)w * (size_t)h;
+    if (is16) {
+        /* 65536-entry table: cheaper than a pow per channel beyond ~16k texels. */
+        float *lut = ibl_alloc(ctx, 65536 * sizeof(float));
+        if (!lut) {
+            stbi_image_free(pix);
+            ibl_texture_free(ctx, out);
+            return ibl__fail_named(ctx, IBL_ERR_OUT_OF_MEMORY, name);
+        }
+        for (int i = 0; i < 65536; i++) {
+            double v = i / 65535.0;
+            lut[i] = (float)(power == 0.0 ? srgb_to_linear(v) : power == 1.0 ? v : pow(v, power));
+        }
+        const uint16_t *src = pix;
+        for (size_t i = 0; i < texels; i++) {
+            float *o = out->data + i * 4;
+            o[0] = lut[src[i * 4]];
+            o[1] = lut[src[i * 4 + 1]];
+            o[2] = lut[src[i * 4 + 2]];
+            o[3] = (float)(src[i * 4 + 3] / 65535.0);
+        }
+        ibl_free(ctx, lut);
+    } else {
+        float lut[256];
+        for (int i = 0; i < 256; i++) {
+            double v = i / 255.0;
+            lut[i] = (float)(power == 0.0 ? srgb_to_linear(v) : power == 1.0 ? v : pow(v, power));
+        }
+        const uint8_t *src = pix;
+        for (size_t i = 0; i < texels; i++) {
+            float *o = out->data + i * 4;
+            o[0] = lut[src[i * 4]];
+            o[1] = lut[src[i * 4 + 1]];
+            o[2] = lut[src[i * 4 + 2]];
+            o[3] = (float)(src[i * 4 + 3] / 255.0);
+        }
+    }
+    stbi_image_free(pix);
+    out->format = is16 ? IBL_FORMAT_RGBA16_UNORM : IBL_FORMAT_RGBA8_SRGB;
+    info->format = out->format;
+    info->has_alpha = comp == 2 || comp == 4;
+    return IBL_OK;
+}
+
+/* ---- 8-bit display encoding shared by the PNG and JPEG writers ----------------------- */
+
+/* Exposure, tone map and sRGB encoding to the nearest 8-bit code, without a pow per channel:
+ * the code is the number of decision levels (the linear values whose sRGB encoding is k + 0.5
+ * codes) at or below the value, i.e. round(oetf(t) * 255). A 4096-bucket table gives the
+ * count at each bucket's lower edge; levels are at least 1 / (255 * 12.92) = 3.0e-4 apart
+ * (the steepest, linear part of the curve) and buckets 2.4e-4 wide, so at most one more
+ * level can lie inside a bucket: one comparison finishes the job. */
+enum { DISPLAY_BUCKETS = 4096 };
+
+typedef struct display_encoder {
+    float scale;
+    ibl_tonemap tonemap;
+    float level[256];                     /* level[k]: smallest value encoding to k + 1 */
+    uint8_t base[DISPLAY_BUCKETS + 1];    /* levels <= bucket / DISPLAY_BUCKETS */
+} display_encoder;
+
+static void display_encoder_init(display_encoder *d, float exposure_ev, ibl_tonemap tm)
+{
+    d->scale = exp2f(exposure_ev);
+    d->tonemap = tm;
+    for (int k = 0; k < 255; k++) d->level[k] = (float)srgb_to_linear((k + 0.5) / 255.0);
+    d->level[255] = 2.0f; /* sentinel above every tone-mapped value */
+    int code = 0;
+    for (int b = 0; b <= DISPLAY_BUCKETS; b++) {
+        float edge = (float)b / DISPLAY_BUCKETS;
+        while (code < 255 && d->level[code] <= edge) code++;
+        d->base[b] = (uint8_t)code;
+    }
+}
+
+static uint8_t display_code(const display_encoder *d, float linear)
+{
+    float t = ibl_tonemap_apply(d->tonemap, linear * d->scale); /* in [0, 1] */
+    int code = d->base[(int)(t * DISPLAY_BUCKETS)];
+    return (uint8_t)(code + (d->level[code] <= t));
+}
+
+static uint8_t unit_code8(float a)
+{
+    if (!(a > 0.0f)) return 0;
+    if (a >= 1.0f) return 255;
+    return (uint8_t)(a * 255.0f + 0.5f);
+}
+
+static uint16_t unit_code16(float a)
+{
+    if (!(a > 0.0f)) return 0;
+    if (a >= 1.0f) return 65535;
+    return (uint16_t)((double)a * 65535.0 + 0.5);
+}
+
+static int image_has_alpha(const ibl_image *im)
+{
+    size_t n = (size_t)im->width * (size_t)im->height;
+    for (size_t i = 0; i < n; i++)
+        if (im->pixels[i * 4 + 3] != 1.0f) return 1;
+    return 0;
+}
+
+static ibl_tonemap preview_tonemap(const ibl_write_desc *desc)
+{
+    return desc->tonemap == IBL_TONEMAP_DEFAULT ? IBL_TONEMAP_FILMIC : desc->tonemap;
+}
+
+/* ---- PNG writer (libpng) ------------------------------------------------------------- */
+
+typedef struct png_state {
+    ibl_context *ctx;
+    uint8_t *buf;
+    size_t len, cap;
+    uint8_t *row;
+    char error[200];
+} png_state;
+
+static void png_on_error(png_structp png, png_const_charp msg)
+{
+    png_state *st = png_get_error_ptr(png);
+    snprintf(st->error, sizeof st->error, "%s", msg);
+    png_longjmp(png, 1);
+}
+
+static void png_on_warning(png_structp png, png_const_charp msg)
+{
+    (void)png; /* the library never prints */
+    (void)msg;
+}
+
+static void png_on_write(png_structp png, png_bytep data, size_t n)
+{
+    png_state *st = png_get_io_ptr(png);
+    if (n > st->cap - st->len) {
+        size_t ncap = st->cap ? st->cap : 65536;
+        while (ncap - st->len < n) {
+            if (ncap > SIZE_MAX / 2) png_error(png, "output too large");
+            ncap *= 2;
+        }
+        uint8_t *grown = ibl_alloc(st->ctx, ncap);
+        if (!grown) png_error(png, "out of memory");
+        if (st->len) memcpy(grown, st->buf, st->len);
+        ibl_free(st->ctx, st->buf);
+        st->buf = grown;
+        st->cap = ncap;
+    }
+    memcpy(st->buf + st->len, data, n);
+    st->len += n;
+}
+
+static void png_on_flush(png_structp png)
+{
+    (void)png;
+}
+
+/* Runs libpng; everything it may touch after setjmp lives in *st (not in locals). */
+static int png_run(png_state *st, const ibl_image *im, int sixteen, int channels,
+                   const display_encoder *enc)
+{
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, st, png_on_error, png_on_warning);
+    if (!png) {
+        snprintf(st->error, sizeof st->error, "cannot start libpng");
+        return 0;
+    }
+    png_infop pinfo = png_create_info_struct(png);
+    if (!pinfo) {
+        png_destroy_write_struct(&png, NULL);
+        snprintf(st->error, sizeof st->error, "cannot start libpng");
+        return 0;
+    }
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_write_struct(&png, &pinfo);
+        return 0;
+    }
+    png_set_write_fn(png, st, png_on_write, png_on_flush);
+    png_set_IHDR(png, pinfo, (png_uint_32)im->width, (png_uint_32)im->height, sixteen ? 16 : 8,
+                 channels == 4 ? PNG_COLOR_TYPE_RGBA : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    if (sixteen) png_set_gAMA(png, pinfo, 1.0); /* linear: read back without a curve */
+    else png_set_sRGB_gAMA_and_cHRM(png, pinfo, PNG_sRGB_INTENT_PERCEPTUAL);
+    /* Fast settings (zlib level 3, Paeth filter only): about twice as fast as libpng's
+     * defaults for ~3% larger files (docs/PERFORMANCE.md). */
+    png_set_compression_level(png, 3);
+    png_set_filter(png, 0, PNG_FILTER_PAETH);
+    png_write_info(png, pinfo);
+    for (int y = 0; y < im->height; y++) {
+        const float *src = im->pixels + (size_t)y * (size_t)im->width * 4;
+        uint8_t *o = st->row;
+        for (int x = 0; x < im->width; x++) {
+            const float *p = src + (size_t)x * 4;
+            for (int c = 0; c < channels; c++) {
+                if (sixteen) {
+                    uint16_t v = unit_code16(p[c]);
+                    *o++ = (uint8_t)(v >> 8); /* PNG samples are big-endian */
+                    *o++ = (uint8_t)(v & 0xFF);
+                } else {
+                    *o++ = c == 3 ? unit_code8(p[3]) : display_code(enc, p[c]);
+                }
+            }
+        }
+        png_write_row(png, st->row);
+    }
+    png_write_end(png, pinfo);
+    png_destroy_write_struct(&png, &pinfo);
+    return 1;
+}
+
+ibl_status ibl__png_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
+                           const char *name, void **bytes, size_t *size)
+{
+    int sixteen;
+    if (desc->format == IBL_FORMAT_DEFAULT || desc->format == IBL_FORMAT_RGBA8_SRGB) sixteen = 0;
+    else if (desc->format == IBL_FORMAT_RGBA16_UNORM) sixteen = 1;
+    else
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+                        "%s: PNG stores rgba8 (sRGB preview) or rgba16 (linear), not %s", name,
+                        ibl_format_name(desc->format));
+    if (image->width > IBL_MAX_DIMENSION || image->height > IBL_MAX_DIMENSION)
+        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: image %dx%d too large", name, image->width,
+                        image->height);
+    int channels = image_has_alpha(image) ? 4 : 3;
+    png_state *st = ibl_calloc(ctx, 1, sizeof *st);
+    if (!st) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
+    st->ctx = ctx;
+    st->row = ibl_alloc(ctx, (size_t)image->width * (size_t)channels * (sixteen ? 2 : 1));
+    if (!st->row) {
+        ibl_free(ctx, st);
+        return ibl__fail_named(ctx, ibl_context_status(ctx), name);
+    }
+    display_encoder enc;
+    display_encoder_init(&enc, desc->exposure_ev, preview_tonemap(desc));
+    int ok = png_run(st, image, sixteen, channels, &enc);
+    ibl_free(ctx, st->row);
+    if (!ok) {
+        ibl_free(ctx, st->buf);
+        ibl_status s = strcmp(st->error, "out of memory") == 0 ? IBL_ERR_OUT_OF_MEMORY : IBL_ERR_IO;
+        ibl_fail(ctx, s, "%s: cannot encode PNG: %s", name, st->error);
+        ibl_free(ctx, st);
+        return s;
+    }
+    *bytes = st->buf;
+    *size = st->len;
+    ibl_free(ctx, st);
+    return IBL_OK;
+}
+
+/* ---- JPEG writer (stb_image_write) --------------------------------------------------- */
+
+typedef struct jpeg_sink {
+    ibl_context *ctx;
+    uint8_t *buf;
+    size_t len, cap;
+    int failed;
+} jpeg_sink;
+
+static void jpeg_on_write(void *user, void *data, int n)
+{
+    jpeg_sink *s = user;
+    if (s->failed || n <= 0) return;
+    if ((size_t)n > s->cap - s->len) {
+        size_t ncap = s->cap ? s->cap * 2 : 65536;
+        while (ncap - s->len < (size_t)n) ncap *= 2;
+        uint8_t *grown = ibl_alloc(s->ctx, ncap);
+        if (!grown) {
+            s->failed = 1;
+            return;
+        }
+        if (s->len) memcpy(grown, s->buf, s->len);
+        ibl_free(s->ctx, s->buf);
+        s->buf = grown;
+        s->cap = ncap;
+    }
+    memcpy(s->buf + s->len, data, (size_t)n);
+    s->len += (size_t)n;
+}
+
+ibl_status ibl__jpeg_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
+                            const char *name, void **bytes, size_t *size)
+{
+    if (desc->format != IBL_FORMAT_DEFAULT && desc->format != IBL_FORMAT_RGBA8_SRGB)
+        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: JPEG stores only 8-bit sRGB, not %s", name,
+                        ibl_format_name(desc->format));
+    int w = image->width, h = image->height;
+    if (w > 65535 || h > 65535)
+        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: JPEG is limited to 65535 pixels a side", name);
+    size_t n = (size_t)w * (size_t)h;
+    uint8_t *rgb = ibl_alloc(ctx, n * 3);
+    if (!rgb) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
+    display_encoder enc;
+    display_encoder_init(&enc, desc->exposure_ev, preview_tonemap(desc));
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++) rgb[i * 3 + (size_t)c] = display_code(&enc, image->pixels[i * 4 + (size_t)c]);
+    jpeg_sink sink = {ctx, NULL, 0, 0, 0};
+    int ok = stbi_write_jpg_to_func(jpeg_on_write, &sink, w, h, 3, rgb, 95);
+    ibl_free(ctx, rgb);
+    if (!ok || sink.failed) {
+        ibl_free(ctx, sink.buf);
+        return ibl_fail(ctx, sink.failed ? IBL_ERR_OUT_OF_MEMORY : IBL_ERR_IO,
+                        "%s: cannot encode JPEG", name);
+    }
+    *bytes = sink.buf;
+    *size = sink.len;
+    return IBL_OK;
+}

@@ -1,0 +1,460 @@
+/* Equirectangular (latitude-longitude) images.
+ *
+ * Mapping (docs/CONVENTIONS.md): u in [0, 1] left to right, v in [0, 1] top to bottom,
+ *   phi = 2 pi (u - 1/2), theta = pi v (angle from +Y),
+ *   d = (sin theta sin phi, cos theta, -sin theta cos phi):
+ * the centre column looks toward -Z, u = 3/4 toward +X, u = 0 and 1 toward +Z, the top row is +Y.
+ *
+ * To a cube: every cube texel is the solid-angle-weighted mean of k x k samples spread over
+ * its footprint on the face plane (weights dA / |d|^3, the solid angle of each small cell).
+ * k is chosen per texel so that consecutive samples are at most half a source row apart, so
+ * every row contributes. Along a row each sample averages the source over the longitude
+ * extent of its own cell (a box over whole and partial pixels), so near the poles, where a
+ * texel spans many pixels of a row, every pixel is still reached; where the cell is narrower
+ * than a pixel the row is interpolated linearly (wrapping around in longitude). Rows beyond
+ * the poles continue on the opposite meridian (row -1 is row 0 shifted by half a turn). */
+#include "layout_internal.h"
+
+#include <math.h>
+#include <string.h>
+
+
+#define POLE_ROWS 8.0
+#define POLE_CELLS 4096.0
+static const double PI = 3.14159265358979323846;
+
+int ibl__equirect_dir(double u, double v, double d[3])
+{
+    double phi = 2.0 * PI * (u - 0.5), theta = PI * v;
+    double st = sin(theta);
+    d[0] = st * sin(phi);
+    d[1] = cos(theta);
+    d[2] = -st * cos(phi);
+    return 1;
+}
+
+void ibl__equirect_uv(const double d[3], double *u, double *v)
+{
+    double rho = sqrt(d[0] * d[0] + d[2] * d[2]);
+    *u = atan2(d[0], -d[2]) / (2.0 * PI) + 0.5;
+    *v = atan2(rho, d[1]) / PI;
+}
+
+typedef struct eq_job {
+    const ibl_image *im;
+    double basis[6][3][3]; /* per face: major, s axis, t axis, in the picture frame */
+    double world[3][3];    /* world = world * picture */
+    int pole_cells;        /* cells per pixel side in the texels near the poles */
+    double pole_radius2;   /* sin^2 of the polar region's angular radius */
+    const float *row_mean; /* height x 4 */
+    ibl_cubemap *out;
+    int fixed_k;
+} eq_job;
+
+/* Antiderivative of the unit tent max(0, 1 - |t|). */
+static inline double tent_cdf(double t)
+{
+    if (t <= -1.0) return 0.0;
+    if (t <= 0.0) return 0.5 * (t + 1.0) * (t + 1.0);
+    if (t < 1.0) return 1.0 - 0.5 * (1.0 - t) * (1.0 - t);
+    return 1.0;
+}
+
+/* Mean over the column window [a, b] (pixel i covers [i, i+1)) of the linear interpolant of
+ * row r through its pixel centres, wrapping in longitude. Windows that tile the row add up to
+ * exactly the sum of its pixels, so energy is kept however the windows fall. */
+static void row_window(const eq_job *job, int r, double a, double b, float out[4])
+{
+    const ibl_image *im = job->im;
+    int W = im->width;
+    const float *row = im->pixels + (size_t)r * W * 4;
+    double w = b - a;
+    if (w >= W) {
+        memcpy(out, job->row_mean + (size_t)r * 4, 4 * sizeof(float));
+        return;
+    }
+    double shift = floor(a / W) * W;
+    a -= shift;
+    b -= shift;
+    if (w < 1e-6) {
+        /* a point: plain linear interpolation */
+        double x = 0.5 * (a + b) - 0.5, fl = floor(x);
+        float f = (float)(x - fl);
+        long i0 = (long)fl, i1 = i0 + 1;
+        i0 = i0 < 0 ? i0 + W : i0 % W;
+        i1 = i1 % W;
+        const float *p = row + i0 * 4, *q = row + i1 * 4;
+        for (int c = 0; c < 4; c++) out[c] = p[c] + (q[c] - p[c]) * f;
+        return;
+    }
+    /* pixel i (centre i + 1/2) contributes T(b - c) - T(a - c); those entirely inside the
+     * window contribute 1 */
+    long lo = (long)floor(a - 0.5), hi = (long)floor(b + 0.5);
+    long full_lo = (long)ceil(a + 0.5), full_hi = (long)floor(b - 1.5);
+    if (full_lo > full_hi) {
+        full_lo = hi + 1;
+        full_hi = hi;
+    }
+    double acc[4] = {0, 0, 0, 0};
+    for (long i = lo; i <= hi; i++) {
+        if (i == full_lo) {
+            float sum[4] = {0, 0, 0, 0};
+            long j = full_lo % W;
+            for (long n = full_lo; n <= full_hi; n++) {
+                const float *p = row + j * 4;
+                for (int c = 0; c < 4; c++) sum[c] += p[c];
+                if (++j == W) j = 0;
+            }
+            for (int c = 0; c < 4; c++) acc[c] += sum[c];
+            i = full_hi;
+            continue;
+        }
+        double centre = i + 0.5;
+        double wt = tent_cdf(b - centre) - tent_cdf(a - centre);
+        if (wt <= 0.0) continue;
+        long j = i % W;
+        if (j < 0) j += W;
+        const float *p = row + j * 4;
+        for (int c = 0; c < 4; c++) acc[c] += wt * p[c];
+    }
+    for (int c = 0; c < 4; c++) out[c] = (float)(acc[c] / w);
+}
+
+/* First moment of the unit tent: integral of s max(0, 1 - |s|) from -1 to t. */
+static inline double tent_moment(double t)
+{
+    if (t <= -1.0 || t >= 1.0) return 0.0;
+    if (t <= 0.0) return t * t * (0.5 + t / 3.0) - 1.0 / 6.0;
+    return t * t * (0.5 - t / 3.0) - 1.0 / 6.0;
+}
+
+/* Rows this close to a pole are reconstructed as constant bands instead of being interpolated:
+ * a tent folded at the pole gives its row about 1/24 of a row too much solid angle (the
+ * kernel's first moment no longer matches the row's), and the error, a fixed amount, is only
+ * negligible against rows far from the pole. Box rows are exact. */
+enum { POLAR_BOX_ROWS = 12 };
+
+/* Solid angle (in pixel-row units of the integral of sin(theta)) of band [a, b]. */
+static inline double band(int H, double a, double b)
+{
+    return (H / PI) * (cos(PI * a / H) - cos(PI * b / H));
+}
+
+/* The share of window [py0, py1] given to row r: the integral over the window of the row's
+ * reconstruction kernel times sin(theta). Away from the poles the kernel is the tent between
+ * the row centres and sin(theta) is taken linear across the window (its curvature is
+ * pi^2/H^2 per row), so the rows' shares add up to the window's solid angle and every row
+ * hands out exactly its own. Near the poles the kernel is the row's own band; the first tent
+ * row is flat on its half next to the bands, so the kernels still sum to one everywhere. */
+static double row_share(int H, long r, double py0, double py1, double c, double s_c, double s_d)
+{
+    long R = POLAR_BOX_ROWS < H / 4 ? POLAR_BOX_ROWS : H / 4;
+    if (r < R || r >= H - R) {
+        double a = fmax(py0, (double)r), b = fmin(py1, (double)r + 1);
+        return b > a ? band(H, a, b) : 0.0;
+    }
+    double lo = py0, hi = py1, flat = 0.0;
+    if (r == R) {
+        /* flat on [R, R + 1/2] */
+        double a = fmax(py0, (double)R), b = fmin(py1, R + 0.5);
+        if (b > a) flat = band(H, a, b);
+        lo = fmax(lo, R + 0.5);
+    } else if (r == H - R - 1) {
+        double a = fmax(py0, H - R - 0.5), b = fmin(py1, (double)(H - R));
+        if (b > a) flat = band(H, a, b);
+        hi = fmin(hi, H - R - 0.5);
+    }
+    if (hi <= lo) return flat;
+    double centre = r + 0.5;
+    double t = tent_cdf(hi - centre) - tent_cdf(lo - centre);
+    double mom = tent_moment(hi - centre) - tent_moment(lo - centre);
+    return flat + t * (s_c + s_d * (centre - c)) + s_d * mom;
+}
+
+/* Mean of the bilinear interpolant of the picture over the window [px0, px1] x [py0, py1]
+ * (pixel units). Rows past a pole continue on the opposite meridian (row -1 is row 0 turned
+ * by half a revolution). */
+static void window_value(const eq_job *job, double px0, double px1, double py0, double py1,
+                         float out[4])
+{
+    int W = job->im->width, H = job->im->height;
+    /* a window reaching past a pole is cut there: the far side is already covered by the
+     * neighbouring cells across the pole, and counting it twice would add energy */
+    if (py0 < 0.0) py0 = 0.0;
+    if (py1 > H) py1 = H;
+    if (py1 < py0) py1 = py0;
+    double h = py1 - py0;
+    double acc[4] = {0, 0, 0, 0}, wsum = 0;
+    double c = 0.5 * (py0 + py1), k_rad = PI / H;
+    double s_c = sin(k_rad * c), s_d = k_rad * cos(k_rad * c);
+    long lo = (long)floor(py0 - 0.5), hi = (long)floor(py1 + 0.5);
+    if (h < 1e-6) {
+        /* a point in latitude: the two rows around it */
+        double y = 0.5 * (py0 + py1) - 0.5;
+        lo = (long)floor(y);
+        hi = lo + 1;
+    }
+    for (long r = lo; r <= hi; r++) {
+        double wt;
+        if (h < 1e-6) {
+            double y = 0.5 * (py0 + py1) - 0.5;
+            wt = r == lo ? 1.0 - (y - lo) : y - lo;
+        } else {
+            if (r < 0 || r >= H) continue;
+            wt = row_share(H, r, py0, py1, c, s_c, s_d);
+        }
+        if (wt <= 0.0) continue;
+        long rr = r;
+        double shift = 0.0;
+        if (rr < 0) {
+            rr = -1 - rr;
+            shift = 0.5 * W;
+        } else if (rr >= H) {
+            rr = 2L * H - 1 - rr;
+            shift = 0.5 * W;
+        }
+        if (rr < 0) rr = 0; /* only for images a pixel or two high */
+        if (rr >= H) rr = H - 1;
+        float v[4];
+        row_window(job, (int)rr, px0 + shift, px1 + shift, v);
+        for (int c = 0; c < 4; c++) acc[c] += wt * v[c];
+        wsum += wt;
+    }
+    for (int c = 0; c < 4; c++) out[c] = (float)(acc[c] / wsum);
+}
+
+static double wrap_angle(double a)
+{
+    if (a > PI) a -= 2.0 * PI;
+    else if (a < -PI) a += 2.0 * PI;
+    return a;
+}
+
+/* Texels within a few cells of a pole. There theta and phi are far from linear across a
+ * texel and the sample cells, turned against the meridians, cannot be matched by
+ * longitude/latitude windows. Instead the texel integrates the source directly: every
+ * source pixel in the texel's longitude/latitude range is cut into m x m cells of exact solid
+ * angle, and the cells whose centres fall in the texel are summed. The texel's value is their
+ * solid-angle-weighted mean; m is chosen so that thousands of cells land in the texel, which
+ * keeps the share of each pixel exact to well under a percent. */
+static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, float *out)
+{
+    int N = job->out->size, W = job->im->width, H = job->im->height;
+    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
+    const double cell = 2.0 / N;
+    /* longitude / latitude range of the texel from its corners and edge midpoints */
+    double sc0 = -1.0 + (tx + 0.5) * cell, tc0 = -1.0 + (ty + 0.5) * cell;
+    double cx = m[0] + sc0 * a[0] + tc0 * b[0], cy = m[1] + sc0 * a[1] + tc0 * b[1],
+           cz = m[2] + sc0 * a[2] + tc0 * b[2];
+    double centre = atan2(cx, -cz), lo = 0, hi = 0, ylo = H, yhi = 0, winding = 0, prev = 0;
+    int any_pole = 0;
+    static const double ring[9][2] = {{0, 0}, {0.5, 0}, {1, 0}, {1, 0.5}, {1, 1},
+                                      {0.5, 1}, {0, 1}, {0, 0.5}, {0, 0}};
+    for (int c = 0; c < 9; c++) {
+        double sc = -1.0 + (tx + ring[c][0]) * cell, tc = -1.0 + (ty + ring[c][1]) * cell;
+        double x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
+               z = m[2] + sc * a[2] + tc * b[2];
+        double rho = sqrt(x * x + z * z), py = atan2(rho, y) / PI * H;
+        ylo = fmin(ylo, py);
+        yhi = fmax(yhi, py);
+        if (rho <= 1e-12 * fabs(y)) {
+            any_pole = 1;
+            continue;
+        }
+        double phi = atan2(x, -z), rel = wrap_angle(phi - centre);
+        lo = fmin(lo, rel);
+        hi = fmax(hi, rel);
+        if (c > 0) winding += wrap_angle(phi - prev);
+        prev = phi;
+    }
+    int full = any_pole || fabs(winding) > PI;
+    /* the closest approach to the pole can lie inside an edge: widen by a row */
+    ylo = fmax(0.0, floor(ylo) - 1.0);
+    yhi = fmin((double)H, ceil(yhi) + 1.0);
+    if (full) {
+        if (cy > 0) ylo = 0;
+        else yhi = H;
+    }
+    long c0 = 0, c1 = W;
+    if (!full) {
+        c0 = (long)floor(((centre + lo) / (2.0 * PI) + 0.5) * W) - 1;
+        c1 = (long)ceil(((centre + hi) / (2.0 * PI) + 0.5) * W) + 1;
+        if (c1 - c0 > W) {
+            c0 = 0;
+            c1 = W;
+        }
+    }
+    int r0 = (int)ylo, r1 = (int)yhi;
+    int mm = job->pole_cells;
+    double acc[4] = {0, 0, 0, 0}, wsum = 0;
+    for (int r = r0; r < r1; r++) {
+        const float *row = job->im->pixels + (size_t)r * W * 4;
+        for (int j = 0; j < mm; j++) {
+            double th0 = PI * (r + (double)j / mm) / H, th1 = PI * (r + (j + 1.0) / mm) / H;
+            double th = 0.5 * (th0 + th1), st = sin(th), ct = cos(th);
+            double w = (cos(th0) - cos(th1)) * (2.0 * PI / W / mm);
+            for (long col = c0; col < c1; col++) {
+                long wc = col % W;
+                if (wc < 0) wc += W;
+                const float *p = row + wc * 4;
+                for (int i = 0; i < mm; i++) {
+                    double phi = 2.0 * PI * ((col + (i + 0.5) / mm) / W - 0.5);
+                    double pd[3] = {st * sin(phi), ct, -st * cos(phi)}, wd[3], s, t;
+                    ibl__mul3(job->world, pd, wd);
+                    if (ibl_cube_face_st_d(wd, &s, &t) != face) continue;
+                    if ((int)floor(s * N) != tx || (int)floor(t * N) != ty) continue;
+                    for (int c = 0; c < 4; c++) acc[c] += w * p[c];
+                    wsum += w;
+                }
+            }
+        }
+    }
+    if (wsum > 0.0) {
+        for (int c = 0; c < 4; c++) out[c] = (float)(acc[c] / wsum);
+    } else {
+        /* a texel smaller than any cell: the picture at its centre */
+        double py = atan2(sqrt(cx * cx + cz * cz), cy) / PI * H;
+        double px = (centre / (2.0 * PI) + 0.5) * W;
+        window_value(job, px, px, py, py, out);
+    }
+}
+
+static void eq_row_task(void *arg, int index)
+{
+    const eq_job *job = arg;
+    int N = job->out->size, face = index / N, ty = index % N;
+    int W = job->im->width, H = job->im->height;
+    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
+    float *out = ibl_cubemap_face(job->out, 0, face) + (size_t)ty * N * 4;
+    const double cell = 2.0 / N;            /* texel edge on the face plane */
+    const double px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
+
+    for (int tx = 0; tx < N; tx++) {
+        int k = job->fixed_k, near_pole;
+        {
+            double sc = -1.0 + (tx + 0.5) * cell, tc = -1.0 + (ty + 0.5) * cell;
+            double d[3] = {m[0] + sc * a[0] + tc * b[0], m[1] + sc * a[1] + tc * b[1],
+                           m[2] + sc * a[2] + tc * b[2]};
+            double rho2 = d[0] * d[0] + d[2] * d[2], r2 = rho2 + d[1] * d[1];
+            near_pole = rho2 < job->pole_radius2 * r2;
+        }
+        if (near_pole && k == 0) {
+            eq_texel_near_pole(job, face, tx, ty, out + (size_t)tx * 4);
+            continue;
+        }
+        if (k == 0) {
+            /* latitude extent of the texel in source rows, from the gradient of theta */
+            double sc = -1.0 + (tx + 0.5) * cell, tc = -1.0 + (ty + 0.5) * cell;
+            double d[3] = {m[0] + sc * a[0] + tc * b[0], m[1] + sc * a[1] + tc * b[1],
+                           m[2] + sc * a[2] + tc * b[2]};
+            double rho2 = d[0] * d[0] + d[2] * d[2], r2 = rho2 + d[1] * d[1];
+            double rho = sqrt(rho2), len = sqrt(r2), ext;
+            if (rho < 2.0 * cell * len) {
+                /* at a pole theta is a cone: bound its change by the full gradient 1/|d| */
+                ext = 2.0 / len;
+            } else {
+                double g[3] = {d[1] * d[0] / rho / r2, -rho / r2, d[1] * d[2] / rho / r2};
+                ext = fabs(g[0] * a[0] + g[1] * a[1] + g[2] * a[2]) +
+                      fabs(g[0] * b[0] + g[1] * b[1] + g[2] * b[2]);
+            }
+            double rows = ext * cell * px_per_rad_v;
+            /* and its longitude extent in source columns */
+            double cols = (fabs(d[0] * a[2] - d[2] * a[0]) + fabs(d[0] * b[2] - d[2] * b[0])) /
+                          rho2 * cell * px_per_rad_u;
+            k = (int)ceil(fmax(rows, cols));
+            if (k < 2) k = 2;
+            if (k > 64) k = 64;
+        }
+        double acc[4] = {0, 0, 0, 0}, wsum = 0;
+        const double sub = cell / k;
+        for (int j = 0; j < k; j++) {
+            double tc = -1.0 + ty * cell + (j + 0.5) * sub;
+            double e[3] = {m[0] + tc * b[0], m[1] + tc * b[1], m[2] + tc * b[2]};
+            for (int i = 0; i < k; i++) {
+                double sc = -1.0 + tx * cell + (i + 0.5) * sub;
+                double x = e[0] + sc * a[0], y = e[1] + sc * a[1], z = e[2] + sc * a[2];
+                double rho2 = x * x + z * z, r2 = rho2 + y * y;
+                double wt = 1.0 / (r2 * sqrt(r2));
+                double rho = sqrt(rho2);
+                double px = (atan2(x, -z) / (2.0 * PI) + 0.5) * W;
+                double py = atan2(rho, y) / PI * H;
+                /* extents of this sample's cell in longitude and latitude (pixels): the
+                 * gradients of phi and theta along both face axes, times the cell size */
+                double wpx = W, hpx;
+                double g1 = fabs(y * (x * a[0] + z * a[2]) - rho2 * a[1]);
+                double g2 = fabs(y * (x * b[0] + z * b[2]) - rho2 * b[1]);
+                if (rho2 > 1e-300) {
+                    double ga = fabs(x * a[2] - z * a[0]), gb = fabs(x * b[2] - z * b[0]);
+                    wpx = (ga + gb) / rho2 * sub * px_per_rad_u;
+                    if (!(wpx < W)) wpx = W;
+                    hpx = (g1 + g2) / (rho * r2) * sub * px_per_rad_v;
+                } else {
+                    hpx = 2.0 / sqrt(r2) * sub * px_per_rad_v;
+                }
+                float val[4];
+                window_value(job, px - 0.5 * wpx, px + 0.5 * wpx, py - 0.5 * hpx, py + 0.5 * hpx, val);
+                for (int c = 0; c < 4; c++) acc[c] += wt * val[c];
+                wsum += wt;
+            }
+        }
+        for (int c = 0; c < 4; c++) out[(size_t)tx * 4 + c] = (float)(acc[c] / wsum);
+    }
+}
+
+ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const ibl__frame *frame,
+                                 int samples_per_axis, ibl_cubemap *out)
+{
+    int W = image->width, H = image->height;
+    float *mean = ibl_alloc(ctx, (size_t)H * 4 * sizeof(float));
+    if (!mean) return ibl_context_status(ctx);
+    for (int r = 0; r < H; r++) {
+        double s[4] = {0, 0, 0, 0};
+        const float *p = image->pixels + (size_t)r * W * 4;
+        for (int x = 0; x < W; x++)
+            for (int c = 0; c < 4; c++) s[c] += p[(size_t)x * 4 + c];
+        for (int c = 0; c < 4; c++) mean[(size_t)r * 4 + c] = (float)(s[c] / W);
+    }
+    eq_job job;
+    memset(&job, 0, sizeof job);
+    job.im = image;
+    job.row_mean = mean;
+    job.out = out;
+    job.fixed_k = samples_per_axis;
+    memcpy(job.world, frame->m, sizeof job.world);
+    {
+        /* One cell size for every texel near a pole, so that all of them cut the pixels the
+         * same way and each cell is counted by exactly one texel; thousands of cells per
+         * texel at the edge of the polar region (its largest pixels). */
+        int N = out->size;
+        double cell = 2.0 / N;
+        /* the polar region: 3 texels, and at least POLE_ROWS source rows */
+        double radius = fmax(atan(3.0 * cell), POLE_ROWS * PI / H);
+        job.pole_radius2 = sin(radius) * sin(radius);
+        double theta = radius + 1.5 * cell;
+        int r = (int)(theta / PI * H);
+        if (r >= H) r = H - 1;
+        double pixel = 2.0 * PI / W * (cos(PI * r / H) - cos(PI * (r + 1) / H));
+        int mm = (int)ceil(sqrt(POLE_CELLS * pixel / (cell * cell)));
+        job.pole_cells = mm < 1 ? 1 : mm > 16 ? 16 : mm;
+    }
+    /* face axes in the picture frame: picture = M^T world */
+    for (int f = 0; f < 6; f++) {
+        double o[3], sx[3], tx[3];
+        ibl_cube_direction_d(f, 0.5, 0.5, o);
+        ibl_cube_direction_d(f, 1.0, 0.5, sx);
+        ibl_cube_direction_d(f, 0.5, 1.0, tx);
+        double axes[3][3];
+        for (int i = 0; i < 3; i++) {
+            axes[0][i] = o[i];
+            axes[1][i] = sx[i] - o[i];
+            axes[2][i] = tx[i] - o[i];
+        }
+        for (int r = 0; r < 3; r++)
+            for (int i = 0; i < 3; i++)
+                job.basis[f][r][i] = frame->m[0][i] * axes[r][0] + frame->m[1][i] * axes[r][1] +
+                                     frame->m[2][i] * axes[r][2];
+    }
+    ibl_parallel_for(ctx, 6 * out->size, eq_row_task, &job);
+    ibl_free(ctx, mean);
+    return IBL_OK;
+}

@@ -1,0 +1,1147 @@
+/* Image I/O: round trips of every flat format (bounds stated per format), real files checked
+ * against independent decodes written here, hostile input, the pixel policy and atomic
+ * writes. */
+#include "test_support.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* ---- helpers ------------------------------------------------------------------------- */
+
+static uint32_t rng_state = 12345;
+static float frand(void)
+{
+    rng_state = rng_state * 1664525u + 1013904223u;
+    return (float)((rng_state >> 8) / 16777216.0);
+}
+
+static ibl_image make_image(ibl_context *ctx, int w, int h)
+{
+    ibl_image im;
+    assert_int_equal(ibl_image_alloc(ctx, w, h, &im), IBL_OK);
+    return im;
+}
+
+static uint8_t *slurp(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    uint8_t *b = malloc((size_t)n + 1);
+    assert_int_equal(fread(b, 1, (size_t)n, f), (size_t)n);
+    fclose(f);
+    *size = (size_t)n;
+    return b;
+}
+
+static void spit(const char *path, const void *bytes, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(bytes, 1, n, f), n);
+    fclose(f);
+}
+
+static ibl_status decode(ibl_context *ctx, const void *b, size_t n, ibl_texture *t, ibl_file_info *fi)
+{
+    return ibl_decode_texture(ctx, b, n, "mem.bin", NULL, t, fi);
+}
+
+/* Writes an image to path and reads it back. */
+static ibl_image write_read(ibl_context *ctx, const char *name, const ibl_image *im,
+                            const ibl_write_desc *wd, ibl_file_info *fi)
+{
+    const char *path = test_path(name);
+    assert_int_equal(ibl_write_image(ctx, path, im, wd), IBL_OK);
+    ibl_image back;
+    assert_int_equal(ibl_read_image(ctx, path, NULL, &back, fi), IBL_OK);
+    assert_int_equal(back.width, im->width);
+    assert_int_equal(back.height, im->height);
+    return back;
+}
+
+static int bits_equal(float a, float b)
+{
+    return memcmp(&a, &b, sizeof a) == 0;
+}
+
+/* Counts allocations and remembers the largest, to prove refusals happen before allocating. */
+typedef struct alloc_stats {
+    size_t largest;
+} alloc_stats;
+
+static void *counting_alloc(size_t bytes, void *user)
+{
+    alloc_stats *st = user;
+    if (bytes > st->largest) st->largest = bytes;
+    void *p = NULL;
+    if (posix_memalign(&p, 64, bytes ? bytes : 1) != 0) return NULL;
+    return p;
+}
+
+static void counting_free(void *p, void *user)
+{
+    (void)user;
+    free(p);
+}
+
+static ibl_context *counting_context(alloc_stats *st)
+{
+    ibl_context_desc d = {0};
+    d.threads = 1;
+    d.allocator.alloc = counting_alloc;
+    d.allocator.free = counting_free;
+    d.allocator.user = st;
+    ibl_context *ctx = NULL;
+    assert_int_equal(ibl_context_create(&d, &ctx), IBL_OK);
+    return ctx;
+}
+
+/* Independent sRGB curves (IEC 61966-2-1) for the PNG checks. */
+static double ref_srgb_encode(double v)
+{
+    return v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1 / 2.4) - 0.055;
+}
+
+/* ---- file types ---------------------------------------------------------------------- */
+
+static void file_types(void **state)
+{
+    (void)state;
+    assert_int_equal(ibl_file_type_from_path("a/b.HDR"), IBL_FILE_HDR);
+    assert_int_equal(ibl_file_type_from_path("x.pic"), IBL_FILE_HDR);
+    assert_int_equal(ibl_file_type_from_path("x.Exr"), IBL_FILE_EXR);
+    assert_int_equal(ibl_file_type_from_path("x.pfm"), IBL_FILE_PFM);
+    assert_int_equal(ibl_file_type_from_path("x.jpeg"), IBL_FILE_JPEG);
+    assert_int_equal(ibl_file_type_from_path("x.ktx2"), IBL_FILE_KTX2);
+    assert_int_equal(ibl_file_type_from_path("x.ktx"), IBL_FILE_KTX1);
+    assert_int_equal(ibl_file_type_from_path("x.dds"), IBL_FILE_DDS);
+    assert_int_equal(ibl_file_type_from_path("dir.exr/file"), IBL_FILE_UNKNOWN);
+    assert_int_equal(ibl_file_type_from_path(".png"), IBL_FILE_UNKNOWN);
+    assert_string_equal(ibl_file_type_name(IBL_FILE_KTX1), "ktx");
+    assert_int_equal(ibl_file_type_sniff("#?RADIANCE\n", 11), IBL_FILE_HDR);
+    assert_int_equal(ibl_file_type_sniff("PF\n1 1\n-1\n", 10), IBL_FILE_PFM);
+    assert_int_equal(ibl_file_type_sniff("Pf 1 1", 6), IBL_FILE_PFM);
+    assert_int_equal(ibl_file_type_sniff("P6\n", 3), IBL_FILE_UNKNOWN);
+    assert_int_equal(ibl_file_type_sniff("\x76\x2f\x31\x01", 4), IBL_FILE_EXR);
+    assert_int_equal(ibl_file_type_sniff("\x89PNG\r\n\x1a\n", 8), IBL_FILE_PNG);
+    assert_int_equal(ibl_file_type_sniff("\xff\xd8\xff\xe0", 4), IBL_FILE_JPEG);
+    assert_int_equal(ibl_file_type_sniff("\xabKTX 20\xbb\r\n\x1a\n", 12), IBL_FILE_KTX2);
+    assert_int_equal(ibl_file_type_sniff("\xabKTX 11\xbb\r\n\x1a\n", 12), IBL_FILE_KTX1);
+    assert_int_equal(ibl_file_type_sniff("DDS ", 4), IBL_FILE_DDS);
+    assert_int_equal(ibl_file_type_sniff("\x89PN", 3), IBL_FILE_UNKNOWN);
+    assert_true(ibl_file_type_is_container(IBL_FILE_DDS));
+    assert_false(ibl_file_type_is_container(IBL_FILE_EXR));
+}
+
+/* ---- PFM ----------------------------------------------------------------------------- */
+
+/* Float formats must round-trip bit for bit (alpha is not stored: it comes back as 1). */
+static void pfm_round_trip(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image im = make_image(ctx, 37, 23);
+    for (size_t i = 0; i < 37 * 23 * 4; i++) im.pixels[i] = ldexpf(frand(), (int)(frand() * 60) - 30);
+    ibl_file_info fi;
+    ibl_image back = write_read(ctx, "a.pfm", &im, NULL, &fi);
+    assert_int_equal(fi.type, IBL_FILE_PFM);
+    assert_int_equal(fi.format, IBL_FORMAT_RGB32F);
+    for (size_t i = 0; i < 37 * 23; i++) {
+        for (int c = 0; c < 3; c++) assert_true(bits_equal(back.pixels[i * 4 + c], im.pixels[i * 4 + c]));
+        assert_true(back.pixels[i * 4 + 3] == 1.0f);
+    }
+    ibl_image_free(ctx, &back);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
+/* A hand-made big-endian grey file: rows are stored bottom first. */
+static void pfm_grey_big_endian(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    uint8_t file[64];
+    int hl = sprintf((char *)file, "Pf\n2 2\n1.0\n");
+    const float v[4] = {1.0f, 2.0f, 3.0f, 4.0f}; /* stored order: bottom row (1 2), top (3 4) */
+    for (int i = 0; i < 4; i++) {
+        uint32_t u;
+        memcpy(&u, &v[i], 4);
+        for (int k = 0; k < 4; k++) file[hl + i * 4 + k] = (uint8_t)(u >> (24 - 8 * k));
+    }
+    ibl_texture t;
+    assert_int_equal(decode(ctx, file, (size_t)hl + 16, &t, NULL), IBL_OK);
+    assert_int_equal(t.width, 2);
+    const float expect[4] = {3, 4, 1, 2};
+    for (int i = 0; i < 4; i++)
+        for (int c = 0; c < 3; c++) assert_true(t.data[i * 4 + c] == expect[i]);
+    ibl_texture_free(ctx, &t);
+    ibl_context_destroy(ctx);
+}
+
+/* ---- OpenEXR ------------------------------------------------------------------------- */
+
+static void exr_float_round_trip(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image im = make_image(ctx, 41, 19);
+    for (size_t i = 0; i < 41 * 19 * 4; i++) im.pixels[i] = ldexpf(frand(), (int)(frand() * 80) - 40);
+    const ibl_exr_compression comps[] = {IBL_EXR_DEFAULT, IBL_EXR_NONE, IBL_EXR_RLE,
+                                         IBL_EXR_ZIPS, IBL_EXR_ZIP, IBL_EXR_PIZ};
+    for (size_t k = 0; k < sizeof comps / sizeof comps[0]; k++) {
+        for (int rgba = 0; rgba < 2; rgba++) {
+            ibl_write_desc wd = {0};
+            wd.format = rgba ? IBL_FORMAT_RGBA32F : IBL_FORMAT_RGB32F;
+            wd.exr_compression = comps[k];
+            ibl_file_info fi;
+            ibl_image back = write_read(ctx, "f.exr", &im, &wd, &fi);
+            assert_int_equal(fi.format, wd.format);
+            assert_int_equal(fi.has_alpha, rgba);
+            for (size_t i = 0; i < 41 * 19; i++) {
+                for (int c = 0; c < 3; c++) assert_true(bits_equal(back.pixels[i * 4 + c], im.pixels[i * 4 + c]));
+                assert_true(bits_equal(back.pixels[i * 4 + 3], rgba ? im.pixels[i * 4 + 3] : 1.0f));
+            }
+            ibl_image_free(ctx, &back);
+        }
+    }
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
+/* Half: values with an 11-bit significand inside the half range come back exactly; finite
+ * values above the largest half (65504) are clamped to it rather than becoming infinite. */
+static void exr_half_round_trip(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image im = make_image(ctx, 16, 9);
+    for (size_t i = 0; i < 16 * 9 * 4; i++) {
+        float m = (float)(1024 + (int)(frand() * 1024)) / 2048.0f; /* 11 significant bits */
+        im.pixels[i] = ldexpf(m, (int)(frand() * 28) - 13);      /* normal half range */
+    }
+    im.pixels[0] = 1e6f;
+    im.pixels[5] = 0.0f;
+    ibl_write_desc wd = {0};
+    wd.format = IBL_FORMAT_RGBA16F;
+    wd.exr_compression = IBL_EXR_PIZ;
+    ibl_file_info fi;
+    ibl_image back = write_read(ctx, "h.exr", &im, &wd, &fi);
+    assert_int_equal(fi.format, IBL_FORMAT_RGBA16F);
+    assert_true(back.pixels[0] == 65504.0f);
+    for (size_t i = 1; i < 16 * 9 * 4; i++) assert_true(back.pixels[i] == im.pixels[i]);
+    ibl_image_free(ctx, &back);
+    wd.format = IBL_FORMAT_RGB16F;
+    back = write_read(ctx, "h3.exr", &im, &wd, &fi);
+    assert_int_equal(fi.format, IBL_FORMAT_RGB16F);
+    assert_true(back.pixels[7] == 1.0f);
+    assert_true(back.pixels[6] == im.pixels[6]);
+    ibl_image_free(ctx, &back);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
+/* A real DWAB file: known size, plausible radiance, and our float re-encoding is exact. */
+static void exr_real_dwab(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image im;
+    ibl_file_info fi;
+    assert_int_equal(ibl_read_image(ctx, test_data("studio.exr"), NULL, &im, &fi), IBL_OK);
+    assert_int_equal(fi.type, IBL_FILE_EXR);
+    assert_int_equal(im.width, 1024);
+    assert_int_equal(im.height, 512);
+    assert_int_equal(fi.format, IBL_FORMAT_RGB32F);
+    assert_int_equal(fi.has_alpha, 0);
+    assert_true(fi.pixels.nan_count == 0 && fi.pixels.inf_count == 0);
+    double sum = 0, maxv = 0;
+    for (size_t i = 0; i < 1024 * 512; i++)
+        for (int c = 0; c < 3; c++) {
+            sum += im.pixels[i * 4 + c];
+            if (im.pixels[i * 4 + c] > maxv) maxv = im.pixels[i * 4 + c];
+        }
+    double mean = sum / (1024.0 * 512 * 3);
+    assert_true(isfinite(mean) && mean > 0.0);
+    assert_true(maxv > mean); /* a studio has lights brighter than its average */
+    ibl_write_desc wd = {0};
+    wd.format = IBL_FORMAT_RGB32F;
+    ibl_image back = write_read(ctx, "studio_zip.exr", &im, &wd, NULL);
+    assert_memory_equal(back.pixels, im.pixels, 1024 * 512 * 4 * sizeof(float));
+    ibl_image_free(ctx, &back);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
+/* Hand-built uncompressed OpenEXR files (the layout of the OpenEXR file-format document),
+ * to pin what our writer never produces: tiles, grey, and data != display window. */
+typedef struct exr_builder {
+    uint8_t b[16384];
+    size_t n, table; /* bytes used; where the chunk offset table starts */
+} exr_builder;
+
+static void put(exr_builder *e, const void *v, size_t len)
+{
+    memcpy(e->b + e->n, v, len);
+    e->n += len;
+}
+
+static void put_i32(exr_builder *e, int32_t v)
+{
+    put(e, &v, 4); /* little-endian host */
+}
+
+static void put_attr(exr_builder *e, const char *name, const char *type, const void *v, int32_t len)
+{
+    put(e, name, strlen(name) + 1);
+    put(e, type, strlen(type) + 1);
+    put_i32(e, len);
+    put(e, v, (size_t)len);
+}
+
+/* The value stored for channel c (index in the sorted name list) at absolute pixel (x, y). */
+static float exr_value(int c, int x, int y)
+{
+    return (float)(c * 100 + x * 10 + y) + 0.25f;
+}
+
+/* channels: names in sorted order (all FLOAT); tile 0 = scanlines. */
+static size_t build_exr(exr_builder *e, const char *const *channels, int nch, const int32_t data[4],
+                        const int32_t disp[4], int tile)
+{
+    e->n = 0;
+    const uint8_t magic[8] = {0x76, 0x2f, 0x31, 0x01, 2, tile ? 2 : 0, 0, 0};
+    put(e, magic, 8);
+    uint8_t ch[256];
+    size_t cn = 0;
+    for (int c = 0; c < nch; c++) {
+        size_t l = strlen(channels[c]) + 1;
+        memcpy(ch + cn, channels[c], l), cn += l;
+        const int32_t fields[4] = {2 /* FLOAT */, 0 /* pLinear + reserved */, 1, 1};
+        memcpy(ch + cn, fields, 16), cn += 16;
+    }
+    ch[cn++] = 0;
+    put_attr(e, "channels", "chlist", ch, (int32_t)cn);
+    const uint8_t zero = 0;
+    put_attr(e, "compression", "compression", &zero, 1);
+    put_attr(e, "dataWindow", "box2i", data, 16);
+    put_attr(e, "displayWindow", "box2i", disp, 16);
+    put_attr(e, "lineOrder", "lineOrder", &zero, 1);
+    const float one = 1.0f, centre[2] = {0, 0};
+    put_attr(e, "pixelAspectRatio", "float", &one, 4);
+    put_attr(e, "screenWindowCenter", "v2f", centre, 8);
+    put_attr(e, "screenWindowWidth", "float", &one, 4);
+    if (tile) {
+        uint8_t td[9];
+        int32_t t32 = tile;
+        memcpy(td, &t32, 4), memcpy(td + 4, &t32, 4), td[8] = 0; /* one level */
+        put_attr(e, "tiles", "tiledesc", td, 9);
+    }
+    put(e, &zero, 1);
+    int w = data[2] - data[0] + 1, h = data[3] - data[1] + 1;
+    int tx = tile ? (w + tile - 1) / tile : 1, ty = tile ? (h + tile - 1) / tile : h;
+ size_t table = e->n;
+    e->table = table;
+    e->n += (size_t)tx * (size_t)ty * 8;
+    for (int j = 0; j < ty; j++)
+        for (int i = 0; i < tx; i++) {
+            uint64_t off = e->n;
+            memcpy(e->b + table + ((size_t)j * (size_t)tx + (size_t)i) * 8, &off, 8);
+            int x0 = tile ? i * tile : 0, x1 = tile ? x0 + tile : w;
+            int y0 = tile ? j * tile : j, y1 = tile ? y0 + tile : j + 1;
+            if (x1 > w) x1 = w;
+            if (y1 > h) y1 = h;
+            if (tile) {
+                put_i32(e, i), put_i32(e, j), put_i32(e, 0), put_i32(e, 0);
+            } else {
+                put_i32(e, data[1] + j);
+            }
+            put_i32(e, (y1 - y0) * (x1 - x0) * nch * 4);
+            for (int y = y0; y < y1; y++)
+                for (int c = 0; c < nch; c++)
+                    for (int x = x0; x < x1; x++) {
+                        float v = exr_value(c, data[0] + x, data[1] + y);
+                        put(e, &v, 4);
+                    }
+        }
+    return e->n;
+}
+
+static void exr_windows_tiles_grey(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    static exr_builder e;
+    ibl_texture t;
+    ibl_file_info fi;
+    const char *const bgr[3] = {"B", "G", "R"};
+    /* Data window inside a larger display window: the rest is black and transparent. */
+    const int32_t data[4] = {1, 1, 2, 2}, disp[4] = {0, 0, 3, 2};
+    size_t n = build_exr(&e, bgr, 3, data, disp, 0);
+    assert_int_equal(decode(ctx, e.b, n, &t, &fi), IBL_OK);
+    assert_int_equal(t.width, 4);
+    assert_int_equal(t.height, 3);
+    assert_int_equal(fi.format, IBL_FORMAT_RGB32F);
+    for (int y = 0; y < 3; y++)
+        for (int x = 0; x < 4; x++) {
+            const float *p = t.data + ((size_t)y * 4 + (size_t)x) * 4;
+            int inside = x >= 1 && x <= 2 && y >= 1 && y <= 2;
+            assert_true(p[0] == (inside ? exr_value(2, x, y) : 0.0f)); /* R is channel 2 */
+            assert_true(p[1] == (inside ? exr_value(1, x, y) : 0.0f));
+            assert_true(p[2] == (inside ? exr_value(0, x, y) : 0.0f));
+            assert_true(p[3] == (inside ? 1.0f : 0.0f));
+        }
+    ibl_texture_free(ctx, &t);
+    /* Data window beyond the display window: cropped. */
+    const int32_t data2[4] = {-1, -2, 3, 3}, disp2[4] = {0, 0, 1, 1};
+    n = build_exr(&e, bgr, 3, data2, disp2, 0);
+    assert_int_equal(decode(ctx, e.b, n, &t, NULL), IBL_OK);
+    assert_int_equal(t.width, 2);
+    assert_int_equal(t.height, 2);
+    for (int y = 0; y < 2; y++)
+        for (int x = 0; x < 2; x++) assert_true(t.data[((size_t)y * 2 + (size_t)x) * 4] == exr_value(2, x, y));
+    ibl_texture_free(ctx, &t);
+    /* Tiled (2x2 tiles, partial at the edges), grey Y with alpha. */
+    const char *const ay[2] = {"A", "Y"};
+    const int32_t data3[4] = {0, 0, 4, 2};
+    n = build_exr(&e, ay, 2, data3, data3, 2);
+    assert_int_equal(decode(ctx, e.b, n, &t, &fi), IBL_OK);
+    assert_int_equal(t.width, 5);
+    assert_int_equal(t.height, 3);
+    assert_int_equal(fi.format, IBL_FORMAT_RGBA32F);
+    assert_int_equal(fi.has_alpha, 1);
+    for (int y = 0; y < 3; y++)
+        for (int x = 0; x < 5; x++) {
+            const float *p = t.data + ((size_t)y * 5 + (size_t)x) * 4;
+            for (int c = 0; c < 3; c++) assert_true(p[c] == exr_value(1, x, y));
+            assert_true(p[3] == exr_value(0, x, y));
+        }
+    ibl_texture_free(ctx, &t);
+    /* Channels that are neither colour nor grey are refused by name. */
+    const char *const z[1] = {"Z"};
+    n = build_exr(&e, z, 1, data3, data3, 0);
+    assert_int_equal(decode(ctx, e.b, n, &t, NULL), IBL_ERR_UNSUPPORTED);
+    assert_non_null(strstr(ibl_context_message(ctx), "Z"));
+    /* A chunk offset pointing past the end is refused before decoding. */
+    n = build_exr(&e, bgr, 3, data, disp, 0);
+    memset(e.b + e.table + 8, 0xff, 8);
+    assert_int_equal(decode(ctx, e.b, n, &t, NULL), IBL_ERR_FORMAT);
+    ibl_context_destroy(ctx);
+}
+
+/* Samples written by OpenEXR itself (tests/data/make_exr_samples.cpp) from this pattern. */
+static void exr_pattern(int x, int y, float *rgb)
+{
+    rgb[0] = 0.5f + 0.25f * sinf(x / 5.0f);
+    rgb[1] = (y + 1) / 16.0f;
+    rgb[2] = 0.1f + 0.05f * (float)((x + 2 * y) % 7);
+}
+
+/* Largest error relative to the pattern (whose values lie in [0.06, 1.5]). */
+static double exr_sample_error(ibl_context *ctx, const char *name, ibl_format expect_format)
+{
+    ibl_image im;
+    ibl_file_info fi;
+    assert_int_equal(ibl_read_image(ctx, test_data(name), NULL, &im, &fi), IBL_OK);
+    assert_int_equal(im.width, 32);
+    assert_int_equal(im.height, 24);
+    assert_int_equal(fi.format, expect_format);
+    double worst = 0;
+    for (int y = 0; y < 24; y++)
+        for (int x = 0; x < 32; x++) {
+            float p[3];
+            exr_pattern(x, y, p);
+            const float *q = ibl_image_texel(&im, x, y);
+            for (int c = 0; c < 3; c++) worst = fmax(worst, fabs(q[c] - p[c]) / p[c]);
+            assert_true(q[3] == 1.0f);
+        }
+    ibl_image_free(ctx, &im);
+    return worst;
+}
+
+static void exr_every_compression(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    /* Lossless codecs on half data: only the float -> half rounding, <= 2^-11 relative. PXR24
+     * is lossless for half too. Tiled mip-mapped: level 0, also exact half. */
+    const char *lossless[] = {"exr_none.exr", "exr_rle.exr", "exr_zips.exr", "exr_zip.exr",
+                              "exr_piz.exr", "exr_pxr24.exr", "exr_tiled_mip.exr"};
+    for (size_t i = 0; i < sizeof lossless / sizeof lossless[0]; i++)
+        assert_true(exr_sample_error(ctx, lossless[i], IBL_FORMAT_RGB16F) <= ldexp(1, -11));
+    /* PXR24 on float keeps 15 of 23 mantissa bits (rounded): <= 2^-16 relative. */
+    assert_true(exr_sample_error(ctx, "exr_pxr24_float.exr", IBL_FORMAT_RGB32F) <= ldexp(1, -16));
+    /* Lossy codecs: a loose bound that still catches any misdecoded block, swapped channel
+     * or shifted row (those give errors of order 1). B44 quantises 4x4 blocks of half; DWA
+     * is a DCT codec at its default quality; luminance/chroma subsamples chroma 2x2. */
+    /* Measured with OpenEXR 3.1.5: 0.021 for B44/B44A, 0.054 for DWAA/DWAB (half or float). */
+    assert_true(exr_sample_error(ctx, "exr_b44.exr", IBL_FORMAT_RGB16F) <= 0.05);
+    assert_true(exr_sample_error(ctx, "exr_b44a.exr", IBL_FORMAT_RGB16F) <= 0.05);
+    assert_true(exr_sample_error(ctx, "exr_dwaa.exr", IBL_FORMAT_RGB16F) <= 0.1);
+    assert_true(exr_sample_error(ctx, "exr_dwab.exr", IBL_FORMAT_RGB16F) <= 0.1);
+    assert_true(exr_sample_error(ctx, "exr_dwaa_float.exr", IBL_FORMAT_RGB32F) <= 0.1);
+    /* Luminance/chroma: this pattern's blue changes every pixel, so subsampled chroma cannot
+     * hold it (OpenEXR's own RgbaInputFile gives the same 178% on blue); luminance is kept at
+     * full resolution: Rec. 709 luminance within 1% (measured 0.45%). */
+    ibl_image yc;
+    ibl_file_info fi;
+    assert_int_equal(ibl_read_image(ctx, test_data("exr_yc.exr"), NULL, &yc, &fi), IBL_OK);
+    assert_int_equal(fi.format, IBL_FORMAT_RGB16F);
+    for (int y = 0; y < 24; y++)
+        for (int x = 0; x < 32; x++) {
+            float p[3];
+            exr_pattern(x, y, p);
+            const float *q = ibl_image_texel(&yc, x, y);
+            double lp = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+            double lq = 0.2126 * q[0] + 0.7152 * q[1] + 0.0722 * q[2];
+            assert_true(fabs(lq - lp) <= 0.01 * lp);
+        }
+    ibl_image_free(ctx, &yc);
+    /* A file whose only colour is a named layer: that layer is read (float, exact). */
+    assert_true(exr_sample_error(ctx, "exr_layer.exr", IBL_FORMAT_RGB32F) == 0.0);
+    ibl_context_destroy(ctx);
+}
+
+/* ---- Radiance ------------------------------------------------------------------------ */
+
+/* A minimal RGBE reader written from the format description, independent of src/io/hdr.c
+ * (new-style RLE or flat scanlines, "-Y H +X W" only). */
+static int ref_read_rgbe(const uint8_t *b, size_t n, int *w, int *h, float **out)
+{
+    const uint8_t *p = NULL;
+    for (size_t i = 0; i + 1 < n; i++)
+        if (b[i] == '\n' && b[i + 1] == '\n') {
+            p = b + i + 2;
+            break;
+        }
+    if (!p || sscanf((const char *)p, "-Y %d +X %d", h, w) != 2) return 0;
+    p = memchr(p, '\n', (size_t)(b + n - p)) + 1;
+    float *img = malloc((size_t)*w * (size_t)*h * 3 * sizeof(float));
+    uint8_t *line = malloc((size_t)*w * 4);
+    for (int y = 0; y < *h; y++) {
+        if (p[0] == 2 && p[1] == 2) {
+            p += 4;
+            for (int c = 0; c < 4; c++)
+                for (int x = 0; x < *w;) {
+                    int count = *p++;
+                    if (count > 128) { /* a run: one value repeated count - 128 times */
+                        uint8_t v = *p++;
+                        for (int k = 0; k < count - 128; k++) line[(x++) * 4 + c] = v;
+                    } else { /* count literal values */
+                        for (int k = 0; k < count; k++) line[(x++) * 4 + c] = *p++;
+                    }
+                }
+        } else {
+            memcpy(line, p, (size_t)*w * 4);
+            p += (size_t)*w * 4;
+        }
+        for (int x = 0; x < *w; x++)
+            for (int c = 0; c < 3; c++) {
+                int e = line[x * 4 + 3];
+                /* Radiance's colr_color: (mantissa + 0.5) * 2^(e - 136) */
+                img[((size_t)y * (size_t)*w + (size_t)x) * 3 + (size_t)c] =
+                    e ? (float)ldexp(line[x * 4 + c] + 0.5, e - 136) : 0.0f;
+            }
+    }
+    free(line);
+    *out = img;
+    return 1;
+}
+
+static void hdr_uffizi(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image im;
+    ibl_file_info fi;
+    assert_int_equal(ibl_read_image(ctx, test_data("uffizi_latlong_256x128.hdr"), NULL, &im, &fi), IBL_OK);
+    assert_int_equal(fi.type, IBL_FILE_HDR);
+    assert_int_equal(fi.format, IBL_FORMAT_RGBE);
+    assert_int_equal(im.width, 256);
+    assert_int_equal(im.height, 128);
+    size_t n;
+    uint8_t *b = slurp(test_data("uffizi_latlong_256x128.hdr"), &n);
+    int w = 0, h = 0;
+    float *ref = NULL;
+    assert_true(ref_read_rgbe(b, n, &w, &h, &ref));
+    assert_int_equal(w, 256);
+    assert_int_equal(h, 128);
+    double sum = 0;
+    for (size_t i = 0; i < 256 * 128; i++) {
+        for (int c = 0; c < 3; c++) assert_true(im.pixels[i * 4 + c] == ref[i * 3 + c]);
+        sum += im.pixels[i * 4 + 1];
+    }
+    assert_true(sum > 0);
+    free(ref);
+    free(b);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
+/* RGBE keeps 8 bits of mantissa for the largest channel (at least 128 of 256 steps) and the
+ * reader returns the bucket centre: error <= half a step <= 2^-8 of the largest channel. */
+static void check_rgbe_bound(const ibl_image *orig, const ibl_image *back)
+{
+    size_t n = (size_t)orig->width * (size_t)orig->height;
+    for (size_t i = 0; i < n; i++) {
+        const float *o = orig->pixels + i * 4, *r = back->pixels + i * 4;
+        double m = fmax(o[0], fmax(o[1], o[2]));
+        for (int c = 0; c < 3; c++) assert_true(fabs((double)r[c] - o[c]) <= ldexp(m, -8));
+        assert_true(r[3] == 1.0f);
+    }
+}
+
+/* Offset of the first scanline: after the empty line and the resolution line. */
+static size_t hdr_data_offset(const uint8_t *b, size_t n)
+{
+    for (size_t i = 0; i + 1 < n; i++)
+        if (b[i] == '\n' && b[i + 1] == '\n') {
+            const uint8_t *nl = memchr(b + i + 2, '\n', n - i - 2);
+            return (size_t)(nl - b) + 1;
+        }
+    return 0;
+}
+
+static void hdr_round_trip(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    const int sizes[][2] = {{64, 8}, {7, 5}, {33000, 2}, {300, 3}};
+    for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
+        int w = sizes[k][0], h = sizes[k][1];
+        ibl_image im = make_image(ctx, w, h);
+        for (size_t i = 0; i < (size_t)w * (size_t)h; i++) {
+            float *p = im.pixels + i * 4;
+            if (i % 17 < 6) { /* runs of equal pixels exercise the run-length code */
+                p[0] = 0.5f, p[1] = 2.0f, p[2] = 100.0f;
+            } else {
+                for (int c = 0; c < 3; c++) p[c] = ldexpf(frand(), (int)(frand() * 40) - 20);
+            }
+            p[3] = 1.0f;
+        }
+        im.pixels[0] = im.pixels[1] = im.pixels[2] = 0.0f;
+        for (int flat = 0; flat < 2; flat++) {
+            ibl_write_desc wd = {0};
+            wd.hdr_no_rle = flat;
+            ibl_image back = write_read(ctx, "r.hdr", &im, &wd, NULL);
+            check_rgbe_bound(&im, &back);
+            assert_true(back.pixels[0] == 0.0f);
+            /* Re-encoding the decoded values reproduces the same bytes (bucket centres). */
+            size_t n1, n2;
+            uint8_t *b1 = slurp(test_path("r.hdr"), &n1);
+            assert_int_equal(ibl_write_image(ctx, test_path("r2.hdr"), &back, &wd), IBL_OK);
+            uint8_t *b2 = slurp(test_path("r2.hdr"), &n2);
+            assert_int_equal(n1, n2);
+            assert_memory_equal(b1, b2, n1);
+            /* Flat scanlines (asked for, or widths RLE cannot code) are exactly 4 bytes a pixel. */
+            size_t data = hdr_data_offset(b1, n1);
+            if (flat || w < 8 || w > 32767) assert_int_equal(n1 - data, (size_t)w * (size_t)h * 4);
+            else assert_true(b1[data] == 2 && b1[data + 1] == 2);
+            free(b1);
+            free(b2);
+            ibl_image_free(ctx, &back);
+        }
+        ibl_image_free(ctx, &im);
+    }
+    ibl_context_destroy(ctx);
+}
+
+/* Hand-made flat files: orientations, old-style run-length records, refusals. */
+static size_t make_hdr(uint8_t *buf, const char *res, const uint8_t *pix, size_t npix_bytes)
+{
+    int hl = sprintf((char *)buf, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\nEXPOSURE=2.0\n\n%s\n", res);
+    memcpy(buf + hl, pix, npix_bytes);
+    return (size_t)hl + npix_bytes;
+}
+
+static void hdr_orientations(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    /* 2x2 pixels in stored order; mantissa 128 + k, exponent 129: value (128 + k + 0.5) / 128 */
+    const uint8_t pix[16] = {128, 128, 128, 129, 129, 129, 129, 129,
+                             130, 130, 130, 129, 131, 131, 131, 129};
+    struct {
+        const char *res;
+        float expect[4]; /* red of top-left, top-right, bottom-left, bottom-right */
+    } cases[] = {
+        {"-Y 2 +X 2", {0, 1, 2, 3}},
+        {"+Y 2 +X 2", {2, 3, 0, 1}},
+        {"-Y 2 -X 2", {1, 0, 3, 2}},
+        {"+Y 2 -X 2", {3, 2, 1, 0}},
+    };
+    uint8_t buf[256];
+    for (size_t k = 0; k < 4; k++) {
+        size_t n = make_hdr(buf, cases[k].res, pix, 16);
+        ibl_texture t;
+        assert_int_equal(decode(ctx, buf, n, &t, NULL), IBL_OK);
+        for (int i = 0; i < 4; i++)
+            assert_true(t.data[i * 4] == (128.0f + cases[k].expect[i] + 0.5f) / 128.0f);
+        ibl_texture_free(ctx, &t);
+    }
+    size_t n = make_hdr(buf, "+X 2 -Y 2", pix, 16);
+    ibl_texture t;
+    assert_int_equal(decode(ctx, buf, n, &t, NULL), IBL_ERR_UNSUPPORTED);
+    assert_non_null(strstr(ibl_context_message(ctx), "mem.bin"));
+    /* Old-style RLE: pixel A, repeat x2, pixel B, repeat 1 then (shifted) 0 -> A A A B B */
+    const uint8_t old[] = {200, 100, 50, 130, 1, 1, 1, 2, 160, 160, 160, 128, 1, 1, 1, 1, 1, 1, 1, 0};
+    n = make_hdr(buf, "-Y 1 +X 5", old, sizeof old);
+    assert_int_equal(decode(ctx, buf, n, &t, NULL), IBL_OK);
+    const float a = (200 + 0.5f) / 64.0f, bv = (160 + 0.5f) / 256.0f;
+    const float expect[5] = {a, a, a, bv, bv};
+    for (int i = 0; i < 5; i++) assert_true(t.data[i * 4] == expect[i]);
+    ibl_texture_free(ctx, &t);
+    /* A repeat running past the end of the scanline is malformed. */
+    const uint8_t over[] = {200, 100, 50, 130, 1, 1, 1, 9};
+    n = make_hdr(buf, "-Y 1 +X 5", over, sizeof over);
+    assert_int_equal(decode(ctx, buf, n, &t, NULL), IBL_ERR_FORMAT);
+    /* XYZE is refused by name. */
+    n = (size_t)sprintf((char *)buf, "#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 1 +X 1\n");
+    memset(buf + n, 128, 4);
+    assert_int_equal(decode(ctx, buf, n + 4, &t, NULL), IBL_ERR_UNSUPPORTED);
+    ibl_context_destroy(ctx);
+}
+
+/* ---- PNG and JPEG -------------------------------------------------------------------- */
+
+/* 16-bit linear PNG: each value is rounded to the nearest of 65536 codes (error <= 0.5/65535,
+ * plus float rounding of the decoded value). */
+static void png16_round_trip(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image im = make_image(ctx, 33, 17);
+    for (size_t i = 0; i < 33 * 17 * 4; i++) im.pixels[i] = frand();
+    im.pixels[0] = 0.0f;
+    im.pixels[1] = 1.0f;
+    ibl_write_desc wd = {0};
+    wd.format = IBL_FORMAT_RGBA16_UNORM;
+    wd.exposure_ev = 3.0f; /* ignored for the linear 16-bit tables */
+    ibl_file_info fi;
+    ibl_image back = write_read(ctx, "t.png", &im, &wd, &fi);
+    assert_int_equal(fi.format, IBL_FORMAT_RGBA16_UNORM);
+    assert_int_equal(fi.has_alpha, 1);
+    for (size_t i = 0; i < 33 * 17 * 4; i++) assert_near(back.pixels[i], im.pixels[i], 0.5 / 65535 + 1e-7);
+    assert_true(back.pixels[0] == 0.0f && back.pixels[1] == 1.0f);
+    ibl_image_free(ctx, &back);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
+/* 8-bit sRGB without a tone map: the decoded value re-encoded to sRGB code units is within
+ * half a code of the original's (+1e-3 for float rounding); alpha within half a code too. */
+static void png8_round_trip(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image im = make_image(ctx, 29, 13);
+    for (size_t i = 0; i < 29 * 13 * 4; i++) im.pixels[i] = frand();
+    ibl_write_desc wd = {0};
+    wd.tonemap = IBL_TONEMAP_NONE;
+    ibl_file_info fi;
+    ibl_image back = write_read(ctx, "s.png", &im, &wd, &fi);
+    assert_int_equal(fi.format, IBL_FORMAT_RGBA8_SRGB);
+    for (size_t i = 0; i < 29 * 13; i++) {
+        for (int c = 0; c < 3; c++)
+            assert_near(ref_srgb_encode(back.pixels[i * 4 + c]) * 255,
+                        ref_srgb_encode(im.pixels[i * 4 + c]) * 255, 0.5 + 1e-3);
+        assert_near(back.pixels[i * 4 + 3], im.pixels[i * 4 + 3], 0.5 / 255 + 1e-6);
+    }
+    ibl_image_free(ctx, &back);
+    /* Opaque images are written without an alpha channel. */
+    for (size_t i = 0; i < 29 * 13; i++) im.pixels[i * 4 + 3] = 1.0f;
+    back = write_read(ctx, "o.png", &im, &wd, &fi);
+    assert_int_equal(fi.has_alpha, 0);
+    ibl_image_free(ctx, &back);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
+/* Exposure and the default (filmic) tone map against the published curve. */
+static void png8_exposure_filmic(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    const float values[4] = {0.0f, 0.05f, 0.18f, 3.0f};
+    ibl_image im = make_image(ctx, 4, 1);
+    for (int i = 0; i < 4; i++) {
+        im.pixels[i * 4] = im.pixels[i * 4 + 1] = im.pixels[i * 4 + 2] = values[i];
+        im.pixels[i * 4 + 3] = 1.0f;
+    }
+    ibl_write_desc wd = {0};
+    wd.exposure_ev = 1.0f;
+    ibl_image back = write_read(ctx, "f.png", &im, &wd, NULL);
+    for (int i = 0; i < 4; i++) {
+        double x = values[i] * 2.0; /* 2^ev */
+        double y = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14);
+        if (y > 1) y = 1;
+        /* within half an 8-bit code of the exact display value */
+        assert_near(ref_srgb_encode(back.pixels[i * 4]) * 255, ref_srgb_encode(y) * 255, 0.5 + 1e-3);
+    }
+    ibl_image_free(ctx, &back);
+    ibl_image_free(ctx, &im);
+    assert_near(ibl_tonemap_apply(IBL_TONEMAP_FILMIC, 1.0f), 2.54 / 3.16, 1e-6);
+    assert_true(ibl_tonemap_apply(IBL_TONEMAP_DEFAULT, 1e30f) == 1.0f);
+    assert_true(ibl_tonemap_apply(IBL_TONEMAP_NONE, 2.0f) == 1.0f);
+    assert_true(ibl_tonemap_apply(IBL_TONEMAP_NONE, 0.25f) == 0.25f);
+    assert_true(ibl_tonemap_apply(IBL_TONEMAP_FILMIC, NAN) == 0.0f);
+    assert_true(ibl_tonemap_apply(IBL_TONEMAP_FILMIC, -1.0f) == 0.0f);
+    ibl_context_destroy(ctx);
+}
+
+/* JPEG is lossy: a flat colour (no AC energy) must come back within 2 codes. */
+static void jpeg_round_trip(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image im = make_image(ctx, 48, 24);
+    for (size_t i = 0; i < 48 * 24; i++) {
+        im.pixels[i * 4] = 0.2f, im.pixels[i * 4 + 1] = 0.5f, im.pixels[i * 4 + 2] = 0.05f;
+        im.pixels[i * 4 + 3] = 1.0f;
+    }
+    ibl_write_desc wd = {0};
+    wd.tonemap = IBL_TONEMAP_NONE;
+    ibl_file_info fi;
+    ibl_image back = write_read(ctx, "p.jpg", &im, &wd, &fi);
+    assert_int_equal(fi.type, IBL_FILE_JPEG);
+    assert_int_equal(fi.format, IBL_FORMAT_RGBA8_SRGB);
+    for (size_t i = 0; i < 48 * 24; i++)
+        for (int c = 0; c < 3; c++)
+            assert_near(ref_srgb_encode(back.pixels[i * 4 + c]) * 255,
+                        ref_srgb_encode(im.pixels[i * 4 + c]) * 255, 2.0);
+    ibl_image_free(ctx, &back);
+    wd.format = IBL_FORMAT_RGBA32F;
+    assert_int_equal(ibl_write_image(ctx, test_path("bad.jpg"), &im, &wd), IBL_ERR_UNSUPPORTED);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
+/* ---- bad input ----------------------------------------------------------------------- */
+
+/* Every proper prefix of a valid file is refused with a message naming it, never crashes. */
+static void truncated_files(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image im = make_image(ctx, 20, 10);
+    for (size_t i = 0; i < 20 * 10 * 4; i++) im.pixels[i] = frand() * 4;
+    const char *names[] = {"t.hdr", "tf.hdr", "t.pfm", "t.exr", "tp.exr", "t.png"};
+    for (size_t k = 0; k < sizeof names / sizeof names[0]; k++) {
+        ibl_write_desc wd = {0};
+        wd.hdr_no_rle = k == 1;
+        wd.exr_compression = k == 4 ? IBL_EXR_PIZ : IBL_EXR_DEFAULT;
+        assert_int_equal(ibl_write_image(ctx, test_path(names[k]), &im, &wd), IBL_OK);
+        size_t n;
+        uint8_t *b = slurp(test_path(names[k]), &n);
+        for (size_t cut = 0; cut < n; cut += (cut < 64 ? 1 : 7)) {
+            ibl_texture t;
+            ibl_status s = ibl_decode_texture(ctx, b, cut, "cut.bin", NULL, &t, NULL);
+            if (k == 5 && cut >= n - 12) { /* a PNG without its IEND chunk still decodes */
+                ibl_texture_free(ctx, &t);
+                continue;
+            }
+            assert_int_not_equal(s, IBL_OK);
+            assert_null(t.data);
+            assert_non_null(strstr(ibl_context_message(ctx), "cut.bin"));
+        }
+        free(b);
+    }
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
+static void wrong_magic(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_texture t;
+    assert_int_equal(ibl_decode_texture(ctx, "hello world, not an image", 25, "x.exr", NULL, &t, NULL),
+                     IBL_ERR_FORMAT);
+    assert_non_null(strstr(ibl_context_message(ctx), "x.exr"));
+    assert_int_equal(ibl_decode_texture(ctx, "", 0, "empty.hdr", NULL, &t, NULL), IBL_ERR_FORMAT);
+    spit(test_path("garbage.png"), "GIF89a....", 10);
+    ibl_image im;
+    assert_int_equal(ibl_read_image(ctx, test_path("garbage.png"), NULL, &im, NULL), IBL_ERR_FORMAT);
+    assert_non_null(strstr(ibl_context_message(ctx), "garbage.png"));
+    ibl_context_destroy(ctx);
+}
+
+/* Writes one OpenEXR attribute. */
+static size_t exr_attr(uint8_t *p, const char *name, const char *type, const void *v, int len)
+{
+    size_t n = 0;
+    memcpy(p + n, name, strlen(name) + 1), n += strlen(name) + 1;
+    memcpy(p + n, type, strlen(type) + 1), n += strlen(type) + 1;
+    memcpy(p + n, &len, 4), n += 4; /* little-endian host, as the test machines are */
+    memcpy(p + n, v, (size_t)len), n += (size_t)len;
+    return n;
+}
+
+static size_t exr_header(uint8_t *p, int32_t xmax, int32_t ymax)
+{
+    size_t n = 0;
+    const uint8_t magic[8] = {0x76, 0x2f, 0x31, 0x01, 2, 0, 0, 0};
+    memcpy(p, magic, 8), n = 8;
+    uint8_t ch[19] = {'R', 0, 2, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0};
+    n += exr_attr(p + n, "channels", "chlist", ch, 19);
+    uint8_t comp = 0;
+    n += exr_attr(p + n, "compression", "compression", &comp, 1);
+    int32_t box[4] = {0, 0, xmax, ymax};
+    n += exr_attr(p + n, "dataWindow", "box2i", box, 16);
+    n += exr_attr(p + n, "displayWindow", "box2i", box, 16);
+    p[n++] = 0;
+    return n;
+}
+
+/* Absurd or zero sizes are refused before any large allocation (the largest block the
+ * context hands out stays under 1 MiB, the Radiance scanline buffer being the biggest). */
+static void absurd_dimensions(void **state)
+{
+    (void)state;
+    alloc_stats st = {0};
+    ibl_context *ctx = counting_context(&st);
+    uint8_t buf[4096];
+    ibl_texture t;
+    const char *hdrs[] = {"#?RADIANCE\n\n-Y 100000 +X 100000\n", "#?RADIANCE\n\n-Y 60000 +X 60000\n",
+                          "#?RADIANCE\n\n-Y 0 +X 16\n", "#?RADIANCE\n\n-Y 99999999999999999999 +X 1\n"};
+    for (size_t k = 0; k < 4; k++) {
+        size_t n = strlen(hdrs[k]);
+        memcpy(buf, hdrs[k], n);
+        memset(buf + n, 0x80, 64);
+        assert_int_equal(decode(ctx, buf, n + 64, &t, NULL), IBL_ERR_FORMAT);
+    }
+    const char *pfms[] = {"PF\n60000 60000\n-1.0\n", "PF\n0 7\n-1.0\n", "PF\n-3 7\n-1.0\n",
+                          "PF\n70000 1\n-1.0\n", "PF\n4 4\n0\n"};
+    for (size_t k = 0; k < 5; k++) {
+        size_t n = strlen(pfms[k]);
+        memcpy(buf, pfms[k], n);
+        memset(buf + n, 0, 256);
+        assert_int_equal(decode(ctx, buf, n + 256, &t, NULL), IBL_ERR_FORMAT);
+    }
+    size_t n = exr_header(buf, 59999, 59999); /* no offset table, no data */
+    assert_int_equal(decode(ctx, buf, n, &t, NULL), IBL_ERR_FORMAT);
+    n = exr_header(buf, 99999, 0);
+    assert_int_equal(decode(ctx, buf, n, &t, NULL), IBL_ERR_FORMAT);
+    n = exr_header(buf, -5, 10); /* xmax < xmin */
+    assert_int_equal(decode(ctx, buf, n, &t, NULL), IBL_ERR_FORMAT);
+    /* PNG header claiming 100000 x 10 (stb reads the IHDR without checking its CRC) */
+    const uint8_t png[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R',
+                           0, 1, 0x86, 0xa0, 0, 0, 0, 10, 8, 2, 0, 0, 0, 0, 0, 0, 0,
+                           0, 0, 0, 0, 'I', 'E', 'N', 'D', 0xae, 0x42, 0x60, 0x82};
+    assert_int_equal(decode(ctx, png, sizeof png, &t, NULL), IBL_ERR_FORMAT);
+    assert_true(st.largest < (1u << 20));
+    ibl_context_destroy(ctx);
+}
+
+/* The pixel policy: NaN and negatives become 0 and are counted; infinities are refused
+ * unless clamping, then +Inf becomes the clamp value and -Inf 0. */
+static void non_finite_pixels(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image im = make_image(ctx, 4, 2);
+    for (size_t i = 0; i < 4 * 2 * 4; i++) im.pixels[i] = 0.5f;
+    im.pixels[0] = NAN;                  /* texel 0: NaN */
+    im.pixels[4 + 1] = -2.0f;            /* texel 1: negative */
+    im.pixels[8 + 2] = INFINITY;         /* texel 2: +Inf */
+    im.pixels[12 + 0] = -INFINITY;       /* texel 3: -Inf */
+    im.pixels[16 + 0] = NAN;             /* texel 4: NaN and negative */
+    im.pixels[16 + 1] = -1.0f;
+    const char *path = test_path("bad.pfm");
+    assert_int_equal(ibl_write_image(ctx, path, &im, NULL), IBL_OK);
+    ibl_image back;
+    ibl_file_info fi;
+    assert_int_equal(ibl_read_image(ctx, path, NULL, &back, &fi), IBL_ERR_BAD_PIXELS);
+    assert_null(back.pixels);
+    assert_non_null(strstr(ibl_context_message(ctx), "bad.pfm"));
+    assert_int_equal(fi.pixels.inf_count, 2);
+    ibl_read_desc rd = {1, 1000.0f};
+    assert_int_equal(ibl_read_image(ctx, path, &rd, &back, &fi), IBL_OK);
+    assert_int_equal(fi.pixels.nan_count, 2);
+    assert_int_equal(fi.pixels.negative_count, 2);
+    assert_int_equal(fi.pixels.inf_count, 2);
+    assert_int_equal(fi.pixels.texel_count, 8);
+    assert_true(back.pixels[0] == 0.0f && back.pixels[1] == 0.5f);
+    assert_true(back.pixels[5] == 0.0f);
+    assert_true(back.pixels[10] == 1000.0f);
+    assert_true(back.pixels[12] == 0.0f);
+    assert_true(back.pixels[16] == 0.0f && back.pixels[17] == 0.0f);
+    ibl_image_free(ctx, &back);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
+/* ---- files and API edges ------------------------------------------------------------- */
+
+static int count_entries(const char *dir)
+{
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)))
+        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) n++;
+    closedir(d);
+    return n;
+}
+
+static void atomic_write(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    char dir[600];
+    snprintf(dir, sizeof dir, "%s", test_path("atomic"));
+    assert_int_equal(mkdir(dir, 0755), 0);
+    char target[700];
+    snprintf(target, sizeof target, "%s/out.bin", dir);
+    const char original[] = "ORIGINAL CONTENT";
+    spit(target, original, sizeof original);
+
+    /* A write that fails half-way (file size limit): the target is untouched, no temp left. */
+    static uint8_t big[1 << 16];
+    memset(big, 'x', sizeof big);
+    struct rlimit old;
+    assert_int_equal(getrlimit(RLIMIT_FSIZE, &old), 0);
+    struct rlimit lim = old;
+    lim.rlim_cur = 4096;
+    void (*prev)(int) = signal(SIGXFSZ, SIG_IGN);
+    assert_int_equal(setrlimit(RLIMIT_FSIZE, &lim), 0);
+    ibl_status s = ibl_write_file_atomic(ctx, target, big, sizeof big);
+    assert_int_equal(setrlimit(RLIMIT_FSIZE, &old), 0);
+    signal(SIGXFSZ, prev);
+    assert_int_equal(s, IBL_ERR_IO);
+    assert_non_null(strstr(ibl_context_message(ctx), target));
+    size_t n;
+    uint8_t *b = slurp(target, &n);
+    assert_int_equal(n, sizeof original);
+    assert_memory_equal(b, original, n);
+    free(b);
+    assert_int_equal(count_entries(dir), 1);
+
+    /* The rename fails (the target is a directory): the temporary is removed. */
+    char sub[800];
+    snprintf(sub, sizeof sub, "%s/sub", dir);
+    assert_int_equal(mkdir(sub, 0755), 0);
+    assert_int_equal(ibl_write_file_atomic(ctx, sub, big, 100), IBL_ERR_IO);
+    assert_int_equal(count_entries(dir), 2);
+
+    /* A successful write replaces the content. */
+    assert_int_equal(ibl_write_file_atomic(ctx, target, big, 100), IBL_OK);
+    b = slurp(target, &n);
+    assert_int_equal(n, 100);
+    free(b);
+    assert_int_equal(count_entries(dir), 2);
+    struct stat stt;
+    assert_int_equal(stat(target, &stt), 0);
+    assert_int_equal(stt.st_mode & 0777, 0644);
+
+    /* A folder that cannot be written: missing, or read-only (root ignores the mode). */
+    char missing[800];
+    snprintf(missing, sizeof missing, "%s/no/such/dir/x.exr", dir);
+    assert_int_equal(ibl_write_file_atomic(ctx, missing, big, 10), IBL_ERR_IO);
+    assert_non_null(strstr(ibl_context_message(ctx), missing));
+    if (geteuid() != 0) {
+        char ro[800], file[900];
+        snprintf(ro, sizeof ro, "%s/ro", dir);
+        assert_int_equal(mkdir(ro, 0555), 0);
+        snprintf(file, sizeof file, "%s/x.png", ro);
+        assert_int_equal(ibl_write_file_atomic(ctx, file, big, 10), IBL_ERR_IO);
+        assert_non_null(strstr(ibl_context_message(ctx), file));
+        chmod(ro, 0755);
+    }
+    ibl_context_destroy(ctx);
+}
+
+static void read_file_errors(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    void *bytes;
+    size_t n;
+    const char *missing = test_path("does-not-exist.hdr");
+    assert_int_equal(ibl_read_file(ctx, missing, &bytes, &n), IBL_ERR_IO);
+    char expect[700];
+    snprintf(expect, sizeof expect, "%s: cannot open: %s", missing, strerror(ENOENT));
+    assert_string_equal(ibl_context_message(ctx), expect);
+    assert_int_equal(ibl_read_file(ctx, test_tmpdir(), &bytes, &n), IBL_ERR_IO);
+    ibl_context_destroy(ctx);
+
+    /* Files beyond the context's memory limit are refused. */
+    ibl_context_desc d = {0};
+    d.threads = 1;
+    d.max_bytes = 1000;
+    assert_int_equal(ibl_context_create(&d, &ctx), IBL_OK);
+    static uint8_t two_k[2000];
+    spit(test_path("2k.bin"), two_k, sizeof two_k);
+    assert_int_equal(ibl_read_file(ctx, test_path("2k.bin"), &bytes, &n), IBL_ERR_TOO_LARGE);
+    assert_non_null(strstr(ibl_context_message(ctx), "2k.bin"));
+    ibl_context_destroy(ctx);
+}
+
+static void api_edges(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image im = make_image(ctx, 8, 4);
+    assert_int_equal(ibl_write_image(ctx, test_path("x.tiff"), &im, NULL), IBL_ERR_INVALID_ARGUMENT);
+    assert_false(test_file_exists(test_path("x.tiff")));
+    ibl_write_desc wd = {0};
+    wd.format = IBL_FORMAT_RG11B10F;
+    assert_int_equal(ibl_write_image(ctx, test_path("x.exr"), &im, &wd), IBL_ERR_UNSUPPORTED);
+    assert_int_equal(ibl_write_image(ctx, test_path("x.hdr"), &im, &wd), IBL_ERR_UNSUPPORTED);
+    assert_int_equal(ibl_write_image(ctx, test_path("x.pfm"), &im, &wd), IBL_ERR_UNSUPPORTED);
+    assert_int_equal(ibl_write_image(ctx, test_path("x.png"), &im, &wd), IBL_ERR_UNSUPPORTED);
+    assert_false(test_file_exists(test_path("x.exr")));
+    /* Flat formats hold one 2D image: a cube is refused, not silently cut. */
+    ibl_texture cube;
+    assert_int_equal(ibl_texture_alloc(ctx, IBL_TEXTURE_CUBE, 4, 4, 1, 1, &cube), IBL_OK);
+    assert_int_equal(ibl_write_texture(ctx, test_path("c.exr"), &cube, NULL), IBL_ERR_UNSUPPORTED);
+    void *bytes = NULL;
+    size_t n = 0;
+    assert_int_equal(ibl_encode_texture(ctx, IBL_FILE_HDR, &cube, NULL, &bytes, &n), IBL_ERR_UNSUPPORTED);
+    ibl_texture_free(ctx, &cube);
+    /* A one-level 2D texture goes to a flat format, and ibl_read_texture reads it back. */
+    ibl_texture t;
+    assert_int_equal(ibl_texture_alloc(ctx, IBL_TEXTURE_2D, 8, 4, 1, 1, &t), IBL_OK);
+    for (size_t i = 0; i < 8 * 4 * 4; i++) t.data[i] = (float)i;
+    assert_int_equal(ibl_encode_texture(ctx, IBL_FILE_EXR, &t, NULL, &bytes, &n), IBL_OK);
+    ibl_texture r;
+    ibl_file_info fi;
+    assert_int_equal(decode(ctx, bytes, n, &r, &fi), IBL_OK);
+    ibl_free(ctx, bytes);
+    assert_int_equal(fi.kind, IBL_TEXTURE_2D);
+    assert_int_equal(fi.levels, 1);
+    assert_int_equal(fi.format, IBL_FORMAT_RGBA32F); /* alpha was not all 1 */
+    assert_memory_equal(r.data, t.data, 8 * 4 * 4 * sizeof(float));
+    ibl_texture_free(ctx, &r);
+    ibl_texture_free(ctx, &t);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(file_types),         cmocka_unit_test(pfm_round_trip),
+        cmocka_unit_test(pfm_grey_big_endian), cmocka_unit_test(exr_float_round_trip),
+        cmocka_unit_test(exr_half_round_trip), cmocka_unit_test(exr_real_dwab),
+        cmocka_unit_test(exr_windows_tiles_grey), cmocka_unit_test(exr_every_compression), cmocka_unit_test(hdr_uffizi),         cmocka_unit_test(hdr_round_trip),
+        cmocka_unit_test(hdr_orientations),   cmocka_unit_test(png16_round_trip),
+        cmocka_unit_test(png8_round_trip),    cmocka_unit_test(png8_exposure_filmic),
+        cmocka_unit_test(jpeg_round_trip),    cmocka_unit_test(truncated_files),
+        cmocka_unit_test(wrong_magic),        cmocka_unit_test(absurd_dimensions),
+        cmocka_unit_test(non_finite_pixels),  cmocka_unit_test(atomic_write),
+        cmocka_unit_test(read_file_errors),   cmocka_unit_test(api_edges),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
