@@ -89,8 +89,13 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
                                 "prefilter: mapping table value %d (%g) is not a finite value >= 0",
                                 l, desc->table[l]);
     }
+    /* --mirror: level 0 is the unfiltered source. The seed's shininess chain then starts at
+     * level 1 (the seeds' "mirror reflection option" adds the sharp end); the roughness
+     * mappings keep their levels and only level 0 becomes the mirror (most already put
+     * roughness 0 there). */
     int first = info->mirror ? 1 : 0;
-    int L = levels - first; /* levels the mapping spreads over */
+    int shift = info->mirror && m == IBL_MAPPING_SEED;
+    int L = levels - shift; /* levels the mapping spreads over */
     int ggx = desc->filter == IBL_FILTER_GGX;
     for (int l = 0; l < levels; l++) {
         if (l < first) {
@@ -98,7 +103,7 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
             info->shininess[l] = 0.0f; /* 0: mirror (unfiltered) */
             continue;
         }
-        int ml = l - first;
+        int ml = l - shift;
         if (m == IBL_MAPPING_TABLE) {
             if (ggx) info->roughness[l] = desc->table[l] > 1 ? 1.0f : desc->table[l];
             else info->shininess[l] = desc->table[l];
