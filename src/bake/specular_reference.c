@@ -3,7 +3,8 @@
  * over every source texel t, in double. int_t f is the exact texel solid angle times f at the
  * centre when f is smooth over the texel, and otherwise a k x k split of the texel into
  * sub-rectangles with exact solid angles (ibl_cube_rect_solid_angle), k chosen from the lobe's
- * log slope so that each piece's midpoint error stays below ~4e-4 of its own value. Blocks of
+ * variation (log slope) so that f changes by at most ~20% across a piece (midpoint error
+ * <= ~0.2% of that piece, far less summed over the lobe). Blocks of
  * 8x8 texels whose nearest point is beyond the lobe's 1e-12 cut-off are skipped (their weight
  * is below 1e-12 of the peak). Slow by design: it is the yardstick. */
 #include "specular_internal.h"
@@ -140,14 +141,14 @@ void ibl__reference_eval_lobe(const ibl_specular_reference *r, const ibl__lobe *
                         if (t0 >= lobe->cull_angle || t0 >= PI_2) continue;
                         if (t0 < 0) t0 = 0;
                         double g = ibl__lobe_max_log_slope(lobe, t0, t1 < PI_2 ? t1 : PI_2);
-                        double kk = ceil(2.0 * gamma * g / 0.1);
+                        double kk = ceil(2.0 * gamma * g / 0.2);
                         if (t1 > PI_2 && lobe->horizon > 1e-3) {
                             /* the lobe's kink at the horizon: pieces of at most 0.01 rad where the lobe is
                              * still above 1e-3 of its peak 0.1 rad above the horizon */
                             double kh = ceil(2.0 * gamma / 0.01);
                             if (kh > kk) kk = kh;
                         }
-                        int k = kk < 1 ? 1 : kk > 64 ? 64 : (int)kk;
+                        int k = kk < 1 ? 1 : kk > 32 ? 32 : (int)kk;
                         double w;
                         if (k == 1) {
                             double c = R[0] * d[0] + R[1] * d[1] + R[2] * d[2];
