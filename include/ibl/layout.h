@@ -33,7 +33,11 @@ ibl_layout ibl_layout_from_name(const char *name); /* IBL_LAYOUT_AUTO if unknown
  * images are reported as angular; pass --layout octahedral to override. */
 ibl_layout ibl_layout_detect(int width, int height);
 
-/* How the picture's frame relates to the world frame. */
+/* How the picture's frame relates to the world frame:
+ *   world = Yaw(yaw_degrees) * Mirror * ZUp * picture   (ZUp first, yaw last).
+ * z_up maps (x, y, z) -> (x, z, -y); mirror maps x -> -x; yaw turns about +Y, right-handed, so
+ * yaw 90 takes +X to -Z and slides an equirect's content left by a quarter. Quarter turns,
+ * mirror and z_up move the texels of cube layouts exactly. See docs/CONVENTIONS.md. */
 typedef struct ibl_orientation {
     float yaw_degrees; /* rotate the environment about the up axis (positive: counter-clockwise seen from above) */
     int mirror;        /* flip left-right (for images that look at the sphere from outside) */
@@ -51,7 +55,10 @@ typedef struct ibl_to_cube_desc {
     int samples_per_axis;     /* supersampling of each cube texel's footprint; 0: automatic */
 } ibl_to_cube_desc;
 
-/* Converts a flat image in any layout to a one-level cubemap (allocated into out). */
+/* Converts a flat image in any layout to a one-level cubemap (allocated into out). Each
+ * texel is the solid-angle-weighted mean of the source over its footprint (an equirect's small
+ * bright sources keep their energy at any cube size; docs/CONVENTIONS.md gives the measured
+ * accuracy). Cube layouts at their own size are copied texel for texel. */
 ibl_status ibl_image_to_cubemap(ibl_context *ctx, const ibl_image *image,
                                 const ibl_to_cube_desc *desc, ibl_cubemap *out);
 /* Six face images (+X -X +Y -Y +Z -Z), all square and of one size. */
@@ -66,7 +73,10 @@ typedef struct ibl_from_cube_desc {
     int samples_per_axis; /* 0: automatic                                                  */
 } ibl_from_cube_desc;
 
-/* Converts one level of a cubemap to a flat image in a layout (allocated into out). */
+/* Converts one level of a cubemap to a flat image in a layout (allocated into out). Each
+ * pixel averages its footprint (from the area-correct mip level matching its size), so
+ * nothing aliases; pixels outside the angular map's disk and cells of a cross that hold no
+ * face are transparent black. */
 ibl_status ibl_cubemap_to_image(ibl_context *ctx, const ibl_cubemap *cube,
                                 const ibl_from_cube_desc *desc, ibl_image *out);
 /* Copies the six faces of one level into six new images. */
