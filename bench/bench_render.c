@@ -54,7 +54,9 @@ int main(int argc, char **argv)
     ibl_probe probe;
     for (int r = 0; r < RUNS; r++) {
         double t0 = now();
-        if (ibl_render_probe_from_environment(ctx, &env, &(ibl_render_probe_desc){.specular_size = 128}, &probe) != IBL_OK) return 1;
+        if (ibl_render_probe_from_environment(
+                ctx, &env, &(ibl_render_probe_desc){.specular_size = 128}, &probe) != IBL_OK)
+            return 1;
         t_probe[r] = now() - t0;
         if (r + 1 < RUNS) ibl_probe_free(ctx, &probe);
     }

@@ -28,6 +28,11 @@ static const char usage[] =
     "  --width W             image width (default 1024); --height H (default W/2)\n"
     "  --layout L            layout of INPUT (equirect, hcross, ...; default: detect)\n"
     "  --specular-size N     face size of the in-memory prefiltered chain (default 128)\n"
+    "  --chain FILE          use this prefiltered chain (cube .ktx2/.dds, level k at roughness\n"
+    "                        k/(levels-1)) instead of prefiltering INPUT, which stays the\n"
+    "                        background, mirror and SH source; with --lut FILE (split-sum\n"
+    "                        table) and --ambient FILE (AmbientBRDF volume, as `ibl lut`\n"
+    "                        writes them; --ambient-range A:B, default 1:2000)\n"
     "  --so FORMULA          specular occlusion: none ao triace triace-shininess triace-fast\n"
     "                        frostbite cone (default none)\n"
     "  --mix MODE            ambient composition: multiply lerp-albedo lerp-ao ao-lerp-ao\n"
@@ -38,13 +43,15 @@ static const char usage[] =
     "                        direction (shows the split sum's error at high roughness)\n"
     "  --sphere-ao MIN       synthetic AO on the spheres from MIN (bottom) to 1 (top)\n"
     "  --reference           Monte Carlo reference of the same scene (no split sum)\n"
-    "  --samples N           reference samples per pixel and lobe (default 256)\n"
+    "  --samples N           reference iterations per pixel, 3 directions each (default 256)\n"
     "  --supersample N       N x N rays per pixel for the runtime shading (default 1; the\n"
     "                        reference spreads its samples over each pixel anyway)\n"
     "  --report              also render the reference and print the error per sphere\n"
     "                        (the runtime image then uses at least 4 x 4 rays per pixel)\n"
     "  --compare A B         two variants side by side, labelled; each is a comma-separated\n"
-    "                        list of the options above without dashes, e.g.\n"
+    "                        list of so=, mix=, energy=, bp-diffuse=seed|f0, samples=,\n"
+    "                        sphere-ao=, horizon, mirror-direction, nearest-level,\n"
+    "                        reference, applied over the other options, e.g.\n"
     "                        --compare so=none so=triace-fast,sphere-ao=0.2\n"
     "                        --compare '' reference,samples=512\n";
 
@@ -55,10 +62,14 @@ typedef struct variant {
 
 static int energy_from_name(const char *s, ibl_energy_compensation *out)
 {
-    if (strcmp(s, "none") == 0) *out = IBL_ENERGY_NONE;
-    else if (strcmp(s, "fdez-aguera") == 0) *out = IBL_ENERGY_FDEZ_AGUERA;
-    else if (strcmp(s, "turquin") == 0) *out = IBL_ENERGY_TURQUIN;
-    else return 0;
+    if (strcmp(s, "none") == 0)
+        *out = IBL_ENERGY_NONE;
+    else if (strcmp(s, "fdez-aguera") == 0)
+        *out = IBL_ENERGY_FDEZ_AGUERA;
+    else if (strcmp(s, "turquin") == 0)
+        *out = IBL_ENERGY_TURQUIN;
+    else
+        return 0;
     return 1;
 }
 
@@ -74,9 +85,12 @@ static int apply_setting(ibl_render_desc *d, const char *key, const char *value)
     if (strcmp(key, "reference") == 0) return d->reference = 1;
     if (strcmp(key, "bp-diffuse") == 0) {
         if (!value) return 0;
-        if (strcmp(value, "seed") == 0) d->shade.bp_diffuse = IBL_BP_DIFFUSE_SEED;
-        else if (strcmp(value, "f0") == 0) d->shade.bp_diffuse = IBL_BP_DIFFUSE_F0;
-        else return 0;
+        if (strcmp(value, "seed") == 0)
+            d->shade.bp_diffuse = IBL_BP_DIFFUSE_SEED;
+        else if (strcmp(value, "f0") == 0)
+            d->shade.bp_diffuse = IBL_BP_DIFFUSE_F0;
+        else
+            return 0;
         return 1;
     }
     if (strcmp(key, "samples") == 0 || strcmp(key, "sphere-ao") == 0) {
@@ -84,8 +98,10 @@ static int apply_setting(ibl_render_desc *d, const char *key, const char *value)
         char *end;
         double x = strtod(value, &end);
         if (*end || !(x >= 0)) return 0;
-        if (key[1] == 'a') d->reference_samples = x > 1 << 20 ? 1 << 20 : (int)x;
-        else d->sphere_ao_min = x > 1 ? 1.0f : (float)x;
+        if (key[1] == 'a')
+            d->reference_samples = x > 1 << 20 ? 1 << 20 : (int)x;
+        else
+            d->sphere_ao_min = x > 1 ? 1.0f : (float)x;
         return 1;
     }
     return 0;
@@ -100,7 +116,8 @@ static void apply_spec(cli_args *a, ibl_render_desc *d, const char *spec)
         char *eq = strchr(tok, '=');
         if (eq) *eq = 0;
         if (!apply_setting(d, tok, eq ? eq + 1 : NULL))
-            cli_usage_error(a, "bad --compare setting '%s%s%s'", tok, eq ? "=" : "", eq ? eq + 1 : "");
+            cli_usage_error(a, "bad --compare setting '%s%s%s'", tok, eq ? "=" : "",
+                            eq ? eq + 1 : "");
     }
 }
 
@@ -193,23 +210,51 @@ int cli_cmd_render(int argc, char **argv)
     double exposure = 0;
     int width = 0, height = 0, specular_size = 0, report = 0;
     ibl_layout layout = IBL_LAYOUT_AUTO;
+    ibl_probe_files files = {0};
     ibl_render_desc base = {0};
     const char *arg;
     while ((arg = cli_next(&a))) {
         if (cli_common_option(&a, arg)) continue;
-        if (cli_is(&a, arg, "--output", "-o")) output = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--scene", NULL)) scene = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--exposure", NULL)) exposure = cli_double(&a, arg, -40, 40);
-        else if (cli_is(&a, arg, "--width", NULL)) width = cli_int(&a, arg, 8, 16384);
-        else if (cli_is(&a, arg, "--height", NULL)) height = cli_int(&a, arg, 4, 16384);
-        else if (cli_is(&a, arg, "--specular-size", NULL)) specular_size = cli_int(&a, arg, 4, 1024);
-        else if (cli_is(&a, arg, "--samples", NULL)) base.reference_samples = cli_int(&a, arg, 1, 1 << 20);
-        else if (cli_is(&a, arg, "--reference", NULL)) base.reference = 1;
-        else if (cli_is(&a, arg, "--report", NULL)) report = 1;
-        else if (cli_is(&a, arg, "--supersample", NULL)) base.supersample = cli_int(&a, arg, 1, 16);
-        else if (cli_is(&a, arg, "--horizon", NULL)) base.shade.horizon_occlusion = 1;
-        else if (cli_is(&a, arg, "--mirror-direction", NULL)) base.shade.mirror_direction = 1;
-        else if (cli_is(&a, arg, "--sphere-ao", NULL)) base.sphere_ao_min = (float)cli_double(&a, arg, 0, 1);
+        if (cli_is(&a, arg, "--output", "-o"))
+            output = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--scene", NULL))
+            scene = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--exposure", NULL))
+            exposure = cli_double(&a, arg, -40, 40);
+        else if (cli_is(&a, arg, "--width", NULL))
+            width = cli_int(&a, arg, 8, 16384);
+        else if (cli_is(&a, arg, "--height", NULL))
+            height = cli_int(&a, arg, 4, 16384);
+        else if (cli_is(&a, arg, "--specular-size", NULL))
+            specular_size = cli_int(&a, arg, 4, 1024);
+        else if (cli_is(&a, arg, "--samples", NULL))
+            base.reference_samples = cli_int(&a, arg, 1, 1 << 20);
+        else if (cli_is(&a, arg, "--reference", NULL))
+            base.reference = 1;
+        else if (cli_is(&a, arg, "--report", NULL))
+            report = 1;
+        else if (cli_is(&a, arg, "--chain", NULL))
+            files.specular = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--lut", NULL))
+            files.splitsum = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--ambient", NULL))
+            files.ambient_brdf = cli_value(&a, arg);
+        else if (cli_is(&a, arg, "--ambient-range", NULL)) {
+            const char *v = cli_value(&a, arg);
+            char *end = NULL;
+            double lo = strtod(v, &end), hi = end && *end == ':' ? strtod(end + 1, &end) : -1;
+            if (!end || *end || !(lo > 0 && hi > lo))
+                cli_usage_error(&a, "--ambient-range wants A:B with 0 < A < B, not '%s'", v);
+            files.ambient_shininess_min = (float)lo;
+            files.ambient_shininess_max = (float)hi;
+        } else if (cli_is(&a, arg, "--supersample", NULL))
+            base.supersample = cli_int(&a, arg, 1, 16);
+        else if (cli_is(&a, arg, "--horizon", NULL))
+            base.shade.horizon_occlusion = 1;
+        else if (cli_is(&a, arg, "--mirror-direction", NULL))
+            base.shade.mirror_direction = 1;
+        else if (cli_is(&a, arg, "--sphere-ao", NULL))
+            base.sphere_ao_min = (float)cli_double(&a, arg, 0, 1);
         else if (cli_is(&a, arg, "--layout", NULL)) {
             const char *v = cli_value(&a, arg);
             layout = ibl_layout_from_name(v);
@@ -217,13 +262,16 @@ int cli_cmd_render(int argc, char **argv)
                 cli_usage_error(&a, "unknown layout '%s'", v);
         } else if (cli_is(&a, arg, "--so", NULL)) {
             const char *v = cli_value(&a, arg);
-            if (!ibl_so_formula_from_name(v, &base.shade.so)) cli_usage_error(&a, "unknown --so '%s'", v);
+            if (!ibl_so_formula_from_name(v, &base.shade.so))
+                cli_usage_error(&a, "unknown --so '%s'", v);
         } else if (cli_is(&a, arg, "--mix", NULL)) {
             const char *v = cli_value(&a, arg);
-            if (!ibl_ambient_mix_from_name(v, &base.shade.mix)) cli_usage_error(&a, "unknown --mix '%s'", v);
+            if (!ibl_ambient_mix_from_name(v, &base.shade.mix))
+                cli_usage_error(&a, "unknown --mix '%s'", v);
         } else if (cli_is(&a, arg, "--energy", NULL)) {
             const char *v = cli_value(&a, arg);
-            if (!energy_from_name(v, &base.shade.energy)) cli_usage_error(&a, "unknown --energy '%s'", v);
+            if (!energy_from_name(v, &base.shade.energy))
+                cli_usage_error(&a, "unknown --energy '%s'", v);
         } else if (cli_is(&a, arg, "--compare", NULL)) {
             cmp[0] = cli_value(&a, arg);
             if (a.index >= a.argc) cli_usage_error(&a, "--compare needs two variants");
@@ -252,7 +300,12 @@ int cli_cmd_render(int argc, char **argv)
         st = ibl_probe_load(ctx, input, &probe);
     } else {
         st = load_environment(ctx, &a, input, layout, &env);
-        if (st == IBL_OK) {
+        if (st == IBL_OK && files.specular) {
+            files.mirror = input;
+            files.clamp_infinite = a.common.clamp;
+            if (strcmp(input, "sky") == 0) files.mirror = NULL;
+            st = ibl_probe_load_files(ctx, &files, &probe);
+        } else if (st == IBL_OK) {
             ibl_render_probe_desc pd = {.specular_size = specular_size};
             st = ibl_render_probe_from_environment(ctx, &env, &pd, &probe);
         }
@@ -292,8 +345,8 @@ int cli_cmd_render(int argc, char **argv)
         ibl_image other;
         st = ibl_render(ctx, &probe, &rd, &other, NULL);
         if (st == IBL_OK) {
-            report_errors(rd.reference ? &images[0] : &other, rd.reference ? &other : &images[0], ids,
-                          rd.mesh != NULL);
+            report_errors(rd.reference ? &images[0] : &other, rd.reference ? &other : &images[0],
+                          ids, rd.mesh != NULL);
             ibl_image_free(ctx, &other);
         }
     }

@@ -6,6 +6,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <math.h>
+#include <png.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -849,6 +850,119 @@ static void jpeg_round_trip(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* PNG layouts our writer never makes, written here with libpng itself (gAMA 1.0, so the
+ * expected value of a sample is simply sample / max): 1-bit grey, grey+alpha, 4-bit palette
+ * with transparency, 16-bit grey and Adam7-interlaced 16-bit RGB. Exact up to float rounding. */
+typedef struct mem_png {
+    uint8_t *b;
+    size_t n, cap;
+} mem_png;
+
+static void mem_png_write(png_structp png, png_bytep d, size_t n)
+{
+    mem_png *m = png_get_io_ptr(png);
+    if (m->n + n > m->cap) {
+        m->cap = (m->n + n) * 2;
+        m->b = realloc(m->b, m->cap);
+    }
+    memcpy(m->b + m->n, d, n);
+    m->n += n;
+}
+
+static void mem_png_flush(png_structp png)
+{
+    (void)png;
+}
+
+/* sample(x, y, c) in [0, 2^depth) for the file's channels; palette files index pal. */
+static unsigned png_sample(int x, int y, int c, int depth)
+{
+    return (unsigned)(x * 7 + y * 3 + c * 5) % (1u << depth);
+}
+
+static void png_variant(ibl_context *ctx, int color, int depth, int interlace)
+{
+    const int w = 9, h = 5;
+    int ch = color == PNG_COLOR_TYPE_GRAY ? 1 : color == PNG_COLOR_TYPE_GRAY_ALPHA ? 2
+           : color == PNG_COLOR_TYPE_PALETTE ? 1 : color == PNG_COLOR_TYPE_RGB ? 3 : 4;
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    png_infop info = png_create_info_struct(png);
+    mem_png m = {0};
+    assert_int_equal(setjmp(png_jmpbuf(png)), 0);
+    png_set_write_fn(png, &m, mem_png_write, mem_png_flush);
+    png_set_IHDR(png, info, w, h, depth, color, interlace, PNG_COMPRESSION_TYPE_DEFAULT,
+                 PNG_FILTER_TYPE_DEFAULT);
+    png_set_gAMA(png, info, 1.0);
+    png_color pal[16];
+    png_byte trans[16];
+    for (int i = 0; i < 16; i++) {
+        pal[i].red = (png_byte)(i * 16), pal[i].green = (png_byte)(255 - i * 16), pal[i].blue = (png_byte)(i * 3);
+        trans[i] = (png_byte)(i * 17);
+    }
+    if (color == PNG_COLOR_TYPE_PALETTE) {
+        png_set_PLTE(png, info, pal, 16);
+        png_set_tRNS(png, info, trans, 16, NULL);
+    }
+    png_write_info(png, info);
+    int passes = png_set_interlace_handling(png);
+    uint8_t row[9 * 4 * 2];
+    for (int pass = 0; pass < passes; pass++)
+        for (int y = 0; y < h; y++) {
+            memset(row, 0, sizeof row);
+            for (int x = 0; x < w; x++)
+                for (int c = 0; c < ch; c++) {
+                    unsigned v = png_sample(x, y, c, depth);
+                    if (depth == 16) {
+                        row[(x * ch + c) * 2] = (uint8_t)(v >> 8);
+                        row[(x * ch + c) * 2 + 1] = (uint8_t)v;
+                    } else if (depth == 8) {
+                        row[x * ch + c] = (uint8_t)v;
+                    } else { /* packed, most significant bits first */
+                        int bit = (x * ch + c) * depth;
+                        row[bit / 8] |= (uint8_t)(v << (8 - depth - bit % 8));
+                    }
+                }
+            png_write_row(png, row);
+        }
+    png_write_end(png, info);
+    png_destroy_write_struct(&png, &info);
+    ibl_texture t;
+    ibl_file_info fi;
+    assert_int_equal(decode(ctx, m.b, m.n, &t, &fi), IBL_OK);
+    assert_int_equal(fi.has_alpha, ch == 2 || ch == 4 || color == PNG_COLOR_TYPE_PALETTE);
+    assert_int_equal(fi.format, depth == 16 ? IBL_FORMAT_RGBA16_UNORM : IBL_FORMAT_RGBA8_SRGB);
+    double max = (double)((1u << depth) - 1);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            const float *p = t.data + ((size_t)y * w + (size_t)x) * 4;
+            double e[4];
+            if (color == PNG_COLOR_TYPE_PALETTE) {
+                unsigned i = png_sample(x, y, 0, depth);
+                e[0] = pal[i].red / 255.0, e[1] = pal[i].green / 255.0, e[2] = pal[i].blue / 255.0;
+                e[3] = trans[i] / 255.0;
+            } else {
+                for (int c = 0; c < 3; c++) e[c] = png_sample(x, y, ch >= 3 ? c : 0, depth) / max;
+                e[3] = (ch == 2 || ch == 4) ? png_sample(x, y, ch - 1, depth) / max : 1.0;
+            }
+            for (int c = 0; c < 4; c++) assert_near(p[c], e[c], 1e-6);
+        }
+    ibl_texture_free(ctx, &t);
+    free(m.b);
+}
+
+static void png_layouts(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    png_variant(ctx, PNG_COLOR_TYPE_GRAY, 1, PNG_INTERLACE_NONE);
+    png_variant(ctx, PNG_COLOR_TYPE_GRAY_ALPHA, 8, PNG_INTERLACE_NONE);
+    png_variant(ctx, PNG_COLOR_TYPE_PALETTE, 4, PNG_INTERLACE_NONE);
+    png_variant(ctx, PNG_COLOR_TYPE_GRAY, 16, PNG_INTERLACE_NONE);
+    png_variant(ctx, PNG_COLOR_TYPE_RGB, 16, PNG_INTERLACE_ADAM7);
+    png_variant(ctx, PNG_COLOR_TYPE_RGB_ALPHA, 8, PNG_INTERLACE_ADAM7);
+    ibl_context_destroy(ctx);
+}
+
 /* ---- bad input ----------------------------------------------------------------------- */
 
 /* Every proper prefix of a valid file is refused with a message naming it, never crashes. */
@@ -962,6 +1076,12 @@ static void absurd_dimensions(void **state)
                            0, 1, 0x86, 0xa0, 0, 0, 0, 10, 8, 2, 0, 0, 0, 0, 0, 0, 0,
                            0, 0, 0, 0, 'I', 'E', 'N', 'D', 0xae, 0x42, 0x60, 0x82};
     assert_int_equal(decode(ctx, png, sizeof png, &t, NULL), IBL_ERR_FORMAT);
+    /* Found by fuzzing: a 556-byte PNG whose IDAT made stb_image ask for 1 GiB. */
+    size_t fn;
+    uint8_t *fb = slurp(test_data("fuzz_png_idat_huge.png"), &fn);
+    ibl_status fs = decode(ctx, fb, fn, &t, NULL);
+    if (fs == IBL_OK) ibl_texture_free(ctx, &t);
+    free(fb);
     assert_true(st.largest < (1u << 20));
     ibl_context_destroy(ctx);
 }
@@ -1161,7 +1281,7 @@ int main(void)
         cmocka_unit_test(exr_windows_tiles_grey), cmocka_unit_test(exr_every_compression), cmocka_unit_test(hdr_uffizi),         cmocka_unit_test(hdr_round_trip),
         cmocka_unit_test(hdr_orientations),   cmocka_unit_test(png16_round_trip),
         cmocka_unit_test(png8_round_trip),    cmocka_unit_test(png8_exposure_filmic),
-        cmocka_unit_test(jpeg_round_trip),    cmocka_unit_test(truncated_files),
+        cmocka_unit_test(jpeg_round_trip),    cmocka_unit_test(png_layouts),    cmocka_unit_test(truncated_files),
         cmocka_unit_test(wrong_magic),        cmocka_unit_test(absurd_dimensions),
         cmocka_unit_test(non_finite_pixels),  cmocka_unit_test(atomic_write),
         cmocka_unit_test(read_file_errors),   cmocka_unit_test(api_edges),

@@ -4,6 +4,8 @@
 #include "test_support.h"
 
 #include "ibl/render.h"
+#include "render/render_internal.h"
+#include "ibl/brdf.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -99,7 +101,8 @@ static void sphere_hits_and_background(void **state)
     /* every sphere pixel is finite and positive */
     for (int i = 0; i < 140 * 70; i++) {
         if (ids[i] < 0) continue;
-        for (int c = 0; c < 3; c++) assert_true(isfinite(im.pixels[i * 4 + c]) && im.pixels[i * 4 + c] >= 0);
+        for (int c = 0; c < 3; c++)
+            assert_true(isfinite(im.pixels[i * 4 + c]) && im.pixels[i * 4 + c] >= 0);
     }
     free(ids);
     ibl_image_free(ctx, &im);
@@ -207,8 +210,12 @@ static void identical_at_any_thread_count(void **state)
         ibl_probe probe;
         assert_int_equal(build_probe(ctx, &env, 16, 16, &probe), IBL_OK);
         for (int mode = 0; mode < 2; mode++) {
-            ibl_render_desc d = {.width = 64, .height = 32, .environment = &env, .reference = mode,
-                                 .reference_samples = 16, .shade = {.so = IBL_SO_TRIACE_FAST},
+            ibl_render_desc d = {.width = 64,
+                                 .height = 32,
+                                 .environment = &env,
+                                 .reference = mode,
+                                 .reference_samples = 16,
+                                 .shade = {.so = IBL_SO_TRIACE_FAST},
                                  .sphere_ao_min = 0.3f};
             ibl_image im;
             assert_int_equal(ibl_render(ctx, &probe, &d, &im, NULL), IBL_OK);
@@ -247,7 +254,8 @@ static void tonemap_and_labels(void **state)
     /* exposure +1 EV doubles the input */
     b.pixels[0] = 0.09f;
     ibl_render_tonemap(&b, 1.0f);
-    assert_near(b.pixels[0], 0.18 * (2.51 * 0.18 + 0.03) / (0.18 * (2.43 * 0.18 + 0.59) + 0.14), 1e-5);
+    assert_near(b.pixels[0], 0.18 * (2.51 * 0.18 + 0.03) / (0.18 * (2.43 * 0.18 + 0.59) + 0.14),
+                1e-5);
     for (size_t i = 0; i < (size_t)60 * 20 * 4; i++) a.pixels[i] = 0.5f;
     for (size_t i = 0; i < (size_t)40 * 20 * 4; i++) b.pixels[i] = 0.25f;
     assert_int_equal(ibl_render_side_by_side(ctx, &a, "A1", &b, "B", &out), IBL_OK);
@@ -262,7 +270,8 @@ static void tonemap_and_labels(void **state)
     assert_near(ibl_image_texel(&out, out.width - 5, 15)[0], 0.25, 0);
     ibl_image_free(ctx, &out);
     b.height = 10;
-    assert_int_equal(ibl_render_side_by_side(ctx, &a, "x", &b, "y", &out), IBL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(ibl_render_side_by_side(ctx, &a, "x", &b, "y", &out),
+                     IBL_ERR_INVALID_ARGUMENT);
     b.height = 20;
     ibl_image_free(ctx, &a);
     ibl_image_free(ctx, &b);
@@ -322,7 +331,8 @@ static void obj_mesh(void **state)
     assert_non_null(f);
     fputs("v 0 0 0\nv -1 0 1\nv 1 0 1\nv 1 0 -1\nv -1 0 -1\n"
           "v -1 0 -1.001\nv 1 0 -1.001\nv 1 2 -1.001\nv -1 2 -1.001\n"
-          "f 1 2 3\nf 1 3 4\nf 1 4 5\nf 1 5 2\nf 6 7 8 9\n", f);
+          "f 1 2 3\nf 1 3 4\nf 1 4 5\nf 1 5 2\nf 6 7 8 9\n",
+          f);
     fclose(f);
     assert_int_equal(ibl_mesh_load_obj(ctx, corner, 256, &m), IBL_OK);
     double open = 0;
@@ -359,8 +369,9 @@ static void cli_render(void **state)
                           test_data("studio.exr"), png);
     assert_int_equal(rc, 0);
     assert_true(test_file_exists(png));
-    rc = test_run_cli(&out, "render '%s' -o '%s' --width 64 --specular-size 16 -q --compare so=none "
-                            "so=triace-fast,sphere-ao=0.3,mix=lerp-ao",
+    rc = test_run_cli(&out,
+                      "render '%s' -o '%s' --width 64 --specular-size 16 -q --compare so=none "
+                      "so=triace-fast,sphere-ao=0.3,mix=lerp-ao",
                       test_data("studio.exr"), cmp);
     assert_int_equal(rc, 0);
     ibl_context *ctx = test_context(1);
@@ -369,17 +380,88 @@ static void cli_render(void **state)
     assert_int_equal(im.height, 32);
     assert_true(im.width > 128);
     ibl_image_free(ctx, &im);
-    rc = test_run_cli(&out, "render '%s' -o '%s' --width 32 --specular-size 8 --reference --samples 8 -q",
+    rc = test_run_cli(&out,
+                      "render '%s' -o '%s' --width 32 --specular-size 8 --reference --samples 8 -q",
                       test_data("studio.exr"), exr);
     assert_int_equal(rc, 0);
     assert_int_equal(ibl_read_image(ctx, exr, NULL, &im, NULL), IBL_OK);
     assert_int_equal(im.width, 32);
     ibl_image_free(ctx, &im);
     ibl_context_destroy(ctx);
-    assert_int_equal(test_run_cli(&out, "render '%s' -o '%s' --so bogus", test_data("studio.exr"), png), 2);
-    assert_int_equal(test_run_cli(&out, "render '%s' -o '%s' --compare so=none", test_data("studio.exr"), png), 2);
+    /* a chain and a table from files (what the bake stages write) */
+    ibl_context *c2 = test_context(1);
+    ibl_cubemap env;
+    face_coloured_cube(c2, &env);
+    ibl_probe probe;
+    assert_int_equal(build_probe(c2, &env, 16, 16, &probe), IBL_OK);
+    ibl_texture chain = ibl_texture_from_cubemap(&probe.specular);
+    assert_int_equal(ibl_write_texture(c2, test_path("chain.ktx2"), &chain, NULL), IBL_OK);
+    ibl_image lutimg;
+    ibl_brdf_lut_desc ld = {.size = 16};
+    assert_int_equal(ibl_brdf_lut(c2, &ld, &lutimg), IBL_OK);
+    assert_int_equal(ibl_write_image(c2, test_path("lut.exr"), &lutimg, NULL), IBL_OK);
+    rc = test_run_cli(&out, "render '%s' -o '%s' --width 64 -q --chain '%s' --lut '%s'",
+                      test_data("studio.exr"), png, test_path("chain.ktx2"), test_path("lut.exr"));
+    assert_int_equal(rc, 0);
+    rc = test_run_cli(&out, "render '%s' -o '%s' --width 64 -q --chain '%s'",
+                      test_data("studio.exr"), png, test_path("lut.exr"));
+    assert_int_equal(rc, 1);
+    ibl_image_free(c2, &lutimg);
+    ibl_probe_free(c2, &probe);
+    ibl_cubemap_free(c2, &env);
+    ibl_context_destroy(c2);
+    assert_int_equal(
+        test_run_cli(&out, "render '%s' -o '%s' --so bogus", test_data("studio.exr"), png), 2);
+    assert_int_equal(
+        test_run_cli(&out, "render '%s' -o '%s' --compare so=none", test_data("studio.exr"), png),
+        2);
     assert_int_equal(test_run_cli(&out, "render '%s' -o '%s'", test_path("missing.exr"), png), 1);
     assert_non_null(strstr(out, "missing.exr"));
+}
+
+/* The reference's environment sampler: its density integrates to 1 over the sphere (grid of
+ * exact texel solid angles, 8x8 points per texel of a 16 cube: the density is smooth within a
+ * texel, so 1e-3), and the mean of 1/pdf over its own samples is 4 pi (an unbiased estimate of
+ * the sphere's area; 4096 stratified samples: 2%). */
+static void environment_sampler(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_cubemap env;
+    face_coloured_cube(ctx, &env);
+    /* a bright spot so the density is far from uniform */
+    ibl_cubemap_face(&env, 0, IBL_FACE_POS_Y)[(5 * 16 + 7) * 4 + 1] = 500.0f;
+    ibl__env_sampler *es = ibl__env_sampler_create(ctx, &env);
+    assert_non_null(es);
+    double total = 0;
+    int sub = 8;
+    for (int f = 0; f < 6; f++)
+        for (int y = 0; y < 16 * sub; y++)
+            for (int x = 0; x < 16 * sub; x++) {
+                int n = 16 * sub;
+                ibl_vec3 d = ibl_cube_texel_direction(f, n, x, y);
+                total += ibl__env_sampler_pdf(es, d) * ibl_cube_texel_solid_angle(n, x, y);
+            }
+    assert_near(total, 1.0, 1e-3);
+    double inv = 0;
+    int hits_spot = 0;
+    for (int i = 0; i < 4096; i++) {
+        float u0 = (i + 0.5f) / 4096.0f, u1 = (float)((i * 0.6180339887) - floor(i * 0.6180339887)),
+              pdf;
+        ibl_vec3 d = ibl__env_sampler_sample(es, u0, u1, &pdf);
+        assert_near(pdf, ibl__env_sampler_pdf(es, d), 1e-3 * pdf);
+        inv += 1.0 / pdf;
+        float s, t;
+        if (ibl_cube_face_st(d, &s, &t) == IBL_FACE_POS_Y && (int)(s * 16) == 7 &&
+            (int)(t * 16) == 5)
+            hits_spot++;
+    }
+    assert_near(inv / 4096, 4 * 3.14159265358979, 0.02 * 4 * 3.14159265358979);
+    /* the spot (3x3 dilated) holds most of the weight */
+    assert_true(hits_spot > 4096 / 20);
+    ibl__env_sampler_destroy(ctx, es);
+    ibl_cubemap_free(ctx, &env);
+    ibl_context_destroy(ctx);
 }
 
 int main(void)
@@ -392,6 +474,7 @@ int main(void)
         cmocka_unit_test(tonemap_and_labels),
         cmocka_unit_test(obj_mesh),
         cmocka_unit_test(cli_render),
+        cmocka_unit_test(environment_sampler),
     };
     return cmocka_run_group_tests_name("render", tests, NULL, NULL);
 }

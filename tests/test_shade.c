@@ -31,7 +31,8 @@ static void reference_ab(double nv, double r, int steps, double *a_out, double *
             double vh = vx * hx + vz * hz;
             double nl = 2.0 * vh * hz - vz;
             if (nl <= 0.0 || vh <= 0.0) continue;
-            double lv = nl * sqrt(nv * nv * (1.0 - a2) + a2), ll = nv * sqrt(nl * nl * (1.0 - a2) + a2);
+            double lv = nl * sqrt(nv * nv * (1.0 - a2) + a2),
+                   ll = nv * sqrt(nl * nl * (1.0 - a2) + a2);
             double vis = 0.5 / (lv + ll);
             double w = vis * 4.0 * vh * nl / hz; /* D V F n.l 4 v.h / (D n.h) */
             double fc = pow(1.0 - vh, 5.0);
@@ -140,9 +141,11 @@ static void so_conditions(void **state)
         double mid = acos(sqrt(ao));
         float e0 = 0.0f, em = (float)sin(mid), e1 = 1.0f;
         /* (1): saturate(sin^2 + 2AO - 1) -> 2AO - 1, AO, 2AO */
-        assert_near(ibl_specular_occlusion(IBL_SO_TRIACE, e0, (float)ao, 0, 0), fmax(0, 2 * ao - 1), 1e-6);
+        assert_near(ibl_specular_occlusion(IBL_SO_TRIACE, e0, (float)ao, 0, 0), fmax(0, 2 * ao - 1),
+                    1e-6);
         assert_near(ibl_specular_occlusion(IBL_SO_TRIACE, em, (float)ao, 0, 0), ao, 1e-6);
-        assert_near(ibl_specular_occlusion(IBL_SO_TRIACE, e1, (float)ao, 0, 0), fmin(1, 2 * ao), 1e-6);
+        assert_near(ibl_specular_occlusion(IBL_SO_TRIACE, e1, (float)ao, 0, 0), fmin(1, 2 * ao),
+                    1e-6);
         /* (3): saturate((sin + AO)^2 - 1 + AO) */
         double s0 = fmin(1, fmax(0, ao * ao + ao - 1));
         double sm = fmin(1, fmax(0, pow(sqrt(1 - ao) + ao, 2) - 1 + ao));
@@ -196,12 +199,12 @@ static void compositions(void **state)
     float ao = 0.5f, so = 0.2f, out[3];
     /* hand values: lerp(x, y, t) = x + (y - x) t */
     const double expect[IBL_MIX_COUNT] = {
-        0.5 + 10 * 0.2,                      /* multiply              */
-        0.5 + (0.5 + (10 - 0.5) * 0.2),      /* (1) da*albedo = 0.5   */
-        0.5 + (1.0 + (10 - 1.0) * 0.2),      /* (2) da*AO = 1         */
+        0.5 + 10 * 0.2,                       /* multiply              */
+        0.5 + (0.5 + (10 - 0.5) * 0.2),       /* (1) da*albedo = 0.5   */
+        0.5 + (1.0 + (10 - 1.0) * 0.2),       /* (2) da*AO = 1         */
         0.5 + 0.5 * (1.0 + (10 - 1.0) * 0.2), /* (3)                  */
-        0.5 + (0.5 + (10 - 0.5) * 0.2),      /* (4) da*AO^2 = 0.5     */
-        0.5 * 0.2 + 0.5 * (1.0 + 9.0 * 0.2), /* entire                */
+        0.5 + (0.5 + (10 - 0.5) * 0.2),       /* (4) da*AO^2 = 0.5     */
+        0.5 * 0.2 + 0.5 * (1.0 + 9.0 * 0.2),  /* entire                */
     };
     for (int m = 0; m < IBL_MIX_COUNT; m++) {
         ibl_ambient_mix_apply((ibl_ambient_mix)m, sd, da, sa, alb, ao, so, out);
@@ -227,12 +230,14 @@ static void shininess_hack_and_offset(void **state)
     assert_near(ibl_shininess_hack(400, 120, 1.0f), 0.0, 1e-6);
 
     /* R' = normalize(c (P_obj - P_IBL) + R): (2 * (1, 0, 0) - 0 + (0, 0, 1)) / sqrt(5) */
-    ibl_vec3 r = ibl_offset_reflection((ibl_vec3){0, 0, 1}, (ibl_vec3){3, 2, 0}, (ibl_vec3){2, 2, 0}, 2.0f);
+    ibl_vec3 r =
+        ibl_offset_reflection((ibl_vec3){0, 0, 1}, (ibl_vec3){3, 2, 0}, (ibl_vec3){2, 2, 0}, 2.0f);
     assert_near(r.x, 2.0 / sqrt(5.0), 1e-6);
     assert_near(r.y, 0.0, 1e-7);
     assert_near(r.z, 1.0 / sqrt(5.0), 1e-6);
     /* c = 0 leaves R as is */
-    r = ibl_offset_reflection((ibl_vec3){0, 0.6f, 0.8f}, (ibl_vec3){3, 2, 0}, (ibl_vec3){0, 0, 0}, 0.0f);
+    r = ibl_offset_reflection((ibl_vec3){0, 0.6f, 0.8f}, (ibl_vec3){3, 2, 0}, (ibl_vec3){0, 0, 0},
+                              0.0f);
     assert_near(r.y, 0.6, 1e-6);
 
     /* environment switch: object centred on the border is half in, a whole extent away is out */
@@ -249,13 +254,14 @@ static void parallax(void **state)
     ibl_vec3 c = {0, 0, 0};
     /* a ray from the capture point is unchanged, in any direction */
     for (int i = 0; i < 50; i++) {
-        ibl_vec3 r = {sinf(i * 0.7f) * cosf(i * 1.3f), cosf(i * 0.7f), sinf(i * 0.7f) * sinf(i * 1.3f)};
+        ibl_vec3 r = {sinf(i * 0.7f) * cosf(i * 1.3f), cosf(i * 0.7f),
+                      sinf(i * 0.7f) * sinf(i * 1.3f)};
         ibl_vec3 o = ibl_parallax_correct(&box, c, c, r);
         assert_near(o.x, r.x, 1e-5);
         assert_near(o.y, r.y, 1e-5);
         assert_near(o.z, r.z, 1e-5);
     }
-    /* from (1, 0, 0) straight up hits the top at (1, 1, 0): seen from the centre, (1, 1, 0)/sqrt2 */
+    /* from (1, 0, 0) straight up: the top at (1, 1, 0), seen from the centre (1, 1, 0)/sqrt2 */
     ibl_vec3 o = ibl_parallax_correct(&box, c, (ibl_vec3){1, 0, 0}, (ibl_vec3){0, 1, 0});
     assert_near(o.x, 1 / sqrt(2.0), 1e-6);
     assert_near(o.y, 1 / sqrt(2.0), 1e-6);
@@ -279,8 +285,8 @@ static void influence_blending(void **state)
 {
     (void)state;
     ibl_volume v[3] = {
-        {IBL_VOLUME_BOX, {0, 0, 0}, {10, 5, 10}, 0, 2},    /* big room        */
-        {IBL_VOLUME_SPHERE, {2, 0, 0}, {0, 0, 0}, 3, 1},   /* medium, inside  */
+        {IBL_VOLUME_BOX, {0, 0, 0}, {10, 5, 10}, 0, 2},     /* big room        */
+        {IBL_VOLUME_SPHERE, {2, 0, 0}, {0, 0, 0}, 3, 1},    /* medium, inside  */
         {IBL_VOLUME_SPHERE, {3, 0, 0}, {0, 0, 0}, 1, 0.5f}, /* small, inside  */
     };
     int order[3];
@@ -498,8 +504,10 @@ static void atlas_round_trip(void **state)
         int n = ibl_level_size(32, k);
         const float *a = ibl_cubemap_face(&chain, k, 0), *b = ibl_cubemap_face(&back, k, 0);
         for (size_t i = 0; i < (size_t)6 * n * n * 4; i++) {
-            if (k <= 2) assert_true(a[i] == b[i]);
-            else assert_near(b[i], a[i], 0.5);
+            if (k <= 2)
+                assert_true(a[i] == b[i]);
+            else
+                assert_near(b[i], a[i], 0.5);
         }
     }
     /* shader emulation: away from face edges the atlas's 2D bilinear equals the cube's seamless
@@ -535,7 +543,8 @@ static void channel_packing(void **state)
         assert_int_equal(ibl_image_alloc(ctx, 5, 3, &in[i]), IBL_OK);
         for (int p = 0; p < 15; p++) in[i].pixels[p * 4] = (float)(i * 100 + p);
     }
-    assert_int_equal(ibl_pack_material_channels(ctx, &in[0], &in[1], &in[2], &in[3], &packed), IBL_OK);
+    assert_int_equal(ibl_pack_material_channels(ctx, &in[0], &in[1], &in[2], &in[3], &packed),
+                     IBL_OK);
     assert_near(packed.pixels[7 * 4 + 2], 207, 0); /* AO of pixel 7 in blue */
     assert_int_equal(ibl_unpack_material_channels(ctx, &packed, out), IBL_OK);
     for (int i = 0; i < 4; i++) {
@@ -585,6 +594,113 @@ static void ambient_brdf_usage(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* Loading the parts from files: a chain (KTX2), the split-sum table and the AmbientBRDF
+ * volume as `ibl lut` computes them (KTX2, float32: exact), read back into a probe whose reads
+ * equal the in-memory values. */
+static void load_files(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_cubemap chain;
+    assert_int_equal(ibl_cubemap_alloc(ctx, 16, 5, &chain), IBL_OK);
+    for (int k = 0; k < 5; k++) {
+        int n = ibl_level_size(16, k);
+        float *f = ibl_cubemap_face(&chain, k, 0);
+        for (size_t i = 0; i < (size_t)6 * n * n; i++)
+            for (int c = 0; c < 4; c++) f[i * 4 + c] = (float)(k + 1);
+    }
+    ibl_write_desc wd = {.format = IBL_FORMAT_RGBA32F};
+    ibl_texture tex = ibl_texture_from_cubemap(&chain);
+    assert_int_equal(ibl_write_texture(ctx, test_path("spec.ktx2"), &tex, &wd), IBL_OK);
+    ibl_image lut2;
+    ibl_brdf_lut_desc ld = {.size = 16};
+    assert_int_equal(ibl_brdf_lut(ctx, &ld, &lut2), IBL_OK);
+    ibl_texture t2 = {IBL_TEXTURE_2D, 16, 16, 1, 1, IBL_FORMAT_RGBA32F, lut2.pixels, 0, NULL, 0, 0};
+    assert_int_equal(ibl_write_texture(ctx, test_path("lut.ktx2"), &t2, &wd), IBL_OK);
+    ibl_ambient_brdf_desc ad = {.size_nv = 8, .size_shininess = 8, .size_f0 = 4};
+    ibl_texture vol;
+    assert_int_equal(ibl_ambient_brdf_volume(ctx, &ad, &vol), IBL_OK);
+    assert_int_equal(ibl_write_texture(ctx, test_path("amb.ktx2"), &vol, &wd), IBL_OK);
+
+    ibl_probe_files files = {.specular = test_path("spec.ktx2"),
+                             .splitsum = test_path("lut.ktx2"),
+                             .ambient_brdf = test_path("amb.ktx2")};
+    ibl_probe p;
+    assert_int_equal(ibl_probe_load_files(ctx, &files, &p), IBL_OK);
+    assert_int_equal(p.mapping.levels, 5);
+    /* default mapping: roughness k/4, and the levels come back in place */
+    static const float one[3] = {1, 1, 1};
+    ibl_surface s = surface_at(0.7);
+    for (int k = 0; k < 5; k++) {
+        float out[3];
+        assert_near(ibl_probe_lod_from_roughness(&p, k / 4.0f), k, 1e-6);
+        ibl_probe_sample_specular(&p, (float)k, (ibl_vec3){0.2f, 0.3f, -0.9f}, out);
+        assert_near(out[0], k + 1, 0);
+    }
+    /* SH from level 0 (constant 1): IEM = 1 */
+    float irr[3];
+    ibl_probe_irradiance(&p, (ibl_vec3){0, 1, 0}, irr);
+    assert_near(irr[0], 1.0, 1e-5);
+    /* the tables at texel centres are the computed texels */
+    float a, b;
+    ibl_splitsum_lookup(&p.splitsum, 5.5f / 16, 9.5f / 16, &a, &b);
+    assert_near(a, ibl_image_texel(&lut2, 5, 9)[0], 1e-6);
+    assert_near(b, ibl_image_texel(&lut2, 5, 9)[1], 1e-6);
+    float sh3 = (float)ibl_ambient_brdf_row_shininess(&ad, 3);
+    float v = ibl_ambient_brdf_lookup(&p.ambient_brdf, 2.5f / 8, sh3, 1.5f / 4);
+    assert_near(v, vol.data[(((size_t)1 * 8 + 3) * 8 + 2) * 4], 1e-5);
+    /* and the probe shades */
+    ibl_material m = ibl_material_gltf(one, 1.0f, 0.5f);
+    ibl_shade_result r;
+    ibl_shade(&p, NULL, &m, &s, &r);
+    assert_true(r.specular[0] > 0.0f && r.lod == 2.0f);
+    ibl_probe_free(ctx, &p);
+    /* a 2D file is not a chain; a missing file is an I/O error naming it */
+    files.specular = test_path("lut.ktx2");
+    assert_int_equal(ibl_probe_load_files(ctx, &files, &p), IBL_ERR_FORMAT);
+    assert_non_null(strstr(ibl_context_message(ctx), "lut.ktx2"));
+    files.specular = test_path("none.ktx2");
+    assert_int_equal(ibl_probe_load_files(ctx, &files, &p), IBL_ERR_IO);
+    assert_int_equal(ibl_probe_load(ctx, test_tmpdir(), &p), IBL_ERR_UNSUPPORTED);
+    ibl_texture_free(ctx, &vol);
+    ibl_image_free(ctx, &lut2);
+    ibl_cubemap_free(ctx, &chain);
+    ibl_context_destroy(ctx);
+}
+
+/* Two constant probes blended by weight: the sum of their results by weight, by hand. */
+static void probe_blending(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_probe p[2];
+    ibl_cubemap cube[2];
+    for (int i = 0; i < 2; i++) {
+        memset(&p[i], 0, sizeof p[i]);
+        assert_int_equal(ibl_cubemap_alloc(ctx, 4, 2, &cube[i]), IBL_OK);
+        test_fill_cube(&cube[i], 2.0f + 4.0f * i, 2.0f + 4.0f * i, 2.0f + 4.0f * i);
+        p[i].specular = cube[i];
+        p[i].mapping.levels = 2;
+        p[i].mapping.roughness[1] = 1.0f;
+        p[i].sh_kind = IBL_SH_IRRADIANCE;
+        assert_int_equal(ibl_probe_validate(ctx, &p[i]), IBL_OK);
+    }
+    const ibl_probe *list[2] = {&p[0], &p[1]};
+    const float w[2] = {0.25f, 0.75f}, one[3] = {1, 1, 1};
+    ibl_material m = ibl_material_gltf(one, 1.0f, 0.3f);
+    ibl_surface s = surface_at(0.5);
+    ibl_shade_result r;
+    ibl_shade_blend(list, w, 2, NULL, NULL, &m, &s, &r);
+    /* no table: A = 1, B = 0, F0 = 1: specular = the probe's value; 0.25 * 2 + 0.75 * 6 */
+    assert_near(r.specular[0], 5.0, 1e-5);
+    assert_near(r.color[0], 5.0, 1e-5);
+    ibl_vec3 dirs[2] = {{0, 1, 0}, {1, 0, 0}};
+    ibl_shade_blend(list, w, 2, dirs, NULL, &m, &s, &r);
+    assert_near(r.r.x, 1.0, 0); /* the heaviest probe's direction */
+    for (int i = 0; i < 2; i++) ibl_cubemap_free(ctx, &cube[i]);
+    ibl_context_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -599,6 +715,8 @@ int main(void)
         cmocka_unit_test(atlas_round_trip),
         cmocka_unit_test(channel_packing),
         cmocka_unit_test(ambient_brdf_usage),
+        cmocka_unit_test(load_files),
+        cmocka_unit_test(probe_blending),
     };
     return cmocka_run_group_tests_name("shade", tests, NULL, NULL);
 }

@@ -19,5 +19,6 @@
 #include "edge_fixup.h"
 #include "shade.h"
 #include "sky.h"
+#include "specular.h"
 
 #endif

@@ -38,17 +38,17 @@ ibl_status ibl_mesh_load_obj(ibl_context *ctx, const char *path, int ao_rays, ib
 void ibl_mesh_free(ibl_context *ctx, ibl_mesh *mesh);
 
 typedef struct ibl_render_desc {
-    int width, height;           /* 0: 1024 x 512                                            */
-    ibl_shade_desc shade;        /* specular occlusion, mix, energy compensation, ...         */
+    int width, height;              /* 0: 1024 x 512                                            */
+    ibl_shade_desc shade;           /* specular occlusion, mix, energy compensation, ...         */
     const ibl_cubemap *environment; /* unfiltered environment: background and reference;
                                        NULL: the probe's mirror, else its level 0              */
-    const ibl_mesh *mesh;        /* draw this mesh instead of the spheres                    */
-    int reference;               /* Monte Carlo reference instead of the runtime shading; its
+    const ibl_mesh *mesh;           /* draw this mesh instead of the spheres                    */
+    int reference;                  /* Monte Carlo reference instead of the runtime shading; its
                                     samples also spread over the pixel's footprint            */
-    int supersample;             /* runtime shading: n x n rays per pixel; 0: 1               */
-    int reference_samples;       /* per pixel and lobe; 0: 256                                */
-    unsigned seed;               /* of the per-pixel sample rotation                          */
-    float sphere_ao_min;         /* > 0: synthetic AO on the spheres, from this value at the
+    int supersample;                /* runtime shading: n x n rays per pixel; 0: 1               */
+    int reference_samples;          /* per pixel and lobe; 0: 256                                */
+    unsigned seed;                  /* of the per-pixel sample rotation                          */
+    float sphere_ao_min;            /* > 0: synthetic AO on the spheres, from this value at the
                                     bottom to 1 at the top (to see specular occlusion)        */
 } ibl_render_desc;
 

@@ -82,49 +82,73 @@ typedef float (*ibl_lod_fn)(void *user, float value);
 
 /* How the prefiltered levels relate to the material: what level k was filtered for. */
 typedef struct ibl_level_mapping {
-    int levels;                       /* levels described (<= the chain's levels)             */
-    float roughness[IBL_MAX_LEVELS];  /* roughness of level k, strictly increasing             */
-    float shininess[IBL_MAX_LEVELS];  /* shininess of level k, decreasing; an all-zero table
+    int levels;                      /* levels described (<= the chain's levels)             */
+    float roughness[IBL_MAX_LEVELS]; /* roughness of level k, strictly increasing             */
+    float shininess[IBL_MAX_LEVELS]; /* shininess of level k, decreasing; an all-zero table
                                          is derived from roughness[]                          */
-    ibl_lod_fn lod_from_roughness;    /* optional: overrides the table (e.g. a bake's formula) */
-    ibl_lod_fn lod_from_shininess;    /* optional, likewise; e.g. the seed's a - 0.5 log2 n    */
-    void *user;                       /* passed to the two functions                           */
+    ibl_lod_fn lod_from_roughness;   /* optional: overrides the table (e.g. a bake's formula) */
+    ibl_lod_fn lod_from_shininess;   /* optional, likewise; e.g. the seed's a - 0.5 log2 n    */
+    void *user;                      /* passed to the two functions                           */
 } ibl_level_mapping;
 
 typedef enum ibl_sh_kind {
-    IBL_SH_NONE = 0,       /* no SH: use the irradiance cube                                  */
-    IBL_SH_RADIANCE,       /* projection of the radiance L (convolved with the cosine here)   */
-    IBL_SH_IRRADIANCE      /* already convolved: E(n) = sum c_i Y_i(n)                        */
+    IBL_SH_NONE = 0,  /* no SH: use the irradiance cube                                  */
+    IBL_SH_RADIANCE,  /* projection of the radiance L (convolved with the cosine here)   */
+    IBL_SH_IRRADIANCE /* already convolved: E(n) = sum c_i Y_i(n)                        */
 } ibl_sh_kind;
 
 /* Everything the runtime needs about one environment. Non-owning unless loaded by
- * ibl_probe_load (then ibl_probe_free releases it). Fill it by hand from in-memory parts
- * and call ibl_probe_validate once. */
+ * ibl_probe_load_files or built by ibl_render_probe_from_environment (then ibl_probe_free
+ * releases it). Fill it by hand from in-memory parts and call ibl_probe_validate once. The
+ * SH basis and axes are sh.h's (IBL_SH_BASIS_NAME, world x y z, +Y up). */
 typedef struct ibl_probe {
-    ibl_cubemap specular;       /* prefiltered chain, level 0 the sharpest                      */
+    ibl_cubemap specular; /* prefiltered chain, level 0 the sharpest                      */
     ibl_level_mapping mapping;
-    ibl_cubemap mirror;         /* optional unfiltered, high-resolution environment (seed 000
+    ibl_cubemap mirror;     /* optional unfiltered, high-resolution environment (seed 000
                                    "Problems with large shininess": the mirror option)         */
-    float mirror_shininess;     /* shininess from which the mirror is used alone; 0: 10000    */
-    ibl_cubemap irradiance;     /* optional: IEM(n) = E(n) / pi, the seed's irradiance map     */
+    float mirror_shininess; /* shininess from which the mirror is used alone; 0: 10000    */
+    ibl_cubemap irradiance; /* optional: IEM(n) = E(n) / pi, the seed's irradiance map     */
     ibl_sh_kind sh_kind;
-    float sh[9][3];             /* real SH, order (0,0) (1,-1) (1,0) (1,1) (2,-2) (2,-1) (2,0)
+    float sh[9][3]; /* real SH, order (0,0) (1,-1) (1,0) (1,1) (2,-2) (2,-1) (2,0)
                                    (2,1) (2,2); basis 0.282095, 0.488603 (y, z, x), ...        */
     ibl_splitsum_view splitsum;
     ibl_ambient_brdf_view ambient_brdf;
-    float intensity;            /* scales every radiance read from the probe; 0: 1             */
+    float intensity; /* scales every radiance read from the probe; 0: 1             */
     /* owned storage when loaded (internal) */
     void *owned[8];
     int owned_count;
-    ibl_cubemap owned_cubes[3];
+    ibl_cubemap owned_cubes[4];
 } ibl_probe;
 
 /* Checks the probe's parts (sizes, monotonic mapping, tables) and fills a missing shininess
  * table; records the reason on failure. */
 ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *probe);
 /* Loads a bake directory (manifest.json, the specular chain, irradiance/SH, BRDF tables).
- * IBL_ERR_UNSUPPORTED until the bake format exists in this build. */
+ * IBL_ERR_UNSUPPORTED until the bake format exists in this build; ibl_probe_load_files
+ * loads the same parts from files named one by one. */
 ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out);
+
+/* The parts of a probe as files (what the bake stages and `ibl lut` write). */
+typedef struct ibl_probe_files {
+    const char *specular;      /* required: cube texture with its chain (.ktx2 .dds .ktx)      */
+    ibl_level_mapping mapping; /* what each level was filtered for; levels 0 (all zero):
+                                  the whole chain at roughness k / (levels - 1)               */
+    const char *mirror;        /* optional: the unfiltered environment (cube texture, or an
+                                  image in any layout ibl_image_to_cubemap detects)           */
+    const char *irradiance;    /* optional: IEM = E/pi as a cube texture or image; without it
+                                  the probe gets 9 SH coefficients projected from the mirror
+                                  (or from the chain's level 0)                              */
+    const char *splitsum;      /* optional: brdf.h split-sum table (2D, R = A, G = B, texels at
+                                  ((i + 0.5)/N, (j + 0.5)/N), row 0 r ~ 0), e.g. `ibl lut`     */
+    const char *ambient_brdf;  /* optional: brdf.h AmbientBRDF volume (3D, R = the albedo)      */
+    float ambient_shininess_min, ambient_shininess_max; /* its shininess range; 0: 1, 2000  */
+    int ambient_linear; /* its shininess rows are linearly spaced (default: log)       */
+    int clamp_infinite; /* reading: accept infinite texels and clamp them              */
+} ibl_probe_files;
+
+/* Reads the files into a probe that owns them (ibl_probe_free) and validates it. Messages
+ * name the file at fault. */
+ibl_status ibl_probe_load_files(ibl_context *ctx, const ibl_probe_files *files, ibl_probe *out);
 void ibl_probe_free(ibl_context *ctx, ibl_probe *probe);
 
 /* Fractional level for a roughness / shininess through the probe's own mapping (exact level
@@ -144,8 +168,8 @@ void ibl_sh9_irradiance(const float sh[9][3], ibl_sh_kind kind, ibl_vec3 n, floa
 /* Materials and occlusion                                                                    */
 
 typedef enum ibl_material_model {
-    IBL_MATERIAL_GGX = 0,     /* glTF 2.0 metal/roughness: GGX + Smith + Schlick, Lambert     */
-    IBL_MATERIAL_BLINN_PHONG  /* tri-Ace 2010: Rd/pi (1 - F0) + normalised Blinn-Phong        */
+    IBL_MATERIAL_GGX = 0,    /* glTF 2.0 metal/roughness: GGX + Smith + Schlick, Lambert     */
+    IBL_MATERIAL_BLINN_PHONG /* tri-Ace 2010: Rd/pi (1 - F0) + normalised Blinn-Phong        */
 } ibl_material_model;
 
 typedef struct ibl_material {
@@ -164,13 +188,13 @@ ibl_material ibl_material_blinn_phong(const float rd[3], const float f0[3], floa
 
 /* Specular occlusion from AO (docs/SHADING.md has every formula with its source). */
 typedef enum ibl_so_formula {
-    IBL_SO_NONE = 0,       /* SO = 1                                                          */
-    IBL_SO_AO,             /* SO = AO: "generally multiply by the AO factor"                  */
-    IBL_SO_TRIACE,         /* saturate((n.E)^2 + 2AO - 1)                    tri-Ace SO (1)   */
+    IBL_SO_NONE = 0,         /* SO = 1                                                          */
+    IBL_SO_AO,               /* SO = AO: "generally multiply by the AO factor"                  */
+    IBL_SO_TRIACE,           /* saturate((n.E)^2 + 2AO - 1)                    tri-Ace SO (1)   */
     IBL_SO_TRIACE_SHININESS, /* saturate(((n.E) + AO)^(0.01 shininess) - 1 + AO)  SO (2)      */
-    IBL_SO_TRIACE_FAST,    /* saturate(((n.E) + AO)^2 - 1 + AO)              SO (3)           */
-    IBL_SO_FROSTBITE,      /* saturate((n.v + AO)^exp2(-16 r - 1) - 1 + AO)  Lagarde 2014     */
-    IBL_SO_CONE,           /* visibility cone / specular cone intersection  Jimenez 2016     */
+    IBL_SO_TRIACE_FAST,      /* saturate(((n.E) + AO)^2 - 1 + AO)              SO (3)           */
+    IBL_SO_FROSTBITE,        /* saturate((n.v + AO)^exp2(-16 r - 1) - 1 + AO)  Lagarde 2014     */
+    IBL_SO_CONE,             /* visibility cone / specular cone intersection  Jimenez 2016     */
     IBL_SO_COUNT
 } ibl_so_formula;
 
@@ -188,9 +212,9 @@ typedef enum ibl_ambient_mix {
 } ibl_ambient_mix;
 
 typedef enum ibl_energy_compensation {
-    IBL_ENERGY_NONE = 0,     /* single scattering only (the split-sum as is)                  */
-    IBL_ENERGY_FDEZ_AGUERA,  /* Fdez-Aguera 2019: multiple-scattering lobe lit by irradiance  */
-    IBL_ENERGY_TURQUIN       /* Turquin 2019: scale the lobe by 1 + F0 (1/E - 1)              */
+    IBL_ENERGY_NONE = 0,    /* single scattering only (the split-sum as is)                  */
+    IBL_ENERGY_FDEZ_AGUERA, /* Fdez-Aguera 2019: multiple-scattering lobe lit by irradiance  */
+    IBL_ENERGY_TURQUIN      /* Turquin 2019: scale the lobe by 1 + F0 (1/E - 1)              */
 } ibl_energy_compensation;
 
 typedef enum ibl_bp_diffuse {
@@ -198,7 +222,7 @@ typedef enum ibl_bp_diffuse {
     IBL_BP_DIFFUSE_F0        /* Rd (1 - F0): the BRDF's own diffuse weight                    */
 } ibl_bp_diffuse;
 
-const char *ibl_so_formula_name(ibl_so_formula f);   /* "none", "ao", "triace", ...   */
+const char *ibl_so_formula_name(ibl_so_formula f); /* "none", "ao", "triace", ...   */
 int ibl_so_formula_from_name(const char *name, ibl_so_formula *out); /* 0 if unknown  */
 const char *ibl_ambient_mix_name(ibl_ambient_mix m); /* "multiply", "lerp-albedo", ...  */
 int ibl_ambient_mix_from_name(const char *name, ibl_ambient_mix *out);
@@ -220,30 +244,30 @@ typedef struct ibl_shade_desc {
     ibl_energy_compensation energy;
     ibl_so_formula so;
     ibl_ambient_mix mix;
-    int horizon_occlusion;      /* apply the horizon fade (needs the geometric normal)       */
-    float horizon_k;            /* 0: 1.3                                                    */
+    int horizon_occlusion; /* apply the horizon fade (needs the geometric normal)       */
+    float horizon_k;       /* 0: 1.3                                                    */
     ibl_bp_diffuse bp_diffuse;
-    int no_mirror;              /* never use the mirror cube                                 */
-    int nearest_level;          /* round the lod (no trilinear): to see the level steps      */
-    int mirror_direction;       /* ibl_shade: look up along R itself instead of the lobe's
+    int no_mirror;        /* never use the mirror cube                                 */
+    int nearest_level;    /* round the lod (no trilinear): to see the level steps      */
+    int mirror_direction; /* ibl_shade: look up along R itself instead of the lobe's
                                    dominant direction, which leans from R toward N with
                                    roughness (Lagarde & de Rousiers 2014; the default)        */
 } ibl_shade_desc;
 
 typedef struct ibl_surface {
-    ibl_vec3 n;               /* shading normal (unit)                                         */
-    ibl_vec3 v;               /* toward the eye (unit)                                         */
+    ibl_vec3 n;                /* shading normal (unit)                                         */
+    ibl_vec3 v;                /* toward the eye (unit)                                         */
     ibl_vec3 geometric_normal; /* zero: same as n                                              */
-    float direct_specular[3]; /* s_d for the compositions (0 if none)                          */
+    float direct_specular[3];  /* s_d for the compositions (0 if none)                          */
 } ibl_surface;
 
 typedef struct ibl_shade_result {
-    float color[3];            /* diffuse * AO + composed specular: the ambient result         */
-    float diffuse[3];          /* ambient diffuse radiance (albedo applied, no AO)             */
-    float specular[3];         /* ambient specular radiance (BRDF scale applied, no SO)        */
-    float so;                  /* specular occlusion used (horizon fade included)              */
-    float lod;                 /* level sampled                                                */
-    ibl_vec3 r;                /* reflection direction sampled                                 */
+    float color[3];    /* diffuse * AO + composed specular: the ambient result         */
+    float diffuse[3];  /* ambient diffuse radiance (albedo applied, no AO)             */
+    float specular[3]; /* ambient specular radiance (BRDF scale applied, no SO)        */
+    float so;          /* specular occlusion used (horizon fade included)              */
+    float lod;         /* level sampled                                                */
+    ibl_vec3 r;        /* reflection direction sampled                                 */
 } ibl_shade_result;
 
 /* Ambient lighting of one surface point. desc may be NULL (defaults). The reflection vector
@@ -253,6 +277,14 @@ void ibl_shade(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_mat
 /* The same with the specular lookup direction given (parallax-corrected, offset, ...). */
 void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_material *m,
                    const ibl_surface *s, ibl_vec3 lookup_dir, ibl_shade_result *out);
+
+/* Several probes at one point, summed by weight (tri-Ace 2010 "IBL Blending": each radiance
+ * map fetched once; JAGE 2015: weights from ibl_volume_blend, its remainder for the global
+ * probe). lookup_dirs: one direction per probe (e.g. parallax-corrected), or NULL for the
+ * dominant direction / R of ibl_shade. so and lod in out are those of the heaviest probe. */
+void ibl_shade_blend(const ibl_probe *const *probes, const float *weights, int count,
+                     const ibl_vec3 *lookup_dirs, const ibl_shade_desc *desc,
+                     const ibl_material *m, const ibl_surface *s, ibl_shade_result *out);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Analytic BRDF pieces (src/shade/brdf_eval.c), shared by the reference renderer.           */
@@ -279,7 +311,7 @@ typedef struct ibl_volume {
     float blend_distance; /* width of the fade region  */
 } ibl_volume;
 
-float ibl_volume_size(const ibl_volume *v);       /* its volume (for the priority order) */
+float ibl_volume_size(const ibl_volume *v); /* its volume (for the priority order) */
 float ibl_volume_weight(const ibl_volume *v, ibl_vec3 p);
 
 /* Priority blending (seed 004 "Influence Volume"): in the order given (smallest volume
@@ -321,8 +353,9 @@ ibl_screen_rect ibl_volume_screen_rect(const ibl_volume *v, const float view_pro
 
 typedef struct ibl_tile_lists {
     int tiles_x, tiles_y, tile_size;
-    int *offsets;   /* tiles_x * tiles_y + 1 entries: tile t's list is indices[offsets[t]..offsets[t+1]) */
-    int *indices;   /* probe indices, each list in priority order (smallest volume first) */
+    int *offsets; /* tiles_x * tiles_y + 1 entries: tile t's list is
+                     indices[offsets[t] .. offsets[t + 1])                                   */
+    int *indices; /* probe indices, each list in priority order (smallest volume first) */
 } ibl_tile_lists;
 
 /* Per-tile lists of the probes whose rectangle touches the tile, sorted by `order` (from
@@ -343,7 +376,7 @@ typedef struct ibl_atlas_layout {
     int width, height;
     int levels;
     int gutter;
-    int face_size[IBL_MAX_LEVELS];  /* stored face edge (level 2's for levels >= 2) */
+    int face_size[IBL_MAX_LEVELS];            /* stored face edge (level 2's for levels >= 2) */
     int x[IBL_MAX_LEVELS], y[IBL_MAX_LEVELS]; /* top-left of each level's 3x2 block   */
 } ibl_atlas_layout;
 
@@ -353,7 +386,7 @@ typedef enum ibl_atlas_filter {
 } ibl_atlas_filter;
 
 typedef struct ibl_atlas_desc {
-    int gutter;              /* 0: 1 texel (use -1 for none)                               */
+    int gutter; /* 0: 1 texel (use -1 for none)                               */
     ibl_atlas_filter filter;
 } ibl_atlas_desc;
 
@@ -362,8 +395,8 @@ ibl_status ibl_atlas_plan(int size, int levels, const ibl_atlas_desc *desc, ibl_
 ibl_status ibl_atlas_pack(ibl_context *ctx, const ibl_cubemap *chain, const ibl_atlas_desc *desc,
                           ibl_image *out, ibl_atlas_layout *layout);
 /* Reads the chain back (levels > 2 box-averaged down to their own size) into a new cube. */
-ibl_status ibl_atlas_unpack(ibl_context *ctx, const ibl_image *atlas, const ibl_atlas_layout *layout,
-                            int size, ibl_cubemap *out);
+ibl_status ibl_atlas_unpack(ibl_context *ctx, const ibl_image *atlas,
+                            const ibl_atlas_layout *layout, int size, ibl_cubemap *out);
 /* Atlas UV (u right, v down, in [0, 1]) of a direction on a level: what a shader computes. */
 void ibl_atlas_uv(const ibl_atlas_layout *layout, int level, ibl_vec3 dir, float *u, float *v);
 /* Emulates the shader: bilinear in the atlas at the two levels around lod, then linear. */

@@ -17,7 +17,7 @@ ibl_status ibl__pfm_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
                            ibl_texture *out, ibl_file_info *info);
 ibl_status ibl__pfm_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size);
-/* PNG and JPEG through stb_image (8/16-bit, sRGB decoded to linear). */
+/* PNG (libpng) and JPEG (stb_image): 8/16-bit, sRGB decoded to linear. */
 ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info);
 /* PNG: 8-bit sRGB with exposure and tone map, or 16-bit linear (IBL_FORMAT_RGBA16_UNORM). */

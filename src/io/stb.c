@@ -1,6 +1,7 @@
-/* PNG and JPEG. Reading goes through the system stb_image (libstb, which already holds the
- * implementation): 8-bit and 16-bit PNG, baseline and progressive JPEG. Writing PNG goes
- * through libpng (stb_image_write cannot write 16-bit PNG), JPEG through stb_image_write.
+/* PNG and JPEG. PNG goes through libpng both ways (8-bit and 16-bit; stb_image_write cannot
+ * write 16-bit, and stb_image's reader is unbounded on hostile input, see png_decode). JPEG
+ * goes through the system stb_image and stb_image_write (libstb, which already holds their
+ * implementation): baseline and progressive, written for previews.
  *
  * Transfer functions on read: JPEG is sRGB. A PNG with an sRGB chunk is sRGB; one with only
  * a gAMA chunk uses that power law (gAMA 1.0 = linear, which is how the 16-bit tables are
@@ -48,73 +49,186 @@ static double png_decoding_power(const uint8_t *b, size_t size)
     return 100000.0 / (double)gama;
 }
 
-ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
-                           ibl_texture *out, ibl_file_info *info)
+/* Decoded samples (RGBA; 8-bit, or 16-bit big-endian as PNG stores them) to linear float. */
+static ibl_status samples_to_float(ibl_context *ctx, const uint8_t *pix, int is16, double power,
+                                   size_t texels, float *dst, const char *name)
 {
-    int is_png = size >= 8 && bytes[0] == 0x89 && bytes[1] == 'P';
-    const char *kind = is_png ? "PNG" : "JPEG";
-    if (size > INT_MAX) return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: %s file too large", name, kind);
-    int w = 0, h = 0, comp = 0;
-    if (!stbi_info_from_memory(bytes, (int)size, &w, &h, &comp))
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: bad %s header (%s)", name, kind,
-                        stbi_failure_reason());
-    if (w <= 0 || h <= 0 || w > IBL_MAX_DIMENSION || h > IBL_MAX_DIMENSION)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: absurd %s image size %dx%d", name, kind, w, h);
-    int is16 = is_png && stbi_is_16_bit_from_memory(bytes, (int)size);
-    /* Allocate ours first: the memory limit refuses huge images before stb decodes them. */
-    ibl_status s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, w, h, 1, 1, out);
-    if (s != IBL_OK) return ibl__fail_named(ctx, s, name);
-    int lw = 0, lh = 0, lc = 0;
-    void *pix = is16 ? (void *)stbi_load_16_from_memory(bytes, (int)size, &lw, &lh, &lc, 4)
-                     : (void *)stbi_load_from_memory(bytes, (int)size, &lw, &lh, &lc, 4);
-    if (!pix || lw != w || lh != h) {
-        if (pix) stbi_image_free(pix);
-        ibl_texture_free(ctx, out);
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: corrupt %s data (%s)", name, kind,
-                        pix ? "size changed" : stbi_failure_reason());
-    }
-    double power = is_png ? png_decoding_power(bytes, size) : 0.0;
-    size_t texels = (size_t)w * (size_t)h;
     if (is16) {
         /* 65536-entry table: cheaper than a pow per channel beyond ~16k texels. */
         float *lut = ibl_alloc(ctx, 65536 * sizeof(float));
-        if (!lut) {
-            stbi_image_free(pix);
-            ibl_texture_free(ctx, out);
-            return ibl__fail_named(ctx, IBL_ERR_OUT_OF_MEMORY, name);
-        }
+        if (!lut) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
         for (int i = 0; i < 65536; i++) {
             double v = i / 65535.0;
             lut[i] = (float)(power == 0.0 ? srgb_to_linear(v) : power == 1.0 ? v : pow(v, power));
         }
-        const uint16_t *src = pix;
         for (size_t i = 0; i < texels; i++) {
-            float *o = out->data + i * 4;
-            o[0] = lut[src[i * 4]];
-            o[1] = lut[src[i * 4 + 1]];
-            o[2] = lut[src[i * 4 + 2]];
-            o[3] = (float)(src[i * 4 + 3] / 65535.0);
+            const uint8_t *q = pix + i * 8;
+            float *o = dst + i * 4;
+            for (int c = 0; c < 3; c++) o[c] = lut[q[2 * c] << 8 | q[2 * c + 1]];
+            o[3] = (float)((q[6] << 8 | q[7]) / 65535.0);
         }
         ibl_free(ctx, lut);
-    } else {
-        float lut[256];
-        for (int i = 0; i < 256; i++) {
-            double v = i / 255.0;
-            lut[i] = (float)(power == 0.0 ? srgb_to_linear(v) : power == 1.0 ? v : pow(v, power));
-        }
-        const uint8_t *src = pix;
-        for (size_t i = 0; i < texels; i++) {
-            float *o = out->data + i * 4;
-            o[0] = lut[src[i * 4]];
-            o[1] = lut[src[i * 4 + 1]];
-            o[2] = lut[src[i * 4 + 2]];
-            o[3] = (float)(src[i * 4 + 3] / 255.0);
-        }
+        return IBL_OK;
     }
+    float lut[256];
+    for (int i = 0; i < 256; i++) {
+        double v = i / 255.0;
+        lut[i] = (float)(power == 0.0 ? srgb_to_linear(v) : power == 1.0 ? v : pow(v, power));
+    }
+    for (size_t i = 0; i < texels; i++) {
+        const uint8_t *q = pix + i * 4;
+        float *o = dst + i * 4;
+        o[0] = lut[q[0]];
+        o[1] = lut[q[1]];
+        o[2] = lut[q[2]];
+        o[3] = (float)(q[3] / 255.0);
+    }
+    return IBL_OK;
+}
+
+/* ---- PNG reader (libpng) ------------------------------------------------------------- */
+
+/* libpng rather than stb_image: it inflates straight into rows of the declared size, so a
+ * zlib bomb or a chunk declaring gigabytes cannot make it allocate (stb_image grows its
+ * buffers to whatever the stream holds; fuzzing found a 556-byte file asking for 1 GiB). */
+typedef struct png_read_state {
+    ibl_context *ctx;
+    const uint8_t *data;
+    size_t size, pos;
+    ibl_texture *out;
+    int is16, has_alpha;
+    uint8_t *raw;    /* RGBA samples of the whole image */
+    png_bytep *rows; /* into raw */
+    ibl_status status;
+    char error[200];
+} png_read_state;
+
+static void png_on_read_error(png_structp png, png_const_charp msg)
+{
+    png_read_state *st = png_get_error_ptr(png);
+    snprintf(st->error, sizeof st->error, "%s", msg);
+    png_longjmp(png, 1);
+}
+
+static void png_on_read(png_structp png, png_bytep dst, size_t n)
+{
+    png_read_state *st = png_get_io_ptr(png);
+    if (n > st->size - st->pos) png_error(png, "truncated PNG data");
+    memcpy(dst, st->data + st->pos, n);
+    st->pos += n;
+}
+
+static void png_on_warning(png_structp png, png_const_charp msg);
+
+/* Runs libpng; everything it may touch after setjmp lives in *st (not in locals). */
+static int png_read_run(png_read_state *st)
+{
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, st, png_on_read_error, png_on_warning);
+    png_infop pinfo = png ? png_create_info_struct(png) : NULL;
+    if (!pinfo) {
+        if (png) png_destroy_read_struct(&png, NULL, NULL);
+        snprintf(st->error, sizeof st->error, "cannot start libpng");
+        return 0;
+    }
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_read_struct(&png, &pinfo, NULL);
+        return 0;
+    }
+    png_set_read_fn(png, st, png_on_read);
+    png_set_user_limits(png, IBL_MAX_DIMENSION, IBL_MAX_DIMENSION);
+    png_read_info(png, pinfo);
+    png_uint_32 w = 0, h = 0;
+    int depth = 0, color = 0;
+    png_get_IHDR(png, pinfo, &w, &h, &depth, &color, NULL, NULL, NULL);
+    st->has_alpha = (color & PNG_COLOR_MASK_ALPHA) || png_get_valid(png, pinfo, PNG_INFO_tRNS);
+    st->is16 = depth == 16;
+    png_set_expand(png); /* palette -> RGB, grey < 8 bits -> 8, tRNS -> alpha */
+    if (!(color & PNG_COLOR_MASK_COLOR)) png_set_gray_to_rgb(png);
+    if (!st->has_alpha) png_set_add_alpha(png, st->is16 ? 0xFFFF : 0xFF, PNG_FILLER_AFTER);
+    (void)png_set_interlace_handling(png);
+    png_read_update_info(png, pinfo);
+    size_t texel_bytes = st->is16 ? 8 : 4;
+    if (png_get_rowbytes(png, pinfo) != (size_t)w * texel_bytes) png_error(png, "unexpected row layout");
+    /* Ours first: the memory limit refuses huge images before the samples are allocated. */
+    st->status = ibl_texture_alloc(st->ctx, IBL_TEXTURE_2D, (int)w, (int)h, 1, 1, st->out);
+    if (st->status != IBL_OK) png_error(png, "out of memory");
+    st->raw = ibl_alloc(st->ctx, (size_t)w * (size_t)h * texel_bytes);
+    st->rows = ibl_alloc(st->ctx, (size_t)h * sizeof *st->rows);
+    if (!st->raw || !st->rows) {
+        st->status = ibl_context_status(st->ctx);
+        png_error(png, "out of memory");
+    }
+    for (png_uint_32 y = 0; y < h; y++) st->rows[y] = st->raw + (size_t)y * (size_t)w * texel_bytes;
+    png_read_image(png, st->rows);
+    /* The end (IEND and text after the image) is not needed: files cut after it still load. */
+    png_destroy_read_struct(&png, &pinfo, NULL);
+    return 1;
+}
+
+static ibl_status png_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                             ibl_texture *out, ibl_file_info *info)
+{
+    png_read_state *st = ibl_calloc(ctx, 1, sizeof *st);
+    if (!st) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
+    st->ctx = ctx;
+    st->data = bytes;
+    st->size = size;
+    st->out = out;
+    int ok = png_read_run(st);
+    ibl_free(ctx, st->rows);
+    ibl_status s = IBL_OK;
+    if (!ok) {
+        if (st->status != IBL_OK) s = ibl__fail_named(ctx, st->status, name);
+        else s = ibl_fail(ctx, IBL_ERR_FORMAT, "%s: corrupt PNG (%s)", name, st->error);
+    } else {
+        size_t texels = (size_t)out->width * (size_t)out->height;
+        s = samples_to_float(ctx, st->raw, st->is16, png_decoding_power(bytes, size), texels,
+                             out->data, name);
+    }
+    ibl_free(ctx, st->raw);
+    if (s != IBL_OK) {
+        ibl_texture_free(ctx, out);
+    } else {
+        out->format = st->is16 ? IBL_FORMAT_RGBA16_UNORM : IBL_FORMAT_RGBA8_SRGB;
+        info->format = out->format;
+        info->has_alpha = st->has_alpha;
+    }
+    ibl_free(ctx, st);
+    return s;
+}
+
+/* ---- JPEG reader (stb_image) --------------------------------------------------------- */
+
+ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                           ibl_texture *out, ibl_file_info *info)
+{
+    if (size >= 8 && bytes[0] == 0x89 && bytes[1] == 'P') return png_decode(ctx, bytes, size, name, out, info);
+    if (size > INT_MAX) return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: JPEG file too large", name);
+    int w = 0, h = 0, comp = 0;
+    if (!stbi_info_from_memory(bytes, (int)size, &w, &h, &comp))
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: bad JPEG header (%s)", name, stbi_failure_reason());
+    if (w <= 0 || h <= 0 || w > IBL_MAX_DIMENSION || h > IBL_MAX_DIMENSION)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: absurd JPEG image size %dx%d", name, w, h);
+    /* Ours first: the memory limit refuses huge images before stb allocates its own. */
+    ibl_status s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, w, h, 1, 1, out);
+    if (s != IBL_OK) return ibl__fail_named(ctx, s, name);
+    int lw = 0, lh = 0, lc = 0;
+    uint8_t *pix = stbi_load_from_memory(bytes, (int)size, &lw, &lh, &lc, 4);
+    if (!pix || lw != w || lh != h) {
+        if (pix) stbi_image_free(pix);
+        ibl_texture_free(ctx, out);
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: corrupt JPEG data (%s)", name,
+                        pix ? "size changed" : stbi_failure_reason());
+    }
+    s = samples_to_float(ctx, pix, 0, 0.0, (size_t)w * (size_t)h, out->data, name);
     stbi_image_free(pix);
-    out->format = is16 ? IBL_FORMAT_RGBA16_UNORM : IBL_FORMAT_RGBA8_SRGB;
+    if (s != IBL_OK) {
+        ibl_texture_free(ctx, out);
+        return s;
+    }
+    out->format = IBL_FORMAT_RGBA8_SRGB;
     info->format = out->format;
-    info->has_alpha = comp == 2 || comp == 4;
+    info->has_alpha = 0;
     return IBL_OK;
 }
 

@@ -12,8 +12,8 @@
 typedef struct ibl__env_sampler {
     const ibl_cubemap *env;
     int n;
-    double *cdf;  /* 6 n^2 + 1 entries, cdf[0] = 0, last = 1 */
-    float *prob;  /* probability of each texel */
+    double *cdf; /* 6 n^2 + 1 entries, cdf[0] = 0, last = 1 */
+    float *prob; /* probability of each texel */
 } ibl__env_sampler;
 
 static float luminance(const float *t)
@@ -109,8 +109,10 @@ ibl_vec3 ibl__env_sampler_sample(const ibl__env_sampler *s, float u0, float u1, 
     size_t lo = 0, hi = count; /* find i with cdf[i] <= u0 < cdf[i + 1] */
     while (hi - lo > 1) {
         size_t mid = (lo + hi) / 2;
-        if (s->cdf[mid] <= u0) lo = mid;
-        else hi = mid;
+        if (s->cdf[mid] <= u0)
+            lo = mid;
+        else
+            hi = mid;
     }
     size_t i = lo;
     double width = s->cdf[i + 1] - s->cdf[i];

@@ -64,7 +64,6 @@ static void tri_bounds(const ibl_mesh *m, int tri, float lo[3], float hi[3], flo
     for (int k = 0; k < 3; k++) c[k] = 0.5f * (lo[k] + hi[k]);
 }
 
-
 static int build_node(const ibl_mesh *m, bvh *b, int first, int count)
 {
     int index = b->node_count++;
@@ -98,7 +97,8 @@ static int build_node(const ibl_mesh *m, bvh *b, int first, int count)
     while (i <= j) {
         float lo[3], hi[3], c[3];
         tri_bounds(m, b->order[i], lo, hi, c);
-        if (c[axis] < split) i++;
+        if (c[axis] < split)
+            i++;
         else {
             int t = b->order[i];
             b->order[i] = b->order[j];
@@ -140,14 +140,16 @@ static int ray_triangle(const ibl_mesh *m, int tri, const float o[3], const floa
     const float *a = tri_vertex(m, tri, 0), *b = tri_vertex(m, tri, 1), *c = tri_vertex(m, tri, 2);
     float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     float e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    float p[3] = {d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2], d[0] * e2[1] - d[1] * e2[0]};
+    float p[3] = {d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2],
+                  d[0] * e2[1] - d[1] * e2[0]};
     float det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
     if (fabsf(det) < 1e-12f) return 0;
     float inv = 1.0f / det;
     float s[3] = {o[0] - a[0], o[1] - a[1], o[2] - a[2]};
     float uu = (s[0] * p[0] + s[1] * p[1] + s[2] * p[2]) * inv;
     if (uu < 0.0f || uu > 1.0f) return 0;
-    float q[3] = {s[1] * e1[2] - s[2] * e1[1], s[2] * e1[0] - s[0] * e1[2], s[0] * e1[1] - s[1] * e1[0]};
+    float q[3] = {s[1] * e1[2] - s[2] * e1[1], s[2] * e1[0] - s[0] * e1[2],
+                  s[0] * e1[1] - s[1] * e1[0]};
     float vv = (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]) * inv;
     if (vv < 0.0f || uu + vv > 1.0f) return 0;
     float tt = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
@@ -230,8 +232,9 @@ static void ao_task(void *arg, int chunk)
     if (end > m->vertex_count) end = m->vertex_count;
     for (int i = chunk * AO_CHUNK; i < end; i++) {
         ibl_vec3 n = ibl__v3(m->normals[3 * i], m->normals[3 * i + 1], m->normals[3 * i + 2]);
-        ibl_vec3 p = ibl__v3(m->positions[3 * i] + 1e-3f * n.x, m->positions[3 * i + 1] + 1e-3f * n.y,
-                             m->positions[3 * i + 2] + 1e-3f * n.z);
+        ibl_vec3 p =
+            ibl__v3(m->positions[3 * i] + 1e-3f * n.x, m->positions[3 * i + 1] + 1e-3f * n.y,
+                    m->positions[3 * i + 2] + 1e-3f * n.z);
         ibl_vec3 t, b;
         ibl__frame(n, &t, &b);
         float r0 = (float)(ibl__hash((uint32_t)i) >> 8) * (1.0f / 16777216.0f);
@@ -252,8 +255,10 @@ static void ao_task(void *arg, int chunk)
 static int parse_index(const char *tok, int count)
 {
     long v = strtol(tok, NULL, 10);
-    if (v < 0) v = count + v; /* relative */
-    else v -= 1;
+    if (v < 0)
+        v = count + v; /* relative */
+    else
+        v -= 1;
     return (v < 0 || v >= count) ? -1 : (int)v;
 }
 
@@ -271,13 +276,16 @@ ibl_status ibl_mesh_load_obj(ibl_context *ctx, const char *path, int ao_rays, ib
         line_no++;
         if (line[0] == 'v' && line[1] == ' ') {
             float p[4] = {0, 0, 0, 1}, rgb[3];
-            int n = sscanf(line + 2, "%f %f %f %f %f %f", &p[0], &p[1], &p[2], &rgb[0], &rgb[1], &rgb[2]);
+            int n = sscanf(line + 2, "%f %f %f %f %f %f", &p[0], &p[1], &p[2], &rgb[0], &rgb[1],
+                           &rgb[2]);
             if (n < 3) {
                 st = ibl_fail(ctx, IBL_ERR_FORMAT, "%s:%d: bad vertex", path, line_no);
                 break;
             }
-            if (n >= 6) p[3] = rgb[0];
-            else have_colour = 0;
+            if (n >= 6)
+                p[3] = rgb[0];
+            else
+                have_colour = 0;
             if (!grow_push(ctx, &pos, p)) {
                 st = ibl_context_status(ctx);
                 break;
@@ -342,20 +350,25 @@ ibl_status ibl_mesh_load_obj(ibl_context *ctx, const char *path, int ao_rays, ib
     float extent = fmaxf(hi[0] - lo[0], fmaxf(hi[1] - lo[1], hi[2] - lo[2]));
     float s = extent > 0.0f ? 3.2f / extent : 1.0f;
     for (int i = 0; i < nv; i++) {
-        for (int k = 0; k < 3; k++) out->positions[3 * i + k] = (p4[4 * i + k] - 0.5f * (lo[k] + hi[k])) * s;
+        for (int k = 0; k < 3; k++)
+            out->positions[3 * i + k] = (p4[4 * i + k] - 0.5f * (lo[k] + hi[k])) * s;
         out->ao[i] = fminf(1.0f, fmaxf(0.0f, p4[4 * i + 3]));
     }
     ibl_free(ctx, pos.data);
     /* area-weighted smooth normals: the cross product's length is twice the area */
     for (int t = 0; t < nt; t++) {
-        const float *a = tri_vertex(out, t, 0), *bb = tri_vertex(out, t, 1), *c = tri_vertex(out, t, 2);
-        float e1[3] = {bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-        float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        const float *a = tri_vertex(out, t, 0), *bb = tri_vertex(out, t, 1),
+                    *c = tri_vertex(out, t, 2);
+        float e1[3] = {bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]},
+              e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                      e1[0] * e2[1] - e1[1] * e2[0]};
         for (int k = 0; k < 3; k++)
             for (int v = 0; v < 3; v++) out->normals[3 * out->indices[3 * t + k] + v] += n[v];
     }
     for (int i = 0; i < nv; i++) {
-        ibl_vec3 n = ibl__norm(ibl__v3(out->normals[3 * i], out->normals[3 * i + 1], out->normals[3 * i + 2]));
+        ibl_vec3 n = ibl__norm(
+            ibl__v3(out->normals[3 * i], out->normals[3 * i + 1], out->normals[3 * i + 2]));
         if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) n.y = 1.0f;
         out->normals[3 * i] = n.x;
         out->normals[3 * i + 1] = n.y;

@@ -122,8 +122,11 @@ ibl_status ibl_render_probe_from_environment(ibl_context *ctx, const ibl_cubemap
     out->splitsum = (ibl_splitsum_view){lut.pixels, 4, centred, centred};
     /* the AmbientBRDF volume [F0][shininess][n.v] RGBA, R the albedo; shininess rows at
      * min (max/min)^((j + 0.5)/n), i.e. a log axis from row 0's value to the last row's */
-    ibl_ambient_brdf_desc ad = {.size_nv = AB_NV, .size_shininess = AB_S, .size_f0 = AB_F0,
-                                .shininess_min = 1.0, .shininess_max = 100000.0};
+    ibl_ambient_brdf_desc ad = {.size_nv = AB_NV,
+                                .size_shininess = AB_S,
+                                .size_f0 = AB_F0,
+                                .shininess_min = 1.0,
+                                .shininess_max = 100000.0};
     ibl_texture vol;
     if ((st = ibl_ambient_brdf_volume(ctx, &ad, &vol)) != IBL_OK) goto fail;
     float *vol_data = own(out, vol.data);

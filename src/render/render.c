@@ -19,7 +19,8 @@ static const float SPACING = 1.1f, RADIUS = 0.48f, EYE_Z = 12.0f;
 static const float gold[3] = {1.0f, 0.766f, 0.336f};
 static const float white[3] = {0.8f, 0.8f, 0.8f};
 static const float copper[3] = {0.955f, 0.638f, 0.538f};
-static const float shininess_row[COLUMNS] = {1.0f, 10.0f, 50.0f, 200.0f, 1000.0f, 5000.0f, 100000.0f};
+static const float shininess_row[COLUMNS] = {1.0f,    10.0f,   50.0f,    200.0f,
+                                             1000.0f, 5000.0f, 100000.0f};
 
 int ibl_render_scene_objects(ibl_render_object *objects, int max_objects)
 {
@@ -154,8 +155,8 @@ static float eval_lobe(const lobe *b, ibl_vec3 n, ibl_vec3 v, ibl_vec3 l, float 
  * specular lobe, the cosine lobe, the environment's luminance), one sample of each, combined
  * with the balance heuristic (Veach 1997, multi-sample MIS): each adds f L n.l / the sum of
  * the three densities. No split sum, no prefiltering. */
-static void reference_sample(const render_job *job, const lobe *b, ibl_vec3 n, ibl_vec3 v,
-                             float u0, float u1, double acc[3])
+static void reference_sample(const render_job *job, const lobe *b, ibl_vec3 n, ibl_vec3 v, float u0,
+                             float u1, double acc[3])
 {
     float scale = job->probe->intensity > 0.0f ? job->probe->intensity : 1.0f;
     ibl_vec3 t, bt;
@@ -163,7 +164,8 @@ static void reference_sample(const render_job *job, const lobe *b, ibl_vec3 n, i
     ibl_vec3 dirs[3];
     float env_pdf[3] = {-1.0f, -1.0f, 0.0f};
     /* specular lobe */
-    ibl_vec3 h = b->bp ? ibl__sample_phong(n, b->shininess, u0, u1) : ibl__sample_ggx(n, b->alpha, u0, u1);
+    ibl_vec3 h =
+        b->bp ? ibl__sample_phong(n, b->shininess, u0, u1) : ibl__sample_ggx(n, b->alpha, u0, u1);
     float vh = ibl__dot(v, h);
     dirs[0] = ibl__v3(2.0f * vh * h.x - v.x, 2.0f * vh * h.y - v.y, 2.0f * vh * h.z - v.z);
     /* cosine lobe */
@@ -361,5 +363,6 @@ void ibl_render_tonemap(ibl_image *im, float exposure_ev)
     size_t n = (size_t)im->width * im->height;
     for (size_t i = 0; i < n; i++)
         for (int c = 0; c < 3; c++)
-            im->pixels[i * 4 + c] = ibl_tonemap_apply(IBL_TONEMAP_FILMIC, im->pixels[i * 4 + c] * s);
+            im->pixels[i * 4 + c] =
+                ibl_tonemap_apply(IBL_TONEMAP_FILMIC, im->pixels[i * 4 + c] * s);
 }

@@ -109,15 +109,16 @@ ibl_status ibl_render_side_by_side(ibl_context *ctx, const ibl_image *a, const c
 {
     memset(out, 0, sizeof *out);
     if (a->height != b->height)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
-                        "side by side: heights differ (%d and %d)", a->height, b->height);
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "side by side: heights differ (%d and %d)",
+                        a->height, b->height);
     int gap = a->width / 128 + 2;
     ibl_status st = ibl_image_alloc(ctx, a->width + gap + b->width, a->height, out);
     if (st != IBL_OK) return st;
     static const float black[4] = {0, 0, 0, 1}, white[4] = {1, 1, 1, 1};
     fill_rect(out, 0, 0, out->width, out->height, black);
     for (int y = 0; y < a->height; y++) {
-        memcpy(ibl_image_texel(out, 0, y), ibl_image_texel(a, 0, y), (size_t)a->width * 4 * sizeof(float));
+        memcpy(ibl_image_texel(out, 0, y), ibl_image_texel(a, 0, y),
+               (size_t)a->width * 4 * sizeof(float));
         memcpy(ibl_image_texel(out, a->width + gap, y), ibl_image_texel(b, 0, y),
                (size_t)b->width * 4 * sizeof(float));
     }

@@ -64,8 +64,7 @@ ibl_status ibl_atlas_pack(ibl_context *ctx, const ibl_cubemap *chain, const ibl_
                           ibl_image *out, ibl_atlas_layout *layout)
 {
     memset(out, 0, sizeof *out);
-    if (!chain || !chain->data)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "atlas: no chain");
+    if (!chain || !chain->data) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "atlas: no chain");
     if (ibl_atlas_plan(chain->size, chain->levels, desc, layout) != IBL_OK)
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "atlas: bad chain (size %d, %d levels)",
                         chain->size, chain->levels);
@@ -94,22 +93,24 @@ ibl_status ibl_atlas_pack(ibl_context *ctx, const ibl_cubemap *chain, const ibl_
                     /* gutters and enlarged levels: the seamless sample along that direction */
                     ibl_vec3 d = ibl_cube_direction(f, ((float)x + 0.5f) / (float)n,
                                                     ((float)y + 0.5f) / (float)n);
-                    if (nearest) ibl_cubemap_sample_nearest(chain, k, d, dst);
-                    else ibl_cubemap_sample_bilinear(chain, k, d, dst);
+                    if (nearest)
+                        ibl_cubemap_sample_nearest(chain, k, d, dst);
+                    else
+                        ibl_cubemap_sample_bilinear(chain, k, d, dst);
                 }
         }
     }
     return IBL_OK;
 }
 
-ibl_status ibl_atlas_unpack(ibl_context *ctx, const ibl_image *atlas, const ibl_atlas_layout *layout,
-                            int size, ibl_cubemap *out)
+ibl_status ibl_atlas_unpack(ibl_context *ctx, const ibl_image *atlas,
+                            const ibl_atlas_layout *layout, int size, ibl_cubemap *out)
 {
     memset(out, 0, sizeof *out);
     ibl_atlas_layout check;
     ibl_atlas_desc d = {.gutter = layout->gutter ? layout->gutter : -1};
-    if (ibl_atlas_plan(size, layout->levels, &d, &check) != IBL_OK ||
-        check.width != atlas->width || check.height > atlas->height)
+    if (ibl_atlas_plan(size, layout->levels, &d, &check) != IBL_OK || check.width != atlas->width ||
+        check.height > atlas->height)
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "atlas: a %dx%d image does not hold a %d-level chain of size %d",
                         atlas->width, atlas->height, layout->levels, size);
@@ -139,7 +140,8 @@ ibl_status ibl_atlas_unpack(ibl_context *ctx, const ibl_image *atlas, const ibl_
                         for (int c = 0; c < 4; c++) {
                             const float *r0 = tmp + ((size_t)(2 * y) * m + 2 * x) * 4 + c;
                             const float *r1 = r0 + (size_t)m * 4;
-                            tmp[((size_t)y * h + x) * 4 + c] = ((r0[0] + r0[4]) + (r1[0] + r1[4])) * 0.25f;
+                            tmp[((size_t)y * h + x) * 4 + c] =
+                                ((r0[0] + r0[4]) + (r1[0] + r1[4])) * 0.25f;
                         }
             }
             memcpy(ibl_cubemap_face(out, k, f), tmp, (size_t)native * native * 4 * sizeof(float));
@@ -230,7 +232,8 @@ ibl_status ibl_pack_material_channels(ibl_context *ctx, const ibl_image *metalne
     if (st != IBL_OK) return st;
     size_t count = (size_t)w * h;
     for (size_t p = 0; p < count; p++)
-        for (int i = 0; i < 4; i++) out->pixels[p * 4 + i] = in[i] ? in[i]->pixels[p * 4] : fallback[i];
+        for (int i = 0; i < 4; i++)
+            out->pixels[p * 4 + i] = in[i] ? in[i]->pixels[p * 4] : fallback[i];
     return IBL_OK;
 }
 

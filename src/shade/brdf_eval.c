@@ -22,7 +22,8 @@ float ibl_ggx_d(float alpha, float n_dot_h)
     return a2 / (PI_F * d * d);
 }
 
-/* Height-correlated Smith for GGX (Heitz 2014, "Understanding the Masking-Shadowing Function"), divided by 4 (n.l)(n.v). */
+/* Height-correlated Smith for GGX divided by 4 (n.l)(n.v) (Heitz 2014, "Understanding the
+ * Masking-Shadowing Function in Microfacet-Based BRDFs"). */
 float ibl_smith_ggx_v(float alpha, float n_dot_v, float n_dot_l)
 {
     if (n_dot_v <= 0.0f || n_dot_l <= 0.0f) return 0.0f;

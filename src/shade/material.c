@@ -53,14 +53,18 @@ void ibl_splitsum_lookup(const ibl_splitsum_view *t, float n_dot_v, float roughn
     split_index(ibl_table_axis_index(&t->n_dot_v, n_dot_v), nv, &i, &wi);
     split_index(ibl_table_axis_index(&t->roughness, roughness), nr, &j, &wj);
     int i1 = nv > 1 ? i + 1 : i, j1 = nr > 1 ? j + 1 : j;
-    const float *p00 = t->data + ((size_t)j * nv + i) * ch, *p01 = t->data + ((size_t)j * nv + i1) * ch;
-    const float *p10 = t->data + ((size_t)j1 * nv + i) * ch, *p11 = t->data + ((size_t)j1 * nv + i1) * ch;
+    const float *p00 = t->data + ((size_t)j * nv + i) * ch,
+                *p01 = t->data + ((size_t)j * nv + i1) * ch;
+    const float *p10 = t->data + ((size_t)j1 * nv + i) * ch,
+                *p11 = t->data + ((size_t)j1 * nv + i1) * ch;
     for (int c = 0; c < 2; c++) {
         float lo = p00[c] + (p01[c] - p00[c]) * wi;
         float hi = p10[c] + (p11[c] - p10[c]) * wi;
         float v = lo + (hi - lo) * wj;
-        if (c == 0) *a = v;
-        else *b = v;
+        if (c == 0)
+            *a = v;
+        else
+            *b = v;
     }
 }
 
@@ -138,8 +142,9 @@ void ibl_shade(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_mat
         /* Lagarde & de Rousiers 2014 ("Moving Frostbite to PBR", specular dominant
          * direction): rough lobes lean from R toward N, which the n = v = r prefilter
          * cannot express; lerp(N, R, (1 - r)(sqrt(1 - r) + r)) */
-        float rough = m->model == IBL_MATERIAL_BLINN_PHONG ? ibl_roughness_from_shininess(m->shininess)
-                                                           : clamp01(m->roughness);
+        float rough = m->model == IBL_MATERIAL_BLINN_PHONG
+                          ? ibl_roughness_from_shininess(m->shininess)
+                          : clamp01(m->roughness);
         float smooth = 1.0f - rough;
         float f = smooth * (sqrtf(smooth) + rough);
         ibl_vec3 d = {s->n.x + (r.x - s->n.x) * f, s->n.y + (r.y - s->n.y) * f,
@@ -216,7 +221,8 @@ void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl
         so *= ibl_horizon_occlusion(dir, ng, desc->horizon_k);
     }
     float mixed[3];
-    ibl_ambient_mix_apply(desc->mix, s->direct_specular, irr, spec, diffuse_color, m->ao, so, mixed);
+    ibl_ambient_mix_apply(desc->mix, s->direct_specular, irr, spec, diffuse_color, m->ao, so,
+                          mixed);
     for (int c = 0; c < 3; c++) {
         out->diffuse[c] = diffuse_color[c] * irr[c];
         out->specular[c] = spec[c];
@@ -225,4 +231,29 @@ void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl
     out->so = so;
     out->lod = lod;
     out->r = dir;
+}
+
+void ibl_shade_blend(const ibl_probe *const *probes, const float *weights, int count,
+                     const ibl_vec3 *lookup_dirs, const ibl_shade_desc *desc,
+                     const ibl_material *m, const ibl_surface *s, ibl_shade_result *out)
+{
+    memset(out, 0, sizeof *out);
+    float heaviest = -1.0f;
+    for (int i = 0; i < count; i++) {
+        if (weights[i] <= 0.0f) continue;
+        ibl_shade_result r;
+        if (lookup_dirs) ibl_shade_dir(probes[i], desc, m, s, lookup_dirs[i], &r);
+        else ibl_shade(probes[i], desc, m, s, &r);
+        for (int c = 0; c < 3; c++) {
+            out->color[c] += weights[i] * r.color[c];
+            out->diffuse[c] += weights[i] * r.diffuse[c];
+            out->specular[c] += weights[i] * r.specular[c];
+        }
+        if (weights[i] > heaviest) {
+            heaviest = weights[i];
+            out->so = r.so;
+            out->lod = r.lod;
+            out->r = r.r;
+        }
+    }
 }

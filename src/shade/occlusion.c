@@ -16,11 +16,10 @@ static float saturate(float x)
     return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
 }
 
-static const char *const so_names[IBL_SO_COUNT] = {"none",        "ao",        "triace",
-                                                   "triace-shininess", "triace-fast",
-                                                   "frostbite",   "cone"};
-static const char *const mix_names[IBL_MIX_COUNT] = {"multiply", "lerp-albedo", "lerp-ao",
-                                                     "ao-lerp-ao", "lerp-ao2", "entire"};
+static const char *const so_names[IBL_SO_COUNT] = {
+    "none", "ao", "triace", "triace-shininess", "triace-fast", "frostbite", "cone"};
+static const char *const mix_names[IBL_MIX_COUNT] = {"multiply",   "lerp-albedo", "lerp-ao",
+                                                     "ao-lerp-ao", "lerp-ao2",    "entire"};
 
 const char *ibl_so_formula_name(ibl_so_formula f)
 {
@@ -101,7 +100,8 @@ float ibl_specular_occlusion(ibl_so_formula f, float n_dot_e, float ao, float ro
         return saturate(s * s - 1.0f + ao);
     }
     /* Lagarde & de Rousiers 2014, "Moving Frostbite to PBR", specular occlusion */
-    case IBL_SO_FROSTBITE: return saturate(powf(ne + ao, exp2f(-16.0f * roughness - 1.0f)) - 1.0f + ao);
+    case IBL_SO_FROSTBITE:
+        return saturate(powf(ne + ao, exp2f(-16.0f * roughness - 1.0f)) - 1.0f + ao);
     case IBL_SO_CONE: return cone_so(ne, ao, roughness);
     default: return 1.0f;
     }

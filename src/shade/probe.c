@@ -2,6 +2,10 @@
  * and the reads every shading model makes (prefiltered radiance, irradiance). */
 #include "ibl/shade.h"
 
+#include "ibl/io.h"
+#include "ibl/layout.h"
+#include "ibl/sh.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -28,15 +32,16 @@ ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *p)
     ibl_level_mapping *m = &p->mapping;
     if (m->levels <= 0 || m->levels > p->specular.levels)
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
-                        "probe: the level mapping describes %d levels, the chain has %d",
-                        m->levels, p->specular.levels);
+                        "probe: the level mapping describes %d levels, the chain has %d", m->levels,
+                        p->specular.levels);
     int have_r = 0, have_s = 0;
     for (int k = 0; k < m->levels; k++) {
         if (m->roughness[k] != 0.0f) have_r = 1;
         if (m->shininess[k] != 0.0f) have_s = 1;
     }
     if (!have_r && have_s)
-        for (int k = 0; k < m->levels; k++) m->roughness[k] = ibl_roughness_from_shininess(m->shininess[k]);
+        for (int k = 0; k < m->levels; k++)
+            m->roughness[k] = ibl_roughness_from_shininess(m->shininess[k]);
     /* floor at 1e-3: roughness 1 maps to shininess 0, and the lookup works in log2 */
     if (!have_s)
         for (int k = 0; k < m->levels; k++) {
@@ -76,7 +81,7 @@ void ibl_probe_free(ibl_context *ctx, ibl_probe *p)
 {
     if (!p) return;
     for (int i = 0; i < p->owned_count; i++) ibl_free(ctx, p->owned[i]);
-    for (int i = 0; i < 3; i++) ibl_cubemap_free(ctx, &p->owned_cubes[i]);
+    for (int i = 0; i < 4; i++) ibl_cubemap_free(ctx, &p->owned_cubes[i]);
     memset(p, 0, sizeof *p);
 }
 
@@ -149,9 +154,8 @@ void ibl_sh9_irradiance(const float sh[9][3], ibl_sh_kind kind, ibl_vec3 n, floa
                       0.315392f * (3.0f * z * z - 1.0f),
                       1.092548f * x * z,
                       0.546274f * (x * x - y * y)};
-    static const float band[9] = {3.14159265f, 2.09439510f, 2.09439510f, 2.09439510f,
-                                  0.78539816f, 0.78539816f, 0.78539816f, 0.78539816f,
-                                  0.78539816f};
+    static const float band[9] = {3.14159265f, 2.09439510f, 2.09439510f, 2.09439510f, 0.78539816f,
+                                  0.78539816f, 0.78539816f, 0.78539816f, 0.78539816f};
     for (int c = 0; c < 3; c++) {
         float e = 0.0f;
         for (int i = 0; i < 9; i++)
@@ -180,4 +184,132 @@ ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out)
                     "%s: loading a bake directory needs the bake format (manifest.json), which "
                     "this build does not have yet",
                     dir ? dir : "(null)");
+}
+
+/* Reads a cube (a cube texture, or a flat image in a layout) into out, owning its texels. */
+static ibl_status read_cube(ibl_context *ctx, const char *path, const ibl_read_desc *rd,
+                            int allow_image, ibl_cubemap *out)
+{
+    ibl_texture tex;
+    ibl_file_info info;
+    ibl_status st = ibl_read_texture(ctx, path, rd, &tex, &info);
+    if (st != IBL_OK) return st;
+    if (tex.kind == IBL_TEXTURE_CUBE) {
+        out->size = tex.width;
+        out->levels = tex.levels;
+        out->data = tex.data;
+        out->owns_data = tex.owns_data;
+        tex.owns_data = 0;
+    } else if (allow_image && tex.kind == IBL_TEXTURE_2D) {
+        ibl_image im = {tex.width, tex.height, tex.data};
+        st = ibl_image_to_cubemap(ctx, &im, NULL, out);
+    } else {
+        st = ibl_fail(ctx, IBL_ERR_FORMAT, "%s: not a cube texture", path);
+    }
+    ibl_texture_free(ctx, &tex);
+    return st;
+}
+
+/* Reads a 2D or 3D table and keeps its texels (RGBA float, level 0). */
+static ibl_status read_table(ibl_context *ctx, ibl_probe *p, const char *path,
+                             const ibl_read_desc *rd, ibl_texture_kind kind, ibl_texture *shape,
+                             float **data)
+{
+    ibl_texture tex;
+    ibl_status st = ibl_read_texture(ctx, path, rd, &tex, NULL);
+    if (st != IBL_OK) return st;
+    if (tex.kind != kind || !tex.owns_data) {
+        ibl_texture_free(ctx, &tex);
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: expected a %s table", path,
+                        kind == IBL_TEXTURE_3D ? "3D" : "2D");
+    }
+    *shape = tex;
+    shape->data = NULL;
+    shape->metadata = NULL;
+    shape->metadata_count = 0;
+    *data = tex.data;
+    p->owned[p->owned_count++] = tex.data;
+    tex.owns_data = 0;
+    ibl_texture_free(ctx, &tex);
+    return IBL_OK;
+}
+
+ibl_status ibl_probe_load_files(ibl_context *ctx, const ibl_probe_files *f, ibl_probe *out)
+{
+    memset(out, 0, sizeof *out);
+    if (!f || !f->specular)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: no specular chain file");
+    ibl_read_desc rd = {.clamp_infinite = f->clamp_infinite};
+    ibl_status st = read_cube(ctx, f->specular, &rd, 0, &out->owned_cubes[0]);
+    if (st != IBL_OK) goto fail;
+    out->specular = out->owned_cubes[0];
+    out->specular.owns_data = 0;
+    out->mapping = f->mapping;
+    if (out->mapping.levels <= 0) {
+        int n = out->specular.levels;
+        memset(&out->mapping, 0, sizeof out->mapping);
+        out->mapping.levels = n;
+        for (int k = 0; k < n; k++)
+            out->mapping.roughness[k] = n > 1 ? (float)k / (float)(n - 1) : 0.0f;
+    }
+    if (f->mirror) {
+        if ((st = read_cube(ctx, f->mirror, &rd, 1, &out->owned_cubes[1])) != IBL_OK) goto fail;
+        out->mirror = out->owned_cubes[1];
+        out->mirror.owns_data = 0;
+    }
+    if (f->irradiance) {
+        if ((st = read_cube(ctx, f->irradiance, &rd, 1, &out->owned_cubes[2])) != IBL_OK) goto fail;
+        out->irradiance = out->owned_cubes[2];
+        out->irradiance.owns_data = 0;
+    } else {
+        /* SH9 of the sharpest radiance at hand, at a level of at most 32 texels */
+        const ibl_cubemap *src = out->mirror.data ? &out->mirror : &out->specular;
+        int level = 0; /* a one-level mirror is projected whole */
+        while (level + 1 < src->levels && ibl_level_size(src->size, level) > 32) level++;
+        ibl_sh sh;
+        if ((st = ibl_sh_project_cubemap(ctx, src, level, 3, &sh)) != IBL_OK) goto fail;
+        for (int i = 0; i < 9; i++)
+            for (int c = 0; c < 3; c++) out->sh[i][c] = (float)sh.c[i][c];
+        out->sh_kind = IBL_SH_RADIANCE;
+    }
+    if (f->splitsum) {
+        ibl_texture shape;
+        float *data;
+        if ((st = read_table(ctx, out, f->splitsum, &rd, IBL_TEXTURE_2D, &shape, &data)) != IBL_OK)
+            goto fail;
+        float w = (float)shape.width, h = (float)shape.height;
+        out->splitsum = (ibl_splitsum_view){data,
+                                            4,
+                                            {shape.width, 0.5f / w, 1.0f - 0.5f / w, 0},
+                                            {shape.height, 0.5f / h, 1.0f - 0.5f / h, 0}};
+    }
+    if (f->ambient_brdf) {
+        ibl_texture shape;
+        float *data;
+        if ((st = read_table(ctx, out, f->ambient_brdf, &rd, IBL_TEXTURE_3D, &shape, &data)) !=
+            IBL_OK)
+            goto fail;
+        double lo = f->ambient_shininess_min > 0 ? f->ambient_shininess_min : 1.0;
+        double hi = f->ambient_shininess_max > 0 ? f->ambient_shininess_max : 2000.0;
+        int n = shape.height;
+        double t0 = 0.5 / n, t1 = 1.0 - 0.5 / n;
+        ibl_table_axis s_axis;
+        if (f->ambient_linear)
+            s_axis =
+                (ibl_table_axis){n, (float)(lo + (hi - lo) * t0), (float)(lo + (hi - lo) * t1), 0};
+        else
+            s_axis = (ibl_table_axis){n, (float)(lo * pow(hi / lo, t0)),
+                                      (float)(lo * pow(hi / lo, t1)), 1};
+        float w = (float)shape.width, d = (float)shape.depth;
+        out->ambient_brdf = (ibl_ambient_brdf_view){data,
+                                                    4,
+                                                    {shape.width, 0.5f / w, 1.0f - 0.5f / w, 0},
+                                                    s_axis,
+                                                    {shape.depth, 0.5f / d, 1.0f - 0.5f / d, 0}};
+    }
+    if ((st = ibl_probe_validate(ctx, out)) != IBL_OK) goto fail;
+    return IBL_OK;
+fail:
+    ibl_probe_free(ctx, out);
+    return st;
 }

@@ -119,8 +119,8 @@ ibl_vec3 ibl_parallax_correct(const ibl_volume *proxy, ibl_vec3 probe_position, 
         t = (-b + sqrtf(disc > 0.0f ? disc : 0.0f)) / a;
     }
     ibl_vec3 hit = v3(p.x + t * r.x, p.y + t * r.y, p.z + t * r.z);
-    return normalize3(v3(hit.x - probe_position.x, hit.y - probe_position.y,
-                         hit.z - probe_position.z));
+    return normalize3(
+        v3(hit.x - probe_position.x, hit.y - probe_position.y, hit.z - probe_position.z));
 }
 
 ibl_vec3 ibl_offset_reflection(ibl_vec3 r, ibl_vec3 p_obj, ibl_vec3 p_ibl, float c)
@@ -202,8 +202,10 @@ ibl_status ibl_tile_probes(ibl_context *ctx, const ibl_screen_rect *rects, const
             for (int y = by0; y <= by1 && y < ty; y++)
                 for (int x = bx0; x <= bx1 && x < tx; x++) {
                     size_t t = (size_t)y * tx + x;
-                    if (pass == 0) offsets[t + 1]++;
-                    else out->indices[offsets[t]++] = k;
+                    if (pass == 0)
+                        offsets[t + 1]++;
+                    else
+                        out->indices[offsets[t]++] = k;
                 }
         }
         if (pass == 0) {

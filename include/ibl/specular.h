@@ -1,0 +1,156 @@
+/*
+ * ibl/specular.h - the prefiltered (mipmapped) radiance environment map: every level of the
+ * output cube is the source convolved with a lobe (Phong, Blinn, GGX, box or Gaussian) whose
+ * width grows with the level, so that a shader reads a blurred reflection with
+ * textureLod(cube, R, lod(roughness)). docs/SPECULAR.md has the design, algorithms, mapping
+ * formulas with their sources and the manifest format.
+ *
+ *   ibl_specular_desc d = { .filter = IBL_FILTER_GGX, .size = 256 };
+ *   ibl_cubemap out; ibl_specular_info info;
+ *   ibl_specular_prefilter(ctx, &src, &d, &out, &info);   // out: 6 faces x levels
+ *
+ * Kernels (seeds 000/001 "Generate REM" .. "Spherical Phong kernel", 004 "Cubemap Convolution"):
+ *   phong: P(R) = int L(l) max(R.l,0)^n dl / int max(R.l,0)^n dl, n = shininess of the level;
+ *   blinn: the Blinn lobe (n.h)^s through the seed's fit cos^n(t) ~ cos^(f n)(t/2): Phong with
+ *          n = s / f (f = blinn_factor, default 4.2; cmft and CubeMapGen use 4);
+ *   ggx:   P(n) = int L(l) D(h) max(n.l,0) dl / int D(h) max(n.l,0) dl, v = n, h = norm(n+l),
+ *          alpha = roughness^2 (the split-sum prefilter without sampling noise);
+ *   box:   the plain area-weighted mip chain (the seed's fastest dynamic profile);
+ *   gauss: a 2D Gaussian blur per face (the seed's second dynamic profile).
+ *
+ * Methods: IBL_METHOD_FAST (default; deterministic hierarchical quadrature over the source's
+ * moment pyramid, see docs/SPECULAR.md) and IBL_METHOD_REFERENCE (the exact integral of the
+ * piecewise-constant source over every texel with exact solid angles, in double; slow).
+ * Output is bit-identical for any thread count.
+ */
+#ifndef IBL_SPECULAR_H
+#define IBL_SPECULAR_H
+
+#include "core.h"
+#include "cubemap.h"
+#include "edge_fixup.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum ibl_specular_filter {
+    IBL_FILTER_GGX = 0, /* default */
+    IBL_FILTER_PHONG,
+    IBL_FILTER_BLINN,
+    IBL_FILTER_BOX,
+    IBL_FILTER_GAUSS,
+    IBL_FILTER_COUNT
+} ibl_specular_filter;
+
+typedef enum ibl_specular_method {
+    IBL_METHOD_FAST = 0,
+    IBL_METHOD_REFERENCE
+} ibl_specular_method;
+
+/* How a level is tied to a roughness (GGX) or a shininess (Phong family). */
+typedef enum ibl_specular_mapping {
+    IBL_MAPPING_DEFAULT = 0, /* GGX: linear; phong/blinn/box/gauss: seed                      */
+    IBL_MAPPING_SEED,        /* seeds 000/001: lod = a - 0.5 log2(shininess), a = 0.5 log2(max) */
+    IBL_MAPPING_LINEAR,      /* glTF IBL-Sampler: roughness = lod / (levels - 1)             */
+    IBL_MAPPING_FILAMENT,    /* Filament: lod/(levels-1) = r (2 - r)                          */
+    IBL_MAPPING_UNREAL,      /* UE4: mip = levels - 1 - (1 - 1.2 log2 r)                      */
+    IBL_MAPPING_UNITY,       /* Unity: mip = 6 r (1.7 - 0.7 r)                                */
+    IBL_MAPPING_BABYLON,     /* Babylon.js: alpha = 2^(lod / 0.8) / size, lod 0 mirror        */
+    IBL_MAPPING_TABLE,       /* the caller's table of roughness or shininess per level        */
+    IBL_MAPPING_COUNT
+} ibl_specular_mapping;
+
+typedef struct ibl_specular_desc {
+    ibl_specular_filter filter;
+    ibl_specular_method method;
+    int size;                    /* output face edge; 0: the source's                           */
+    int levels;                  /* 0: full chain down to 1x1                                    */
+    ibl_specular_mapping mapping;
+    float shininess_min;         /* Phong family range; 0: 1                                     */
+    float shininess_max;         /* 0: 1000 (the seed's 32x32 configurations)                    */
+    float blinn_factor;          /* 0: 4.2 (seed fit); cmft/CubeMapGen use 4                      */
+    const float *table;          /* IBL_MAPPING_TABLE: roughness (GGX) or shininess per level   */
+    int table_count;             /* must equal the number of levels                              */
+    int mirror;                  /* level 0 is the unfiltered source (see docs/SPECULAR.md)      */
+    ibl_edge_fixup edge_fixup;   /* 0: none                                                      */
+    ibl_bent_desc bent;          /* parameters of IBL_EDGE_FIXUP_BENT                            */
+    int source_size;             /* plans only: face edge of the cubes ibl_specular_run gets     */
+    float accuracy;              /* fast method: refinement threshold; 0: 0.35 (smaller: slower) */
+} ibl_specular_desc;
+
+/* What a prefilter produced: everything a renderer needs to pick the level. */
+typedef struct ibl_specular_info {
+    ibl_specular_filter filter;
+    ibl_specular_mapping mapping;
+    int size, levels, mirror;
+    float blinn_factor;
+    float shininess_min, shininess_max;
+    float seed_a;                     /* IBL_MAPPING_SEED: the fitted a                        */
+    float roughness[IBL_MAX_LEVELS];  /* GGX: perceptual roughness per level (alpha = r^2)     */
+    float shininess[IBL_MAX_LEVELS];  /* Phong family: shininess per level (Blinn: Blinn's s)  */
+} ibl_specular_info;
+
+const char *ibl_specular_filter_name(ibl_specular_filter filter);   /* "ggx", "phong", ...   */
+int ibl_specular_filter_from_name(const char *name, ibl_specular_filter *out); /* 0: unknown */
+const char *ibl_specular_mapping_name(ibl_specular_mapping mapping); /* "seed", "linear", ... */
+int ibl_specular_mapping_from_name(const char *name, ibl_specular_mapping *out);
+
+/* The seed's configurations and the modern presets: "dynamic-box16", "dynamic-gauss32",
+ * "dynamic-phong16", "dynamic-phong32", "static-phong32", "static-phong64", "gltf",
+ * "filament", "unreal", "unity". Fills *desc (other fields zero); 0 for an unknown name. */
+int ibl_specular_preset(const char *name, ibl_specular_desc *desc);
+/* The preset names, NULL-terminated. */
+const char *const *ibl_specular_preset_names(void);
+
+/* Fills the per-level parameters (roughness or shininess) of the chain desc describes for a
+ * source of face edge source_size, without filtering anything. */
+ibl_status ibl_specular_levels(ibl_context *ctx, const ibl_specular_desc *desc, int source_size,
+                               ibl_specular_info *info);
+
+/* Prefilters src (level 0 is used) into a newly allocated cube (free with ibl_cubemap_free).
+ * info may be NULL. */
+ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
+                                  const ibl_specular_desc *desc, ibl_cubemap *out,
+                                  ibl_specular_info *info);
+
+/* The reference integral (double, every source texel, exact solid angles) for single
+ * directions: the yardstick the benchmarks and tests compare the fast method against. */
+typedef struct ibl_specular_reference ibl_specular_reference;
+/* Precomputes texel directions and solid angles of src level 0 (src must outlive it). */
+ibl_status ibl_specular_reference_create(ibl_context *ctx, const ibl_cubemap *src,
+                                         ibl_specular_reference **out);
+/* The filtered value (RGBA) of level `level` of the chain info describes, in direction dir.
+ * A mirror level (roughness 0) gives the nearest source texel. */
+void ibl_specular_reference_eval(const ibl_specular_reference *ref, const ibl_specular_info *info,
+                                 int level, ibl_vec3 dir, double out[4]);
+void ibl_specular_reference_destroy(ibl_specular_reference *ref);
+
+/* Writes the mapping and per-level parameters as KTX2 key/values ("ibl.specular.*"). */
+ibl_status ibl_specular_set_metadata(ibl_context *ctx, const ibl_specular_info *info,
+                                     ibl_texture *tex);
+/* The manifest.json text (NUL-terminated, freed with ibl_free): "filter", "mapping",
+ * "mirror", "levels": [{"level", "size", "roughness" | "shininess"}, ...]. */
+ibl_status ibl_specular_manifest_json(ibl_context *ctx, const ibl_specular_info *info,
+                                      char **json);
+
+/* ---- the dynamic (per-frame) path: plan once, refilter many times ---- */
+
+typedef struct ibl_specular_plan ibl_specular_plan;
+
+/* Plans for source cubes of face edge desc->source_size (0: desc->size) and output desc->size
+ * (required). All tables and scratch memory are allocated here. The context is kept and used
+ * by ibl_specular_run (its parallel-for). */
+ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *desc,
+                                    ibl_specular_plan **out);
+/* Refilters: src must have level 0 of edge source_size; dst must have edge size and the
+ * planned number of levels (e.g. caller-owned memory through ibl_cubemap_wrap). Allocates
+ * nothing; time depends only on the sizes. */
+ibl_status ibl_specular_run(ibl_specular_plan *plan, const ibl_cubemap *src, ibl_cubemap *dst);
+const ibl_specular_info *ibl_specular_plan_info(const ibl_specular_plan *plan);
+void ibl_specular_plan_destroy(ibl_specular_plan *plan);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

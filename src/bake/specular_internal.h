@@ -1,0 +1,76 @@
+/* Internal contract of the specular prefilter: the lobe math shared by the reference and the
+ * fast method, the plan (the fast method's precomputed quadrature), and the seed kernels
+ * (box, gauss) implemented in specular_box.c / specular_gauss.c. */
+#ifndef IBL_SPECULAR_INTERNAL_H
+#define IBL_SPECULAR_INTERNAL_H
+
+#include "ibl/specular.h"
+
+/* Seed kernels (the edge-fixup helper's files). dst->size and dst->levels are given; every
+ * level is filled. */
+ibl_status ibl__specular_box(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst);
+ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst,
+                               const float *shininess_per_level);
+/* The box chain's fitted Phong shininess of a level (specular_box.c). */
+float ibl__box_level_shininess(int size, int level);
+
+/* A radially symmetric lobe f(x) of x = cos(angle between the lobe axis and l), normalised to
+ * f(1) = 1; zero for x <= 0. */
+typedef enum ibl__lobe_kind {
+    IBL__LOBE_MIRROR = 0, /* a delta: the level is the source resampled */
+    IBL__LOBE_PHONG,      /* x^n                                         */
+    IBL__LOBE_GGX         /* x D(h) / D(n), n.h = sqrt((1 + x) / 2)      */
+} ibl__lobe_kind;
+
+typedef struct ibl__lobe {
+    ibl__lobe_kind kind;
+    double n;           /* Phong exponent                               */
+    double alpha;       /* GGX alpha = roughness^2                      */
+    double k;           /* GGX: (alpha^2 - 1) / 2                       */
+    double a4;          /* GGX: alpha^4                                 */
+    double cull_angle;  /* f < 1e-12 beyond this angle (radians)        */
+    double peak_angle;  /* angle where |d log f / d angle| peaks (GGX)  */
+    double half_angle;  /* angle where f = 1/2: the blur radius         */
+    double floor_angle; /* angle where f = 0.02                         */
+    double horizon;     /* f at 0.1 rad above the horizon: is the kink there worth resolving */
+} ibl__lobe;
+
+/* The lobe of one level of the chain info describes (MIRROR for roughness 0 / no shininess). */
+ibl__lobe ibl__lobe_for_level(const ibl_specular_info *info, int level);
+/* f, f', f'' at x (double). */
+double ibl__lobe_f(const ibl__lobe *lobe, double x);
+void ibl__lobe_f012(const ibl__lobe *lobe, double x, double out[3]);
+/* |d log f / d theta| at angle theta (the lobe's local scale is its inverse). */
+double ibl__lobe_log_slope(const ibl__lobe *lobe, double theta);
+/* Upper bound of the log slope over [t0, t1]. */
+double ibl__lobe_max_log_slope(const ibl__lobe *lobe, double t0, double t1);
+
+/* Angular radius of the face-plane rectangle [u0,u1]x[v0,v1] seen from its centre direction. */
+double ibl__rect_radius(int face, double u0, double v0, double u1, double v1, double centre[3]);
+
+/* The reference's precomputed source geometry. */
+struct ibl_specular_reference {
+    ibl_context *ctx;
+    const ibl_cubemap *src;
+    int n, blocks;      /* source face edge; blocks per face edge           */
+    double *dir;        /* 6 n n x 3: texel centre directions (unit)        */
+    double *omega;      /* n n: texel solid angles (same on every face)     */
+    double *radius;     /* n n: texel angular radii                         */
+    double *block;      /* 6 blocks^2 x 4: block centre direction, radius   */
+};
+void ibl__reference_eval_lobe(const ibl_specular_reference *ref, const ibl__lobe *lobe,
+                              const double dir[3], double out[4]);
+/* Reference for whole levels. */
+ibl_status ibl__specular_reference(ibl_context *ctx, const ibl_cubemap *src,
+                                   const ibl_specular_desc *desc, const ibl_specular_info *info,
+                                   ibl_cubemap *dst);
+
+/* The direction the kernel of texel (x, y) is centred on (edge fixups bend it). */
+void ibl__output_direction(const ibl_specular_desc *desc, const ibl__lobe *lobe, int face, int n,
+                           int x, int y, double dir[3]);
+
+/* Fills info from desc for a chain of the given output size and levels. */
+ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc, int size,
+                                 int levels, ibl_specular_info *info);
+
+#endif

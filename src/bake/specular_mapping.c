@@ -1,0 +1,139 @@
+/* Level <-> roughness / shininess presets. Each formula cites where it comes from; the
+ * inverse mappings (roughness of a level) are solved from the engines' lod-of-roughness. */
+#include "specular_internal.h"
+
+#include <math.h>
+#include <string.h>
+
+/* GGX roughness of level l of a chain of L levels, edge `size`, for a roughness mapping. */
+static double mapped_roughness(ibl_specular_mapping m, int l, int L, int size)
+{
+    double last = L > 1 ? L - 1 : 1;
+    double lod = l / last, r;
+    switch (m) {
+    case IBL_MAPPING_FILAMENT:
+        /* Filament IBLPrefilterContext / cmgen: lod / (levels - 1) = r (2 - r), inverted:
+         * lodToPerceptualRoughness(lod) = 1 - sqrt(1 - lod) */
+        r = 1.0 - sqrt(1.0 - (lod > 1 ? 1 : lod));
+        break;
+    case IBL_MAPPING_UNREAL: {
+        /* UE4 ReflectionEnvironmentShared.usf: ComputeReflectionCaptureRoughnessFromMip,
+         * LevelFrom1x1 = CubemapMaxMip - 1 - mip, r = 2^((1 - LevelFrom1x1) / 1.2) */
+        double from1x1 = (L - 1) - l;
+        r = pow(2.0, (1.0 - from1x1) / 1.2);
+        break;
+    }
+    case IBL_MAPPING_UNITY:
+        /* Unity ImageBasedLighting.hlsl: mip = r (1.7 - 0.7 r) * UNITY_SPECCUBE_LOD_STEPS (6),
+         * solved for r */
+        if (l >= 6) r = 1.0;
+        else r = (1.7 - sqrt(1.7 * 1.7 - 2.8 * l / 6.0)) / 1.4;
+        break;
+    case IBL_MAPPING_BABYLON:
+        /* Babylon.js HDRFiltering: alphaG = 2^((lod - 0) / 0.8) / width, lod 0 unfiltered;
+         * alpha = r^2 */
+        if (l == 0) r = 0.0;
+        else r = sqrt(pow(2.0, l / 0.8) / size);
+        break;
+    case IBL_MAPPING_LINEAR:
+    default:
+        /* glTF-Sample-Viewer / KhronosGroup IBL-Sampler: roughness = lod / (levels - 1) */
+        r = L > 1 ? lod : 0.0;
+        break;
+    }
+    if (r > 1.0) r = 1.0;
+    if (r < 0.0) r = 0.0;
+    return r;
+}
+
+/* The seeds' lod = a - 0.5 log2(shininess) with a = 0.5 log2(max): level 0 is the sharpest
+ * lobe of the range, each level 4x less shiny, clamped to the minimum. */
+static double seed_shininess(int l, double smin, double smax)
+{
+    double s = smax / pow(4.0, l);
+    return s < smin ? smin : s;
+}
+
+ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc, int size,
+                                 int levels, ibl_specular_info *info)
+{
+    memset(info, 0, sizeof *info);
+    if (levels < 1 || levels > IBL_MAX_LEVELS)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: %d levels out of range", levels);
+    if ((unsigned)desc->filter >= IBL_FILTER_COUNT)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: unknown filter %d", desc->filter);
+    info->filter = desc->filter;
+    info->size = size;
+    info->levels = levels;
+    info->mirror = desc->mirror != 0;
+    info->blinn_factor = desc->blinn_factor > 0 ? desc->blinn_factor : 4.2f;
+    info->shininess_min = desc->shininess_min > 0 ? desc->shininess_min : 1.0f;
+    info->shininess_max = desc->shininess_max > 0 ? desc->shininess_max : 1000.0f;
+    if (info->shininess_max < info->shininess_min)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: shininess range %g-%g is empty",
+                        info->shininess_min, info->shininess_max);
+    ibl_specular_mapping m = desc->mapping;
+    if ((unsigned)m >= IBL_MAPPING_COUNT)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: unknown mapping %d", m);
+    if (m == IBL_MAPPING_DEFAULT) m = desc->filter == IBL_FILTER_GGX ? IBL_MAPPING_LINEAR : IBL_MAPPING_SEED;
+    info->mapping = m;
+    info->seed_a = (float)(0.5 * log2(info->shininess_max));
+    if (m == IBL_MAPPING_TABLE) {
+        if (!desc->table || desc->table_count != levels)
+            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                            "prefilter: the mapping table has %d values for %d levels",
+                            desc->table ? desc->table_count : 0, levels);
+        for (int l = 0; l < levels; l++)
+            if (!(desc->table[l] >= 0) || isinf(desc->table[l]))
+                return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                                "prefilter: mapping table value %d (%g) is not a finite value >= 0",
+                                l, desc->table[l]);
+    }
+    /* --mirror: level 0 is the unfiltered source. The seed's shininess chain then starts at
+     * level 1 (the seeds' "mirror reflection option" adds the sharp end); the roughness
+     * mappings keep their levels and only level 0 becomes the mirror (most already put
+     * roughness 0 there). */
+    int first = info->mirror ? 1 : 0;
+    int shift = info->mirror && m == IBL_MAPPING_SEED;
+    int L = levels - shift; /* levels the mapping spreads over */
+    int ggx = desc->filter == IBL_FILTER_GGX;
+    for (int l = 0; l < levels; l++) {
+        if (l < first) {
+            info->roughness[l] = 0.0f;
+            info->shininess[l] = 0.0f; /* 0: mirror (unfiltered) */
+            continue;
+        }
+        int ml = l - shift;
+        if (m == IBL_MAPPING_TABLE) {
+            if (ggx) info->roughness[l] = desc->table[l] > 1 ? 1.0f : desc->table[l];
+            else info->shininess[l] = desc->table[l];
+            continue;
+        }
+        if (desc->filter == IBL_FILTER_BOX && m == IBL_MAPPING_SEED) {
+            /* box: the chain's own fitted shininess (specular_box.c, least-squares fit of
+             * the box-plus-bilinear kernel to a Phong lobe), clamped to the range */
+            double s = ibl__box_level_shininess(size, l);
+            if (s > info->shininess_max) s = info->shininess_max;
+            if (s < info->shininess_min) s = info->shininess_min;
+            info->shininess[l] = (float)s;
+            continue;
+        }
+        if (m == IBL_MAPPING_SEED) {
+            double s = seed_shininess(ml, info->shininess_min, info->shininess_max);
+            if (ggx) info->roughness[l] = (float)pow(2.0 / (s + 2.0), 0.25);
+            else info->shininess[l] = (float)s;
+            continue;
+        }
+        double r = mapped_roughness(m, ml, L, size);
+        if (ggx) {
+            info->roughness[l] = (float)r;
+        } else {
+            /* roughness presets for the Phong family: the Blinn-Phong exponent equivalent to
+             * Beckmann/GGX alpha, s = 2 / alpha^2 - 2 (Walter et al. 2007, eq. 33) */
+            double a = r * r;
+            info->shininess[l] = a > 0 ? (float)(2.0 / (a * a) - 2.0) : 0.0f;
+            if (a > 0 && info->shininess[l] < 1e-3f) info->shininess[l] = 1e-3f;
+        }
+    }
+    return IBL_OK;
+}

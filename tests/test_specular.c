@@ -1,0 +1,426 @@
+/* Specular prefilter: white furnace, mirror level, fast method against the reference with a
+ * bright sun, the analytic lobe shape of a single texel, symmetry, thread independence,
+ * mapping presets and the manifest. */
+#include "test_support.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PI 3.14159265358979323846
+
+/* A smooth sky (gradient + colour variation) with a small sun of ~1e4 the sky's radiance. */
+static void fill_sun_sky(ibl_cubemap *c, double sun_dir[3], double sun_radius, float sun_value)
+{
+    int n = c->size;
+    double len = sqrt(sun_dir[0] * sun_dir[0] + sun_dir[1] * sun_dir[1] + sun_dir[2] * sun_dir[2]);
+    double cs = cos(sun_radius);
+    for (int f = 0; f < 6; f++) {
+        float *p = ibl_cubemap_face(c, 0, f);
+        for (int y = 0; y < n; y++)
+            for (int x = 0; x < n; x++, p += 4) {
+                ibl_vec3 d = ibl_cube_texel_direction(f, n, x, y);
+                p[0] = 0.4f + 0.3f * d.y + 0.1f * d.x;
+                p[1] = 0.5f + 0.3f * d.y - 0.1f * d.z * d.x;
+                p[2] = 0.9f + 0.5f * d.y * d.y;
+                p[3] = 1.0f;
+                double c2 = (d.x * sun_dir[0] + d.y * sun_dir[1] + d.z * sun_dir[2]) / len;
+                if (c2 > cs) {
+                    p[0] += sun_value;
+                    p[1] += sun_value * 0.9f;
+                    p[2] += sun_value * 0.8f;
+                }
+            }
+    }
+}
+
+typedef struct err_stats {
+    double rms, max;
+} err_stats;
+
+/* Issue 7's error bar for one level: solid-angle weighted relative RMS per channel, and the
+ * largest texel error relative to max(reference, level mean). */
+static err_stats level_error(const ibl_cubemap *fast, const ibl_cubemap *ref, int level)
+{
+    int n = ibl_level_size(fast->size, level);
+    double mean[4];
+    ibl_cubemap_mean(ref, level, mean);
+    double se[3] = {0, 0, 0}, sr[3] = {0, 0, 0}, mx = 0;
+    for (int f = 0; f < 6; f++) {
+        const float *a = ibl_cubemap_face(fast, level, f), *b = ibl_cubemap_face(ref, level, f);
+        for (int y = 0; y < n; y++)
+            for (int x = 0; x < n; x++) {
+                double w = ibl_cube_texel_solid_angle(n, x, y);
+                size_t i = ((size_t)y * n + x) * 4;
+                for (int c = 0; c < 3; c++) {
+                    double e = a[i + c] - b[i + c];
+                    se[c] += w * e * e;
+                    sr[c] += w * b[i + c] * b[i + c];
+                    double scale = fmax(b[i + c], mean[c]);
+                    if (fabs(e) / scale > mx) mx = fabs(e) / scale;
+                }
+            }
+    }
+    err_stats s = {0, mx};
+    for (int c = 0; c < 3; c++) s.rms = fmax(s.rms, sqrt(se[c] / sr[c]));
+    return s;
+}
+
+static ibl_cubemap make_sun_cube(int n)
+{
+    ibl_cubemap c;
+    ibl_context *ctx = test_context(1);
+    assert_int_equal(ibl_cubemap_alloc(ctx, n, 1, &c), IBL_OK);
+    ibl_context_destroy(ctx);
+    double sun[3] = {0.5, 0.7, -0.35};
+    fill_sun_sky(&c, sun, 1.6 * 2.0 / n, 1e4f);
+    return c;
+}
+
+static void fast_vs_reference_case(ibl_specular_filter filter, int src_size, int size, int verbose)
+{
+    ibl_context *ctx = test_context(0);
+    ibl_cubemap src = make_sun_cube(src_size);
+    ibl_specular_desc d = {0};
+    d.filter = filter;
+    d.size = size;
+    ibl_cubemap fast, ref;
+    ibl_specular_info info;
+    assert_int_equal(ibl_specular_prefilter(ctx, &src, &d, &fast, &info), IBL_OK);
+    d.method = IBL_METHOD_REFERENCE;
+    assert_int_equal(ibl_specular_prefilter(ctx, &src, &d, &ref, NULL), IBL_OK);
+    for (int l = 0; l < fast.levels; l++) {
+        err_stats e = level_error(&fast, &ref, l);
+        if (verbose)
+            printf("  %s %d<-%d level %d (%s %g): rms %.4f%% max %.3f%%\n",
+                   ibl_specular_filter_name(filter), size, src_size, l,
+                   filter == IBL_FILTER_GGX ? "r" : "n",
+                   filter == IBL_FILTER_GGX ? info.roughness[l] : info.shininess[l], 100 * e.rms,
+                   100 * e.max);
+        /* issue 7's error bar */
+        assert_true(e.rms <= 0.005);
+        assert_true(e.max <= 0.05);
+    }
+    ibl_cubemap_free(ctx, &fast);
+    ibl_cubemap_free(ctx, &ref);
+    ibl_cubemap_free(ctx, &src);
+    ibl_context_destroy(ctx);
+}
+
+static void fast_vs_reference(void **state)
+{
+    (void)state;
+    int verbose = getenv("IBL_TEST_VERBOSE") != NULL;
+    ibl_specular_filter filters[3] = {IBL_FILTER_GGX, IBL_FILTER_PHONG, IBL_FILTER_BLINN};
+    /* small cubes keep the reference affordable in the sanitizer build; bench/ measures the
+     * real HDRIs at 128 and 256 */
+    fast_vs_reference_case(filters[0], 16, 16, verbose);
+    for (int i = 0; i < 3; i++) fast_vs_reference_case(filters[i], 32, 16, verbose);
+}
+
+/* A constant environment stays constant at every level of every kernel (issue 7: <= 1e-5). */
+static void white_furnace(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(0);
+    ibl_cubemap src;
+    assert_int_equal(ibl_cubemap_alloc(ctx, 16, 1, &src), IBL_OK);
+    test_fill_cube(&src, 1.5f, 0.25f, 3.0f);
+    for (int f = 0; f < IBL_FILTER_COUNT; f++) {
+        for (int method = 0; method < 2; method++) {
+            if (method == 1 && (f == IBL_FILTER_BOX || f == IBL_FILTER_GAUSS)) continue;
+            ibl_specular_desc d = {0};
+            d.filter = (ibl_specular_filter)f;
+            d.method = (ibl_specular_method)method;
+            d.size = method == 1 ? 8 : 0; /* the reference is slow: a smaller chain */
+            ibl_cubemap out;
+            assert_int_equal(ibl_specular_prefilter(ctx, &src, &d, &out, NULL), IBL_OK);
+            size_t count = ibl_cubemap_floats(out.size, out.levels) / 4;
+            const float expect[3] = {1.5f, 0.25f, 3.0f};
+            for (size_t i = 0; i < count; i++)
+                for (int c = 0; c < 3; c++)
+                    assert_near(out.data[i * 4 + c] / expect[c], 1.0, 1e-5);
+            ibl_cubemap_free(ctx, &out);
+        }
+    }
+    ibl_cubemap_free(ctx, &src);
+    ibl_context_destroy(ctx);
+}
+
+/* --mirror: level 0 is the source itself, bit for bit. */
+static void mirror_level(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(0);
+    ibl_cubemap src = make_sun_cube(16);
+    ibl_specular_filter filters[3] = {IBL_FILTER_GGX, IBL_FILTER_PHONG, IBL_FILTER_BOX};
+    for (int i = 0; i < 3; i++) {
+        ibl_specular_desc d = {0};
+        d.filter = filters[i];
+        d.mirror = 1;
+        ibl_cubemap out;
+        ibl_specular_info info;
+        assert_int_equal(ibl_specular_prefilter(ctx, &src, &d, &out, &info), IBL_OK);
+        assert_int_equal(out.size, 16);
+        assert_memory_equal(out.data, src.data, (size_t)6 * 16 * 16 * 4 * sizeof(float));
+        /* level 1 is filtered: it differs from a plain average */
+        assert_true(info.mirror);
+        if (filters[i] == IBL_FILTER_GGX) assert_true(info.roughness[1] > 0);
+        else assert_true(info.shininess[1] > 0);
+        /* the seed chain starts after the mirror: level 1 has the range's top */
+        if (filters[i] == IBL_FILTER_PHONG) assert_near(info.shininess[1], 1000, 0);
+        ibl_cubemap_free(ctx, &out);
+    }
+    ibl_cubemap_free(ctx, &src);
+    ibl_context_destroy(ctx);
+}
+
+/* Independent normalisation: int over the sphere of the lobe, 1D midpoint rule in theta. */
+static double lobe_integral(int ggx, double param)
+{
+    double acc = 0;
+    int steps = 200000;
+    for (int i = 0; i < steps; i++) {
+        double th = (i + 0.5) * (PI / 2) / steps;
+        double x = cos(th), f;
+        if (ggx) {
+            double a2 = param * param * param * param, nh2 = (1 + x) / 2;
+            double den = nh2 * (a2 - 1) + 1;
+            f = x * a2 * a2 / (den * den); /* D(h) / D(n) times n.l */
+        } else {
+            f = pow(x, param);
+        }
+        acc += f * 2 * PI * sin(th) * (PI / 2) / steps;
+    }
+    return acc;
+}
+
+/* One bright texel: the output around it is the lobe itself, V f(R.d) omega / int f. */
+static void single_texel_lobe(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(0);
+    int S = 32, N = 16;
+    ibl_cubemap src;
+    assert_int_equal(ibl_cubemap_alloc(ctx, S, 1, &src), IBL_OK);
+    int tx = 13, ty = 17, face = IBL_FACE_POS_Z;
+    float V = 1000.0f;
+    float *p = ibl_cubemap_face(&src, 0, face) + ((size_t)ty * S + tx) * 4;
+    p[0] = p[1] = p[2] = V;
+    ibl_vec3 dl = ibl_cube_texel_direction(face, S, tx, ty);
+    double omega = ibl_cube_texel_solid_angle(S, tx, ty);
+    for (int ggx = 0; ggx < 2; ggx++) {
+        float param = ggx ? 0.6f : 40.0f;
+        ibl_specular_desc d = {0};
+        d.filter = ggx ? IBL_FILTER_GGX : IBL_FILTER_PHONG;
+        d.size = N;
+        d.levels = 1;
+        d.mapping = IBL_MAPPING_TABLE;
+        d.table = &param;
+        d.table_count = 1;
+        double norm = lobe_integral(ggx, param);
+        for (int method = 0; method < 2; method++) {
+            d.method = (ibl_specular_method)method;
+            ibl_cubemap out;
+            assert_int_equal(ibl_specular_prefilter(ctx, &src, &d, &out, NULL), IBL_OK);
+            double peak = 0, worst = 0;
+            for (int f = 0; f < 6; f++)
+                for (int y = 0; y < N; y++)
+                    for (int x = 0; x < N; x++) {
+                        ibl_vec3 R = ibl_cube_texel_direction(f, N, x, y);
+                        double c = R.x * dl.x + R.y * dl.y + R.z * dl.z, w = 0;
+                        if (c > 0) {
+                            if (ggx) {
+                                double a2 = pow(param, 4), nh2 = (1 + c) / 2;
+                                double den = nh2 * (a2 - 1) + 1;
+                                w = c * a2 * a2 / (den * den);
+                            } else {
+                                w = pow(c, param);
+                            }
+                        }
+                        double expect = V * w * omega / norm;
+                        double got = ibl_cubemap_face(&out, 0, f)[((size_t)y * N + x) * 4];
+                        if (expect > peak) peak = expect;
+                        if (fabs(got - expect) > worst) worst = fabs(got - expect);
+                    }
+            /* the lobe varies by < 10% across the bright texel (0.05 rad), so its centre value
+             * stands for its integral to ~0.5%: 2% of the peak leaves room for that */
+            assert_true(worst <= 0.02 * peak);
+            ibl_cubemap_free(ctx, &out);
+        }
+    }
+    ibl_cubemap_free(ctx, &src);
+    ibl_context_destroy(ctx);
+}
+
+/* An environment symmetric under x -> -x gives a symmetric result. */
+static void symmetry(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(0);
+    int S = 32, N = 16;
+    ibl_cubemap src;
+    assert_int_equal(ibl_cubemap_alloc(ctx, S, 1, &src), IBL_OK);
+    for (int f = 0; f < 6; f++)
+        for (int y = 0; y < S; y++)
+            for (int x = 0; x < S; x++) {
+                ibl_vec3 d = ibl_cube_texel_direction(f, S, x, y);
+                float *p = ibl_cubemap_face(&src, 0, f) + ((size_t)y * S + x) * 4;
+                p[0] = p[1] = p[2] = 1.0f + d.y + 3 * d.x * d.x + (fabsf(d.x) > 0.5f && d.y > 0.6f ? 50.0f : 0.0f);
+                p[3] = 1;
+            }
+    ibl_specular_filter filters[2] = {IBL_FILTER_GGX, IBL_FILTER_PHONG};
+    for (int i = 0; i < 2; i++) {
+        ibl_specular_desc d = {0};
+        d.filter = filters[i];
+        d.size = N;
+        ibl_cubemap out;
+        assert_int_equal(ibl_specular_prefilter(ctx, &src, &d, &out, NULL), IBL_OK);
+        for (int l = 1; l < out.levels; l++) {
+            int n = ibl_level_size(N, l);
+            double mean[4];
+            ibl_cubemap_mean(&out, l, mean);
+            for (int f = 0; f < 6; f++)
+                for (int y = 0; y < n; y++)
+                    for (int x = 0; x < n; x++) {
+                        ibl_vec3 a = ibl_cube_texel_direction(f, n, x, y), b = a;
+                        b.x = -b.x;
+                        float va[4], vb[4];
+                        ibl_cubemap_sample_nearest(&out, l, a, va);
+                        ibl_cubemap_sample_nearest(&out, l, b, vb);
+                        /* the quadrature's cut is not exactly mirror-symmetric; both sides
+                         * are within the error bar of the truth, so 1% of the level mean */
+                        assert_true(fabs(va[0] - vb[0]) <= 0.01 * fmax(mean[0], va[0]));
+                    }
+        }
+        ibl_cubemap_free(ctx, &out);
+    }
+    ibl_cubemap_free(ctx, &src);
+    ibl_context_destroy(ctx);
+}
+
+/* 1, 2 and 8 threads give the same bits; the plan reruns give the same bits into caller
+ * memory. */
+static void threads_and_plan(void **state)
+{
+    (void)state;
+    ibl_cubemap src = make_sun_cube(32);
+    ibl_specular_filter filters[2] = {IBL_FILTER_GGX, IBL_FILTER_PHONG};
+    for (int i = 0; i < 2; i++) {
+        ibl_cubemap out[3];
+        int threads[3] = {1, 2, 8};
+        for (int t = 0; t < 3; t++) {
+            ibl_context *ctx = test_context(threads[t]);
+            ibl_specular_desc d = {0};
+            d.filter = filters[i];
+            d.size = 16;
+            assert_int_equal(ibl_specular_prefilter(ctx, &src, &d, &out[t], NULL), IBL_OK);
+            ibl_context_destroy(ctx);
+        }
+        size_t bytes = ibl_cubemap_floats(16, out[0].levels) * sizeof(float);
+        assert_memory_equal(out[0].data, out[1].data, bytes);
+        assert_memory_equal(out[0].data, out[2].data, bytes);
+
+        ibl_context *ctx = test_context(2);
+        ibl_specular_desc d = {0};
+        d.filter = filters[i];
+        d.size = 16;
+        d.source_size = 32;
+        ibl_specular_plan *plan = NULL;
+        assert_int_equal(ibl_specular_plan_create(ctx, &d, &plan), IBL_OK);
+        float *mem = malloc(bytes);
+        ibl_cubemap dst;
+        assert_int_equal(ibl_cubemap_wrap(16, out[0].levels, mem, &dst), IBL_OK);
+        for (int rep = 0; rep < 2; rep++) {
+            memset(mem, 0, bytes);
+            assert_int_equal(ibl_specular_run(plan, &src, &dst), IBL_OK);
+            assert_memory_equal(mem, out[0].data, bytes);
+        }
+        free(mem);
+        ibl_specular_plan_destroy(plan);
+        ibl_context_destroy(ctx);
+        ibl_context *c2 = test_context(1);
+        for (int t = 0; t < 3; t++) ibl_cubemap_free(c2, &out[t]);
+        ibl_context_destroy(c2);
+    }
+    ibl_context *ctx = test_context(1);
+    ibl_cubemap_free(ctx, &src);
+    ibl_context_destroy(ctx);
+}
+
+/* Mapping presets against their published formulas, and the manifest. */
+static void mappings_and_manifest(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_specular_desc d = {0};
+    ibl_specular_info info;
+    d.size = 256;
+    assert_int_equal(ibl_specular_levels(ctx, &d, 256, &info), IBL_OK);
+    assert_int_equal(info.levels, 9);
+    for (int l = 0; l < 9; l++) assert_near(info.roughness[l], l / 8.0, 1e-6); /* glTF linear */
+    d.mapping = IBL_MAPPING_FILAMENT;
+    d.levels = 5;
+    assert_int_equal(ibl_specular_levels(ctx, &d, 256, &info), IBL_OK);
+    for (int l = 0; l < 5; l++) {
+        double r = info.roughness[l];
+        assert_near(r * (2 - r), l / 4.0, 1e-6); /* Filament: lod / (levels-1) = r (2 - r) */
+    }
+    d.mapping = IBL_MAPPING_UNREAL;
+    d.levels = 0;
+    d.size = 128;
+    assert_int_equal(ibl_specular_levels(ctx, &d, 128, &info), IBL_OK);
+    for (int l = 0; l < info.levels; l++) {
+        double r = info.roughness[l];
+        if (r >= 1) continue;
+        /* UE4: mip = levels - 1 - (1 - 1.2 log2 r) */
+        assert_near(info.levels - 1 - (1 - 1.2 * log2(r)), l, 1e-4);
+    }
+    d.mapping = IBL_MAPPING_UNITY;
+    assert_int_equal(ibl_specular_levels(ctx, &d, 128, &info), IBL_OK);
+    for (int l = 0; l < 6; l++) {
+        double r = info.roughness[l];
+        assert_near(6 * r * (1.7 - 0.7 * r), l, 1e-4); /* Unity: mip = 6 r (1.7 - 0.7 r) */
+    }
+    d.mapping = IBL_MAPPING_BABYLON;
+    assert_int_equal(ibl_specular_levels(ctx, &d, 128, &info), IBL_OK);
+    assert_near(info.roughness[0], 0, 0);
+    for (int l = 1; l < info.levels; l++) {
+        double a = (double)info.roughness[l] * info.roughness[l];
+        if (info.roughness[l] >= 1) continue;
+        assert_near(a, pow(2, l / 0.8) / 128, 1e-5); /* Babylon: alpha = 2^(lod/0.8)/size */
+    }
+    memset(&d, 0, sizeof d);
+    assert_true(ibl_specular_preset("static-phong64", &d));
+    assert_int_equal(d.filter, IBL_FILTER_PHONG);
+    assert_int_equal(ibl_specular_levels(ctx, &d, 64, &info), IBL_OK);
+    /* the seed: lod = a - 0.5 log2(shininess) with level 0 at the range's top */
+    for (int l = 0; l < info.levels; l++) {
+        double s = info.shininess[l];
+        if (s <= 1.0) continue;
+        assert_near(info.seed_a - 0.5 * log2(s), l, 1e-5);
+    }
+    assert_near(info.shininess[0], 2000, 0);
+    char *json = NULL;
+    assert_int_equal(ibl_specular_manifest_json(ctx, &info, &json), IBL_OK);
+    assert_non_null(strstr(json, "\"filter\": \"phong\""));
+    assert_non_null(strstr(json, "\"mapping\": \"seed\""));
+    assert_non_null(strstr(json, "{\"level\": 6, \"size\": 1, \"shininess\": 1}"));
+    ibl_free(ctx, json);
+    ibl_context_destroy(ctx);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(white_furnace),
+        cmocka_unit_test(mirror_level),
+        cmocka_unit_test(single_texel_lobe),
+        cmocka_unit_test(symmetry),
+        cmocka_unit_test(threads_and_plan),
+        cmocka_unit_test(mappings_and_manifest),
+        cmocka_unit_test(fast_vs_reference),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
