@@ -174,7 +174,10 @@ static void cut_tile(const cut_params *cp, cut_out *o, int write)
                         double m2 = (double)s->d[0] * s->d[0] + (double)s->d[1] * s->d[1] +
                                     (double)s->d[2] * s->d[2];
                         s->e = (float)(1.0 - m2);
-                        s->omega = (float)ibl_cube_rect_solid_angle(u0, v0, u0 + hk, v0 + hk);
+                        /* the solid-angle density 1 / (1 + u^2 + v^2)^(3/2) at the piece's
+                         * centre: relative error O(hk^2) ~ 1e-6, without four atan2 */
+                        double uc = u0 + 0.5 * hk, vc = v0 + 0.5 * hk, q = 1.0 + uc * uc + vc * vc;
+                        s->omega = (float)(hk * hk / (q * sqrt(q)));
                     }
                 }
             }
