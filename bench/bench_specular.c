@@ -4,7 +4,7 @@
  * sample of texels), the fast method's filtering time, and the dynamic plan's refilter time.
  *
  *   bench_specular [--sizes 128,256] [--samples 2000] [--filters ggx,phong,blinn]
- *                  [--threads N] [--dynamic] FILE.exr ...
+ *                  [--threads N] [--accuracy A] [--levels L] [--dynamic] FILE.exr ...
  */
 #include "ibl/ibl.h"
 
@@ -69,7 +69,8 @@ static void dynamic_bench(void)
 
 int main(int argc, char **argv)
 {
-    int sizes[8] = {128, 256}, nsizes = 2, samples = 2000, threads = 0, dynamic = 0;
+    int sizes[8] = {128, 256}, nsizes = 2, samples = 2000, threads = 0, dynamic = 0, max_levels = 0;
+    float accuracy = 0;
     ibl_specular_filter filters[3] = {IBL_FILTER_GGX, IBL_FILTER_PHONG, IBL_FILTER_BLINN};
     int nfilters = 3;
     const char *files[64];
@@ -83,6 +84,10 @@ int main(int argc, char **argv)
             samples = atoi(argv[++i]);
         } else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
             threads = atoi(argv[++i]);
+        } else if (strcmp(argv[i], "--accuracy") == 0 && i + 1 < argc) {
+            accuracy = (float)atof(argv[++i]);
+        } else if (strcmp(argv[i], "--levels") == 0 && i + 1 < argc) {
+            max_levels = atoi(argv[++i]);
         } else if (strcmp(argv[i], "--dynamic") == 0) {
             dynamic = 1;
         } else if (strcmp(argv[i], "--filters") == 0 && i + 1 < argc) {
@@ -133,6 +138,7 @@ int main(int argc, char **argv)
                 ibl_specular_desc d = {0};
                 d.filter = filters[k];
                 d.size = sizes[si];
+                d.accuracy = accuracy;
                 ibl_cubemap out;
                 ibl_specular_info info;
                 double t0 = now();
@@ -143,7 +149,7 @@ int main(int argc, char **argv)
                 double t_fast = now() - t0;
                 printf("# %s %d %s: fast prefilter %.3f s (source %d)\n", base, sizes[si],
                        ibl_specular_filter_name(filters[k]), t_fast, cube.size);
-                for (int l = 0; l < out.levels; l++) {
+                for (int l = 0; l < out.levels && (!max_levels || l < max_levels); l++) {
                     int n = ibl_level_size(out.size, l);
                     int mirror = filters[k] == IBL_FILTER_GGX ? !(info.roughness[l] > 1e-3f)
                                                               : !(info.shininess[l] > 0);
@@ -176,7 +182,11 @@ int main(int argc, char **argv)
                             se[c] += w * e * e;
                             sr[c] += w * r[c] * r[c];
                             double scale = fmax(r[c], mean[c]);
-                            if (scale > 0 && fabs(e) / scale > mx) mx = fabs(e) / scale;
+                            if (scale > 0 && fabs(e) / scale > mx) {
+                                mx = fabs(e) / scale;
+                                if (getenv("IBL_BENCH_WORST"))
+                                    fprintf(stderr, "worst l%d f%d (%d,%d) c%d fast %g ref %g mean %g\n", l, f, x, y, c, v[c], r[c], mean[c]);
+                            }
                         }
                     }
                     double rms = 0;

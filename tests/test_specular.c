@@ -411,6 +411,51 @@ static void mappings_and_manifest(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* The command: one container with metadata and manifest.json, or one image per face/level. */
+static void cli_prefilter(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_image img;
+    assert_int_equal(ibl_image_alloc(ctx, 64, 32, &img), IBL_OK);
+    for (int i = 0; i < 64 * 32; i++) {
+        img.pixels[i * 4 + 0] = 0.5f + (i % 64) / 64.0f;
+        img.pixels[i * 4 + 1] = 0.25f;
+        img.pixels[i * 4 + 2] = 1.0f;
+        img.pixels[i * 4 + 3] = 1.0f;
+    }
+    const char *in = test_path("env.hdr");
+    assert_int_equal(ibl_write_image(ctx, in, &img, NULL), IBL_OK);
+    ibl_image_free(ctx, &img);
+    const char *out = NULL;
+    int rc = test_run_cli(&out, "prefilter %s -o %s --size 8 --filter phong -q", in,
+                          test_path("pf.ktx2"));
+    assert_int_equal(rc, 0);
+    ibl_texture tex;
+    assert_int_equal(ibl_read_texture(ctx, test_path("pf.ktx2"), NULL, &tex, NULL), IBL_OK);
+    assert_int_equal(tex.kind, IBL_TEXTURE_CUBE);
+    assert_int_equal(tex.levels, 4);
+    assert_string_equal(ibl_texture_get_metadata(&tex, "ibl.specular.filter"), "phong");
+    assert_non_null(ibl_texture_get_metadata(&tex, "ibl.specular.shininess"));
+    ibl_texture_free(ctx, &tex);
+    void *bytes = NULL;
+    size_t size = 0;
+    assert_int_equal(ibl_read_file(ctx, test_path("manifest.json"), &bytes, &size), IBL_OK);
+    char *json = calloc(1, size + 1);
+    memcpy(json, bytes, size);
+    assert_non_null(strstr(json, "\"file\": \"pf.ktx2\""));
+    assert_non_null(strstr(json, "{\"level\": 3, \"size\": 1, \"shininess\": "));
+    free(json);
+    ibl_free(ctx, bytes);
+    rc = test_run_cli(&out, "prefilter %s -o %s --size 4 --levels 2 -q", in, test_path("flat.exr"));
+    assert_int_equal(rc, 0);
+    assert_true(test_file_exists(test_path("flat_l0_px.exr")));
+    assert_true(test_file_exists(test_path("flat_l1_nz.exr")));
+    /* usage errors exit 2 */
+    assert_int_equal(test_run_cli(&out, "prefilter %s -o %s --filter nope", in, test_path("x.ktx2")), 2);
+    ibl_context_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -420,6 +465,7 @@ int main(void)
         cmocka_unit_test(symmetry),
         cmocka_unit_test(threads_and_plan),
         cmocka_unit_test(mappings_and_manifest),
+        cmocka_unit_test(cli_prefilter),
         cmocka_unit_test(fast_vs_reference),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
