@@ -7,7 +7,7 @@ PREFIX ?= /usr/local
 IBL = $(BUILD)/ibl
 DEMO_DIR = out/demo
 
-.PHONY: all deps build test test-release test-asan demo bench fuzz install clean
+.PHONY: all deps build test test-release test-asan demo bench fuzz valgrind install clean
 
 all: build
 
@@ -39,6 +39,14 @@ bench: build
 fuzz:
 	@sh scripts/install-deps.sh --fuzz
 	@sh fuzz/run.sh
+
+# memcheck over the small test programs and one CLI run (slow; not part of make test)
+VALGRIND_TESTS ?= test_cubemap test_io test_containers test_pixel_format test_sh test_irradiance test_edge_fixup
+valgrind: build
+	@for t in $(VALGRIND_TESTS); do \
+	  valgrind --error-exitcode=9 --leak-check=full -q $(BUILD)/tests/$$t >/dev/null || { echo "valgrind: $$t failed"; exit 1; }; \
+	  echo "valgrind: $$t clean"; done
+	@valgrind --error-exitcode=9 --leak-check=full -q $(IBL) convert -q tests/data/studio.exr -o $(BUILD)/vg.ktx2 --size 64 --mips && echo "valgrind: ibl convert clean"
 
 install: build
 	@cmake --install $(BUILD) --prefix $(PREFIX)

@@ -102,7 +102,9 @@ static const double HALF_PI = 1.57079632679489661923;
 /* refinement is pointless where the lobe is this far below its peak */
 static const double SMALL_WEIGHT = 1e-4;
 /* largest cell allowed across the horizon (radians): the lobe has a kink there */
-static const double HORIZON_CELL = 0.03;
+static const double HORIZON_CELL = 0.05;
+/* a source texel is used as a point until it would need more than this many pieces a side */
+enum { LEVEL0_POINT_MAX = 1 };
 
 /* 0: drop, 1: leaf, k >= 2: wants splitting (k: pieces per edge a level-0 texel would need) */
 static int classify(const cut_params *cp, const double c[3], double gamma)
@@ -112,9 +114,9 @@ static int classify(const cut_params *cp, const double c[3], double gamma)
     if (t0 >= cp->lobe->cull_angle || t0 >= HALF_PI) return 0;
     if (t0 < 0) t0 = 0;
     double need = 1.0;
-    if (t1 > HALF_PI && cp->lobe->horizon > 1e-3) need = 2.0 * gamma / HORIZON_CELL;
-    if (ibl__lobe_f(cp->lobe, cos(t0)) > SMALL_WEIGHT) {
-        double g = ibl__lobe_max_log_slope(cp->lobe, t0, t1 < HALF_PI ? t1 : HALF_PI);
+    if (t1 > HALF_PI && cp->lobe->horizon > 0.05) need = 2.0 * gamma / HORIZON_CELL;
+    if (ibl__lobe_table_f(cp->lobe, t0) > SMALL_WEIGHT) {
+        double g = ibl__lobe_table_max_variation(cp->lobe, t0, t1 < HALF_PI ? t1 : HALF_PI);
         double k = 2.0 * gamma * g / cp->kappa;
         if (k > need) need = k;
     }
@@ -154,7 +156,7 @@ static void cut_tile(const cut_params *cp, cut_out *o, int write)
             if (write)
                 o->cells[o->ncell] = (uint32_t)(p->level_offset[it.level] + texel_index);
             o->ncell++;
-        } else if (k < 2) {
+        } else if (k <= LEVEL0_POINT_MAX) {
             if (write) o->points[o->npoint] = texel_index;
             o->npoint++;
         } else {

@@ -130,12 +130,17 @@ void ibl__reference_eval_lobe(const ibl_specular_reference *r, const ibl__lobe *
                 const double *b = r->block + (((size_t)f * nb + by) * nb + bx) * 4;
                 double tmin = angle_between(R, b) - b[3];
                 if (tmin >= lobe->cull_angle || tmin >= PI_2) continue;
+                double skip_angle = (lobe->cull_angle < PI_2 ? lobe->cull_angle : PI_2) + b[3];
+                double cos_skip = skip_angle >= 3.14159265358979 ? -2.0 : cos(skip_angle);
                 int x1 = (bx + 1) * BLOCK < n ? (bx + 1) * BLOCK : n;
                 int y1 = (by + 1) * BLOCK < n ? (by + 1) * BLOCK : n;
                 for (int y = by * BLOCK; y < y1; y++) {
                     for (int x = bx * BLOCK; x < x1; x++) {
                         const double *d = r->dir + (((size_t)f * n + y) * n + x) * 3;
                         double gamma = r->radius[(size_t)y * n + x];
+                        /* cheap rejection before the acos: beyond the cut-off plus the block's
+                         * radius (which bounds every texel's radius in it) */
+                        if (R[0] * d[0] + R[1] * d[1] + R[2] * d[2] < cos_skip) continue;
                         double theta = angle_between(R, d);
                         double t0 = theta - gamma, t1 = theta + gamma;
                         if (t0 >= lobe->cull_angle || t0 >= PI_2) continue;

@@ -67,9 +67,13 @@ class MemOStream : public Imf::OStream {
     uint64_t pos_ = 0;
 };
 
+// Messages end up on one line of stderr: line breaks inside OpenEXR's become spaces.
 void set_error(char *err, size_t err_size, const char *what)
 {
-    if (err && err_size) std::snprintf(err, err_size, "%s", what);
+    if (!err || !err_size) return;
+    std::snprintf(err, err_size, "%s", what);
+    for (char *c = err; *c; c++)
+        if (*c == '\n' || *c == '\r') *c = ' ';
 }
 
 // Runs f, converting exceptions into a status.

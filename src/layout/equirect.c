@@ -16,8 +16,8 @@
  * meridians these windows tile the sphere, so a small bright source keeps its energy exactly
  * wherever it falls, and a texel much larger than a pixel is a true area average (no
  * aliasing). Within a few texels of each pole, where texels turn against the meridians and
- * such windows would overlap, the texel integrates the source pixels directly instead
- * (eq_texel_near_pole). Measured accuracy of the energy of a 3x3-pixel sun: tests/test_layout.c
+ * such windows would overlap, the texel integrates the constant source pixels directly
+ * instead (eq_texel_near_pole). Measured accuracy of the energy of a 3x3-pixel sun: tests/test_layout.c
  * and docs/CONVENTIONS.md. */
 #include "layout_internal.h"
 
@@ -365,13 +365,24 @@ static double wrap_angle(double a)
     return a;
 }
 
+/* Is the picture-frame direction p inside texel (tx, ty) of the face with axes m, a, b? */
+static inline int in_texel(const double *m, const double *a, const double *b, double half,
+                           int tx, int ty, double px, double py, double pz)
+{
+    double pm = m[0] * px + m[1] * py + m[2] * pz;
+    if (!(pm > 0.0)) return 0;
+    double inv = half / pm;
+    double fx = (a[0] * px + a[1] * py + a[2] * pz) * inv + half;
+    double fy = (b[0] * px + b[1] * py + b[2] * pz) * inv + half;
+    return fx >= tx && fx < tx + 1 && fy >= ty && fy < ty + 1;
+}
+
 /* Texels within a few cells of a pole. There theta and phi are far from linear across a
  * texel and the sample cells, turned against the meridians, cannot be matched by
- * longitude/latitude windows. Instead the texel integrates the source directly: every
- * source pixel in the texel's longitude/latitude range is cut into m x m cells of exact solid
- * angle, and the cells whose centres fall in the texel are summed. The texel's value is their
- * solid-angle-weighted mean; m is chosen so that thousands of cells land in the texel, which
- * keeps the share of each pixel exact to well under a percent. */
+ * longitude/latitude windows. Instead the texel integrates the source pixels directly, each
+ * with its exact solid angle: pixels whose four corners are in the texel count whole, pixels
+ * the texel's edge crosses are cut into 16 x 16 cells counted by their centres, and the
+ * texel's value is the solid-angle-weighted mean. */
 static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, float *out)
 {
     int N = job->out->size, W = job->im->width, H = job->im->height;
@@ -403,6 +414,9 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
         prev = phi;
     }
     int full = any_pole || fabs(winding) > PI;
+    /* a texel only a few pixels across can lie between pixel corners: then every pixel of its
+     * range is cut into cells, not only those its edges visibly cross */
+    int thin = yhi - ylo < 4.0 || (!full && (hi - lo) / (2.0 * PI) * W < 4.0);
     /* the closest approach to the pole can lie inside an edge: widen by a row */
     ylo = fmax(0.0, floor(ylo) - 1.0);
     yhi = fmin((double)H, ceil(yhi) + 1.0);
@@ -422,47 +436,63 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
     int r0 = (int)ylo, r1 = (int)yhi;
     double acc[4] = {0, 0, 0, 0}, wsum = 0;
     const double half = 0.5 * N;
+    const double dphi = 2.0 * PI / W;
+    const double cd = cos(dphi), sd = sin(dphi);
+    const double phi_start = 2.0 * PI * ((double)c0 / W - 0.5);
+    const double cos_start = cos(phi_start), sin_start = sin(phi_start);
+    enum { FINE = 16 };
+    const double fine_d = dphi / FINE, fcd = cos(fine_d), fsd = sin(fine_d);
+    const double hc = cos(0.5 * fine_d), hs = sin(0.5 * fine_d);
     for (int r = r0; r < r1; r++) {
         const float *row = job->im->pixels + (size_t)r * W * 4;
-        /* cells per pixel side: a function of the row alone, so every texel cuts the pixels
-         * the same way and each cell is counted by exactly one texel */
-        double pixel = 2.0 * PI / W * fabs(cos(PI * r / H) - cos(PI * (r + 1) / H));
-        int mm = (int)ceil(sqrt(pixel / job->pole_cell_area));
-        if (mm < 1) mm = 1;
-        if (mm > 16) mm = 16;
-        const double dphi = 2.0 * PI / ((double)W * mm), cd = cos(dphi), sd = sin(dphi);
-        const double phi0 = 2.0 * PI * ((c0 + 0.5 / mm) / W - 0.5);
-        const double cos0 = cos(phi0), sin0 = sin(phi0);
-        for (int j = 0; j < mm; j++) {
-            double th0 = PI * (r + (double)j / mm) / H, th1 = PI * (r + (j + 1.0) / mm) / H;
-            double th = 0.5 * (th0 + th1), st = sin(th), ct = cos(th);
-            double w = (cos(th0) - cos(th1)) * (2.0 * PI / W / mm);
-            /* the cell centres' longitudes advance by a fixed step: rotate instead of sin/cos */
-            double cp = cos0, sp = sin0;
-            /* the texel test in the face plane: sc = p.a / p.m, tc = p.b / p.m */
-            double mz = m[1] * ct, az = a[1] * ct, bz = b[1] * ct;
-            long wc = c0 % W;
-            if (wc < 0) wc += W;
-            for (long col = c0; col < c1; col++) {
-                const float *p = row + wc * 4;
-                for (int i = 0; i < mm; i++) {
-                    double px = st * sp, pz = -st * cp;
-                    double pm = m[0] * px + mz + m[2] * pz;
-                    if (pm > 0.0) {
-                        double inv = half / pm;
-                        double fx = ((a[0] * px + az + a[2] * pz) * inv + half);
-                        double fy = ((b[0] * px + bz + b[2] * pz) * inv + half);
-                        if (fx >= tx && fx < tx + 1 && fy >= ty && fy < ty + 1) {
-                            for (int c = 0; c < 4; c++) acc[c] += w * p[c];
-                            wsum += w;
-                        }
+        double th0 = PI * r / H, th1 = PI * (r + 1) / H;
+        double st0 = sin(th0), ct0 = cos(th0), st1 = sin(th1), ct1 = cos(th1);
+        double w_pixel = (ct0 - ct1) * dphi;
+        /* the cells of a crossed pixel: their rows' sin, cos and solid angle */
+        double sub_st[FINE], sub_ct[FINE], sub_w[FINE];
+        for (int j = 0; j < FINE; j++) {
+            double ta = th0 + (th1 - th0) * j / FINE, tb = th0 + (th1 - th0) * (j + 1) / FINE;
+            double tm = 0.5 * (ta + tb);
+            sub_st[j] = sin(tm);
+            sub_ct[j] = cos(tm);
+            sub_w[j] = (cos(ta) - cos(tb)) * fine_d;
+        }
+        /* pixel corners along this row's top and bottom edges */
+        double cp = cos_start, sp = sin_start;
+        int top = in_texel(m, a, b, half, tx, ty, st0 * sp, ct0, -st0 * cp);
+        int bottom = in_texel(m, a, b, half, tx, ty, st1 * sp, ct1, -st1 * cp);
+        long wc = c0 % W;
+        if (wc < 0) wc += W;
+        for (long col = c0; col < c1; col++) {
+            double ncp = cp * cd - sp * sd, nsp = sp * cd + cp * sd;
+            int top2 = in_texel(m, a, b, half, tx, ty, st0 * nsp, ct0, -st0 * ncp);
+            int bottom2 = in_texel(m, a, b, half, tx, ty, st1 * nsp, ct1, -st1 * ncp);
+            int inside = top + bottom + top2 + bottom2;
+            const float *p = row + wc * 4;
+            if (inside == 4) {
+                for (int c = 0; c < 4; c++) acc[c] += w_pixel * p[c];
+                wsum += w_pixel;
+            } else if (inside > 0 || thin) {
+                /* the texel's edge crosses this pixel: count FINE x FINE cells by centre */
+                double share = 0.0;
+                for (int j = 0; j < FINE; j++) {
+                    double st = sub_st[j], ct = sub_ct[j], wcell = sub_w[j];
+                    double fc = cp * hc - sp * hs, fs = sp * hc + cp * hs;
+                    for (int i = 0; i < FINE; i++) {
+                        if (in_texel(m, a, b, half, tx, ty, st * fs, ct, -st * fc)) share += wcell;
+                        double t = fc * fcd - fs * fsd;
+                        fs = fs * fcd + fc * fsd;
+                        fc = t;
                     }
-                    double ncp = cp * cd - sp * sd;
-                    sp = sp * cd + cp * sd;
-                    cp = ncp;
                 }
-                if (++wc == W) wc = 0;
+                for (int c = 0; c < 4; c++) acc[c] += share * p[c];
+                wsum += share;
             }
+            cp = ncp;
+            sp = nsp;
+            top = top2;
+            bottom = bottom2;
+            if (++wc == W) wc = 0;
         }
     }
     if (wsum > 0.0) {

@@ -1,0 +1,203 @@
+/* Specular prefilter benchmark: the fast method's error against the reference on real HDRIs
+ * (issue 7's acceptance measurement: per level, solid-angle weighted relative RMS per channel
+ * and the largest texel error relative to max(reference, level mean), on a deterministic
+ * sample of texels), the fast method's filtering time, and the dynamic plan's refilter time.
+ *
+ *   bench_specular [--sizes 128,256] [--samples 2000] [--filters ggx,phong,blinn]
+ *                  [--threads N] [--dynamic] FILE.exr ...
+ */
+#include "ibl/ibl.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + t.tv_nsec * 1e-9;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static void dynamic_bench(void)
+{
+    /* the seed's dynamic 32x32x6 Phong chain (1-1000) refiltered from a 64-face cube, one core */
+    ibl_context_desc cd = {0};
+    cd.threads = 1;
+    ibl_context *ctx;
+    ibl_context_create(&cd, &ctx);
+    ibl_cubemap src;
+    ibl_cubemap_alloc(ctx, 64, 1, &src);
+    for (size_t i = 0; i < ibl_cubemap_floats(64, 1); i++) src.data[i] = (float)((i * 2654435761u) % 1000) / 100.0f;
+    ibl_specular_desc d = {0};
+    d.filter = IBL_FILTER_PHONG;
+    d.size = 32;
+    d.source_size = 64;
+    double t0 = now();
+    ibl_specular_plan *plan = NULL;
+    if (ibl_specular_plan_create(ctx, &d, &plan) != IBL_OK) {
+        fprintf(stderr, "plan: %s\n", ibl_context_message(ctx));
+        exit(1);
+    }
+    double t_plan = now() - t0;
+    int levels = ibl_specular_plan_info(plan)->levels;
+    float *mem = malloc(ibl_cubemap_floats(32, levels) * sizeof(float));
+    ibl_cubemap dst;
+    ibl_cubemap_wrap(32, levels, mem, &dst);
+    double times[51];
+    for (int i = 0; i < 51; i++) {
+        double a = now();
+        ibl_specular_run(plan, &src, &dst);
+        times[i] = now() - a;
+    }
+    qsort(times, 51, sizeof(double), cmp_double);
+    printf("dynamic phong 32x32x6 (%d levels) from 64: plan %.1f ms, refilter median %.3f ms "
+           "(min %.3f) on 1 thread\n", levels, t_plan * 1e3, times[25] * 1e3, times[0] * 1e3);
+    free(mem);
+    ibl_specular_plan_destroy(plan);
+    ibl_cubemap_free(ctx, &src);
+    ibl_context_destroy(ctx);
+}
+
+int main(int argc, char **argv)
+{
+    int sizes[8] = {128, 256}, nsizes = 2, samples = 2000, threads = 0, dynamic = 0;
+    ibl_specular_filter filters[3] = {IBL_FILTER_GGX, IBL_FILTER_PHONG, IBL_FILTER_BLINN};
+    int nfilters = 3;
+    const char *files[64];
+    int nfiles = 0;
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--sizes") == 0 && i + 1 < argc) {
+            nsizes = 0;
+            for (char *p = strtok(argv[++i], ","); p && nsizes < 8; p = strtok(NULL, ","))
+                sizes[nsizes++] = atoi(p);
+        } else if (strcmp(argv[i], "--samples") == 0 && i + 1 < argc) {
+            samples = atoi(argv[++i]);
+        } else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
+            threads = atoi(argv[++i]);
+        } else if (strcmp(argv[i], "--dynamic") == 0) {
+            dynamic = 1;
+        } else if (strcmp(argv[i], "--filters") == 0 && i + 1 < argc) {
+            nfilters = 0;
+            for (char *p = strtok(argv[++i], ","); p && nfilters < 3; p = strtok(NULL, ","))
+                if (ibl_specular_filter_from_name(p, &filters[nfilters])) nfilters++;
+        } else if (nfiles < 64) {
+            files[nfiles++] = argv[i];
+        }
+    }
+    if (dynamic) dynamic_bench();
+    ibl_context_desc cd = {0};
+    cd.threads = threads;
+    ibl_context *ctx;
+    ibl_context_create(&cd, &ctx);
+    printf("%-12s %5s %-6s %5s %10s %9s %9s %7s\n", "file", "size", "filter", "level", "param",
+           "rms%", "max%", "texels");
+    double worst_rms = 0, worst_max = 0;
+    for (int fi = 0; fi < nfiles; fi++) {
+        ibl_image img;
+        if (ibl_read_image(ctx, files[fi], NULL, &img, NULL) != IBL_OK) {
+            fprintf(stderr, "%s\n", ibl_context_message(ctx));
+            return 1;
+        }
+        ibl_cubemap cube;
+        ibl_to_cube_desc td = {0};
+        if (ibl_image_to_cubemap(ctx, &img, &td, &cube) != IBL_OK) {
+            fprintf(stderr, "%s\n", ibl_context_message(ctx));
+            return 1;
+        }
+        ibl_image_free(ctx, &img);
+        /* the prefilter works on a power-of-two source; give the reference the same one */
+        int p = 1;
+        while (p < cube.size) p *= 2;
+        if (p != cube.size) {
+            ibl_cubemap c2;
+            ibl_cubemap_alloc(ctx, p, 1, &c2);
+            ibl_cubemap_resample(ctx, &cube, &c2);
+            ibl_cubemap_free(ctx, &cube);
+            cube = c2;
+        }
+        ibl_specular_reference *ref = NULL;
+        ibl_specular_reference_create(ctx, &cube, &ref);
+        const char *base = strrchr(files[fi], '/');
+        base = base ? base + 1 : files[fi];
+        for (int si = 0; si < nsizes; si++) {
+            for (int k = 0; k < nfilters; k++) {
+                ibl_specular_desc d = {0};
+                d.filter = filters[k];
+                d.size = sizes[si];
+                ibl_cubemap out;
+                ibl_specular_info info;
+                double t0 = now();
+                if (ibl_specular_prefilter(ctx, &cube, &d, &out, &info) != IBL_OK) {
+                    fprintf(stderr, "%s\n", ibl_context_message(ctx));
+                    return 1;
+                }
+                double t_fast = now() - t0;
+                printf("# %s %d %s: fast prefilter %.3f s (source %d)\n", base, sizes[si],
+                       ibl_specular_filter_name(filters[k]), t_fast, cube.size);
+                for (int l = 0; l < out.levels; l++) {
+                    int n = ibl_level_size(out.size, l);
+                    int mirror = filters[k] == IBL_FILTER_GGX ? !(info.roughness[l] > 1e-3f)
+                                                              : !(info.shininess[l] > 0);
+                    if (mirror) {
+                        /* roughness 0: the source's exact area mean, no kernel to compare */
+                        printf("%-12s %5d %-6s %5d %10s %9s %9s %7s\n", base, sizes[si],
+                               ibl_specular_filter_name(filters[k]), l, "mirror", "-", "-", "-");
+                        continue;
+                    }
+                    size_t total = (size_t)6 * n * n;
+                    size_t count = total < (size_t)samples ? total : (size_t)samples;
+                    double mean[4];
+                    ibl_cubemap_mean(&out, l, mean);
+                    double se[3] = {0}, sr[3] = {0}, mx = 0;
+                    uint64_t state = 0x9E3779B97F4A7C15ull ^ (uint64_t)(l * 7919 + si * 104729);
+                    for (size_t s = 0; s < count; s++) {
+                        size_t idx = s;
+                        if (count < total) {
+                            state = state * 6364136223846793005ull + 1442695040888963407ull;
+                            idx = (size_t)((state >> 33) % total);
+                        }
+                        int f = (int)(idx / ((size_t)n * n)), y = (int)(idx / n % n), x = (int)(idx % n);
+                        ibl_vec3 dir = ibl_cube_texel_direction(f, n, x, y);
+                        double r[4];
+                        ibl_specular_reference_eval(ref, &info, l, dir, r);
+                        const float *v = ibl_cubemap_face(&out, l, f) + ((size_t)y * n + x) * 4;
+                        double w = ibl_cube_texel_solid_angle(n, x, y);
+                        for (int c = 0; c < 3; c++) {
+                            double e = v[c] - r[c];
+                            se[c] += w * e * e;
+                            sr[c] += w * r[c] * r[c];
+                            double scale = fmax(r[c], mean[c]);
+                            if (scale > 0 && fabs(e) / scale > mx) mx = fabs(e) / scale;
+                        }
+                    }
+                    double rms = 0;
+                    for (int c = 0; c < 3; c++)
+                        if (sr[c] > 0) rms = fmax(rms, sqrt(se[c] / sr[c]));
+                    double param = filters[k] == IBL_FILTER_GGX ? info.roughness[l] : info.shininess[l];
+                    printf("%-12s %5d %-6s %5d %10.4g %9.4f %9.3f %7zu\n", base, sizes[si],
+                           ibl_specular_filter_name(filters[k]), l, param, 100 * rms, 100 * mx, count);
+                    fflush(stdout);
+                    if (rms > worst_rms) worst_rms = rms;
+                    if (mx > worst_max) worst_max = mx;
+                }
+                ibl_cubemap_free(ctx, &out);
+            }
+        }
+        ibl_specular_reference_destroy(ref);
+        ibl_cubemap_free(ctx, &cube);
+    }
+    if (nfiles)
+        printf("worst over all: rms %.4f%% (bar 0.5%%), max %.3f%% (bar 5%%)\n", 100 * worst_rms,
+               100 * worst_max);
+    ibl_context_destroy(ctx);
+    return 0;
+}
