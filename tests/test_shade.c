@@ -687,6 +687,19 @@ static void load_files(void **state)
     assert_near(ibl_probe_lod_from_roughness(&p, 0.45f), 2.5, 1e-6);
     assert_non_null(p.splitsum.data);
     ibl_probe_free(ctx, &p);
+    /* a Phong chain: level shininess are Phong exponents n, the material's Blinn exponent 4.2 n */
+    mf = fopen(test_path("bake/manifest.json"), "w");
+    assert_non_null(mf);
+    fputs("{\"specular\": {\"filter\": \"phong\", \"shininess_range\": [1, 1000],\n"
+          "  \"levels\": [{\"level\": 0, \"shininess\": null, \"mirror\": true},\n"
+          "    {\"level\": 1, \"shininess\": 100}, {\"level\": 2, \"shininess\": 25},\n"
+          "    {\"level\": 3, \"shininess\": 6}, {\"level\": 4, \"shininess\": 1}]}}\n", mf);
+    fclose(mf);
+    assert_int_equal(ibl_probe_load(ctx, test_path("bake"), &p), IBL_OK);
+    assert_near(p.mapping.shininess[0], 1e6, 0);
+    assert_near(p.mapping.shininess[2], 4.2 * 25, 1e-4);
+    assert_near(ibl_probe_lod_from_shininess(&p, 4.2f * 6), 3.0, 1e-5);
+    ibl_probe_free(ctx, &p);
     ibl_texture_free(ctx, &vol);
     ibl_image_free(ctx, &lut2);
     ibl_cubemap_free(ctx, &chain);

@@ -241,6 +241,18 @@ ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out)
         if (stop && o > stop) o = NULL;
     }
     files.mapping.levels = k;
+    /* the Phong-family chains (phong, box, gauss) are filtered with Phong lobes around R of
+     * exponent n; the material's shininess is the Blinn-Phong exponent of the seed's BRDF, and
+     * the seed's fit cos^n(t) ~ cos^(4.2 n)(t/2) makes that 4.2 n (a blinn chain is already
+     * in Blinn exponents) */
+    const char *filter = spec ? json_value(spec, end, "filter") : NULL;
+    if (filter && strncmp(filter, "\"blinn\"", 7) != 0 && strncmp(filter, "\"ggx\"", 5) != 0) {
+        const char *bf = json_value(spec, end, "blinn_factor");
+        float f = bf ? strtof(bf, NULL) : 4.2f;
+        if (!(f > 0.0f)) f = 4.2f;
+        for (int i = 0; i < k; i++)
+            if (files.mapping.shininess[i] < 1e6f) files.mapping.shininess[i] *= f;
+    }
     if (range && *range == '[') {
         char *e = NULL;
         files.ambient_shininess_min = strtof(range + 1, &e);
