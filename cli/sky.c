@@ -34,7 +34,7 @@ int cli_cmd_sky(int argc, char **argv)
     while ((arg = cli_next(&a))) {
         if (cli_common_option(&a, arg)) continue;
         if (cli_is(&a, arg, "--output", "-o")) out = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--sun-elevation", NULL)) d.sun_elevation_deg = (float)cli_double(&a, arg, -90, 90);
+        else if (cli_is(&a, arg, "--sun-elevation", NULL)) d.sun_elevation_deg = (float)cli_double(&a, arg, 0.01, 90);
         else if (cli_is(&a, arg, "--sun-azimuth", NULL)) d.sun_azimuth_deg = (float)cli_double(&a, arg, -360, 360);
         else if (cli_is(&a, arg, "--turbidity", NULL)) d.turbidity = (float)cli_double(&a, arg, 1.7, 10);
         else if (cli_is(&a, arg, "--ground-albedo", NULL)) d.ground_albedo = (float)cli_double(&a, arg, 0, 1);
