@@ -389,6 +389,12 @@ static void cli_render(void **state)
     assert_int_equal(im.width, 32);
     ibl_image_free(ctx, &im);
     ibl_context_destroy(ctx);
+    /* what `ibl bake` writes, rendered from its directory */
+    rc = test_run_cli(&out, "bake '%s' -o '%s' --size 16 --lut-size 16 -q", test_data("studio.exr"),
+                      test_path("bakedir"));
+    assert_int_equal(rc, 0);
+    rc = test_run_cli(&out, "render '%s' -o '%s' --width 64 -q", test_path("bakedir"), png);
+    assert_int_equal(rc, 0);
     /* a chain and a table from files (what the bake stages write) */
     ibl_context *c2 = test_context(1);
     ibl_cubemap env;

@@ -7,6 +7,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <stdio.h>
 #include <string.h>
 
 static const double PI = 3.14159265358979323846;
@@ -661,7 +662,44 @@ static void load_files(void **state)
     assert_non_null(strstr(ibl_context_message(ctx), "lut.ktx2"));
     files.specular = test_path("none.ktx2");
     assert_int_equal(ibl_probe_load_files(ctx, &files, &p), IBL_ERR_IO);
-    assert_int_equal(ibl_probe_load(ctx, test_tmpdir(), &p), IBL_ERR_UNSUPPORTED);
+    /* a bake directory: manifest.json (as `ibl bake` writes it) names the mapping */
+    assert_int_equal(ibl_probe_load(ctx, test_tmpdir(), &p), IBL_ERR_IO); /* no manifest */
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "mkdir -p '%s' && cp '%s' '%s/specular.ktx2' && cp '%s' '%s/brdf_lut.ktx2'",
+             test_path("bake"), test_path("spec.ktx2"), test_path("bake"), test_path("lut.ktx2"),
+             test_path("bake"));
+    assert_int_equal(system(cmd), 0);
+    FILE *mf = fopen(test_path("bake/manifest.json"), "w");
+    assert_non_null(mf);
+    fputs("{\n  \"generator\": \"ibl\",\n  \"specular\": {\n    \"filter\": \"ggx\",\n"
+          "    \"levels\": [\n"
+          "      {\"level\": 0, \"size\": 16, \"roughness\": 0, \"mirror\": true},\n"
+          "      {\"level\": 1, \"size\": 8, \"roughness\": 0.1},\n"
+          "      {\"level\": 2, \"size\": 4, \"roughness\": 0.3},\n"
+          "      {\"level\": 3, \"size\": 2, \"roughness\": 0.6},\n"
+          "      {\"level\": 4, \"size\": 1, \"roughness\": 1}\n    ]\n  },\n"
+          "  \"files\": [{\"file\": \"specular.ktx2\", \"kind\": \"specular\"}]\n}\n",
+          mf);
+    fclose(mf);
+    assert_int_equal(ibl_probe_load(ctx, test_path("bake"), &p), IBL_OK);
+    assert_int_equal(p.mapping.levels, 5);
+    assert_near(ibl_probe_lod_from_roughness(&p, 0.3f), 2.0, 1e-6);
+    assert_near(ibl_probe_lod_from_roughness(&p, 0.45f), 2.5, 1e-6);
+    assert_non_null(p.splitsum.data);
+    ibl_probe_free(ctx, &p);
+    /* a Phong chain: level shininess are Phong exponents n, the material's Blinn exponent 4.2 n */
+    mf = fopen(test_path("bake/manifest.json"), "w");
+    assert_non_null(mf);
+    fputs("{\"specular\": {\"filter\": \"phong\", \"shininess_range\": [1, 1000],\n"
+          "  \"levels\": [{\"level\": 0, \"shininess\": null, \"mirror\": true},\n"
+          "    {\"level\": 1, \"shininess\": 100}, {\"level\": 2, \"shininess\": 25},\n"
+          "    {\"level\": 3, \"shininess\": 6}, {\"level\": 4, \"shininess\": 1}]}}\n", mf);
+    fclose(mf);
+    assert_int_equal(ibl_probe_load(ctx, test_path("bake"), &p), IBL_OK);
+    assert_near(p.mapping.shininess[0], 1e6, 0);
+    assert_near(p.mapping.shininess[2], 4.2 * 25, 1e-4);
+    assert_near(ibl_probe_lod_from_shininess(&p, 4.2f * 6), 3.0, 1e-5);
+    ibl_probe_free(ctx, &p);
     ibl_texture_free(ctx, &vol);
     ibl_image_free(ctx, &lut2);
     ibl_cubemap_free(ctx, &chain);

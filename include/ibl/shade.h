@@ -123,9 +123,10 @@ typedef struct ibl_probe {
 /* Checks the probe's parts (sizes, monotonic mapping, tables) and fills a missing shininess
  * table; records the reason on failure. */
 ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *probe);
-/* Loads a bake directory (manifest.json, the specular chain, irradiance/SH, BRDF tables).
- * IBL_ERR_UNSUPPORTED until the bake format exists in this build; ibl_probe_load_files
- * loads the same parts from files named one by one. */
+/* Loads what `ibl bake` writes into dir: manifest.json (the level mapping, the AmbientBRDF
+ * shininess range), specular.ktx2 (or .dds), irradiance.ktx2 (or .dds), brdf_lut.ktx2 and,
+ * for the Phong family, ambient_brdf.ktx2. ibl_probe_load_files loads the same parts from
+ * files named one by one. */
 ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out);
 
 /* The parts of a probe as files (what the bake stages and `ibl lut` write). */

@@ -7,6 +7,8 @@
 #include "ibl/sh.h"
 
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static const float PI_F = 3.14159265358979f;
@@ -177,13 +179,98 @@ void ibl_probe_irradiance(const ibl_probe *p, ibl_vec3 n, float out[3])
     for (int c = 0; c < 3; c++) out[c] = scale * t[c];
 }
 
+/* The value after "key": within [p, end), or NULL. Enough for the manifest `ibl bake`
+ * writes (cli/bake.c, ibl_specular_manifest_json); not a general JSON reader. */
+static const char *json_value(const char *p, const char *end, const char *key)
+{
+    size_t n = strlen(key);
+    for (const char *q = p; q && q < end; q = strchr(q + 1, '"')) {
+        if (q + n + 2 <= end && q[0] == '"' && strncmp(q + 1, key, n) == 0 && q[n + 1] == '"') {
+            const char *v = q + n + 2;
+            while (v < end && (*v == ' ' || *v == ':')) v++;
+            return v < end ? v : NULL;
+        }
+    }
+    return NULL;
+}
+
+static int file_exists(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    fclose(f);
+    return 1;
+}
+
 ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out)
 {
     if (out) memset(out, 0, sizeof *out);
-    return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
-                    "%s: loading a bake directory needs the bake format (manifest.json), which "
-                    "this build does not have yet",
-                    dir ? dir : "(null)");
+    if (!dir || !out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: no directory");
+    char path[4][1024], manifest_path[1024];
+    snprintf(manifest_path, sizeof manifest_path, "%s/manifest.json", dir);
+    void *bytes = NULL;
+    size_t size = 0;
+    ibl_status st = ibl_read_file(ctx, manifest_path, &bytes, &size);
+    if (st != IBL_OK) return st;
+    char *text = ibl_alloc(ctx, size + 1);
+    if (!text) {
+        ibl_free(ctx, bytes);
+        return ibl_context_status(ctx);
+    }
+    memcpy(text, bytes, size);
+    text[size] = 0;
+    ibl_free(ctx, bytes);
+
+    /* the level mapping: "specular": {..., "levels": [{"roughness": r} or {"shininess": s}]} */
+    ibl_probe_files files;
+    memset(&files, 0, sizeof files);
+    const char *end = text + size;
+    const char *spec = json_value(text, end, "specular");
+    const char *lv = spec ? strstr(spec, "\"levels\": [") : NULL;
+    const char *range = spec ? json_value(spec, end, "shininess_range") : NULL;
+    int k = 0, bad = !lv;
+    for (const char *o = lv ? strchr(lv, '{') : NULL; o && k < IBL_MAX_LEVELS; k++) {
+        const char *close = strchr(o, '}'), *stop = strchr(lv, ']');
+        if (!close || (stop && o > stop)) break;
+        const char *r = json_value(o, close, "roughness"), *sh = json_value(o, close, "shininess");
+        if (r) files.mapping.roughness[k] = strtof(r, NULL);
+        else if (sh && strncmp(sh, "null", 4) == 0) files.mapping.shininess[k] = 1e6f; /* mirror */
+        else if (sh) files.mapping.shininess[k] = strtof(sh, NULL);
+        else bad = 1;
+        o = strchr(close, '{');
+        if (stop && o > stop) o = NULL;
+    }
+    files.mapping.levels = k;
+    /* the Phong-family chains (phong, box, gauss) are filtered with Phong lobes around R of
+     * exponent n; the material's shininess is the Blinn-Phong exponent of the seed's BRDF, and
+     * the seed's fit cos^n(t) ~ cos^(4.2 n)(t/2) makes that 4.2 n (a blinn chain is already
+     * in Blinn exponents) */
+    const char *filter = spec ? json_value(spec, end, "filter") : NULL;
+    if (filter && strncmp(filter, "\"blinn\"", 7) != 0 && strncmp(filter, "\"ggx\"", 5) != 0) {
+        const char *bf = json_value(spec, end, "blinn_factor");
+        float f = bf ? strtof(bf, NULL) : 4.2f;
+        if (!(f > 0.0f)) f = 4.2f;
+        for (int i = 0; i < k; i++)
+            if (files.mapping.shininess[i] < 1e6f) files.mapping.shininess[i] *= f;
+    }
+    if (range && *range == '[') {
+        char *e = NULL;
+        files.ambient_shininess_min = strtof(range + 1, &e);
+        if (e && *e == ',') files.ambient_shininess_max = strtof(e + 1, NULL);
+    }
+    ibl_free(ctx, text);
+    if (bad || k == 0)
+        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: no specular level mapping", manifest_path);
+
+    const char *names[4] = {"specular.ktx2", "irradiance.ktx2", "brdf_lut.ktx2", "ambient_brdf.ktx2"};
+    for (int i = 0; i < 4; i++) snprintf(path[i], sizeof path[i], "%s/%s", dir, names[i]);
+    if (!file_exists(path[0])) snprintf(path[0], sizeof path[0], "%s/specular.dds", dir);
+    if (!file_exists(path[1])) snprintf(path[1], sizeof path[1], "%s/irradiance.dds", dir);
+    files.specular = path[0];
+    files.irradiance = file_exists(path[1]) ? path[1] : NULL;
+    files.splitsum = file_exists(path[2]) ? path[2] : NULL;
+    files.ambient_brdf = file_exists(path[3]) ? path[3] : NULL;
+    return ibl_probe_load_files(ctx, &files, out);
 }
 
 /* Reads a cube (a cube texture, or a flat image in a layout) into out, owning its texels. */
