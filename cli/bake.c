@@ -338,8 +338,10 @@ int cli_cmd_bake(int argc, char **argv)
         if (info.filter != IBL_FILTER_GGX) {
             ibl_ambient_brdf_desc ad;
             memset(&ad, 0, sizeof ad);
-            ad.shininess_min = info.shininess_min;
-            ad.shininess_max = info.shininess_max;
+            /* the material's Blinn exponent runs to blinn_factor x the Phong range (seed fit) */
+            float to_blinn = info.filter == IBL_FILTER_BLINN ? 1.0f : (info.blinn_factor > 0 ? info.blinn_factor : 4.2f);
+            ad.shininess_min = info.shininess_min * to_blinn;
+            ad.shininess_max = info.shininess_max * to_blinn;
             st = ibl_ambient_brdf_volume(ctx, &ad, &amb);
             if (st != IBL_OK) goto fail;
             join(path, sizeof path, dir, "ambient_brdf.ktx2");

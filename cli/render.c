@@ -24,7 +24,8 @@ static const char usage[] =
     "  -o, --output FILE     output image (required)\n"
     "  --scene balls|FILE    the sphere grid (default) or a Wavefront OBJ mesh; its vertex\n"
     "                        colours' red is the AO, otherwise AO is ray-cast\n"
-    "  --exposure EV         exposure for tone-mapped outputs (default 0)\n"
+    "  --exposure EV         exposure for tone-mapped outputs (default: automatic, the\n"
+    "                        image's mean luminance maps to middle grey)\n"
     "  --width W             image width (default 1024); --height H (default W/2)\n"
     "  --layout L            layout of INPUT (equirect, hcross, ...; default: detect)\n"
     "  --specular-size N     face size of the in-memory prefiltered chain (default 128)\n"
@@ -208,6 +209,7 @@ int cli_cmd_render(int argc, char **argv)
     cli_args a = {argc, argv, 0, "render", usage, {0}, {0}, 0};
     const char *output = NULL, *scene = NULL, *cmp[2] = {NULL, NULL};
     double exposure = 0;
+    int exposure_given = 0;
     int width = 0, height = 0, specular_size = 0, report = 0;
     ibl_layout layout = IBL_LAYOUT_AUTO;
     ibl_probe_files files = {0};
@@ -219,8 +221,10 @@ int cli_cmd_render(int argc, char **argv)
             output = cli_value(&a, arg);
         else if (cli_is(&a, arg, "--scene", NULL))
             scene = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--exposure", NULL))
+        else if (cli_is(&a, arg, "--exposure", NULL)) {
             exposure = cli_double(&a, arg, -40, 40);
+            exposure_given = 1;
+        }
         else if (cli_is(&a, arg, "--width", NULL))
             width = cli_int(&a, arg, 8, 16384);
         else if (cli_is(&a, arg, "--height", NULL))
@@ -352,6 +356,8 @@ int cli_cmd_render(int argc, char **argv)
     }
     if (st == IBL_OK) {
         int display = is_display_output(output);
+        /* one exposure for every image of a comparison, from the first */
+        if (display && !exposure_given) exposure = cli_auto_exposure(&images[0]);
         for (int i = 0; i < count && display; i++) ibl_render_tonemap(&images[i], (float)exposure);
         ibl_write_desc wd = {0};
         if (display) wd.tonemap = IBL_TONEMAP_NONE;

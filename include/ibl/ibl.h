@@ -17,6 +17,7 @@
 #include "sh.h"
 #include "irradiance.h"
 #include "edge_fixup.h"
+#include "render.h"
 #include "shade.h"
 #include "sky.h"
 #include "specular.h"
