@@ -6,6 +6,7 @@
 
 static const char usage[] =
     "usage: ibl convert IN -o OUT [options]\n"
+    "       ibl convert PX NX PY NY PZ NZ -o OUT [options]   (six face images)\n"
     "\n"
     "Converts an environment between layouts and containers. IN is a flat image (.hdr .exr\n"
     ".pfm .png .jpg) in any layout, or a cube texture (.ktx2 .ktx .dds). The container of OUT\n"
@@ -88,10 +89,11 @@ int cli_cmd_convert(int argc, char **argv)
             }
         } else cli_positional_or_unknown(&a, arg);
     }
-    if (a.positional_count != 1) cli_usage_error(&a, "needs exactly one input file");
+    if (a.positional_count != 1 && a.positional_count != 6)
+        cli_usage_error(&a, "needs one input file, or six face images (+X -X +Y -Y +Z -Z)");
     if (!out) cli_usage_error(&a, "needs an output: -o OUT");
     const char *input = a.positional[0];
-    cli_check_distinct(&a, input, out);
+    for (int i = 0; i < a.positional_count; i++) cli_check_distinct(&a, a.positional[i], out);
     ibl_file_type out_type = ibl_file_type_from_path(out);
     if (out_type == IBL_FILE_UNKNOWN)
         cli_usage_error(&a, "cannot tell the container of %s from its extension", out);
@@ -99,7 +101,9 @@ int cli_cmd_convert(int argc, char **argv)
     ibl_context *ctx = cli_context(&a.common);
     double t0 = cli_seconds();
     ibl_cubemap cube;
-    int rc = cli_read_cubemap(ctx, &a.common, input, &in, &cube, NULL);
+    int rc = a.positional_count == 6
+                 ? cli_read_cubemap_faces(ctx, &a.common, a.positional, &in, &cube)
+                 : cli_read_cubemap(ctx, &a.common, input, &in, &cube, NULL);
     if (rc != CLI_EXIT_OK) {
         ibl_context_destroy(ctx);
         return rc;

@@ -107,3 +107,47 @@ void cli_check_distinct(const cli_args *a, const char *input, const char *output
          si.st_ino == so.st_ino))
         cli_usage_error(a, "the output %s is the input file; choose another name", output);
 }
+
+int cli_read_cubemap_faces(ibl_context *ctx, const cli_common *c, const char *const paths[6],
+                           const cli_input_options *o, ibl_cubemap *out)
+{
+    static const char *const names[6] = {"+X", "-X", "+Y", "-Y", "+Z", "-Z"};
+    ibl_read_desc rd = {c->clamp, 0};
+    ibl_image faces[6];
+    memset(faces, 0, sizeof faces);
+    memset(out, 0, sizeof *out);
+    int rc = CLI_EXIT_OK;
+    for (int f = 0; f < 6 && rc == CLI_EXIT_OK; f++) {
+        ibl_file_info info;
+        ibl_status st = ibl_read_image(ctx, paths[f], &rd, &faces[f], &info);
+        if (st != IBL_OK) {
+            cli_error("%s", ibl_context_message(ctx));
+            rc = CLI_EXIT_BAD_INPUT;
+            break;
+        }
+        cli_report_pixels(c, paths[f], &info.pixels);
+        /* name the file, not just the face, when the sizes do not fit together */
+        if (faces[f].width != faces[f].height) {
+            cli_error("%s: the %s face is %dx%d; faces must be square", paths[f], names[f],
+                      faces[f].width, faces[f].height);
+            rc = CLI_EXIT_BAD_INPUT;
+        } else if (f > 0 && faces[f].width != faces[0].width) {
+            cli_error("%s: the %s face is %dx%d but %s is %dx%d; all faces must have one size",
+                      paths[f], names[f], faces[f].width, faces[f].height, paths[0],
+                      faces[0].width, faces[0].height);
+            rc = CLI_EXIT_BAD_INPUT;
+        }
+    }
+    if (rc == CLI_EXIT_OK) {
+        ibl_to_cube_desc d;
+        memset(&d, 0, sizeof d);
+        d.size = o->size;
+        d.orientation = o->orientation;
+        if (ibl_faces_to_cubemap(ctx, faces, &d, out) != IBL_OK) {
+            cli_error("%s: %s", paths[0], ibl_context_message(ctx));
+            rc = CLI_EXIT_BAD_INPUT;
+        }
+    }
+    for (int f = 0; f < 6; f++) ibl_image_free(ctx, &faces[f]);
+    return rc;
+}

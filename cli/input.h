@@ -19,6 +19,11 @@ int cli_input_option(cli_args *a, const char *arg, cli_input_options *o);
 int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
                      const cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out);
 
+/* Reads six face images (+X -X +Y -Y +Z -Z, square, one size) into a one-level cubemap.
+ * Prints the error (naming the offending file) and returns the exit code. */
+int cli_read_cubemap_faces(ibl_context *ctx, const cli_common *c, const char *const paths[6],
+                           const cli_input_options *o, ibl_cubemap *out);
+
 /* Refuses (usage error, exit 2) an output path that names the same file as the input. */
 void cli_check_distinct(const cli_args *a, const char *input, const char *output);
 

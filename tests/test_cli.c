@@ -266,6 +266,42 @@ static void interrupt_leaves_nothing(void **state)
     assert_false(test_file_exists(out));
 }
 
+/* Six face images in, and the ways they can fail to fit together. */
+static void six_faces(void **state)
+{
+    (void)state;
+    const char *text;
+    const char *names[6] = {"px.pfm", "nx.pfm", "py.pfm", "ny.pfm", "pz.pfm", "nz.pfm"};
+    char paths[6][512];
+    for (int f = 0; f < 6; f++) {
+        snprintf(paths[f], sizeof paths[f], "%s", test_path(names[f]));
+        write_pfm(paths[f], 16, 16, (float)(f + 1), (float)(f + 1));
+    }
+    const char *out = test_path("faces.ktx2");
+    int rc = test_run_cli(&text, "convert -q '%s' '%s' '%s' '%s' '%s' '%s' -o '%s' --format rgba32f",
+                          paths[0], paths[1], paths[2], paths[3], paths[4], paths[5], out);
+    if (rc) fail_msg("%s", text);
+    /* each face keeps its own constant: the +Z face (5.0) is found where the cube's +Z is */
+    assert_int_equal(test_run_cli(&text, "info --json '%s'", out), 0);
+    assert_non_null(strstr(text, "\"max\": [6, 6, 6"));
+    assert_non_null(strstr(text, "\"min\": [1, 1, 1"));
+    /* a non-square face, then a face of another size: exit 1, one line naming that file */
+    write_pfm(paths[3], 16, 8, 1.0f, 1.0f);
+    rc = test_run_cli(&text, "convert '%s' '%s' '%s' '%s' '%s' '%s' -o '%s'", paths[0], paths[1],
+                      paths[2], paths[3], paths[4], paths[5], test_path("bad.ktx2"));
+    assert_int_equal(rc, 1);
+    assert_int_equal(count_lines(text), 1);
+    assert_non_null(strstr(text, paths[3]));
+    assert_non_null(strstr(text, "square"));
+    write_pfm(paths[3], 8, 8, 1.0f, 1.0f);
+    rc = test_run_cli(&text, "convert '%s' '%s' '%s' '%s' '%s' '%s' -o '%s'", paths[0], paths[1],
+                      paths[2], paths[3], paths[4], paths[5], test_path("bad.ktx2"));
+    assert_int_equal(rc, 1);
+    assert_int_equal(count_lines(text), 1);
+    assert_non_null(strstr(text, paths[3]));
+    assert_false(test_file_exists(test_path("bad.ktx2")));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -277,6 +313,7 @@ int main(void)
         cmocka_unit_test(outputs_identical_across_threads),
         cmocka_unit_test(memory_limit),
         cmocka_unit_test(interrupt_leaves_nothing),
+        cmocka_unit_test(six_faces),
     };
     return cmocka_run_group_tests_name("cli", tests, NULL, NULL);
 }
