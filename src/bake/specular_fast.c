@@ -22,12 +22,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-enum { REC = 40, TILE = 8, CHUNK = 64, NCH = 5 };
+enum { REC = 32, TILE = 8, CHUNK = 64, NCH = 5 };
 
 /* record fields */
-/* C: radiance-weighted covariance about m (normalised); CW: solid-angle second moment about m
- * (normalised), for the solid-angle and alpha channels, which are spread over the whole cell */
-enum { R_M = 0, R_E = 3, R_M0 = 4, R_D = 9, R_C = 24, R_CW = 30 };
+enum { R_M = 0, R_E = 3, R_M0 = 4, R_D = 9, R_C = 24 };
 
 typedef struct subleaf {
     uint32_t texel;
@@ -455,7 +453,7 @@ static void pyramid_task(void *arg, int index)
     for (int x = 0; x < n; x++) {
         float *rec = p->pyramid + (p->level_offset[level] + ((size_t)face * n + y) * n + x) * REC;
         /* the four children: position, moments, covariance */
-        double cm[4][3], cM0[4][NCH], cD[4][NCH][3], cC[4][6], cW[4][6];
+        double cm[4][3], cM0[4][NCH], cD[4][NCH][3], cC[4][6];
         for (int k = 0; k < 4; k++) {
             int cx = 2 * x + (k & 1), cy = 2 * y + (k >> 1);
             if (level == 1) {
@@ -467,7 +465,6 @@ static void pyramid_task(void *arg, int index)
                 cM0[k][4] = om;
                 memset(cD[k], 0, sizeof cD[k]);
                 memset(cC[k], 0, sizeof cC[k]);
-                memset(cW[k], 0, sizeof cW[k]);
             } else {
                 const float *r = p->pyramid +
                                  (p->level_offset[level - 1] + ((size_t)face * cn + cy) * cn + cx) * REC;
@@ -476,7 +473,7 @@ static void pyramid_task(void *arg, int index)
                     cM0[k][c] = r[R_M0 + c];
                     for (int i = 0; i < 3; i++) cD[k][c][i] = r[R_D + 3 * c + i];
                 }
-                for (int i = 0; i < 6; i++) cC[k][i] = r[R_C + i], cW[k][i] = r[R_CW + i];
+                for (int i = 0; i < 6; i++) cC[k][i] = r[R_C + i];
             }
         }
         double rho[4], rs = 0;
@@ -514,20 +511,7 @@ static void pyramid_task(void *arg, int index)
             C[5] += rho[k] * (cC[k][5] + d[2] * d[2]);
         }
         for (int i = 0; i < 6; i++) rec[R_C + i] = (float)(C[i] / rs);
-        /* second moment of the solid angle about m: each child's moment about its own m_k,
-         * moved to m with its first moment D_W,k (its solid-angle centroid is not m_k) */
-        double W[6] = {0, 0, 0, 0, 0, 0}, ws = 0;
-        static const int ia[6] = {0, 0, 0, 1, 1, 2}, ib[6] = {0, 1, 2, 1, 2, 2};
-        for (int k = 0; k < 4; k++) {
-            double om = cM0[k][4], d[3] = {cm[k][0] - mf[0], cm[k][1] - mf[1], cm[k][2] - mf[2]};
-            const double *Dk = cD[k][4];
-            ws += om;
-            for (int i = 0; i < 6; i++)
-                W[i] += om * cW[k][i] + d[ia[i]] * Dk[ib[i]] + Dk[ia[i]] * d[ib[i]] +
-                        om * d[ia[i]] * d[ib[i]];
-        }
-        for (int i = 0; i < 6; i++) rec[R_CW + i] = (float)(W[i] / ws);
-        rec[36] = rec[37] = rec[38] = rec[39] = 0.0f;
+        rec[30] = rec[31] = 0.0f;
     }
 }
 
@@ -601,40 +585,15 @@ static void tile_run_task(void *arg, int index)
                 float f0, f1, f2;
                 lobe_eval(lobe, nn, a2, a4, u, &f0, &f1, &f2);
                 if (f0 == 0.0f && f1 == 0.0f) continue;
-                /* the spread of x = R.l over the cell (R^T C R) enters as two sigma points,
-                 * (f(x - s) + f(x + s)) / 2: equal to the second-order Taylor term
-                 * f'' R^T C R / 2 for small cells, but bounded by f over the cell where the
-                 * expansion fails (large cells in GGX's tail, where the Taylor term
-                 * overshoots by several percent on real HDRIs). Radiance channels use the
-                 * radiance's spread, the solid-angle and alpha channels the cell's own. */
-                const float *C = rec + R_C, *CW = rec + R_CW;
+                /* the second-order term f'' R^T C R / 2 with the radiance's covariance
+                 * (docs/SPECULAR.md: variants that bound it measured worse on real HDRIs) */
+                const float *C = rec + R_C;
                 float var = r[0] * (r[0] * C[0] + 2.0f * (r[1] * C[1] + r[2] * C[2])) +
                             r[1] * (r[1] * C[3] + 2.0f * r[2] * C[4]) + r[2] * r[2] * C[5];
-                float varw = r[0] * (r[0] * CW[0] + 2.0f * (r[1] * CW[1] + r[2] * CW[2])) +
-                             r[1] * (r[1] * CW[3] + 2.0f * r[2] * CW[4]) + r[2] * r[2] * CW[5];
-                (void)f2;
-                float w0 = f0;
-                if (var > 0.0f) {
-                    float sd = sqrtf(var), ua = u - sd, ub = u + sd;
-                    w0 = 0.5f * (lobe_f(lobe, nn, a2, a4, ua < 0.0f ? -ua : ua) +
-                                 lobe_f(lobe, nn, a2, a4, ub));
-                }
-                for (int ch = 0; ch < 3; ch++) {
+                float w0 = f0 + 0.5f * f2 * var;
+                for (int ch = 0; ch < NCH; ch++) {
                     const float *D = rec + R_D + 3 * ch;
                     part[q][ch] += rec[R_M0 + ch] * w0 + f1 * (r[0] * D[0] + r[1] * D[1] + r[2] * D[2]);
-                }
-                /* alpha and solid angle: sigma points about their own mean (their centroid
-                 * is not the radiance's), with their own spread */
-                for (int ch = 3; ch < NCH; ch++) {
-                    const float *D = rec + R_D + 3 * ch;
-                    float m0 = rec[R_M0 + ch];
-                    if (!(m0 > 0.0f)) continue;
-                    float delta = (r[0] * D[0] + r[1] * D[1] + r[2] * D[2]) / m0;
-                    float cv = varw - delta * delta;
-                    float uc = u - delta, sd = cv > 0.0f ? sqrtf(cv) : 0.0f;
-                    float ua = uc - sd, ub = uc + sd;
-                    part[q][ch] += m0 * 0.5f * (lobe_f(lobe, nn, a2, a4, ua < 0.0f ? -ua : ua) +
-                                                lobe_f(lobe, nn, a2, a4, ub < 0.0f ? -ub : ub));
                 }
             }
         }
