@@ -19,8 +19,6 @@
 
 #include <math.h>
 #include <string.h>
-#include <stdio.h>
-#include <stdlib.h>
 
 enum { REC = 32, TILE = 8, CHUNK = 64, NCH = 5 };
 
@@ -410,14 +408,6 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
     p->points = ibl_alloc(ctx, (p->point_total + 1) * sizeof(uint32_t));
     p->subs = ibl_alloc(ctx, (p->sub_total + 1) * sizeof(subleaf));
     if (!p->cells || !p->points || !p->subs) goto oom;
-    if (getenv("IBL_SPEC_DEBUG")) {
-        for (int l = 0; l < levels; l++) {
-            size_t c = 0, q = 0, u = 0;
-            for (int i = p->level_tile_begin[l]; i < p->level_tile_begin[l + 1]; i++) c += p->tiles[i].cell_count, q += p->tiles[i].point_count, u += p->tiles[i].sub_count;
-            int nt = p->level_tile_begin[l + 1] - p->level_tile_begin[l];
-            fprintf(stderr, "level %d tiles %d cells/tile %.0f points/tile %.0f subs/tile %.0f\n", l, nt, nt ? (double)c / nt : 0, nt ? (double)q / nt : 0, nt ? (double)u / nt : 0);
-        }
-    }
     job.write = 1;
     if (tiles) ibl_parallel_for(ctx, tiles, plan_tile_task, &job);
     *out = p;
