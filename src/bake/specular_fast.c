@@ -19,8 +19,6 @@
 
 #include <math.h>
 #include <string.h>
-#include <stdio.h>
-#include <stdlib.h>
 
 enum { REC = 32, TILE = 8, CHUNK = 64, NCH = 5 };
 
@@ -116,7 +114,10 @@ static int classify(const cut_params *cp, const double c[3], double gamma)
     double need = 1.0;
     if (t1 > HALF_PI && cp->lobe->horizon > 0.05) need = 2.0 * gamma / HORIZON_CELL;
     if (ibl__lobe_table_f(cp->lobe, t0) > SMALL_WEIGHT) {
-        double g = ibl__lobe_table_max_variation(cp->lobe, t0, t1 < HALF_PI ? t1 : HALF_PI);
+        /* the last 0.05 rad above the horizon belong to the horizon rule: lobes with
+         * n < 1 (Blinn 1 / 4.2) have an unbounded slope there that does not matter */
+        double te = t1 < HALF_PI - 0.05 ? t1 : HALF_PI - 0.05;
+        double g = t0 < te ? ibl__lobe_table_max_variation(cp->lobe, t0, te) : 0.0;
         double k = 2.0 * gamma * g / cp->kappa;
         if (k > need) need = k;
     }
@@ -407,14 +408,6 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
     p->points = ibl_alloc(ctx, (p->point_total + 1) * sizeof(uint32_t));
     p->subs = ibl_alloc(ctx, (p->sub_total + 1) * sizeof(subleaf));
     if (!p->cells || !p->points || !p->subs) goto oom;
-    if (getenv("IBL_SPEC_DEBUG")) {
-        for (int l = 0; l < levels; l++) {
-            size_t c = 0, q = 0, u = 0;
-            for (int i = p->level_tile_begin[l]; i < p->level_tile_begin[l + 1]; i++) c += p->tiles[i].cell_count, q += p->tiles[i].point_count, u += p->tiles[i].sub_count;
-            int nt = p->level_tile_begin[l + 1] - p->level_tile_begin[l];
-            fprintf(stderr, "level %d tiles %d cells/tile %.0f points/tile %.0f subs/tile %.0f\n", l, nt, nt ? (double)c / nt : 0, nt ? (double)q / nt : 0, nt ? (double)u / nt : 0);
-        }
-    }
     job.write = 1;
     if (tiles) ibl_parallel_for(ctx, tiles, plan_tile_task, &job);
     *out = p;
@@ -582,15 +575,12 @@ static void tile_run_task(void *arg, int index)
                 float f0, f1, f2;
                 lobe_eval(lobe, nn, a2, a4, u, &f0, &f1, &f2);
                 if (f0 == 0.0f && f1 == 0.0f) continue;
-                /* the covariance term f'' R^T C R / 2 helps where the expansion holds; in the
-                 * large cells of GGX's tail, where f changes by orders of magnitude across the
-                 * cell, it overshoots (measured on real HDRIs): keep it only while it is a
-                 * correction (at most a quarter of f) */
+                /* the second-order term f'' R^T C R / 2 with the radiance's covariance
+                 * (docs/SPECULAR.md: variants that bound it measured worse on real HDRIs) */
                 const float *C = rec + R_C;
                 float var = r[0] * (r[0] * C[0] + 2.0f * (r[1] * C[1] + r[2] * C[2])) +
                             r[1] * (r[1] * C[3] + 2.0f * r[2] * C[4]) + r[2] * r[2] * C[5];
-                float corr = 0.5f * f2 * var;
-                float w0 = f0 + (fabsf(corr) <= 0.25f * f0 ? corr : 0.0f);
+                float w0 = f0 + 0.5f * f2 * var;
                 for (int ch = 0; ch < NCH; ch++) {
                     const float *D = rec + R_D + 3 * ch;
                     part[q][ch] += rec[R_M0 + ch] * w0 + f1 * (r[0] * D[0] + r[1] * D[1] + r[2] * D[2]);

@@ -145,7 +145,8 @@ void ibl__reference_eval_lobe(const ibl_specular_reference *r, const ibl__lobe *
                         double t0 = theta - gamma, t1 = theta + gamma;
                         if (t0 >= lobe->cull_angle || t0 >= PI_2) continue;
                         if (t0 < 0) t0 = 0;
-                        double g = ibl__lobe_max_log_slope(lobe, t0, t1 < PI_2 ? t1 : PI_2);
+                        double te = t1 < PI_2 - 0.05 ? t1 : PI_2 - 0.05;
+                        double g = t0 < te ? ibl__lobe_max_log_slope(lobe, t0, te) : 0.0;
                         double kk = ceil(2.0 * gamma * g / 0.2);
                         if (t1 > PI_2 && lobe->horizon > 1e-3) {
                             /* the lobe's kink at the horizon: pieces of at most 0.01 rad where the lobe is
