@@ -548,6 +548,7 @@ static void tile_run_task(void *arg, int index)
     const tile *t = &p->tiles[p->level_tile_begin[level] + index];
     const ibl__lobe *lobe = &p->lobes[level];
     float nn = (float)lobe->n, a2 = (float)(lobe->alpha * lobe->alpha), a4 = a2 * a2;
+    int bounded = lobe->kind == IBL__LOBE_PHONG && lobe->n < 2.0;
     int n = ibl_level_size(p->N, level), S = p->S;
     const float *dirs = p->outdir + p->outdir_offset[level];
     const float *src = p->run_src->data; /* level 0: 6 faces contiguous */
@@ -580,7 +581,12 @@ static void tile_run_task(void *arg, int index)
                 const float *C = rec + R_C;
                 float var = r[0] * (r[0] * C[0] + 2.0f * (r[1] * C[1] + r[2] * C[2])) +
                             r[1] * (r[1] * C[3] + 2.0f * r[2] * C[4]) + r[2] * r[2] * C[5];
-                float w0 = f0 + 0.5f * f2 * var;
+                float corr = 0.5f * f2 * var;
+                /* Phong with n < 2 has f'' = n (n - 1) x^(n-2) unbounded at the horizon
+                 * (Blinn shininess 1 is n = 0.24): there the expansion is bounded to
+                 * [-f/2, +f] (measured: 37% RMS at a 2x2 level without it) */
+                if (bounded) corr = corr > f0 ? f0 : corr < -0.5f * f0 ? -0.5f * f0 : corr;
+                float w0 = f0 + corr;
                 for (int ch = 0; ch < NCH; ch++) {
                     const float *D = rec + R_D + 3 * ch;
                     part[q][ch] += rec[R_M0 + ch] * w0 + f1 * (r[0] * D[0] + r[1] * D[1] + r[2] * D[2]);
