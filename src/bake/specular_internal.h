@@ -5,14 +5,10 @@
 #define IBL_SPECULAR_INTERNAL_H
 
 #include "ibl/specular.h"
+#include "bake/specular_seed.h"
 
-/* Seed kernels (the edge-fixup helper's files). dst->size and dst->levels are given; every
- * level is filled. */
-ibl_status ibl__specular_box(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst);
-ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst,
-                               const float *shininess_per_level);
-/* The box chain's fitted Phong shininess of a level (specular_box.c). */
-float ibl__box_level_shininess(int size, int level);
+/* The seed kernels (box, gauss) and the box chain's fitted shininess live in specular_box.c /
+ * specular_gauss.c and are declared once, in specular_seed.h. */
 
 /* A radially symmetric lobe f(x) of x = cos(angle between the lobe axis and l), normalised to
  * f(1) = 1; zero for x <= 0. */

@@ -8,19 +8,16 @@
 #include "ibl/core.h"
 #include "ibl/cubemap.h"
 
-/* also declared in specular_internal.h */
 /* dst->size and dst->levels given; fills every level: level 0 = src resampled to dst->size
  * (the exact area mean of the covered source texels when src->size is a multiple of
  * dst->size, ibl_cubemap_resample otherwise), then the area-correct box mip chain. */
 ibl_status ibl__specular_box(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst);
 
-/* also declared in specular_internal.h */
 /* A 2D Gaussian blur within each face of every level of the box chain (no filtering across
  * face edges, as in the seed), with sigma from the level's shininess (ibl__gauss_sigma). */
 ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst,
                                const float *shininess_per_level);
 
-/* also declared in specular_internal.h */
 /* The Phong shininess whose normalised lobe best matches, in least squares over the sphere,
  * the box chain's effective kernel at `level` of a chain whose level 0 has edge `size`
  * (area-mean texels read back with seamless bilinear filtering). */
