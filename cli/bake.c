@@ -24,7 +24,8 @@ static const char usage[] =
     "\n"
     "  -o, --output DIR       output folder (created if missing)\n"
     "  --preset P             gltf (default), filament, unreal, unity, or the seed's\n"
-    "                         configurations (see 'ibl prefilter --help')\n"
+    "                         configurations dynamic-box16, dynamic-gauss32, dynamic-phong16,\n"
+    "                         dynamic-phong32, static-phong32, static-phong64\n"
     "  --filter K             ggx, phong, blinn, box, gauss (overrides the preset)\n"
     "  --size N               specular face edge (default: the preset's)\n"
     "  --levels L             specular levels (default: down to 1x1)\n"
@@ -94,6 +95,31 @@ static ibl_status write_texture_both(bake_state *b, const char *stem, ibl_textur
         add_file(b, name, kind, ibl_format_name(format ? format : IBL_FORMAT_RGBA16F), layout);
     }
     return IBL_OK;
+}
+
+/* Writes a flat table (an ibl_image) as a one-level 2D KTX2 texture with a description. */
+static ibl_status write_table_ktx2(bake_state *b, const char *name, const ibl_image *image,
+                                   ibl_format format, const char *description, const char *kind,
+                                   const char *layout)
+{
+    ibl_texture tex;
+    memset(&tex, 0, sizeof tex);
+    tex.kind = IBL_TEXTURE_2D;
+    tex.width = image->width;
+    tex.height = image->height;
+    tex.depth = 1;
+    tex.levels = 1;
+    tex.data = image->pixels;
+    ibl_status st = ibl_texture_set_metadata(b->ctx, &tex, "ibl.brdf", description);
+    char path[4096];
+    join(path, sizeof path, b->dir, name);
+    ibl_write_desc wd;
+    memset(&wd, 0, sizeof wd);
+    wd.format = format;
+    if (st == IBL_OK) st = ibl_write_texture(b->ctx, path, &tex, &wd);
+    ibl_texture_free(b->ctx, &tex); /* the metadata; the pixels stay with the image */
+    if (st == IBL_OK) add_file(b, name, kind, ibl_format_name(format), layout);
+    return st;
 }
 
 static void json_escape(FILE *f, const char *s)
@@ -294,47 +320,23 @@ int cli_cmd_bake(int argc, char **argv)
         memset(&ld, 0, sizeof ld);
         ld.size = lut_size;
         st = ibl_brdf_lut(ctx, &ld, &lut);
+        if (st == IBL_OK)
+            st = write_table_ktx2(&b, "brdf_lut.ktx2", &lut, IBL_FORMAT_RG16F,
+                                  "split-sum GGX, height-correlated Smith: R = A, G = B, specular = "
+                                  "F0*A + F90*B; x = n.v, y = roughness, row 0 = roughness 0",
+                                  "brdf_splitsum", "2d: x = n.v, y = roughness (texel centres)");
         if (st != IBL_OK) goto fail;
-        ibl_texture tex;
-        memset(&tex, 0, sizeof tex);
-        tex.kind = IBL_TEXTURE_2D;
-        tex.width = lut.width;
-        tex.height = lut.height;
-        tex.depth = 1;
-        tex.levels = 1;
-        tex.data = lut.pixels;
-        ibl_texture_set_metadata(ctx, &tex, "ibl.brdf", "split-sum GGX, height-correlated Smith: R = A, G = B, specular = F0*A + F90*B; x = n.v, y = roughness, row 0 = roughness 0");
-        char path[4096];
-        join(path, sizeof path, dir, "brdf_lut.ktx2");
-        ibl_write_desc wd;
-        memset(&wd, 0, sizeof wd);
-        wd.format = IBL_FORMAT_RG16F;
-        st = ibl_write_texture(ctx, path, &tex, &wd);
-        ibl_texture_free(ctx, &tex); /* metadata only */
-        if (st != IBL_OK) goto fail;
-        add_file(&b, "brdf_lut.ktx2", "brdf_splitsum", "rg16f", "2d: x = n.v, y = roughness (texel centres)");
-
         ld.channels[0] = IBL_BRDF_ALBEDO;
         ld.channels[1] = IBL_BRDF_ALBEDO_AVG;
         ld.channels[2] = IBL_BRDF_SHEEN;
         ld.channels[3] = IBL_BRDF_SHEEN_AVG;
         st = ibl_brdf_lut(ctx, &ld, &extra);
+        if (st == IBL_OK)
+            st = write_table_ktx2(&b, "brdf_extra.ktx2", &extra, IBL_FORMAT_RGBA16F,
+                                  "R = E (GGX directional albedo), G = E_avg, B = Charlie sheen "
+                                  "albedo, A = its average; x = n.v, y = roughness",
+                                  "brdf_multiscatter_sheen", "2d: x = n.v, y = roughness");
         if (st != IBL_OK) goto fail;
-        memset(&tex, 0, sizeof tex);
-        tex.kind = IBL_TEXTURE_2D;
-        tex.width = extra.width;
-        tex.height = extra.height;
-        tex.depth = 1;
-        tex.levels = 1;
-        tex.data = extra.pixels;
-        ibl_texture_set_metadata(ctx, &tex, "ibl.brdf", "R = E (GGX directional albedo), G = E_avg, B = Charlie sheen albedo, A = its average; x = n.v, y = roughness");
-        join(path, sizeof path, dir, "brdf_extra.ktx2");
-        wd.format = IBL_FORMAT_RGBA16F;
-        st = ibl_write_texture(ctx, path, &tex, &wd);
-        ibl_texture_free(ctx, &tex);
-        if (st != IBL_OK) goto fail;
-        add_file(&b, "brdf_extra.ktx2", "brdf_multiscatter_sheen", "rgba16f", "2d: x = n.v, y = roughness");
-
         if (info.filter != IBL_FILTER_GGX) {
             ibl_ambient_brdf_desc ad;
             memset(&ad, 0, sizeof ad);
@@ -344,7 +346,10 @@ int cli_cmd_bake(int argc, char **argv)
             ad.shininess_max = info.shininess_max * to_blinn;
             st = ibl_ambient_brdf_volume(ctx, &ad, &amb);
             if (st != IBL_OK) goto fail;
+            char path[4096];
             join(path, sizeof path, dir, "ambient_brdf.ktx2");
+            ibl_write_desc wd;
+            memset(&wd, 0, sizeof wd);
             wd.format = IBL_FORMAT_RG16F;
             st = ibl_write_texture(ctx, path, &amb, &wd);
             if (st != IBL_OK) goto fail;
