@@ -1,14 +1,33 @@
 #!/bin/sh
-# make bench: runs every benchmark program in the build folder on the shared test data and
-# the whole-command timings with hyperfine. Results go to stdout; copy the figures you quote
-# into docs/PERFORMANCE.md together with this command.
+# make bench: every benchmark program, then whole-command timings with hyperfine. Results go
+# to stdout; quote figures in docs/PERFORMANCE.md together with the command that made them.
+# BENCH_FULL=1 adds the prefilter's accuracy table against the reference (tens of minutes).
 set -eu
 BUILD=${1:-build}
 DATA=${IBL_TESTDATA:-../shared/testdata}
-[ -d "$DATA" ] || DATA=tests/data
-for b in "$BUILD"/bench/bench_*; do
-  [ -x "$b" ] || continue
-  echo "== $b"
-  "$b" "$DATA"
-done
-if [ -x bench/commands.sh ]; then sh bench/commands.sh "$BUILD" "$DATA"; fi
+HDRI=$DATA/hdri
+[ -d "$HDRI" ] || { DATA=tests/data; HDRI=tests/data; }
+B=$BUILD/bench
+run() { echo "== $*"; "$@"; }
+run "$B/bench_brdf"
+run "$B/bench_containers" x 2
+run "$B/bench_io" "$DATA"
+run "$B/bench_layout" 1024 256 2 11
+run "$B/bench_render"
+run "$B/bench_seed_kernels"
+run "$B/bench_sh" "$DATA"
+run "$B/bench_specular" --dynamic
+if [ "${BENCH_FULL:-0}" = 1 ]; then
+  run "$B/bench_specular" --sizes 128,256 --samples 2000 --filters ggx,phong,blinn "$HDRI"/*.exr
+fi
+OUT=$(mktemp -d)
+trap 'rm -rf "$OUT"' EXIT
+IN=$HDRI/city.exr
+echo "== whole commands (hyperfine, 2 threads)"
+hyperfine -w 1 -r 5 -N \
+  "$BUILD/ibl convert -q $IN -o $OUT/c.ktx2 --size 256" \
+  "$BUILD/ibl sh --json $IN" \
+  "$BUILD/ibl irradiance -q $IN -o $OUT/i.ktx2" \
+  "$BUILD/ibl lut -q -o $OUT/l.ktx2" \
+  "$BUILD/ibl render -q $IN -o $OUT/r.png --specular-size 64"
+hyperfine -w 0 -r 3 -N "$BUILD/ibl prefilter -q $IN -o $OUT/p.ktx2 --size 256"
