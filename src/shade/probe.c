@@ -1,6 +1,7 @@
 /* The probe: validation of its plain parts, the level mapping (roughness/shininess <-> lod)
  * and the reads every shading model makes (prefiltered radiance, irradiance). */
 #include "ibl/shade.h"
+#include "shade/probe_internal.h"
 
 #include "ibl/io.h"
 #include "ibl/layout.h"
@@ -202,29 +203,20 @@ static int file_exists(const char *path)
     return 1;
 }
 
-ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out)
+ibl_status ibl__probe_parse_manifest(ibl_context *ctx, const void *bytes, size_t size,
+                                     const char *name, ibl_probe_files *files)
 {
-    if (out) memset(out, 0, sizeof *out);
-    if (!dir || !out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: no directory");
-    char path[4][1024], manifest_path[1024];
-    snprintf(manifest_path, sizeof manifest_path, "%s/manifest.json", dir);
-    void *bytes = NULL;
-    size_t size = 0;
-    ibl_status st = ibl_read_file(ctx, manifest_path, &bytes, &size);
-    if (st != IBL_OK) return st;
+    memset(files, 0, sizeof *files);
+    if (size > ((size_t)64 << 20))
+        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: a manifest of %zu bytes is too large", name, size);
     char *text = ibl_alloc(ctx, size + 1);
-    if (!text) {
-        ibl_free(ctx, bytes);
-        return ibl_context_status(ctx);
-    }
+    if (!text) return ibl_fail(ctx, ibl_context_status(ctx), "%s: out of memory", name);
     memcpy(text, bytes, size);
+    /* the parse below stops at the first NUL, so an embedded NUL only shortens the text */
     text[size] = 0;
-    ibl_free(ctx, bytes);
 
     /* the level mapping: "specular": {..., "levels": [{"roughness": r} or {"shininess": s}]} */
-    ibl_probe_files files;
-    memset(&files, 0, sizeof files);
-    const char *end = text + size;
+    const char *end = text + strlen(text);
     const char *spec = json_value(text, end, "specular");
     const char *lv = spec ? strstr(spec, "\"levels\": [") : NULL;
     const char *range = spec ? json_value(spec, end, "shininess_range") : NULL;
@@ -233,14 +225,14 @@ ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out)
         const char *close = strchr(o, '}'), *stop = strchr(lv, ']');
         if (!close || (stop && o > stop)) break;
         const char *r = json_value(o, close, "roughness"), *sh = json_value(o, close, "shininess");
-        if (r) files.mapping.roughness[k] = strtof(r, NULL);
-        else if (sh && strncmp(sh, "null", 4) == 0) files.mapping.shininess[k] = 1e6f; /* mirror */
-        else if (sh) files.mapping.shininess[k] = strtof(sh, NULL);
+        if (r) files->mapping.roughness[k] = strtof(r, NULL);
+        else if (sh && strncmp(sh, "null", 4) == 0) files->mapping.shininess[k] = 1e6f; /* mirror */
+        else if (sh) files->mapping.shininess[k] = strtof(sh, NULL);
         else bad = 1;
         o = strchr(close, '{');
         if (stop && o > stop) o = NULL;
     }
-    files.mapping.levels = k;
+    files->mapping.levels = k;
     /* the Phong-family chains (phong, box, gauss) are filtered with Phong lobes around R of
      * exponent n; the material's shininess is the Blinn-Phong exponent of the seed's BRDF, and
      * the seed's fit cos^n(t) ~ cos^(4.2 n)(t/2) makes that 4.2 n (a blinn chain is already
@@ -251,16 +243,32 @@ ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out)
         float f = bf ? strtof(bf, NULL) : 4.2f;
         if (!(f > 0.0f)) f = 4.2f;
         for (int i = 0; i < k; i++)
-            if (files.mapping.shininess[i] < 1e6f) files.mapping.shininess[i] *= f;
+            if (files->mapping.shininess[i] < 1e6f) files->mapping.shininess[i] *= f;
     }
     if (range && *range == '[') {
         char *e = NULL;
-        files.ambient_shininess_min = strtof(range + 1, &e);
-        if (e && *e == ',') files.ambient_shininess_max = strtof(e + 1, NULL);
+        files->ambient_shininess_min = strtof(range + 1, &e);
+        if (e && *e == ',') files->ambient_shininess_max = strtof(e + 1, NULL);
     }
     ibl_free(ctx, text);
-    if (bad || k == 0)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: no specular level mapping", manifest_path);
+    if (bad || k == 0) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: no specular level mapping", name);
+    return IBL_OK;
+}
+
+ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out)
+{
+    if (out) memset(out, 0, sizeof *out);
+    if (!dir || !out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: no directory");
+    char path[4][1024], manifest_path[1024];
+    snprintf(manifest_path, sizeof manifest_path, "%s/manifest.json", dir);
+    void *bytes = NULL;
+    size_t size = 0;
+    ibl_status st = ibl_read_file(ctx, manifest_path, &bytes, &size);
+    if (st != IBL_OK) return st;
+    ibl_probe_files files;
+    st = ibl__probe_parse_manifest(ctx, bytes, size, manifest_path, &files);
+    ibl_free(ctx, bytes);
+    if (st != IBL_OK) return st;
 
     const char *names[4] = {"specular.ktx2", "irradiance.ktx2", "brdf_lut.ktx2", "ambient_brdf.ktx2"};
     for (int i = 0; i < 4; i++) snprintf(path[i], sizeof path[i], "%s/%s", dir, names[i]);

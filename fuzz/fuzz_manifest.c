@@ -1,0 +1,30 @@
+/* libFuzzer target for the bake manifest reader (what ibl_probe_load parses). */
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "ibl/ibl.h"
+#include "shade/probe_internal.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    static ibl_context *ctx;
+    if (!ctx) {
+        ibl_context_desc d;
+        memset(&d, 0, sizeof d);
+        d.threads = 1;
+        d.max_bytes = (uint64_t)256 << 20;
+        if (ibl_context_create(&d, &ctx) != IBL_OK) return 0;
+    }
+    ibl_probe_files files;
+    ibl_status st = ibl__probe_parse_manifest(ctx, data, size, "<fuzz>", &files);
+    if (st == IBL_OK) {
+        /* a mapping was found: it has at least one level and at most the maximum */
+        if (files.mapping.levels < 1 || files.mapping.levels > IBL_MAX_LEVELS) __builtin_trap();
+    } else if (strncmp(ibl_context_message(ctx), "<fuzz>", 6) != 0) {
+        __builtin_trap();
+    }
+    return 0;
+}
