@@ -619,22 +619,7 @@ ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const
         /* How finely the pixels are cut there: cells of about 1/POLE_CELLS of a texel. */
         job.pole_cell_area = cell * cell / POLE_CELLS;
     }
-    /* face axes in the picture frame: picture = M^T world */
-    for (int f = 0; f < 6; f++) {
-        double o[3], sx[3], tx[3], axes[3][3];
-        ibl_cube_direction_d(f, 0.5, 0.5, o);
-        ibl_cube_direction_d(f, 1.0, 0.5, sx);
-        ibl_cube_direction_d(f, 0.5, 1.0, tx);
-        for (int i = 0; i < 3; i++) {
-            axes[0][i] = o[i];
-            axes[1][i] = sx[i] - o[i];
-            axes[2][i] = tx[i] - o[i];
-        }
-        for (int r = 0; r < 3; r++)
-            for (int i = 0; i < 3; i++)
-                job.basis[f][r][i] = frame->m[0][i] * axes[r][0] + frame->m[1][i] * axes[r][1] +
-                                     frame->m[2][i] * axes[r][2];
-    }
+    ibl__picture_basis(frame, job.basis);
     ibl_parallel_for(ctx, 6 * out->size, eq_row_task, &job);
     ibl_free(ctx, mean);
     return IBL_OK;

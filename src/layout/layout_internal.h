@@ -17,6 +17,8 @@ void ibl__frame_from_orientation(const ibl_orientation *o, ibl__frame *f);
 void ibl__frame_from_matrix(const double m[3][3], ibl__frame *f);
 /* The transpose (the inverse of an orthogonal matrix). */
 void ibl__frame_transpose(const ibl__frame *f, ibl__frame *out);
+/* Each cube face's centre, s and t axes (rows 0, 1, 2) expressed in the picture's frame. */
+void ibl__picture_basis(const ibl__frame *frame, double basis[6][3][3]);
 
 static inline void ibl__mul3(const double m[3][3], const double p[3], double out[3])
 {

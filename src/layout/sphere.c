@@ -146,7 +146,7 @@ static void to_cube_row(void *arg, int index)
     }
 }
 
-static void picture_basis(const ibl__frame *frame, double basis[6][3][3])
+void ibl__picture_basis(const ibl__frame *frame, double basis[6][3][3])
 {
     for (int f = 0; f < 6; f++) {
         double o[3], sx[3], tx[3], axes[3][3];
@@ -198,7 +198,7 @@ ibl_status ibl__sphere_to_cube(ibl_context *ctx, ibl_layout layout, const ibl_im
     }
     job.out = out;
     job.fixed_k = samples_per_axis;
-    picture_basis(frame, job.basis);
+    ibl__picture_basis(frame, job.basis);
     ibl_parallel_for(ctx, 6 * out->size, to_cube_row, &job);
     ibl_image_free(ctx, &padded);
     return IBL_OK;
