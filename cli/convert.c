@@ -93,10 +93,7 @@ int cli_cmd_convert(int argc, char **argv)
         cli_usage_error(&a, "needs one input file, or six face images (+X -X +Y -Y +Z -Z)");
     if (!out) cli_usage_error(&a, "needs an output: -o OUT");
     const char *input = a.positional[0];
-    for (int i = 0; i < a.positional_count; i++) cli_check_distinct(&a, a.positional[i], out);
-    ibl_file_type out_type = ibl_file_type_from_path(out);
-    if (out_type == IBL_FILE_UNKNOWN)
-        cli_usage_error(&a, "cannot tell the container of %s from its extension", out);
+    ibl_file_type out_type = cli_check_output(&a, out);
 
     ibl_context *ctx = cli_context(&a.common);
     double t0 = cli_seconds();

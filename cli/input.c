@@ -99,6 +99,15 @@ int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
     return CLI_EXIT_OK;
 }
 
+ibl_file_type cli_check_output(const cli_args *a, const char *output)
+{
+    ibl_file_type type = ibl_file_type_from_path(output);
+    if (type == IBL_FILE_UNKNOWN)
+        cli_usage_error(a, "cannot tell the container of %s from its extension", output);
+    for (int i = 0; i < a->positional_count; i++) cli_check_distinct(a, a->positional[i], output);
+    return type;
+}
+
 void cli_check_distinct(const cli_args *a, const char *input, const char *output)
 {
     struct stat si, so;

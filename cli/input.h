@@ -26,5 +26,8 @@ int cli_read_cubemap_faces(ibl_context *ctx, const cli_common *c, const char *co
 
 /* Refuses (usage error, exit 2) an output path that names the same file as the input. */
 void cli_check_distinct(const cli_args *a, const char *input, const char *output);
+/* The container of an output path, checked before any work: an unknown extension or an output
+ * that is one of the command's input files is a usage error. */
+ibl_file_type cli_check_output(const cli_args *a, const char *output);
 
 #endif

@@ -88,11 +88,8 @@ int cli_cmd_irradiance(int argc, char **argv)
     }
     if (a.positional_count != 1) cli_usage_error(&a, "wants exactly one input file");
     if (!out_path) cli_usage_error(&a, "wants an output file (-o OUT)");
-    ibl_file_type out_type = ibl_file_type_from_path(out_path);
-    if (out_type == IBL_FILE_UNKNOWN)
-        cli_usage_error(&a, "cannot tell the output container from '%s'", out_path);
+    ibl_file_type out_type = cli_check_output(&a, out_path);
     const char *in = a.positional[0];
-    cli_check_distinct(&a, in, out_path);
     ibl_context *ctx = cli_context(&a.common);
     double t0 = cli_seconds();
     ibl_cubemap cube = {0}, result = {0};

@@ -189,11 +189,8 @@ int cli_cmd_prefilter(int argc, char **argv)
     if (set.accuracy > 0) d.accuracy = set.accuracy;
     d.method = set.method;
     d.mirror = set.mirror;
-    ibl_file_type out_type = ibl_file_type_from_path(out_path);
-    if (out_type == IBL_FILE_UNKNOWN)
-        cli_usage_error(&a, "cannot tell the output container from '%s'", out_path);
+    ibl_file_type out_type = cli_check_output(&a, out_path);
     const char *in = a.positional[0];
-    cli_check_distinct(&a, in, out_path);
     ibl_context *ctx = cli_context(&a.common);
     double t0 = cli_seconds();
     ibl_cubemap cube = {0}, result = {0};
