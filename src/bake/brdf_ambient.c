@@ -143,17 +143,24 @@ static void table_row(void *arg, int j)
     }
 }
 
+/* The part both table shapes share: the checked descriptor, the quadrature, the first
+ * progress report. */
+static ibl_status job_init(ibl_context *ctx, const ibl_ambient_brdf_desc *desc, volume_job *job)
+{
+    memset(job, 0, sizeof *job);
+    ibl_status st = check_desc(ctx, desc, &job->plan.d);
+    if (st != IBL_OK) return st;
+    ibl__quadrature_init(&job->plan.q, job->plan.d.order);
+    return ibl_progress(ctx, "ambient brdf", 0.0);
+}
+
 ibl_status ibl_ambient_brdf_volume(ibl_context *ctx, const ibl_ambient_brdf_desc *desc,
                                    ibl_texture *out)
 {
     if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: no output texture");
     memset(out, 0, sizeof *out);
     volume_job job;
-    memset(&job, 0, sizeof job);
-    ibl_status st = check_desc(ctx, desc, &job.plan.d);
-    if (st != IBL_OK) return st;
-    ibl__quadrature_init(&job.plan.q, job.plan.d.order);
-    st = ibl_progress(ctx, "ambient brdf", 0.0);
+    ibl_status st = job_init(ctx, desc, &job);
     if (st != IBL_OK) return st;
     st = ibl_texture_alloc(ctx, IBL_TEXTURE_3D, job.plan.d.size_nv, job.plan.d.size_shininess,
                            job.plan.d.size_f0, 1, out);
@@ -171,11 +178,7 @@ ibl_status ibl_ambient_brdf_table(ibl_context *ctx, const ibl_ambient_brdf_desc 
     if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: no output image");
     memset(out, 0, sizeof *out);
     volume_job job;
-    memset(&job, 0, sizeof job);
-    ibl_status st = check_desc(ctx, desc, &job.plan.d);
-    if (st != IBL_OK) return st;
-    ibl__quadrature_init(&job.plan.q, job.plan.d.order);
-    st = ibl_progress(ctx, "ambient brdf", 0.0);
+    ibl_status st = job_init(ctx, desc, &job);
     if (st != IBL_OK) return st;
     st = ibl_image_alloc(ctx, job.plan.d.size_nv, job.plan.d.size_shininess, out);
     if (st != IBL_OK) return st;
