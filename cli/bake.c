@@ -122,6 +122,16 @@ static ibl_status write_table_ktx2(bake_state *b, const char *name, const ibl_im
     return st;
 }
 
+/* Writes text built in a memory stream to DIR/name atomically, then frees it. */
+static ibl_status write_text_file(bake_state *b, const char *name, char *text, size_t len)
+{
+    char path[4096];
+    join(path, sizeof path, b->dir, name);
+    ibl_status st = ibl_write_file_atomic(b->ctx, path, text, len);
+    free(text);
+    return st;
+}
+
 static void json_escape(FILE *f, const char *s)
 {
     fputc('"', f);
@@ -304,10 +314,7 @@ int cli_cmd_bake(int argc, char **argv)
         }
         cli_sh_write_json(mem, input ? input : "built-in sky", "cube", sh_bands, window, &rep, &radiance);
         fclose(mem);
-        char path[4096];
-        join(path, sizeof path, dir, "sh.json");
-        st = ibl_write_file_atomic(ctx, path, text, len);
-        free(text);
+        st = write_text_file(&b, "sh.json", text, len);
         if (st != IBL_OK) goto fail;
         add_file(&b, "sh.json", "sh", "json", "real SH, see keys basis and axes");
     }
@@ -413,8 +420,14 @@ int cli_cmd_bake(int argc, char **argv)
         fprintf(m, ", \"yaw\": %.9g, \"mirror_input\": %s, \"z_up\": %s",
                 in.orientation.yaw_degrees, in.orientation.mirror ? "true" : "false",
                 in.orientation.z_up ? "true" : "false");
-        if (!input)
-            fprintf(m, ", \"sky\": {\"sun_elevation_deg\": 35, \"sun_azimuth_deg\": 0, \"turbidity\": 3, \"ground_albedo\": 0.3}");
+        if (!input) {
+            ibl_sky_model model;
+            if (ibl_sky_model_init(ctx, &sky, &model) == IBL_OK)
+                fprintf(m, ", \"sky\": {\"sun_elevation_deg\": %.9g, \"sun_azimuth_deg\": %.9g, "
+                           "\"turbidity\": %.9g, \"ground_albedo\": %.9g, \"width\": %d}",
+                        model.desc.sun_elevation_deg, model.desc.sun_azimuth_deg,
+                        model.desc.turbidity, model.desc.ground_albedo, model.desc.width);
+        }
         fprintf(m, "},\n  \"specular\": ");
         /* the prefilter's own manifest block, indented one level */
         size_t spec_len = strlen(spec_json);
@@ -434,10 +447,7 @@ int cli_cmd_bake(int argc, char **argv)
         fprintf(m, "  ]\n}\n");
         fclose(m);
         ibl_free(ctx, spec_json);
-        char path[4096];
-        join(path, sizeof path, dir, "manifest.json");
-        st = ibl_write_file_atomic(ctx, path, text, len);
-        free(text);
+        st = write_text_file(&b, "manifest.json", text, len);
         if (st != IBL_OK) goto fail;
     }
 
