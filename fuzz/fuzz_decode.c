@@ -5,7 +5,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "ibl/ibl.h"
+#include "fuzz_common.h"
 #include "io/io_internal.h"
 
 __attribute__((unused)) static ibl_status ibl_decode_any(ibl_context *ctx, const uint8_t *bytes, size_t size,
@@ -19,15 +19,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    static ibl_context *ctx;
-    if (!ctx) {
-        /* single-threaded, with a memory limit so that huge declared sizes are refused */
-        ibl_context_desc d;
-        memset(&d, 0, sizeof d);
-        d.threads = 1;
-        d.max_bytes = (uint64_t)256 << 20;
-        if (ibl_context_create(&d, &ctx) != IBL_OK) return 0;
-    }
+    ibl_context *ctx = fuzz_context();
+    if (!ctx) return 0;
     ibl_texture tex;
     ibl_file_info info;
     memset(&tex, 0, sizeof tex);

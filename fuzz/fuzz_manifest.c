@@ -3,21 +3,15 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "ibl/ibl.h"
+#include "fuzz_common.h"
 #include "shade/probe_internal.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    static ibl_context *ctx;
-    if (!ctx) {
-        ibl_context_desc d;
-        memset(&d, 0, sizeof d);
-        d.threads = 1;
-        d.max_bytes = (uint64_t)256 << 20;
-        if (ibl_context_create(&d, &ctx) != IBL_OK) return 0;
-    }
+    ibl_context *ctx = fuzz_context();
+    if (!ctx) return 0;
     ibl_probe_files files;
     ibl_status st = ibl__probe_parse_manifest(ctx, data, size, "<fuzz>", &files);
     if (st == IBL_OK) {
