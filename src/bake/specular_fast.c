@@ -1,282 +1,411 @@
-/* The fast prefilter: a deterministic hierarchical quadrature ("Barnes-Hut" over the source).
+/* The fast prefilter: a multilevel summation over a moment pyramid of the source.
  *
- * The source's area-weighted quadtree (one per face, down from 1x1) stores per cell the
- * moments of its radiance: per channel the integral M0 = int L dl, the first moment about the
- * cell's radiance centroid m, D = int L (l - m) dl, and the shared normalised covariance C.
- * For every tile of 8x8 output texels a cut through the tree is chosen once (the plan): a cell
- * is split while it is wider than `accuracy` times the lobe's local length scale
- * 1 / |d log f / d angle| over the tile (or straddles the horizon), unless the lobe is below
- * 1e-4 of its peak there; cells beyond the lobe's 1e-12 cut-off are dropped. Each leaf then
- * contributes the second-order Taylor expansion of f(R.l) about x = R.m:
- *     sum_c = M0_c (f(x) + f''(x) R^T C R / 2) + f'(x) R.D_c,
- * exact for a point light in the cell (its centroid is the light) and to second order for
- * smooth light. Where even a source texel is too wide, it is split into k x k sub-texels
- * (points with exact solid angles), as the reference does. The result is divided by the same
- * sum for L = 1, so a constant environment stays constant. Cost per output texel depends only
- * on the lobe and the accuracy, not on the source size beyond a log factor.
- * Deterministic: tiles are independent, reductions run in a fixed order. */
+ * The lobe f(u), u = 1 - R.l, is split by a smooth partition of unity in u into a core
+ * f phi_0 (u < 4 U0, U0 set by the lobe's half width) and dyadic rings f phi_j
+ * (U0 4^(j-1) < u < U0 4^(j+1)): phi_0 = psi(u / U0), phi_j = psi(u / Uj) - psi(u / Uj-1),
+ * psi a C2 step from 1 (t <= 1) to 0 (t >= 4), so that sum_j phi_j = 1 exactly. A ring is
+ * smooth on the scale of its inner radius b, so it is summed over a source mip whose texels
+ * are <= gamma b wide and evaluated on a cube grid whose spacing is <= beta b, then
+ * bilinearly interpolated to the output texels. The core is summed over the finest source
+ * level the lobe needs, directly at every output texel (edge-fixup directions included).
+ * Cost per output texel is therefore a constant set by gamma and beta, not by the source
+ * size: the far field of a heavy-tailed GGX lobe costs little because it is summed on coarse
+ * grids from coarse mips.
+ *
+ * Every source texel carries its moments: solid angle, mean direction m (|m| < 1), the
+ * covariance C of directions over it, and e = (1 - |m|^2) / 2; a coarse texel also carries
+ * the same moments weighted by luminance and its power per channel. A texel contributes the
+ * second-order Taylor expansion of the piece g about its centroid:
+ *     int g(1 - R.l) dl ~ Omega (g(u0) + g''(u0) R^T C R / 2),  u0 = |R - m|^2 / 2 + e,
+ * (u0 written so that it keeps float precision next to the lobe's axis). The numerator uses
+ * the luminance-weighted moments (a point light lies exactly at its texel's centroid), the
+ * normaliser the geometric ones, so that a constant environment stays constant. Each piece
+ * (lobe times partition) is tabulated in u with its second derivative.
+ * Deterministic: every output value is a sum in a fixed order, independent of the threads. */
 #include "specular_internal.h"
 
 #include <math.h>
 #include <string.h>
+#include <stdlib.h>
 
-enum { REC = 32, TILE = 8, CHUNK = 64, NCH = 5 };
+enum { BW = 4, BH = 2, BT = BW * BH }; /* a block: one 8-wide vector */
+/* fields of a source block, BT floats each: the geometric moments, then level 0's radiance
+ * or a coarse level's luminance-weighted moments and power */
+enum { F_MX = 0, F_E = 3, F_C = 4, F_OM = 10, GEO_FIELDS = 11 };
+enum { F_L = GEO_FIELDS, NF0 = GEO_FIELDS + 3 };
+enum { F_WM = GEO_FIELDS, F_WE = F_WM + 3, F_WC = F_WM + 4, F_P = F_WM + 10, NFC = F_P + 3 };
+enum { TAB = 2048, TILE = 8, MAX_PIECES = 24, MAX_GRIDS = 12, CAND = 1024 };
 
-/* record fields */
-enum { R_M = 0, R_E = 3, R_M0 = 4, R_D = 9, R_C = 24 };
+static const double PI = 3.14159265358979323846;
 
-typedef struct subleaf {
-    uint32_t texel;
-    float d[3], e, omega;
-} subleaf;
+typedef struct srclev {
+    int M, nbx, nby, nf;
+    float *rec;    /* 6 nby nbx blocks x nf fields x BT                     */
+    float *block;  /* per block: centre direction (unit) and angular radius  */
+} srclev;
 
-typedef struct tile {
-    int face, x0, y0, w, h;
-    size_t cell_begin, cell_count;   /* indices into plan->cells   */
-    size_t point_begin, point_count; /* level-0 texel indices       */
-    size_t sub_begin, sub_count;     /* subleaves                   */
-} tile;
+typedef struct piece {
+    int grid, src;
+    double u_lo, u_hi, th_in, th_out;
+    float t0, tscale;
+    float *tab; /* (TAB + 2) x 2: g, g'' (the last entry zero) */
+    /* GGX in closed form for the SIMD path: a2 = alpha^2, kap = (1 - alpha^2) / 2, a4 =
+     * alpha^4; each psi as s = clamp(u sa - sb, 0, 1) with ds/du = sk */
+    float a2, kap, a4, out_sa, out_sb, out_sk, in_sa, in_sb, in_sk;
+    int ggx;
+} piece;
+
+typedef struct grid {
+    int n, direct; /* direct: the output level's own texels (edge-fixup directions) */
+    int tiles;     /* tiles per face edge */
+    float *acc;    /* 6 n n x 4: sum g P (rgb), sum g Omega */
+} grid;
+
+typedef struct level_plan {
+    ibl__lobe lobe;
+    int npieces, ngrids, tasks;
+    piece pieces[MAX_PIECES];
+    grid grids[MAX_GRIDS];
+    int task_begin[MAX_GRIDS + 1];
+} level_plan;
 
 struct ibl_specular_plan {
     ibl_context *ctx;
     ibl_specular_desc desc;
     ibl_specular_info info;
-    int S, SL;        /* source edge (power of two) and its level count */
-    int N, L;         /* output edge and levels                         */
-    ibl__lobe lobes[IBL_MAX_LEVELS];
-    float *pyramid;   /* records of source levels 1..SL-1               */
-    size_t level_offset[IBL_MAX_LEVELS + 1]; /* record index of (level, face 0, 0, 0) */
-    double *radius[IBL_MAX_LEVELS];          /* per source level: n x n angular radii  */
-    float *texel;     /* 6 S S x 4: direction, 1 - |d|^2 (double-accurate) */
-    float *omega;     /* S S */
-    float *outdir;    /* per output level: 6 n n x 4 (direction, 1 - |R|^2) */
-    size_t outdir_offset[IBL_MAX_LEVELS];
-    tile *tiles;
-    int tile_count, level_tile_begin[IBL_MAX_LEVELS + 1];
-    uint32_t *cells;
-    uint32_t *points;
-    subleaf *subs;
-    size_t cell_total, point_total, sub_total;
+    int S, K, SL, N, L; /* source edge, sub-texel split, pyramid levels (of S K) */
+    srclev src[IBL_MAX_LEVELS];
+    level_plan lv[IBL_MAX_LEVELS];
+    float face_basis[6][3][3]; /* axis, s tangent, t tangent */
     const ibl_cubemap *run_src;
     ibl_cubemap *run_dst;
     int run_level;
 };
 
-/* ------------------------------------------------------------------------------------------ */
-/* Geometry                                                                                   */
-
-static void cell_centre(int face, int n, int x, int y, double c[3])
-{
-    ibl_cube_direction_d(face, (x + 0.5) / n, (y + 0.5) / n, c);
-    double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    for (int i = 0; i < 3; i++) c[i] /= len;
-}
-
-static double angle_between(const double a[3], const double b[3])
-{
-    double c = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    if (c > 1.0) c = 1.0;
-    if (c < -1.0) c = -1.0;
-    return acos(c);
-}
-
-/* ------------------------------------------------------------------------------------------ */
-/* The cut: which cells of the source tree serve a tile                                       */
-
-typedef struct cut_params {
-    const ibl_specular_plan *p;
-    const ibl__lobe *lobe;
-    double axis[3], beta; /* the tile's cone */
-    double kappa;
-} cut_params;
-
-typedef struct cut_out {
-    uint32_t *cells, *points;
-    subleaf *subs;
-    size_t ncell, npoint, nsub;
-} cut_out;
-
-static const double HALF_PI = 1.57079632679489661923;
-/* refinement is pointless where the lobe is this far below its peak */
-static const double SMALL_WEIGHT = 1e-6;
-/* largest cell allowed across the horizon (radians): the lobe has a kink there */
-static const double HORIZON_CELL = 0.05;
-/* a source texel is used as a point until it would need more than this many pieces a side */
-enum { LEVEL0_POINT_MAX = 1 };
-
-/* 0: drop, 1: leaf, k >= 2: wants splitting (k: pieces per edge a level-0 texel would need) */
-static int classify(const cut_params *cp, const double c[3], double gamma)
-{
-    double theta = angle_between(cp->axis, c);
-    double t0 = theta - cp->beta - gamma, t1 = theta + cp->beta + gamma;
-    if (t0 >= cp->lobe->cull_angle || t0 >= HALF_PI) return 0;
-    if (t0 < 0) t0 = 0;
-    double need = 1.0;
-    if (t1 > HALF_PI && cp->lobe->horizon > 0.05) need = 2.0 * gamma / HORIZON_CELL;
-    if (ibl__lobe_table_f(cp->lobe, t0) > SMALL_WEIGHT) {
-        /* the last 0.05 rad above the horizon belong to the horizon rule: lobes with
-         * n < 1 (Blinn 1 / 4.2) have an unbounded slope there that does not matter */
-        double te = t1 < HALF_PI - 0.05 ? t1 : HALF_PI - 0.05;
-        double g = t0 < te ? ibl__lobe_table_max_variation(cp->lobe, t0, te) : 0.0;
-        double k = 2.0 * gamma * g / cp->kappa;
-        if (k > need) need = k;
-    }
-    if (need <= 1.0) return 1;
-    double k = ceil(need);
-    return k > 16 ? 16 : (int)k;
-}
-
-static void cut_tile(const cut_params *cp, cut_out *o, int write)
-{
-    const ibl_specular_plan *p = cp->p;
-    int top = p->SL - 1;
-    struct item {
-        int8_t level, face;
-        int x, y;
-    } stack[256];
-    int sp = 0;
-    for (int f = 5; f >= 0; f--) stack[sp++] = (struct item){(int8_t)top, (int8_t)f, 0, 0};
-    while (sp > 0) {
-        struct item it = stack[--sp];
-        int n = p->S >> it.level;
-        double c[3];
-        cell_centre(it.face, n, it.x, it.y, c);
-        double gamma = p->radius[it.level][(size_t)it.y * n + it.x];
-        int k = classify(cp, c, gamma);
-        if (k == 0) continue;
-        if (k >= 2 && it.level > 0) {
-            /* children pushed so that they pop in row-major order */
-            for (int j = 1; j >= 0; j--)
-                for (int i = 1; i >= 0; i--)
-                    stack[sp++] = (struct item){(int8_t)(it.level - 1), it.face, 2 * it.x + i,
-                                                2 * it.y + j};
-            continue;
-        }
-        uint32_t texel_index = (uint32_t)(((size_t)it.face * n + it.y) * n + it.x);
-        if (it.level > 0) {
-            if (write)
-                o->cells[o->ncell] = (uint32_t)(p->level_offset[it.level] + texel_index);
-            o->ncell++;
-        } else if (k <= LEVEL0_POINT_MAX) {
-            if (write) o->points[o->npoint] = texel_index;
-            o->npoint++;
-        } else {
-            if (write) {
-                double h = 2.0 / n, hk = h / k;
-                for (int j = 0; j < k; j++) {
-                    for (int i = 0; i < k; i++) {
-                        double u0 = it.x * h - 1 + i * hk, v0 = it.y * h - 1 + j * hk, d[3];
-                        ibl_cube_direction_d(it.face, 0.5 * (u0 + 0.5 * hk + 1.0),
-                                             0.5 * (v0 + 0.5 * hk + 1.0), d);
-                        double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-                        subleaf *s = &o->subs[o->nsub + (size_t)j * k + i];
-                        s->texel = texel_index;
-                        for (int q = 0; q < 3; q++) s->d[q] = (float)(d[q] / len);
-                        double m2 = (double)s->d[0] * s->d[0] + (double)s->d[1] * s->d[1] +
-                                    (double)s->d[2] * s->d[2];
-                        s->e = (float)(1.0 - m2);
-                        /* the solid-angle density 1 / (1 + u^2 + v^2)^(3/2) at the piece's
-                         * centre: relative error O(hk^2) ~ 1e-6, without four atan2 */
-                        double uc = u0 + 0.5 * hk, vc = v0 + 0.5 * hk, q = 1.0 + uc * uc + vc * vc;
-                        s->omega = (float)(hk * hk / (q * sqrt(q)));
-                    }
-                }
-            }
-            o->nsub += (size_t)k * k;
-        }
-    }
-}
-
-static void tile_cone(const ibl_specular_plan *p, int level, const tile *t, double axis[3],
-                      double *beta)
-{
-    int n = ibl_level_size(p->N, level);
-    const float *dirs = p->outdir + p->outdir_offset[level];
-    double a[3] = {0, 0, 0};
-    for (int y = t->y0; y < t->y0 + t->h; y++)
-        for (int x = t->x0; x < t->x0 + t->w; x++) {
-            const float *d = dirs + (((size_t)t->face * n + y) * n + x) * 4;
-            for (int i = 0; i < 3; i++) a[i] += d[i];
-        }
-    double len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    for (int i = 0; i < 3; i++) axis[i] = a[i] / len;
-    double b = 0;
-    for (int y = t->y0; y < t->y0 + t->h; y++)
-        for (int x = t->x0; x < t->x0 + t->w; x++) {
-            const float *d = dirs + (((size_t)t->face * n + y) * n + x) * 4;
-            double dd[3] = {d[0], d[1], d[2]};
-            double ang = angle_between(axis, dd);
-            if (ang > b) b = ang;
-        }
-    *beta = b * 1.0001 + 1e-9;
-}
-
-typedef struct plan_job {
-    ibl_specular_plan *p;
-    int write;
-} plan_job;
-
-static int tile_level(const ibl_specular_plan *p, int index)
-{
-    int level = 0;
-    while (level + 1 <= p->L && p->level_tile_begin[level + 1] <= index) level++;
-    return level;
-}
-
-static void plan_tile_task(void *arg, int index)
-{
-    plan_job *job = arg;
-    ibl_specular_plan *p = job->p;
-    tile *t = &p->tiles[index];
-    int level = tile_level(p, index);
-    cut_params cp;
-    cp.p = p;
-    cp.lobe = &p->lobes[level];
-    cp.kappa = p->desc.accuracy > 0 ? p->desc.accuracy : 0.35;
-    tile_cone(p, level, t, cp.axis, &cp.beta);
-    cut_out o = {0};
-    if (job->write) {
-        o.cells = p->cells + t->cell_begin;
-        o.points = p->points + t->point_begin;
-        o.subs = p->subs + t->sub_begin;
-    }
-    cut_tile(&cp, &o, job->write);
-    if (!job->write) {
-        t->cell_count = o.ncell;
-        t->point_count = o.npoint;
-        t->sub_count = o.nsub;
-    }
-}
-
-/* ------------------------------------------------------------------------------------------ */
-/* Plan                                                                                       */
-
 static int is_pow2(int n) { return n > 0 && (n & (n - 1)) == 0; }
 
-/* Tiles share one cut, refined for the whole tile's cone: keep them within about two lobe
- * half-widths so the cut stays as coarse as a single texel's would be. */
-static int tile_width(const ibl__lobe *lobe, int n)
+static size_t rec_index(const srclev *s, int face, int x, int y, int field)
 {
-    double texel = HALF_PI / n;
-    int w = (int)(2.0 * lobe->half_angle / texel);
-    if (w < 1) w = 1;
-    if (w > TILE) w = TILE;
-    return w > n ? n : w;
+    size_t b = ((size_t)face * s->nby + y / BH) * s->nbx + x / BW;
+    return (b * s->nf + field) * BT + (y % BH) * BW + x % BW;
+}
+
+static size_t block_count(const srclev *s) { return (size_t)6 * s->nby * s->nbx; }
+
+/* ---- the partition of unity and the tabulated pieces ---- */
+
+/* psi(t): 1 for t <= 1, 0 for t >= 4, the quintic smootherstep between (C2). */
+static void psi012(double t, double scale, double out[3])
+{
+    double s = (t - 1.0) / 3.0;
+    if (s <= 0.0) {
+        out[0] = 1.0, out[1] = out[2] = 0.0;
+        return;
+    }
+    if (s >= 1.0) {
+        out[0] = out[1] = out[2] = 0.0;
+        return;
+    }
+    double S = s * s * s * (10.0 + s * (-15.0 + 6.0 * s));
+    double S1 = 30.0 * s * s * (1.0 - s) * (1.0 - s);
+    double S2 = 60.0 * s * (1.0 - s) * (1.0 - 2.0 * s);
+    double k = 1.0 / (3.0 * scale); /* ds/du */
+    out[0] = 1.0 - S;
+    out[1] = -S1 * k;
+    out[2] = -S2 * k * k;
+}
+
+/* g = f phi and g'' in u for piece (inner scale a, outer scale b; a = 0: core). */
+static void piece_g(const ibl__lobe *lobe, double a, double b, double u, double out[2])
+{
+    double f[3];
+    ibl__lobe_f012(lobe, 1.0 - u, f);
+    /* derivatives in u = 1 - x: f_u = -f_x, f_uu = f_xx */
+    double f0 = f[0], f1 = -f[1], f2 = f[2];
+    double po[3] = {1, 0, 0}, pi[3] = {0, 0, 0};
+    if (b > 0) psi012(u / b, b, po);
+    if (a > 0) psi012(u / a, a, pi);
+    double p0 = po[0] - pi[0], p1 = po[1] - pi[1], p2 = po[2] - pi[2];
+    out[0] = f0 * p0;
+    out[1] = f2 * p0 + 2.0 * f1 * p1 + f0 * p2;
+}
+
+static ibl_status make_table(ibl_context *ctx, const ibl__lobe *lobe, double a, double b,
+                             piece *p)
+{
+    p->tab = ibl_alloc(ctx, (size_t)(TAB + 2) * 2 * sizeof(float));
+    if (!p->tab) return ibl_context_status(ctx);
+    double step = (p->u_hi - p->u_lo) / TAB;
+    for (int i = 0; i <= TAB; i++) {
+        double g[2];
+        piece_g(lobe, a, b, p->u_lo + i * step, g);
+        p->tab[2 * i] = (float)g[0];
+        p->tab[2 * i + 1] = (float)g[1];
+    }
+    p->tab[2 * TAB + 2] = p->tab[2 * TAB + 3] = 0.0f;
+    p->t0 = (float)p->u_lo;
+    p->tscale = (float)(TAB / (p->u_hi - p->u_lo));
+    p->ggx = lobe->kind == IBL__LOBE_GGX;
+    double al2 = lobe->alpha * lobe->alpha;
+    p->a2 = (float)al2;
+    p->kap = (float)(0.5 * (1.0 - al2));
+    p->a4 = (float)(al2 * al2);
+    /* an absent outer step is psi = 1 (s = 0), an absent inner one psi = 0 (s = 1) */
+    p->out_sa = b > 0 ? (float)(1.0 / (3.0 * b)) : 0.0f;
+    p->out_sb = b > 0 ? (float)(1.0 / 3.0) : 1.0f;
+    p->out_sk = p->out_sa;
+    p->in_sa = a > 0 ? (float)(1.0 / (3.0 * a)) : 0.0f;
+    p->in_sb = a > 0 ? (float)(1.0 / 3.0) : -2.0f;
+    p->in_sk = p->in_sa;
+    return IBL_OK;
+}
+
+/* ---- geometry: moments of every texel of every source level ---- */
+
+typedef struct geo {
+    double m[3], e, c[6], om; /* c: xx yy zz xy xz yz */
+} geo;
+
+/* Face-local moments of level-0 texels by 4x4 Gauss-Legendre on the face plane. */
+static void texel_geo(int n, int x, int y, geo *g)
+{
+    static const double gx[4] = {-0.861136311594052575, -0.339981043584856265,
+                                 0.339981043584856265, 0.861136311594052575};
+    static const double gw[4] = {0.347854845137453857, 0.652145154862546143,
+                                 0.652145154862546143, 0.347854845137453857};
+    double h = 2.0 / n, u0 = -1.0 + x * h, v0 = -1.0 + y * h;
+    double l[16][3], w[16], W = 0, m[3] = {0, 0, 0};
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++) {
+            double u = u0 + 0.5 * h * (1.0 + gx[i]), v = v0 + 0.5 * h * (1.0 + gx[j]);
+            double r2 = 1.0 + u * u + v * v, r = sqrt(r2);
+            int k = j * 4 + i;
+            w[k] = gw[i] * gw[j] / (r2 * r);
+            l[k][0] = u / r, l[k][1] = v / r, l[k][2] = 1.0 / r;
+            W += w[k];
+            for (int c = 0; c < 3; c++) m[c] += w[k] * l[k][c];
+        }
+    for (int c = 0; c < 3; c++) g->m[c] = m[c] / W;
+    memset(g->c, 0, sizeof g->c);
+    double e = 0;
+    for (int k = 0; k < 16; k++) {
+        double d[3] = {l[k][0] - g->m[0], l[k][1] - g->m[1], l[k][2] - g->m[2]};
+        double ww = w[k] / W;
+        g->c[0] += ww * d[0] * d[0], g->c[1] += ww * d[1] * d[1], g->c[2] += ww * d[2] * d[2];
+        g->c[3] += ww * d[0] * d[1], g->c[4] += ww * d[0] * d[2], g->c[5] += ww * d[1] * d[2];
+        e += ww * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    }
+    g->e = 0.5 * e; /* 1 - |m|^2 = E |l - m|^2 for unit l */
+    g->om = ibl_cube_texel_solid_angle(n, x, y);
+}
+
+/* Moments of a union from its parts (weights w): the parallel-axis rule. */
+static void combine(const geo *const *parts, const double *w, int count, geo *out)
+{
+    double W = 0, m[3] = {0, 0, 0};
+    for (int k = 0; k < count; k++) {
+        W += w[k];
+        for (int c = 0; c < 3; c++) m[c] += w[k] * parts[k]->m[c];
+    }
+    memset(out, 0, sizeof *out);
+    if (!(W > 0)) return;
+    for (int c = 0; c < 3; c++) out->m[c] = m[c] / W;
+    for (int k = 0; k < count; k++) {
+        const geo *p = parts[k];
+        double a = w[k] / W, d[3] = {p->m[0] - out->m[0], p->m[1] - out->m[1], p->m[2] - out->m[2]};
+        out->c[0] += a * (p->c[0] + d[0] * d[0]);
+        out->c[1] += a * (p->c[1] + d[1] * d[1]);
+        out->c[2] += a * (p->c[2] + d[2] * d[2]);
+        out->c[3] += a * (p->c[3] + d[0] * d[1]);
+        out->c[4] += a * (p->c[4] + d[0] * d[2]);
+        out->c[5] += a * (p->c[5] + d[1] * d[2]);
+        out->e += a * (p->e + 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+    }
+}
+
+/* Writes the geometric fields of texel (x, y) of every face from face-local moments. */
+static void store_geo(const ibl_specular_plan *p, srclev *s, int x, int y, const geo *g)
+{
+    for (int f = 0; f < 6; f++) {
+        const float(*B)[3] = p->face_basis[f];
+        /* local (s, t, axis) -> world: columns b1, b2, b0 */
+        double M[3][3];
+        for (int i = 0; i < 3; i++) M[i][0] = B[1][i], M[i][1] = B[2][i], M[i][2] = B[0][i];
+        double Cl[3][3] = {{g->c[0], g->c[3], g->c[4]}, {g->c[3], g->c[1], g->c[5]},
+                           {g->c[4], g->c[5], g->c[2]}};
+        double mw[3], Cw[3][3];
+        for (int i = 0; i < 3; i++) mw[i] = M[i][0] * g->m[0] + M[i][1] * g->m[1] + M[i][2] * g->m[2];
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                double v = 0;
+                for (int a = 0; a < 3; a++)
+                    for (int b = 0; b < 3; b++) v += M[i][a] * Cl[a][b] * M[j][b];
+                Cw[i][j] = v;
+            }
+        float *r = s->rec;
+        for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_MX + c)] = (float)mw[c];
+        r[rec_index(s, f, x, y, F_E)] = (float)g->e;
+        const double cw[6] = {Cw[0][0], Cw[1][1], Cw[2][2], Cw[0][1], Cw[0][2], Cw[1][2]};
+        for (int c = 0; c < 6; c++) r[rec_index(s, f, x, y, F_C + c)] = (float)cw[c];
+        r[rec_index(s, f, x, y, F_OM)] = (float)g->om;
+    }
+}
+
+static ibl_status build_geometry(ibl_specular_plan *p)
+{
+    ibl_context *ctx = p->ctx;
+    int S = p->S * p->K;
+    geo *cur = ibl_alloc(ctx, (size_t)S * S * sizeof(geo));
+    geo *next = ibl_alloc(ctx, (size_t)(S > 1 ? S / 2 : 1) * (S > 1 ? S / 2 : 1) * sizeof(geo));
+    if (!cur || !next) {
+        ibl_free(ctx, cur);
+        ibl_free(ctx, next);
+        return ibl_context_status(ctx);
+    }
+    for (int y = 0; y < S; y++)
+        for (int x = 0; x < S; x++) texel_geo(S, x, y, &cur[(size_t)y * S + x]);
+    for (int l = 0; l < p->SL; l++) {
+        srclev *s = &p->src[l];
+        int M = s->M;
+        if (l > 0) {
+            for (int y = 0; y < M; y++)
+                for (int x = 0; x < M; x++) {
+                    const geo *parts[4];
+                    double w[4];
+                    for (int k = 0; k < 4; k++) {
+                        parts[k] = &cur[(size_t)(2 * y + (k >> 1)) * (2 * M) + 2 * x + (k & 1)];
+                        w[k] = parts[k]->om;
+                    }
+                    combine(parts, w, 4, &next[(size_t)y * M + x]);
+                    next[(size_t)y * M + x].om = w[0] + w[1] + w[2] + w[3];
+                }
+            geo *t = cur;
+            cur = next;
+            next = t;
+        }
+        for (int y = 0; y < M; y++)
+            for (int x = 0; x < M; x++) store_geo(p, s, x, y, &cur[(size_t)y * M + x]);
+        /* block cones */
+        double h = 2.0 / M;
+        for (int f = 0; f < 6; f++)
+            for (int by = 0; by < s->nby; by++)
+                for (int bx = 0; bx < s->nbx; bx++) {
+                    int x1 = (bx + 1) * BW < M ? (bx + 1) * BW : M;
+                    int y1 = (by + 1) * BH < M ? (by + 1) * BH : M;
+                    double c[3];
+                    double r = ibl__rect_radius(f, bx * BW * h - 1, by * BH * h - 1, x1 * h - 1,
+                                                y1 * h - 1, c);
+                    float *b = s->block + (((size_t)f * s->nby + by) * s->nbx + bx) * 4;
+                    for (int i = 0; i < 3; i++) b[i] = (float)c[i];
+                    b[3] = (float)(r + 1e-6);
+                }
+    }
+    ibl_free(ctx, cur);
+    ibl_free(ctx, next);
+    return IBL_OK;
+}
+
+/* ---- the plan: pieces, grids, tasks ---- */
+
+static double texel_angle(int n) { return 2.0 / n; } /* widest texel of a face of edge n */
+
+/* The coarsest source level whose texels are at most `width` wide (0 if none is). */
+static int source_level_for(const ibl_specular_plan *p, double width)
+{
+    int best = 0;
+    for (int l = 0; l < p->SL; l++)
+        if (texel_angle(p->src[l].M) <= width) best = l;
+    return best;
+}
+
+static int grid_index(level_plan *lv, int n, int direct, int tile_edge)
+{
+    for (int g = 0; g < lv->ngrids; g++)
+        if (lv->grids[g].n == n && lv->grids[g].direct == direct) return g;
+    grid *g = &lv->grids[lv->ngrids];
+    g->n = n;
+    g->direct = direct;
+    g->tiles = (n + tile_edge - 1) / tile_edge;
+    return lv->ngrids++;
+}
+
+static ibl_status plan_level(ibl_specular_plan *p, int level)
+{
+    level_plan *lv = &p->lv[level];
+    const ibl__lobe *lobe = &lv->lobe;
+    int n = ibl_level_size(p->N, level);
+    double acc = p->desc.accuracy > 0 ? p->desc.accuracy / 0.35 : 1.0;
+    double kappa = 3.0 / acc;  /* core texels per lobe half width       */
+    double c0 = 2.0;           /* core: psi from c0 half widths          */
+    double gamma = 0.6 * acc;  /* ring texel / ring inner radius         */
+    double beta = 0.2 * acc;   /* ring grid spacing / ring inner radius  */
+    if (getenv("IBL_KAPPA")) kappa = atof(getenv("IBL_KAPPA"));
+    if (getenv("IBL_C0")) c0 = atof(getenv("IBL_C0"));
+    if (getenv("IBL_GAMMA")) gamma = atof(getenv("IBL_GAMMA"));
+    if (getenv("IBL_BETA")) beta = atof(getenv("IBL_BETA"));
+    const double cull = lobe->kind == IBL__LOBE_PHONG ? 1e-9 : 0.0;
+
+    int core_src = source_level_for(p, lobe->half_angle / kappa);
+    double b0 = c0 * lobe->half_angle;
+    double min_b0 = 2.0 * texel_angle(p->src[core_src].M);
+    if (b0 < min_b0) b0 = min_b0;
+    double U = 1.0 - cos(b0 < PI ? b0 : PI);
+    lv->ngrids = 0;
+    lv->npieces = 0;
+    double prevU = 0.0;
+    for (int j = 0; j < MAX_PIECES; j++) {
+        piece *pc = &lv->pieces[lv->npieces];
+        memset(pc, 0, sizeof *pc);
+        double outerU = U;            /* psi(u / U) ends at 4 U */
+        int last = (outerU >= 1.0) || j == MAX_PIECES - 1;
+        pc->u_lo = prevU;
+        pc->u_hi = last ? 2.0 : 4.0 * outerU;
+        if (pc->u_hi > 2.0) pc->u_hi = 2.0;
+        pc->th_in = acos(1.0 - pc->u_lo);
+        pc->th_out = acos(1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0));
+        if (j == 0) {
+            pc->src = core_src;
+            pc->grid = grid_index(lv, n, 1, TILE);
+        } else {
+            double b = pc->th_in;
+            pc->src = source_level_for(p, gamma * b);
+            int gn = 1;
+            while (texel_angle(gn) > beta * b) gn *= 2;
+            if (gn < 8) gn = 8;
+            if (gn >= n) pc->grid = grid_index(lv, n, 1, TILE);
+            else pc->grid = grid_index(lv, gn, 0, TILE);
+        }
+        /* a Phong tail far below the peak is dropped (its weight is below `cull`) */
+        if (cull > 0 && j > 0 && ibl__lobe_f(lobe, 1.0 - pc->u_lo) < cull) break;
+        ibl_status st = make_table(p->ctx, lobe, j == 0 ? 0.0 : prevU, last ? 0.0 : outerU, pc);
+        if (st != IBL_OK) return st;
+        lv->npieces++;
+        if (last) break;
+        prevU = U;
+        U *= 4.0;
+    }
+    lv->tasks = 0;
+    for (int g = 0; g < lv->ngrids; g++) {
+        grid *gr = &lv->grids[g];
+        lv->task_begin[g] = lv->tasks;
+        lv->tasks += 6 * gr->tiles * gr->tiles;
+        gr->acc = ibl_alloc(p->ctx, (size_t)6 * gr->n * gr->n * 4 * sizeof(float));
+        if (!gr->acc) return ibl_context_status(p->ctx);
+    }
+    lv->task_begin[lv->ngrids] = lv->tasks;
+    return IBL_OK;
 }
 
 void ibl_specular_plan_destroy(ibl_specular_plan *p)
 {
     if (!p) return;
     ibl_context *ctx = p->ctx;
-    ibl_free(ctx, p->pyramid);
-    for (int i = 0; i < IBL_MAX_LEVELS; i++) ibl_free(ctx, p->radius[i]);
-    ibl_free(ctx, p->texel);
-    ibl_free(ctx, p->omega);
-    ibl_free(ctx, p->outdir);
-    ibl_free(ctx, p->tiles);
-    ibl_free(ctx, p->cells);
-    ibl_free(ctx, p->points);
-    ibl_free(ctx, p->subs);
+    for (int l = 0; l < IBL_MAX_LEVELS; l++) {
+        ibl_free(ctx, p->src[l].rec);
+        ibl_free(ctx, p->src[l].block);
+        for (int k = 0; k < p->lv[l].npieces; k++) ibl_free(ctx, p->lv[l].pieces[k].tab);
+        for (int g = 0; g < p->lv[l].ngrids; g++) ibl_free(ctx, p->lv[l].grids[g].acc);
+    }
     ibl_free(ctx, p);
 }
 
@@ -285,143 +414,86 @@ const ibl_specular_info *ibl_specular_plan_info(const ibl_specular_plan *plan)
     return plan ? &plan->info : NULL;
 }
 
+static void plan_denominators(ibl_specular_plan *p, int level);
+
 ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *desc,
                                     ibl_specular_plan **out)
 {
     if (!ctx || !desc || !out) return IBL_ERR_INVALID_ARGUMENT;
     *out = NULL;
+    if (desc->size < 1 || desc->size > 16384)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "specular plan: size %d out of range",
+                        desc->size);
+    if (desc->filter == IBL_FILTER_BOX || desc->filter == IBL_FILTER_GAUSS)
+        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                        "specular plan: the %s filter has no plan (use ibl_specular_prefilter)",
+                        ibl_specular_filter_name(desc->filter));
     int S = desc->source_size > 0 ? desc->source_size : desc->size;
-    int N = desc->size;
-    if (N < 1 || N > 16384)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "specular plan: size %d out of range", N);
     if (!is_pow2(S) || S > 16384)
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
-                        "specular plan: source size %d must be a power of two", S);
-    if (desc->filter != IBL_FILTER_GGX && desc->filter != IBL_FILTER_PHONG &&
-        desc->filter != IBL_FILTER_BLINN)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
-                        "specular plan: the %s filter has no plan (phong, blinn, ggx only)",
-                        ibl_specular_filter_name(desc->filter));
+                        "specular plan: source size %d is not a power of two", S);
     ibl_specular_plan *p = ibl_calloc(ctx, 1, sizeof *p);
     if (!p) return ibl_context_status(ctx);
     p->ctx = ctx;
     p->desc = *desc;
     p->S = S;
-    p->SL = ibl_full_mip_count(S);
-    p->N = N;
-    int levels = desc->levels > 0 ? desc->levels : ibl_full_mip_count(N);
-    if (levels > ibl_full_mip_count(N)) levels = ibl_full_mip_count(N);
-    p->L = levels;
-    ibl_status st = ibl__specular_mapping(ctx, desc, N, levels, &p->info);
+    p->N = desc->size;
+    int full = ibl_full_mip_count(p->N);
+    p->L = desc->levels > 0 && desc->levels < full ? desc->levels : full;
+    p->desc.levels = p->L;
+    ibl_status st = ibl__specular_mapping(ctx, &p->desc, p->N, p->L, &p->info);
     if (st != IBL_OK) goto fail;
-    for (int l = 0; l < levels; l++) p->lobes[l] = ibl__lobe_for_level(&p->info, l);
-
-    /* source geometry */
-    size_t off = 0;
-    for (int l = 1; l < p->SL; l++) {
-        int n = S >> l;
-        p->level_offset[l] = off;
-        off += (size_t)6 * n * n;
+    for (int f = 0; f < 6; f++) {
+        double c[3], sx[3], ty[3];
+        ibl_cube_direction_d(f, 0.5, 0.5, c);
+        ibl_cube_direction_d(f, 1.0, 0.5, sx);
+        ibl_cube_direction_d(f, 0.5, 1.0, ty);
+        for (int i = 0; i < 3; i++) {
+            p->face_basis[f][0][i] = (float)c[i];
+            p->face_basis[f][1][i] = (float)(sx[i] - c[i]);
+            p->face_basis[f][2][i] = (float)(ty[i] - c[i]);
+        }
     }
-    p->level_offset[p->SL] = off;
-    p->pyramid = ibl_alloc(ctx, (off ? off : 1) * REC * sizeof(float));
-    p->texel = ibl_alloc(ctx, (size_t)6 * S * S * 4 * sizeof(float));
-    p->omega = ibl_alloc(ctx, (size_t)S * S * sizeof(float));
-    if (!p->pyramid || !p->texel || !p->omega) goto oom;
+    /* a lobe narrower than ~1.5 source texels is summed over k x k sub-texels of level 0
+     * (each with its parent's radiance), as the reference splits such texels */
+    p->K = 1;
+    for (int l = 0; l < p->L; l++) {
+        ibl__lobe lobe = ibl__lobe_for_level(&p->info, l);
+        if (lobe.kind == IBL__LOBE_MIRROR) continue;
+        while (p->K < 8 && (long)S * p->K < 4096 && lobe.half_angle < 1.5 * texel_angle(S * p->K))
+            p->K *= 2;
+    }
+    p->SL = ibl_full_mip_count(S * p->K);
     for (int l = 0; l < p->SL; l++) {
-        int n = S >> l;
-        double h = 2.0 / n, c[3];
-        p->radius[l] = ibl_alloc(ctx, (size_t)n * n * sizeof(double));
-        if (!p->radius[l]) goto oom;
-        for (int y = 0; y < n; y++)
-            for (int x = 0; x < n; x++)
-                p->radius[l][(size_t)y * n + x] =
-                    ibl__rect_radius(0, x * h - 1, y * h - 1, (x + 1) * h - 1, (y + 1) * h - 1, c);
+        srclev *s = &p->src[l];
+        s->M = (S * p->K) >> l;
+        s->nbx = (s->M + BW - 1) / BW;
+        s->nby = (s->M + BH - 1) / BH;
+        s->nf = l == 0 ? NF0 : NFC;
+        s->rec = ibl_calloc(ctx, block_count(s) * s->nf * BT, sizeof(float));
+        s->block = ibl_alloc(ctx, block_count(s) * 4 * sizeof(float));
+        if (!s->rec || !s->block) {
+            st = ibl_context_status(ctx);
+            goto fail;
+        }
     }
-    for (int y = 0; y < S; y++)
-        for (int x = 0; x < S; x++)
-            p->omega[(size_t)y * S + x] = (float)ibl_cube_texel_solid_angle(S, x, y);
-    for (int f = 0; f < 6; f++)
-        for (int y = 0; y < S; y++)
-            for (int x = 0; x < S; x++) {
-                double c[3];
-                cell_centre(f, S, x, y, c);
-                float *t = p->texel + (((size_t)f * S + y) * S + x) * 4;
-                for (int i = 0; i < 3; i++) t[i] = (float)c[i];
-                t[3] = (float)(1.0 - ((double)t[0] * t[0] + (double)t[1] * t[1] +
-                                      (double)t[2] * t[2]));
-            }
-
-    /* output directions and tiles */
-    size_t dir_floats = 0;
-    int tiles = 0;
-    for (int l = 0; l < levels; l++) {
-        int n = ibl_level_size(N, l), tw = tile_width(&p->lobes[l], n);
-        p->outdir_offset[l] = dir_floats;
-        dir_floats += (size_t)6 * n * n * 4;
-        p->level_tile_begin[l] = tiles;
-        if (p->lobes[l].kind != IBL__LOBE_MIRROR) tiles += 6 * ((n + tw - 1) / tw) * ((n + tw - 1) / tw);
+    st = build_geometry(p);
+    if (st != IBL_OK) goto fail;
+    for (int l = 0; l < p->L; l++) {
+        p->lv[l].lobe = ibl__lobe_for_level(&p->info, l);
+        if (p->lv[l].lobe.kind == IBL__LOBE_MIRROR) continue;
+        st = plan_level(p, l);
+        if (st != IBL_OK) goto fail;
+        plan_denominators(p, l);
     }
-    p->level_tile_begin[levels] = tiles;
-    p->tile_count = tiles;
-    p->outdir = ibl_alloc(ctx, dir_floats * sizeof(float));
-    p->tiles = ibl_calloc(ctx, tiles ? (size_t)tiles : 1, sizeof(tile));
-    if (!p->outdir || !p->tiles) goto oom;
-    for (int l = 0; l < levels; l++) {
-        int n = ibl_level_size(N, l), tw = tile_width(&p->lobes[l], n);
-        float *dirs = p->outdir + p->outdir_offset[l];
-        for (int f = 0; f < 6; f++)
-            for (int y = 0; y < n; y++)
-                for (int x = 0; x < n; x++) {
-                    double R[3];
-                    ibl__output_direction(desc, &p->lobes[l], f, n, x, y, R);
-                    float *d = dirs + (((size_t)f * n + y) * n + x) * 4;
-                    for (int i = 0; i < 3; i++) d[i] = (float)R[i];
-                    d[3] = (float)(1.0 - ((double)d[0] * d[0] + (double)d[1] * d[1] +
-                                          (double)d[2] * d[2]));
-                }
-        if (p->lobes[l].kind == IBL__LOBE_MIRROR) continue;
-        int ti = p->level_tile_begin[l];
-        for (int f = 0; f < 6; f++)
-            for (int ty = 0; ty < n; ty += tw)
-                for (int tx = 0; tx < n; tx += tw) {
-                    tile *t = &p->tiles[ti++];
-                    t->face = f;
-                    t->x0 = tx;
-                    t->y0 = ty;
-                    t->w = tx + tw <= n ? tw : n - tx;
-                    t->h = ty + tw <= n ? tw : n - ty;
-                }
-    }
-    plan_job job = {p, 0};
-    if (tiles) ibl_parallel_for(ctx, tiles, plan_tile_task, &job);
-    for (int i = 0; i < tiles; i++) {
-        tile *t = &p->tiles[i];
-        t->cell_begin = p->cell_total;
-        t->point_begin = p->point_total;
-        t->sub_begin = p->sub_total;
-        p->cell_total += t->cell_count;
-        p->point_total += t->point_count;
-        p->sub_total += t->sub_count;
-    }
-    p->cells = ibl_alloc(ctx, (p->cell_total + 1) * sizeof(uint32_t));
-    p->points = ibl_alloc(ctx, (p->point_total + 1) * sizeof(uint32_t));
-    p->subs = ibl_alloc(ctx, (p->sub_total + 1) * sizeof(subleaf));
-    if (!p->cells || !p->points || !p->subs) goto oom;
-    job.write = 1;
-    if (tiles) ibl_parallel_for(ctx, tiles, plan_tile_task, &job);
     *out = p;
     return IBL_OK;
-oom:
-    st = ibl_context_status(ctx);
-    if (st == IBL_OK) st = IBL_ERR_OUT_OF_MEMORY;
 fail:
     ibl_specular_plan_destroy(p);
     return st;
 }
 
-/* ------------------------------------------------------------------------------------------ */
-/* Run: moments of the source, then every tile                                                */
+/* ---- run: the radiance pyramid ---- */
 
 typedef struct pyr_job {
     ibl_specular_plan *p;
@@ -429,228 +501,480 @@ typedef struct pyr_job {
     int level;
 } pyr_job;
 
-/* Combines weighted points / child records into one record (double). */
-typedef struct accum {
-    double rho, m[3], M0[NCH];
-} accum;
+static const double LUM[3] = {0.2126, 0.7152, 0.0722};
+
+static void level0_task(void *arg, int index)
+{
+    const pyr_job *job = arg;
+    srclev *s = &job->p->src[0];
+    int M = s->M, K = job->p->K, f = index / M, y = index % M;
+    const float *row = ibl_cubemap_face(job->src, 0, f) + (size_t)(y / K) * (M / K) * 4;
+    for (int x = 0; x < M; x++)
+        for (int c = 0; c < 3; c++) s->rec[rec_index(s, f, x, y, F_L + c)] = row[(x / K) * 4 + c];
+}
 
 static void pyramid_task(void *arg, int index)
 {
     const pyr_job *job = arg;
-    const ibl_specular_plan *p = job->p;
-    int level = job->level, n = p->S >> level, face = index / n, y = index % n;
-    int cn = n * 2;
-    for (int x = 0; x < n; x++) {
-        float *rec = p->pyramid + (p->level_offset[level] + ((size_t)face * n + y) * n + x) * REC;
-        /* the four children: position, moments, covariance */
-        double cm[4][3], cM0[4][NCH], cD[4][NCH][3], cC[4][6];
+    const srclev *lo = &job->p->src[job->level - 1];
+    srclev *s = &job->p->src[job->level];
+    int M = s->M, f = index / M, y = index % M;
+    const float *r0 = lo->rec;
+    float *r = s->rec;
+    for (int x = 0; x < M; x++) {
+        geo parts[4], out;
+        const geo *pp[4];
+        double w[4], P[3] = {0, 0, 0};
         for (int k = 0; k < 4; k++) {
             int cx = 2 * x + (k & 1), cy = 2 * y + (k >> 1);
-            if (level == 1) {
-                const float *t = p->texel + (((size_t)face * cn + cy) * cn + cx) * 4;
-                const float *L = ibl_cubemap_face(job->src, 0, face) + ((size_t)cy * cn + cx) * 4;
-                double om = p->omega[(size_t)cy * cn + cx];
-                for (int i = 0; i < 3; i++) cm[k][i] = t[i];
-                for (int c = 0; c < 4; c++) cM0[k][c] = om * L[c];
-                cM0[k][4] = om;
-                memset(cD[k], 0, sizeof cD[k]);
-                memset(cC[k], 0, sizeof cC[k]);
+            geo *g = &parts[k];
+            double pw[3];
+            if (job->level == 1) {
+                double om = r0[rec_index(lo, f, cx, cy, F_OM)];
+                for (int c = 0; c < 3; c++) pw[c] = om * r0[rec_index(lo, f, cx, cy, F_L + c)];
+                for (int c = 0; c < 3; c++) g->m[c] = r0[rec_index(lo, f, cx, cy, F_MX + c)];
+                g->e = r0[rec_index(lo, f, cx, cy, F_E)];
+                for (int c = 0; c < 6; c++) g->c[c] = r0[rec_index(lo, f, cx, cy, F_C + c)];
             } else {
-                const float *r = p->pyramid +
-                                 (p->level_offset[level - 1] + ((size_t)face * cn + cy) * cn + cx) * REC;
-                for (int i = 0; i < 3; i++) cm[k][i] = r[R_M + i];
-                for (int c = 0; c < NCH; c++) {
-                    cM0[k][c] = r[R_M0 + c];
-                    for (int i = 0; i < 3; i++) cD[k][c][i] = r[R_D + 3 * c + i];
+                for (int c = 0; c < 3; c++) pw[c] = r0[rec_index(lo, f, cx, cy, F_P + c)];
+                for (int c = 0; c < 3; c++) g->m[c] = r0[rec_index(lo, f, cx, cy, F_WM + c)];
+                g->e = r0[rec_index(lo, f, cx, cy, F_WE)];
+                for (int c = 0; c < 6; c++) g->c[c] = r0[rec_index(lo, f, cx, cy, F_WC + c)];
+            }
+            w[k] = LUM[0] * pw[0] + LUM[1] * pw[1] + LUM[2] * pw[2];
+            if (!(w[k] > 0)) w[k] = 0;
+            for (int c = 0; c < 3; c++) P[c] += pw[c];
+            pp[k] = g;
+        }
+        if (w[0] + w[1] + w[2] + w[3] > 0) {
+            combine(pp, w, 4, &out);
+        } else { /* no light: the geometric moments */
+            for (int c = 0; c < 3; c++) out.m[c] = r[rec_index(s, f, x, y, F_MX + c)];
+            out.e = r[rec_index(s, f, x, y, F_E)];
+            for (int c = 0; c < 6; c++) out.c[c] = r[rec_index(s, f, x, y, F_C + c)];
+        }
+        for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_WM + c)] = (float)out.m[c];
+        r[rec_index(s, f, x, y, F_WE)] = (float)out.e;
+        for (int c = 0; c < 6; c++) r[rec_index(s, f, x, y, F_WC + c)] = (float)out.c[c];
+        for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_P + c)] = (float)P[c];
+    }
+}
+
+/* ---- run: summing pieces over blocks ---- */
+
+/* ---- the sums over source blocks ---- */
+
+/* What a sum accumulates: the normaliser (geometric moments, plan time), or the numerator
+ * from level 0 (texel radiance, geometric moments) or from a coarse level (luminance-weighted
+ * moments and power). */
+enum { EVAL_DEN = 0, EVAL_NUM0, EVAL_NUMC };
+
+typedef struct cand {
+    uint32_t block;
+    float cos_out, cos_in; /* the block can matter only where cos_out <= R.centre <= cos_in */
+} cand;
+
+typedef struct sum_args {
+    int mode, avx2;
+    const srclev *s;
+    const piece *pc;
+    const cand *cands;
+    int ncand;
+} sum_args;
+
+static float table_weight(const piece *pc, float u, float q)
+{
+    float ti = (u - pc->t0) * pc->tscale;
+    ti = ti < 0.0f ? 0.0f : ti > (float)(TAB + 1) ? (float)(TAB + 1) : ti;
+    int i = (int)ti;
+    i = i > TAB ? TAB : i;
+    float fr = ti - (float)i;
+    const float *tab = pc->tab;
+    float g = tab[2 * i] + fr * (tab[2 * i + 2] - tab[2 * i]);
+    float g2 = tab[2 * i + 1] + fr * (tab[2 * i + 3] - tab[2 * i + 1]);
+    return g + 0.5f * g2 * q;
+}
+
+/* The portable sum: one texel at a time through the piece's table. */
+static void sum_blocks_generic(const sum_args *sa, const float R[3], const float RR[6], double out[4])
+{
+    int base = sa->mode == EVAL_NUMC ? F_WM : F_MX;
+    float acc[4] = {0, 0, 0, 0};
+    for (int ci = 0; ci < sa->ncand; ci++) {
+        const cand *cd = &sa->cands[ci];
+        const float *bc = sa->s->block + (size_t)cd->block * 4;
+        float dd = R[0] * bc[0] + R[1] * bc[1] + R[2] * bc[2];
+        if (dd < cd->cos_out || dd > cd->cos_in) continue;
+        const float *rec = sa->s->rec + (size_t)cd->block * sa->s->nf * BT;
+        const float *m = rec + base * BT, *e = m + 3 * BT, *c = m + 4 * BT;
+        const float *om = rec + F_OM * BT, *L = rec + (sa->mode == EVAL_NUMC ? F_P : F_L) * BT;
+        for (int t = 0; t < BT; t++) {
+            float dx = R[0] - m[t], dy = R[1] - m[BT + t], dz = R[2] - m[2 * BT + t];
+            float u = 0.5f * (dx * dx + dy * dy + dz * dz) + e[t];
+            float q = RR[0] * c[t] + RR[1] * c[BT + t] + RR[2] * c[2 * BT + t] +
+                      RR[3] * c[3 * BT + t] + RR[4] * c[4 * BT + t] + RR[5] * c[5 * BT + t];
+            float w = table_weight(sa->pc, u, q);
+            if (sa->mode == EVAL_DEN) {
+                acc[3] += w * om[t];
+                continue;
+            }
+            if (sa->mode == EVAL_NUM0) w *= om[t];
+            acc[0] += w * L[t], acc[1] += w * L[BT + t], acc[2] += w * L[2 * BT + t];
+        }
+    }
+    for (int k = 0; k < 4; k++) out[k] += acc[k];
+}
+
+#if (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__)
+#include <immintrin.h>
+
+#define AVX2 __attribute__((target("avx2,fma")))
+
+typedef struct avx2_consts {
+    __m256 half, zero, one, two, c4, c6, cm15, c10, c30, c60;
+    __m256 t0, ts, tmax;
+    __m256i imax;
+    __m256 a2, kap, a4, kap6, osa, osb, osk, isa, isb, isk;
+} avx2_consts;
+
+AVX2 static void avx2_setup(const piece *pc, avx2_consts *k)
+{
+    k->half = _mm256_set1_ps(0.5f), k->zero = _mm256_setzero_ps(), k->one = _mm256_set1_ps(1.0f);
+    k->two = _mm256_set1_ps(2.0f), k->c4 = _mm256_set1_ps(4.0f), k->c6 = _mm256_set1_ps(6.0f);
+    k->cm15 = _mm256_set1_ps(-15.0f), k->c10 = _mm256_set1_ps(10.0f);
+    k->c30 = _mm256_set1_ps(30.0f), k->c60 = _mm256_set1_ps(60.0f);
+    k->t0 = _mm256_set1_ps(pc->t0), k->ts = _mm256_set1_ps(pc->tscale);
+    k->tmax = _mm256_set1_ps((float)(TAB + 1)), k->imax = _mm256_set1_epi32(TAB);
+    k->a2 = _mm256_set1_ps(pc->a2), k->kap = _mm256_set1_ps(pc->kap), k->a4 = _mm256_set1_ps(pc->a4);
+    k->kap6 = _mm256_set1_ps(6.0f * pc->kap * pc->kap);
+    k->osa = _mm256_set1_ps(pc->out_sa), k->osb = _mm256_set1_ps(pc->out_sb);
+    k->osk = _mm256_set1_ps(pc->out_sk), k->isa = _mm256_set1_ps(pc->in_sa);
+    k->isb = _mm256_set1_ps(pc->in_sb), k->isk = _mm256_set1_ps(pc->in_sk);
+}
+
+/* psi = 1 - S(s), s = clamp(u sa - sb, 0, 1), S the quintic smootherstep; v1, v2 are
+ * -psi' and -psi'' */
+AVX2 static inline void avx2_psi(const avx2_consts *k, __m256 u, __m256 sa, __m256 sb, __m256 sk,
+                                 __m256 *v0, __m256 *v1, __m256 *v2)
+{
+    __m256 s = _mm256_min_ps(_mm256_max_ps(_mm256_fmsub_ps(u, sa, sb), k->zero), k->one);
+    __m256 t = _mm256_sub_ps(k->one, s), ss = _mm256_mul_ps(s, s);
+    __m256 S = _mm256_mul_ps(_mm256_mul_ps(ss, s),
+                             _mm256_fmadd_ps(s, _mm256_fmadd_ps(s, k->c6, k->cm15), k->c10));
+    __m256 S1 = _mm256_mul_ps(_mm256_mul_ps(k->c30, ss), _mm256_mul_ps(t, t));
+    __m256 S2 = _mm256_mul_ps(_mm256_mul_ps(k->c60, s), _mm256_mul_ps(t, _mm256_fnmadd_ps(k->two, s, k->one)));
+    *v0 = _mm256_sub_ps(k->one, S);
+    *v1 = _mm256_mul_ps(S1, sk);
+    *v2 = _mm256_mul_ps(S2, _mm256_mul_ps(sk, sk));
+}
+
+/* g + g'' q / 2 of the GGX piece at u, in closed form */
+AVX2 static inline __m256 avx2_ggx(const avx2_consts *k, __m256 u, __m256 q)
+{
+    /* f = (1 - u) a4 / T^2, T = a2 + kap u; f' and f'' in u; zero beyond the horizon */
+    __m256 x = _mm256_max_ps(_mm256_sub_ps(k->one, u), k->zero);
+    __m256 it = _mm256_div_ps(k->one, _mm256_fmadd_ps(k->kap, u, k->a2));
+    __m256 A = _mm256_mul_ps(k->a4, _mm256_mul_ps(it, it));
+    __m256 xi = _mm256_mul_ps(x, it);
+    __m256 front = _mm256_cmp_ps(u, k->one, _CMP_LT_OQ);
+    __m256 f0 = _mm256_mul_ps(x, A);
+    __m256 f1 = _mm256_and_ps(front, _mm256_fnmsub_ps(A, _mm256_mul_ps(_mm256_add_ps(k->kap, k->kap), xi), A));
+    __m256 f2 = _mm256_and_ps(front, _mm256_mul_ps(_mm256_mul_ps(A, it),
+                                                   _mm256_fmadd_ps(k->kap6, xi, _mm256_mul_ps(k->c4, k->kap))));
+    __m256 po0, po1, po2, pi0, pi1, pi2;
+    avx2_psi(k, u, k->osa, k->osb, k->osk, &po0, &po1, &po2);
+    avx2_psi(k, u, k->isa, k->isb, k->isk, &pi0, &pi1, &pi2);
+    __m256 p0 = _mm256_sub_ps(po0, pi0), p1 = _mm256_sub_ps(pi1, po1), p2 = _mm256_sub_ps(pi2, po2);
+    __m256 g = _mm256_mul_ps(f0, p0);
+    __m256 g2 = _mm256_fmadd_ps(f2, p0, _mm256_fmadd_ps(_mm256_add_ps(f1, f1), p1, _mm256_mul_ps(f0, p2)));
+    return _mm256_fmadd_ps(_mm256_mul_ps(k->half, g2), q, g);
+}
+
+/* the same from the piece's table (Phong family), by gathers */
+AVX2 static inline __m256 avx2_table(const avx2_consts *k, const float *tab, __m256 u, __m256 q)
+{
+    __m256 ti = _mm256_mul_ps(_mm256_sub_ps(u, k->t0), k->ts);
+    ti = _mm256_min_ps(_mm256_max_ps(ti, k->zero), k->tmax);
+    __m256i i = _mm256_min_epi32(_mm256_cvttps_epi32(ti), k->imax);
+    __m256 fr = _mm256_sub_ps(ti, _mm256_cvtepi32_ps(i));
+    __m256i i2 = _mm256_slli_epi32(i, 1);
+    __m256 ga = _mm256_i32gather_ps(tab, i2, 4), gb = _mm256_i32gather_ps(tab + 2, i2, 4);
+    __m256 ha = _mm256_i32gather_ps(tab + 1, i2, 4), hb = _mm256_i32gather_ps(tab + 3, i2, 4);
+    __m256 g = _mm256_fmadd_ps(fr, _mm256_sub_ps(gb, ga), ga);
+    __m256 h = _mm256_fmadd_ps(fr, _mm256_sub_ps(hb, ha), ha);
+    return _mm256_fmadd_ps(_mm256_mul_ps(k->half, h), q, g);
+}
+
+AVX2 static double avx2_hsum(__m256 v)
+{
+    float l[8];
+    _mm256_storeu_ps(l, v);
+    double s = 0;
+    for (int i = 0; i < 8; i++) s += l[i];
+    return s;
+}
+
+AVX2 static void sum_blocks_avx2(const sum_args *sa, const float R[3], const float RR[6], double out[4])
+{
+    avx2_consts k;
+    avx2_setup(sa->pc, &k);
+    const __m256 r0 = _mm256_set1_ps(R[0]), r1 = _mm256_set1_ps(R[1]), r2 = _mm256_set1_ps(R[2]);
+    const __m256 q0 = _mm256_set1_ps(RR[0]), q1 = _mm256_set1_ps(RR[1]), q2 = _mm256_set1_ps(RR[2]);
+    const __m256 q3 = _mm256_set1_ps(RR[3]), q4 = _mm256_set1_ps(RR[4]), q5 = _mm256_set1_ps(RR[5]);
+    int base = sa->mode == EVAL_NUMC ? F_WM : F_MX;
+    int lfield = sa->mode == EVAL_NUMC ? F_P : F_L;
+    int ggx = sa->pc->ggx;
+    __m256 ar = k.zero, ag = k.zero, ab = k.zero, aw = k.zero;
+    for (int ci = 0; ci < sa->ncand; ci++) {
+        const cand *cd = &sa->cands[ci];
+        const float *bc = sa->s->block + (size_t)cd->block * 4;
+        float dd = R[0] * bc[0] + R[1] * bc[1] + R[2] * bc[2];
+        if (dd < cd->cos_out || dd > cd->cos_in) continue;
+        const float *rec = sa->s->rec + (size_t)cd->block * sa->s->nf * BT;
+        const float *m = rec + base * BT;
+        __m256 dx = _mm256_sub_ps(r0, _mm256_loadu_ps(m));
+        __m256 dy = _mm256_sub_ps(r1, _mm256_loadu_ps(m + BT));
+        __m256 dz = _mm256_sub_ps(r2, _mm256_loadu_ps(m + 2 * BT));
+        __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
+        __m256 u = _mm256_fmadd_ps(k.half, d2, _mm256_loadu_ps(m + 3 * BT));
+        const float *c = m + 4 * BT;
+        __m256 q = _mm256_mul_ps(q0, _mm256_loadu_ps(c));
+        q = _mm256_fmadd_ps(q1, _mm256_loadu_ps(c + BT), q);
+        q = _mm256_fmadd_ps(q2, _mm256_loadu_ps(c + 2 * BT), q);
+        q = _mm256_fmadd_ps(q3, _mm256_loadu_ps(c + 3 * BT), q);
+        q = _mm256_fmadd_ps(q4, _mm256_loadu_ps(c + 4 * BT), q);
+        q = _mm256_fmadd_ps(q5, _mm256_loadu_ps(c + 5 * BT), q);
+        __m256 w = ggx ? avx2_ggx(&k, u, q) : avx2_table(&k, sa->pc->tab, u, q);
+        if (sa->mode == EVAL_DEN) {
+            aw = _mm256_fmadd_ps(w, _mm256_loadu_ps(rec + F_OM * BT), aw);
+            continue;
+        }
+        if (sa->mode == EVAL_NUM0) w = _mm256_mul_ps(w, _mm256_loadu_ps(rec + F_OM * BT));
+        const float *L = rec + lfield * BT;
+        ar = _mm256_fmadd_ps(w, _mm256_loadu_ps(L), ar);
+        ag = _mm256_fmadd_ps(w, _mm256_loadu_ps(L + BT), ag);
+        ab = _mm256_fmadd_ps(w, _mm256_loadu_ps(L + 2 * BT), ab);
+    }
+    out[0] += avx2_hsum(ar), out[1] += avx2_hsum(ag), out[2] += avx2_hsum(ab), out[3] += avx2_hsum(aw);
+}
+
+static int cpu_has_avx2(void)
+{
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+}
+#else
+#define sum_blocks_avx2 sum_blocks_generic
+static int cpu_has_avx2(void) { return 0; }
+#endif
+
+static double dot3(const double *a, const float *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/* [lo, hi] of tan(longitude) around `pole` of the cap (axis a, radius T), for a face whose
+ * axis is `ax` and tangent `tg` (the coordinate is a.tg / a.ax). 0 if the cap misses the
+ * face's front half-space in this coordinate. */
+static int cap_range(const double a[3], double T, const float ax[3], const float tg[3],
+                     const float pole[3], double *lo, double *hi)
+{
+    double pz = dot3(a, pole);
+    if (pz > 1) pz = 1;
+    if (pz < -1) pz = -1;
+    double beta = acos(pz);
+    if (T >= beta || T >= PI - beta) {
+        *lo = -1, *hi = 1;
+        return 1;
+    }
+    double phi = atan2(dot3(a, tg), dot3(a, ax));
+    double d = asin(sin(T) / sin(beta));
+    double p0 = phi - d, p1 = phi + d;
+    const double H = 0.5 * PI;
+    if (p1 <= -H || p0 >= H) return 0;
+    *lo = p0 <= -0.25 * PI ? -1.0 : tan(p0);
+    *hi = p1 >= 0.25 * PI ? 1.0 : tan(p1);
+    if (*lo < -1) *lo = -1;
+    if (*hi > 1) *hi = 1;
+    return *lo <= *hi;
+}
+
+typedef struct tile_pts {
+    int count, x[TILE * TILE], y[TILE * TILE];
+    double dir[TILE * TILE][3];
+    double acc[TILE * TILE][4];
+} tile_pts;
+
+typedef struct grid_job {
+    ibl_specular_plan *p;
+    int level, mode; /* mode: EVAL_DEN (face 0 only) or numerators (every face) */
+} grid_job;
+
+static void sum_candidates(const sum_args *sa, tile_pts *tp)
+{
+    for (int k = 0; k < tp->count; k++) {
+        const double *d = tp->dir[k];
+        float R[3] = {(float)d[0], (float)d[1], (float)d[2]};
+        float RR[6] = {R[0] * R[0], R[1] * R[1], R[2] * R[2],
+                       2 * R[0] * R[1], 2 * R[0] * R[2], 2 * R[1] * R[2]};
+        if (sa->avx2) sum_blocks_avx2(sa, R, RR, tp->acc[k]);
+        else sum_blocks_generic(sa, R, RR, tp->acc[k]);
+    }
+}
+
+static void grid_task(void *arg, int index)
+{
+    const grid_job *job = arg;
+    ibl_specular_plan *p = job->p;
+    level_plan *lv = &p->lv[job->level];
+    int faces = job->mode == EVAL_DEN ? 1 : 6;
+    int g = 0, begin = 0;
+    while (index >= begin + faces * lv->grids[g].tiles * lv->grids[g].tiles) {
+        begin += faces * lv->grids[g].tiles * lv->grids[g].tiles;
+        g++;
+    }
+    grid *gr = &lv->grids[g];
+    int t = index - begin, face = t / (gr->tiles * gr->tiles);
+    int ty = (t / gr->tiles) % gr->tiles, tx = t % gr->tiles, n = gr->n;
+    tile_pts tp;
+    tp.count = 0;
+    double axis[3] = {0, 0, 0};
+    for (int y = ty * TILE; y < (ty + 1) * TILE && y < n; y++)
+        for (int x = tx * TILE; x < (tx + 1) * TILE && x < n; x++) {
+            int k = tp.count++;
+            tp.x[k] = x, tp.y[k] = y;
+            if (gr->direct) {
+                ibl__output_direction(&p->desc, &lv->lobe, face, n, x, y, tp.dir[k]);
+            } else {
+                double *d = tp.dir[k];
+                ibl_cube_direction_d(face, (x + 0.5) / n, (y + 0.5) / n, d);
+                double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                for (int i = 0; i < 3; i++) d[i] /= len;
+            }
+            for (int i = 0; i < 3; i++) axis[i] += tp.dir[k][i];
+            memset(tp.acc[k], 0, sizeof tp.acc[k]);
+        }
+    double alen = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    for (int i = 0; i < 3; i++) axis[i] /= alen;
+    double mincos = 1.0;
+    for (int k = 0; k < tp.count; k++) {
+        double c = axis[0] * tp.dir[k][0] + axis[1] * tp.dir[k][1] + axis[2] * tp.dir[k][2];
+        if (c < mincos) mincos = c;
+    }
+    double rho = acos(mincos > 1 ? 1 : mincos) + 1e-6;
+
+    cand cands[CAND];
+    int avx2 = cpu_has_avx2();
+    for (int pi = 0; pi < lv->npieces; pi++) {
+        const piece *pc = &lv->pieces[pi];
+        if (pc->grid != g) continue;
+        const srclev *s = &p->src[pc->src];
+        sum_args sa = {job->mode == EVAL_DEN ? EVAL_DEN : pc->src == 0 ? EVAL_NUM0 : EVAL_NUMC,
+                       avx2, s, pc, cands, 0};
+        double T = pc->th_out + rho;
+        for (int f = 0; f < 6; f++) {
+            const float(*B)[3] = p->face_basis[f];
+            double u0, u1, v0, v1;
+            if (T >= 0.5 * PI - 1e-9) {
+                u0 = v0 = -1, u1 = v1 = 1;
+            } else {
+                if (!cap_range(axis, T, B[0], B[1], B[2], &u0, &u1)) continue;
+                if (!cap_range(axis, T, B[0], B[2], B[1], &v0, &v1)) continue;
+            }
+            int M = s->M;
+            int x0 = (int)floor((u0 + 1) * 0.5 * M) - 1, x1 = (int)ceil((u1 + 1) * 0.5 * M);
+            int y0 = (int)floor((v0 + 1) * 0.5 * M) - 1, y1 = (int)ceil((v1 + 1) * 0.5 * M);
+            x0 = x0 < 0 ? 0 : x0, y0 = y0 < 0 ? 0 : y0;
+            x1 = x1 > M - 1 ? M - 1 : x1, y1 = y1 > M - 1 ? M - 1 : y1;
+            for (int by = y0 / BH; by <= y1 / BH; by++)
+                for (int bx = x0 / BW; bx <= x1 / BW; bx++) {
+                    uint32_t b = (uint32_t)(((size_t)f * s->nby + by) * s->nbx + bx);
+                    const float *bc = s->block + (size_t)b * 4;
+                    double c = dot3(axis, bc);
+                    double ang = acos(c > 1 ? 1 : c < -1 ? -1 : c), r = bc[3];
+                    if (ang - r - rho > pc->th_out) continue;
+                    if (pc->th_in > 0 && ang + r + rho < pc->th_in) continue;
+                    cand *cd = &cands[sa.ncand++];
+                    cd->block = b;
+                    double ao = pc->th_out + r;
+                    cd->cos_out = ao >= PI ? -2.0f : (float)cos(ao) - 1e-6f;
+                    double ai = pc->th_in - r;
+                    cd->cos_in = ai <= 0 ? 2.0f : (float)cos(ai) + 1e-6f;
+                    if (sa.ncand == CAND) {
+                        sum_candidates(&sa, &tp);
+                        sa.ncand = 0;
+                    }
                 }
-                for (int i = 0; i < 6; i++) cC[k][i] = r[R_C + i];
-            }
         }
-        double rho[4], rs = 0;
-        for (int k = 0; k < 4; k++) rs += rho[k] = cM0[k][0] + cM0[k][1] + cM0[k][2];
-        if (!(rs > 0)) {
-            rs = 0;
-            for (int k = 0; k < 4; k++) rs += rho[k] = cM0[k][4];
+        if (sa.ncand) sum_candidates(&sa, &tp);
+    }
+    for (int k = 0; k < tp.count; k++) {
+        float *o = gr->acc + (((size_t)face * n + tp.y[k]) * n + tp.x[k]) * 4;
+        if (job->mode == EVAL_DEN) {
+            o[3] = (float)tp.acc[k][3];
+        } else {
+            for (int c = 0; c < 3; c++) o[c] = (float)tp.acc[k][c];
         }
-        double m[3] = {0, 0, 0};
-        for (int k = 0; k < 4; k++)
-            for (int i = 0; i < 3; i++) m[i] += rho[k] * cm[k][i];
-        for (int i = 0; i < 3; i++) {
-            m[i] /= rs;
-            rec[R_M + i] = (float)m[i];
-        }
-        double mf[3] = {rec[R_M], rec[R_M + 1], rec[R_M + 2]};
-        rec[R_E] = (float)(1.0 - (mf[0] * mf[0] + mf[1] * mf[1] + mf[2] * mf[2]));
-        for (int c = 0; c < NCH; c++) {
-            double M0 = 0, D[3] = {0, 0, 0};
-            for (int k = 0; k < 4; k++) {
-                M0 += cM0[k][c];
-                for (int i = 0; i < 3; i++) D[i] += cD[k][c][i] + cM0[k][c] * (cm[k][i] - mf[i]);
-            }
-            rec[R_M0 + c] = (float)M0;
-            for (int i = 0; i < 3; i++) rec[R_D + 3 * c + i] = (float)D[i];
-        }
-        double C[6] = {0, 0, 0, 0, 0, 0};
-        for (int k = 0; k < 4; k++) {
-            double d[3] = {cm[k][0] - mf[0], cm[k][1] - mf[1], cm[k][2] - mf[2]};
-            C[0] += rho[k] * (cC[k][0] + d[0] * d[0]);
-            C[1] += rho[k] * (cC[k][1] + d[0] * d[1]);
-            C[2] += rho[k] * (cC[k][2] + d[0] * d[2]);
-            C[3] += rho[k] * (cC[k][3] + d[1] * d[1]);
-            C[4] += rho[k] * (cC[k][4] + d[1] * d[2]);
-            C[5] += rho[k] * (cC[k][5] + d[2] * d[2]);
-        }
-        for (int i = 0; i < 6; i++) rec[R_C + i] = (float)(C[i] / rs);
-        rec[30] = rec[31] = 0.0f;
     }
 }
 
-/* f, f', f'' (d/dx) from u = 1 - x, in float. */
-static inline void lobe_eval(const ibl__lobe *lobe, float nn, float a2, float a4, float u,
-                             float *f0, float *f1, float *f2)
+/* The normalisers: the geometric sums depend only on the direction's (s, t) on its face (the
+ * cube's texels are carried onto themselves by the signed permutations that swap faces), so
+ * they are summed for face 0 and copied. */
+static void plan_denominators(ibl_specular_plan *p, int level)
 {
-    float x = 1.0f - u;
-    if (!(x > 0.0f)) {
-        *f0 = *f1 = *f2 = 0.0f;
-        return;
+    level_plan *lv = &p->lv[level];
+    int tasks = 0;
+    for (int g = 0; g < lv->ngrids; g++) tasks += lv->grids[g].tiles * lv->grids[g].tiles;
+    grid_job job = {p, level, EVAL_DEN};
+    ibl_parallel_for(p->ctx, tasks, grid_task, &job);
+    for (int g = 0; g < lv->ngrids; g++) {
+        grid *gr = &lv->grids[g];
+        size_t face = (size_t)gr->n * gr->n * 4;
+        for (int f = 1; f < 6; f++)
+            for (size_t i = 3; i < face; i += 4) gr->acc[f * face + i] = gr->acc[i];
     }
-    if (lobe->kind == IBL__LOBE_PHONG) {
-        float f = expf(nn * log1pf(-u));
-        float ix = 1.0f / x;
-        *f0 = f;
-        *f1 = nn * f * ix;
-        *f2 = nn * (nn - 1.0f) * f * ix * ix;
-        return;
-    }
-    /* t = alpha^2 + u (1 - alpha^2) / 2, k = (alpha^2 - 1) / 2 */
-    float k = 0.5f * (a2 - 1.0f);
-    float t = a2 - u * k;
-    float it = 1.0f / t, it2 = it * it, it3 = it2 * it;
-    *f0 = a4 * x * it2;
-    *f1 = a4 * it3 * (t - 2.0f * k * x);
-    *f2 = a4 * it3 * it * (-4.0f * k * t + 6.0f * k * k * x);
 }
 
-static inline float lobe_f(const ibl__lobe *lobe, float nn, float a2, float a4, float u)
-{
-    float x = 1.0f - u;
-    if (!(x > 0.0f)) return 0.0f;
-    if (lobe->kind == IBL__LOBE_PHONG) return expf(nn * log1pf(-u));
-    float t = a2 + u * 0.5f * (1.0f - a2);
-    float q = 1.0f / t;
-    return a4 * x * q * q;
-}
+/* ---- run: combining the grids into the output level ---- */
 
-static void tile_run_task(void *arg, int index)
+static void combine_task(void *arg, int index)
 {
     ibl_specular_plan *p = arg;
-    int level = p->run_level;
-    const tile *t = &p->tiles[p->level_tile_begin[level] + index];
-    const ibl__lobe *lobe = &p->lobes[level];
-    float nn = (float)lobe->n, a2 = (float)(lobe->alpha * lobe->alpha), a4 = a2 * a2;
-    int bounded = lobe->kind == IBL__LOBE_PHONG && lobe->n < 2.0;
-    int n = ibl_level_size(p->N, level), S = p->S;
-    const float *dirs = p->outdir + p->outdir_offset[level];
-    const float *src = p->run_src->data; /* level 0: 6 faces contiguous */
-    int count = t->w * t->h;
-    float R[TILE * TILE][4];
-    double acc[TILE * TILE][NCH];
-    memset(acc, 0, sizeof acc);
-    for (int j = 0; j < t->h; j++)
-        for (int i = 0; i < t->w; i++)
-            memcpy(R[j * t->w + i],
-                   dirs + (((size_t)t->face * n + t->y0 + j) * n + t->x0 + i) * 4, 4 * sizeof(float));
-
-    /* full cells: Taylor leaves */
-    const uint32_t *cells = p->cells + t->cell_begin;
-    for (size_t c0 = 0; c0 < t->cell_count; c0 += CHUNK) {
-        size_t cn = t->cell_count - c0 < CHUNK ? t->cell_count - c0 : CHUNK;
-        float part[TILE * TILE][NCH];
-        memset(part, 0, sizeof part);
-        for (size_t c = 0; c < cn; c++) {
-            const float *rec = p->pyramid + (size_t)cells[c0 + c] * REC;
-            for (int q = 0; q < count; q++) {
-                const float *r = R[q];
-                float dx = r[0] - rec[0], dy = r[1] - rec[1], dz = r[2] - rec[2];
-                float u = 0.5f * (dx * dx + dy * dy + dz * dz + rec[R_E] + r[3]);
-                float f0, f1, f2;
-                lobe_eval(lobe, nn, a2, a4, u, &f0, &f1, &f2);
-                if (f0 == 0.0f && f1 == 0.0f) continue;
-                /* the second-order term f'' R^T C R / 2 with the radiance's covariance
-                 * (docs/SPECULAR.md: variants that bound it measured worse on real HDRIs) */
-                const float *C = rec + R_C;
-                float var = r[0] * (r[0] * C[0] + 2.0f * (r[1] * C[1] + r[2] * C[2])) +
-                            r[1] * (r[1] * C[3] + 2.0f * r[2] * C[4]) + r[2] * r[2] * C[5];
-                float corr = 0.5f * f2 * var;
-                /* Phong with n < 2 has f'' = n (n - 1) x^(n-2) unbounded at the horizon
-                 * (Blinn shininess 1 is n = 0.24): there the expansion is bounded to
-                 * [-f/2, +f] (measured: 37% RMS at a 2x2 level without it) */
-                if (bounded) corr = corr > f0 ? f0 : corr < -0.5f * f0 ? -0.5f * f0 : corr;
-                float w0 = f0 + corr;
-                for (int ch = 0; ch < NCH; ch++) {
-                    const float *D = rec + R_D + 3 * ch;
-                    part[q][ch] += rec[R_M0 + ch] * w0 + f1 * (r[0] * D[0] + r[1] * D[1] + r[2] * D[2]);
-                }
-            }
+    level_plan *lv = &p->lv[p->run_level];
+    int n = ibl_level_size(p->N, p->run_level), face = index / n, y = index % n;
+    float *row = ibl_cubemap_face(p->run_dst, p->run_level, face) + (size_t)y * n * 4;
+    const grid *direct = NULL;
+    for (int g = 0; g < lv->ngrids; g++)
+        if (lv->grids[g].direct) direct = &lv->grids[g];
+    for (int x = 0; x < n; x++) {
+        double v[4] = {0, 0, 0, 0};
+        if (direct) {
+            const float *a = direct->acc + (((size_t)face * n + y) * n + x) * 4;
+            for (int c = 0; c < 4; c++) v[c] = a[c];
         }
-        for (int q = 0; q < count; q++)
-            for (int ch = 0; ch < NCH; ch++) acc[q][ch] += part[q][ch];
+        int have_dir = 0;
+        ibl_vec3 dv = {0, 0, 0};
+        for (int g = 0; g < lv->ngrids; g++) {
+            const grid *gr = &lv->grids[g];
+            if (gr->direct) continue;
+            if (!have_dir) {
+                double d[3];
+                ibl__output_direction(&p->desc, &lv->lobe, face, n, x, y, d);
+                dv.x = (float)d[0], dv.y = (float)d[1], dv.z = (float)d[2];
+                have_dir = 1;
+            }
+            ibl_cubemap cube = {gr->n, 1, gr->acc, 0};
+            float s[4];
+            ibl_cubemap_sample_bilinear(&cube, 0, dv, s);
+            for (int c = 0; c < 4; c++) v[c] += s[c];
+        }
+        float *o = row + x * 4;
+        for (int c = 0; c < 3; c++) {
+            double r = v[3] > 0 ? v[c] / v[3] : 0.0;
+            o[c] = r > 0 ? (float)r : 0.0f;
+        }
+        o[3] = 1.0f;
     }
-    /* source texels: points */
-    const uint32_t *points = p->points + t->point_begin;
-    for (size_t c0 = 0; c0 < t->point_count; c0 += CHUNK) {
-        size_t cn = t->point_count - c0 < CHUNK ? t->point_count - c0 : CHUNK;
-        float part[TILE * TILE][NCH];
-        memset(part, 0, sizeof part);
-        for (size_t c = 0; c < cn; c++) {
-            uint32_t ti = points[c0 + c];
-            const float *d = p->texel + (size_t)ti * 4;
-            const float *L = src + (size_t)ti * 4;
-            float om = p->omega[ti % ((uint32_t)S * S)];
-            for (int q = 0; q < count; q++) {
-                const float *r = R[q];
-                float dx = r[0] - d[0], dy = r[1] - d[1], dz = r[2] - d[2];
-                float u = 0.5f * (dx * dx + dy * dy + dz * dz + d[3] + r[3]);
-                float w = lobe_f(lobe, nn, a2, a4, u) * om;
-                for (int ch = 0; ch < 4; ch++) part[q][ch] += w * L[ch];
-                part[q][4] += w;
-            }
-        }
-        for (int q = 0; q < count; q++)
-            for (int ch = 0; ch < NCH; ch++) acc[q][ch] += part[q][ch];
-    }
-    /* split source texels */
-    const subleaf *subs = p->subs + t->sub_begin;
-    for (size_t c0 = 0; c0 < t->sub_count; c0 += CHUNK) {
-        size_t cn = t->sub_count - c0 < CHUNK ? t->sub_count - c0 : CHUNK;
-        float part[TILE * TILE][NCH];
-        memset(part, 0, sizeof part);
-        for (size_t c = 0; c < cn; c++) {
-            const subleaf *s = &subs[c0 + c];
-            const float *L = src + (size_t)s->texel * 4;
-            for (int q = 0; q < count; q++) {
-                const float *r = R[q];
-                float dx = r[0] - s->d[0], dy = r[1] - s->d[1], dz = r[2] - s->d[2];
-                float u = 0.5f * (dx * dx + dy * dy + dz * dz + s->e + r[3]);
-                float w = lobe_f(lobe, nn, a2, a4, u) * s->omega;
-                for (int ch = 0; ch < 4; ch++) part[q][ch] += w * L[ch];
-                part[q][4] += w;
-            }
-        }
-        for (int q = 0; q < count; q++)
-            for (int ch = 0; ch < NCH; ch++) acc[q][ch] += part[q][ch];
-    }
-    float *face = ibl_cubemap_face(p->run_dst, level, t->face);
-    for (int j = 0; j < t->h; j++)
-        for (int i = 0; i < t->w; i++) {
-            const double *a = acc[j * t->w + i];
-            float *o = face + ((size_t)(t->y0 + j) * n + t->x0 + i) * 4;
-            for (int ch = 0; ch < 4; ch++) {
-                double v = a[4] > 0 ? a[ch] / a[4] : 0.0;
-                o[ch] = v > 0 ? (float)v : 0.0f;
-            }
-        }
 }
+
+/* ---- run: mirror levels ---- */
 
 typedef struct mirror_job {
     const ibl_specular_plan *p;
@@ -666,22 +990,25 @@ static void mirror_row_task(void *arg, int index)
     int n = ibl_level_size(p->N, job->level), face = index / n, y = index % n;
     float *row = ibl_cubemap_face(job->dst, job->level, face) + (size_t)y * n * 4;
     if (n == p->S) {
-        memcpy(row, ibl_cubemap_face(job->src, 0, face) + (size_t)y * n * 4, (size_t)n * 4 * sizeof(float));
+        memcpy(row, ibl_cubemap_face(job->src, 0, face) + (size_t)y * n * 4,
+               (size_t)n * 4 * sizeof(float));
         return;
     }
-    if (n < p->S) {
+    if (n < p->S && is_pow2(n)) {
         int sl = 0;
-        while ((p->S >> sl) > n) sl++;
+        while ((p->src[0].M >> sl) > n) sl++;
+        const srclev *s = &p->src[sl];
         for (int x = 0; x < n; x++) {
-            const float *rec = p->pyramid + (p->level_offset[sl] + ((size_t)face * n + y) * n + x) * REC;
-            for (int ch = 0; ch < 4; ch++) row[x * 4 + ch] = rec[R_M0 + ch] / rec[R_M0 + 4];
+            float om = s->rec[rec_index(s, face, x, y, F_OM)];
+            for (int c = 0; c < 3; c++) row[x * 4 + c] = s->rec[rec_index(s, face, x, y, F_P + c)] / om;
+            row[x * 4 + 3] = 1.0f;
         }
         return;
     }
-    const float *dirs = p->outdir + p->outdir_offset[job->level];
     for (int x = 0; x < n; x++) {
-        const float *d = dirs + (((size_t)face * n + y) * n + x) * 4;
-        ibl_vec3 v = {d[0], d[1], d[2]};
+        double d[3];
+        ibl_cube_direction_d(face, (x + 0.5) / n, (y + 0.5) / n, d);
+        ibl_vec3 v = {(float)d[0], (float)d[1], (float)d[2]};
         ibl_cubemap_sample_bilinear(job->src, 0, v, row + x * 4);
     }
 }
@@ -694,20 +1021,23 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "specular run: planned source %d -> %d x %d levels, got %d -> %d x %d",
                         p->S, p->N, p->L, src->size, dst->size, dst->levels);
+    pyr_job pj = {p, src, 0};
+    ibl_parallel_for(ctx, 6 * p->src[0].M, level0_task, &pj);
     for (int l = 1; l < p->SL; l++) {
         pyr_job job = {p, src, l};
-        ibl_parallel_for(ctx, 6 * (p->S >> l), pyramid_task, &job);
+        ibl_parallel_for(ctx, 6 * p->src[l].M, pyramid_task, &job);
     }
     p->run_src = src;
     p->run_dst = dst;
     for (int l = 0; l < p->L; l++) {
-        int count = p->level_tile_begin[l + 1] - p->level_tile_begin[l];
-        if (p->lobes[l].kind == IBL__LOBE_MIRROR) {
+        if (p->lv[l].lobe.kind == IBL__LOBE_MIRROR) {
             mirror_job job = {p, src, dst, l};
             ibl_parallel_for(ctx, 6 * ibl_level_size(p->N, l), mirror_row_task, &job);
         } else {
             p->run_level = l;
-            ibl_parallel_for(ctx, count, tile_run_task, p);
+            grid_job job = {p, l, EVAL_NUM0};
+            ibl_parallel_for(ctx, p->lv[l].tasks, grid_task, &job);
+            ibl_parallel_for(ctx, 6 * ibl_level_size(p->N, l), combine_task, p);
         }
         ibl_status st = ibl_edge_fixup_apply(ctx, p->desc.edge_fixup, dst, l);
         if (st != IBL_OK) return st;
