@@ -41,6 +41,7 @@ static void dynamic_bench(void)
     d.filter = IBL_FILTER_PHONG;
     d.size = 32;
     d.source_size = 64;
+    d.dynamic = 1;
     double t0 = now();
     ibl_specular_plan *plan = NULL;
     if (ibl_specular_plan_create(ctx, &d, &plan) != IBL_OK) {

@@ -67,6 +67,9 @@ static err_stats level_error(const ibl_cubemap *fast, const ibl_cubemap *ref, in
     return s;
 }
 
+#define DYNAMIC_RMS 0.017 /* measured worst 1.13% (blinn level 2) */
+#define DYNAMIC_MAX 0.05 /* issue 7 max bar; measured worst 3.4% */
+
 static ibl_cubemap make_sun_cube(int n)
 {
     ibl_cubemap c;
@@ -300,6 +303,61 @@ static void symmetry(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* The dynamic (per-frame) plan: a constant cube stays constant (issue 7: <= 1e-5), runs into
+ * caller memory repeat bit for bit, and the result stays near the reference on the sun-and-sky
+ * cube. Its bound is looser than the static method's: a box mip has no radiance centroid, so
+ * a small bright sun is smeared over its texel (docs/SPECULAR.md "Dynamic path"). */
+static void dynamic_plan(void **state)
+{
+    (void)state;
+    int verbose = getenv("IBL_TEST_VERBOSE") != NULL;
+    ibl_specular_filter filters[3] = {IBL_FILTER_PHONG, IBL_FILTER_GGX, IBL_FILTER_BLINN};
+    ibl_cubemap sun = make_sun_cube(32), flat;
+    ibl_context *ctx = test_context(2);
+    assert_int_equal(ibl_cubemap_alloc(ctx, 32, 1, &flat), IBL_OK);
+    test_fill_cube(&flat, 1.5f, 0.25f, 3.0f);
+    for (int i = 0; i < 3; i++) {
+        ibl_specular_desc d = {0};
+        d.filter = filters[i];
+        d.size = 16;
+        d.source_size = 32;
+        d.dynamic = 1;
+        ibl_specular_plan *plan = NULL;
+        assert_int_equal(ibl_specular_plan_create(ctx, &d, &plan), IBL_OK);
+        int levels = ibl_specular_plan_info(plan)->levels;
+        ibl_cubemap dst, again, ref;
+        assert_int_equal(ibl_cubemap_alloc(ctx, 16, levels, &dst), IBL_OK);
+        assert_int_equal(ibl_cubemap_alloc(ctx, 16, levels, &again), IBL_OK);
+        assert_int_equal(ibl_specular_run(plan, &flat, &dst), IBL_OK);
+        const float expect[3] = {1.5f, 0.25f, 3.0f};
+        for (size_t k = 0; k < ibl_cubemap_floats(16, levels) / 4; k++)
+            for (int c = 0; c < 3; c++) assert_true(fabsf(dst.data[4 * k + c] - expect[c]) <= 1e-5f * expect[c]);
+        assert_int_equal(ibl_specular_run(plan, &sun, &dst), IBL_OK);
+        assert_int_equal(ibl_specular_run(plan, &sun, &again), IBL_OK);
+        assert_memory_equal(dst.data, again.data, ibl_cubemap_floats(16, levels) * sizeof(float));
+        d.dynamic = 0;
+        d.method = IBL_METHOD_REFERENCE;
+        assert_int_equal(ibl_specular_prefilter(ctx, &sun, &d, &ref, NULL), IBL_OK);
+        for (int l = 0; l < levels; l++) {
+            err_stats e = level_error(&dst, &ref, l);
+            if (verbose)
+                printf("  dynamic %s level %d: rms %.4f%% max %.3f%%\n",
+                       ibl_specular_filter_name(filters[i]), l, 100 * e.rms, 100 * e.max);
+            /* measured worst (phong, ggx, blinn on this cube): see docs/SPECULAR.md; the bound
+             * keeps ~1.5x headroom over it */
+            assert_true(e.rms <= DYNAMIC_RMS);
+            assert_true(e.max <= DYNAMIC_MAX);
+        }
+        ibl_cubemap_free(ctx, &dst);
+        ibl_cubemap_free(ctx, &again);
+        ibl_cubemap_free(ctx, &ref);
+        ibl_specular_plan_destroy(plan);
+    }
+    ibl_cubemap_free(ctx, &flat);
+    ibl_cubemap_free(ctx, &sun);
+    ibl_context_destroy(ctx);
+}
+
 /* 1, 2 and 8 threads give the same bits; the plan reruns give the same bits into caller
  * memory. */
 static void threads_and_plan(void **state)
@@ -464,6 +522,7 @@ int main(void)
         cmocka_unit_test(single_texel_lobe),
         cmocka_unit_test(symmetry),
         cmocka_unit_test(threads_and_plan),
+        cmocka_unit_test(dynamic_plan),
         cmocka_unit_test(mappings_and_manifest),
         cmocka_unit_test(cli_prefilter),
         cmocka_unit_test(fast_vs_reference),

@@ -76,7 +76,11 @@ typedef struct ibl_specular_desc {
     ibl_edge_fixup edge_fixup;   /* 0: none                                                      */
     ibl_bent_desc bent;          /* parameters of IBL_EDGE_FIXUP_BENT                            */
     int source_size;             /* plans only: face edge of the cubes ibl_specular_run gets     */
-    float accuracy;              /* fast method: refinement threshold; 0: 0.35 (smaller: slower) */
+    float accuracy;              /* fast method: quadrature step scale; 0: 0.35 (smaller: more
+                                    exact, slower)                                               */
+    int dynamic;                 /* plans only: the per-frame path, one precomputed sparse
+                                    operator over box mips (fast runs, less exact next to small
+                                    bright lights; see docs/SPECULAR.md "Dynamic path")          */
 } ibl_specular_desc;
 
 /* What a prefilter produced: everything a renderer needs to pick the level. */

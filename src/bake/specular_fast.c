@@ -76,6 +76,7 @@ struct ibl_specular_plan {
     srclev src[IBL_MAX_LEVELS];
     level_plan lv[IBL_MAX_LEVELS];
     float face_basis[6][3][3]; /* axis, s tangent, t tangent */
+    ibl__dynamic *dyn; /* desc.dynamic: the precomputed operator instead of the pieces */
     const ibl_cubemap *run_src;
     ibl_cubemap *run_dst;
     int run_level;
@@ -310,12 +311,14 @@ static ibl_status build_geometry(ibl_specular_plan *p)
 
 static double texel_angle(int n) { return 2.0 / n; } /* widest texel of a face of edge n */
 
-/* The coarsest source level whose texels are at most `width` wide (0 if none is). */
-static int source_level_for(const ibl_specular_plan *p, double width)
+/* The coarsest source level whose texels are at most `width` wide (0 if none is) and whose
+ * faces are at least min_edge texels (wide lobes are cheap; coarse texels across the horizon,
+ * where the lobe has a kink, are what a Taylor leaf gets wrong). */
+static int source_level_for(const ibl_specular_plan *p, double width, int min_edge)
 {
     int best = 0;
     for (int l = 0; l < p->SL; l++)
-        if (texel_angle(p->src[l].M) <= width) best = l;
+        if (texel_angle(p->src[l].M) <= width && p->src[l].M >= min_edge) best = l;
     return best;
 }
 
@@ -345,7 +348,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
     const double beta = 0.2 * acc;  /* ring grid spacing / ring inner radius        */
     const double cull = lobe->kind == IBL__LOBE_PHONG ? 1e-9 : 0.0;
 
-    int core_src = source_level_for(p, lobe->half_angle / kappa);
+    int core_src = source_level_for(p, lobe->half_angle / kappa, 32);
     double b0 = c0 * lobe->half_angle;
     double min_b0 = 2.0 * texel_angle(p->src[core_src].M);
     if (b0 < min_b0) b0 = min_b0;
@@ -368,7 +371,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
             pc->grid = grid_index(lv, n, 1, TILE);
         } else {
             double b = pc->th_in;
-            pc->src = source_level_for(p, gamma * b);
+            pc->src = source_level_for(p, gamma * b, 16);
             int gn = 1;
             while (texel_angle(gn) > beta * b) gn *= 2;
             if (gn < 8) gn = 8;
@@ -400,6 +403,7 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
 {
     if (!p) return;
     ibl_context *ctx = p->ctx;
+    ibl__dynamic_destroy(p->dyn);
     for (int l = 0; l < IBL_MAX_LEVELS; l++) {
         ibl_free(ctx, p->src[l].rec);
         ibl_free(ctx, p->src[l].block);
@@ -453,6 +457,12 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
             p->face_basis[f][1][i] = (float)(sx[i] - c[i]);
             p->face_basis[f][2][i] = (float)(ty[i] - c[i]);
         }
+    }
+    if (desc->dynamic) {
+        st = ibl__dynamic_create(ctx, &p->desc, &p->info, S, &p->dyn);
+        if (st != IBL_OK) goto fail;
+        *out = p;
+        return IBL_OK;
     }
     /* a lobe narrower than ~1.5 source texels is summed over k x k sub-texels of level 0
      * (each with its parent's radiance), as the reference splits such texels */
@@ -1023,6 +1033,15 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
         return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "specular run: planned source %d -> %d x %d levels, got %d -> %d x %d",
                         p->S, p->N, p->L, src->size, dst->size, dst->levels);
+    if (p->dyn) {
+        ibl__dynamic_mips(p->dyn, src);
+        for (int l = 0; l < p->L; l++) {
+            ibl__dynamic_level(p->dyn, dst, l);
+            ibl_status st = ibl_edge_fixup_apply(ctx, p->desc.edge_fixup, dst, l);
+            if (st != IBL_OK) return st;
+        }
+        return ibl_progress(ctx, "prefilter", 1.0);
+    }
     pyr_job pj = {p, src, 0};
     ibl_parallel_for(ctx, 6 * p->src[0].M, level0_task, &pj);
     for (int l = 1; l < p->SL; l++) {

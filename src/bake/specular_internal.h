@@ -75,6 +75,14 @@ ibl_status ibl__specular_reference(ibl_context *ctx, const ibl_cubemap *src,
 void ibl__output_direction(const ibl_specular_desc *desc, const ibl__lobe *lobe, int face, int n,
                            int x, int y, double dir[3]);
 
+/* The dynamic path (specular_dynamic.c): the chain as a sparse operator over box mips. */
+typedef struct ibl__dynamic ibl__dynamic;
+ibl_status ibl__dynamic_create(ibl_context *ctx, const ibl_specular_desc *desc,
+                               const ibl_specular_info *info, int source_size, ibl__dynamic **out);
+void ibl__dynamic_mips(ibl__dynamic *d, const ibl_cubemap *src); /* first, once per run */
+void ibl__dynamic_level(ibl__dynamic *d, ibl_cubemap *dst, int level);
+void ibl__dynamic_destroy(ibl__dynamic *d);
+
 /* Fills info from desc for a chain of the given output size and levels. */
 ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc, int size,
                                  int levels, ibl_specular_info *info);
