@@ -650,6 +650,7 @@ typedef struct avx2_consts {
     __m256i imax;
     __m256 a2, kap, a4, kap6, osa, osb, osk, isa, isb, isk;
     __m256 n, nn1, xmin; /* Phong: n, n (n - 1), smallest x divided by */
+    int has_in, has_out;
 } avx2_consts;
 
 AVX2 static void avx2_setup(const piece *pc, avx2_consts *k)
@@ -667,6 +668,8 @@ AVX2 static void avx2_setup(const piece *pc, avx2_consts *k)
     k->isb = _mm256_set1_ps(pc->in_sb), k->isk = _mm256_set1_ps(pc->in_sk);
     k->n = _mm256_set1_ps(pc->n), k->nn1 = _mm256_set1_ps(pc->n * (pc->n - 1.0f));
     k->xmin = _mm256_set1_ps(1e-3f);
+    k->has_in = pc->in_sa != 0.0f;
+    k->has_out = pc->out_sa != 0.0f;
 }
 
 /* ln x for x in (0, 1]: x = m 2^e with m in [sqrt(1/2), sqrt(2)), ln m = 2 atanh(r),
@@ -734,7 +737,9 @@ AVX2 static inline __m256 avx2_lobe(const avx2_consts *k, int ggx, __m256 u, __m
     __m256 f0, f1, f2;
     if (ggx) {
         /* f = (1 - u) a4 / T^2, T = a2 + kap u; f' and f'' in u; zero beyond the horizon */
-        __m256 it = _mm256_div_ps(k->one, _mm256_fmadd_ps(k->kap, u, k->a2));
+        /* 1 / T by the reciprocal estimate and one Newton step (relative error ~1e-7) */
+        __m256 T = _mm256_fmadd_ps(k->kap, u, k->a2), it = _mm256_rcp_ps(T);
+        it = _mm256_mul_ps(it, _mm256_fnmadd_ps(T, it, k->two));
         __m256 A = _mm256_mul_ps(k->a4, _mm256_mul_ps(it, it));
         __m256 xi = _mm256_mul_ps(x, it);
         f0 = _mm256_mul_ps(x, A);
@@ -749,9 +754,10 @@ AVX2 static inline __m256 avx2_lobe(const avx2_consts *k, int ggx, __m256 u, __m
         f1 = _mm256_sub_ps(k->zero, _mm256_mul_ps(k->n, fx));
         f2 = _mm256_mul_ps(k->nn1, _mm256_mul_ps(fx, ix));
     }
-    __m256 po0, po1, po2, pi0, pi1, pi2;
-    avx2_psi(k, u, k->osa, k->osb, k->osk, &po0, &po1, &po2);
-    avx2_psi(k, u, k->isa, k->isb, k->isk, &pi0, &pi1, &pi2);
+    /* the core has no inner step and the last ring no outer one: psi_in = 0, psi_out = 1 */
+    __m256 po0 = k->one, po1 = k->zero, po2 = k->zero, pi0 = k->zero, pi1 = k->zero, pi2 = k->zero;
+    if (k->has_out) avx2_psi(k, u, k->osa, k->osb, k->osk, &po0, &po1, &po2);
+    if (k->has_in) avx2_psi(k, u, k->isa, k->isb, k->isk, &pi0, &pi1, &pi2);
     __m256 p0 = _mm256_sub_ps(po0, pi0), p1 = _mm256_sub_ps(pi1, po1), p2 = _mm256_sub_ps(pi2, po2);
     __m256 g = _mm256_mul_ps(f0, p0);
     __m256 g2 = _mm256_fmadd_ps(f2, p0, _mm256_fmadd_ps(_mm256_add_ps(f1, f1), p1, _mm256_mul_ps(f0, p2)));
