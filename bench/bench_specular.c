@@ -4,7 +4,11 @@
  * sample of texels), the fast method's filtering time, and the dynamic plan's refilter time.
  *
  *   bench_specular [--sizes 128,256] [--samples 2000] [--filters ggx,phong,blinn]
- *                  [--threads N] [--accuracy A] [--levels L] [--dynamic] FILE.exr ...
+ *                  [--threads N] [--accuracy A] [--levels L] [--dynamic]
+ *                  [--ref-cache DIR] FILE.exr ...
+ *
+ * --ref-cache keeps the reference values of the sampled texels in DIR (one file per file,
+ * size, filter, level), so that re-measuring a changed fast method costs seconds.
  */
 #include "ibl/ibl.h"
 
@@ -25,6 +29,52 @@ static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
     return x < y ? -1 : x > y;
+}
+
+/* The reference at a list of sampled texels of one level, in parallel, optionally cached in a
+ * file (the reference is slow; the fast method changes more often than the yardstick). */
+typedef struct ref_job {
+    const ibl_specular_reference *ref;
+    const ibl_specular_info *info;
+    int level, n;
+    const size_t *idx;
+    double *out;
+} ref_job;
+
+static void ref_task(void *arg, int index)
+{
+    const ref_job *j = arg;
+    size_t t = j->idx[index];
+    int f = (int)(t / ((size_t)j->n * j->n)), y = (int)(t / j->n % j->n), x = (int)(t % j->n);
+    ibl_specular_reference_eval(j->ref, j->info, j->level, ibl_cube_texel_direction(f, j->n, x, y),
+                                j->out + 4 * (size_t)index);
+}
+
+static void reference_samples(ibl_context *ctx, const char *cache_dir, const char *base, int size,
+                              ibl_specular_filter filter, int src_size, int level,
+                              const ibl_specular_reference *ref, const ibl_specular_info *info,
+                              int n, const size_t *idx, size_t count, double *out)
+{
+    char path[1024] = "";
+    if (cache_dir) {
+        snprintf(path, sizeof path, "%s/%s_%d_%s_src%d_l%d_n%zu.ref", cache_dir, base, size,
+                 ibl_specular_filter_name(filter), src_size, level, count);
+        FILE *fp = fopen(path, "rb");
+        if (fp) {
+            size_t got = fread(out, 4 * sizeof(double), count, fp);
+            fclose(fp);
+            if (got == count) return;
+        }
+    }
+    ref_job job = {ref, info, level, n, idx, out};
+    ibl_parallel_for(ctx, (int)count, ref_task, &job);
+    if (cache_dir) {
+        FILE *fp = fopen(path, "wb");
+        if (fp) {
+            fwrite(out, 4 * sizeof(double), count, fp);
+            fclose(fp);
+        }
+    }
 }
 
 static void dynamic_bench(void)
@@ -74,7 +124,7 @@ int main(int argc, char **argv)
     float accuracy = 0;
     ibl_specular_filter filters[3] = {IBL_FILTER_GGX, IBL_FILTER_PHONG, IBL_FILTER_BLINN};
     int nfilters = 3;
-    const char *files[64];
+    const char *files[64], *cache_dir = NULL;
     int nfiles = 0;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--sizes") == 0 && i + 1 < argc) {
@@ -89,6 +139,8 @@ int main(int argc, char **argv)
             accuracy = (float)atof(argv[++i]);
         } else if (strcmp(argv[i], "--levels") == 0 && i + 1 < argc) {
             max_levels = atoi(argv[++i]);
+        } else if (strcmp(argv[i], "--ref-cache") == 0 && i + 1 < argc) {
+            cache_dir = argv[++i];
         } else if (strcmp(argv[i], "--dynamic") == 0) {
             dynamic = 1;
         } else if (strcmp(argv[i], "--filters") == 0 && i + 1 < argc) {
@@ -166,16 +218,21 @@ int main(int argc, char **argv)
                     ibl_cubemap_mean(&out, l, mean);
                     double se[3] = {0}, sr[3] = {0}, mx = 0;
                     uint64_t state = 0x9E3779B97F4A7C15ull ^ (uint64_t)(l * 7919 + si * 104729);
+                    size_t *idxs = malloc(count * sizeof *idxs);
+                    double *refs = malloc(count * 4 * sizeof *refs);
                     for (size_t s = 0; s < count; s++) {
-                        size_t idx = s;
+                        idxs[s] = s;
                         if (count < total) {
                             state = state * 6364136223846793005ull + 1442695040888963407ull;
-                            idx = (size_t)((state >> 33) % total);
+                            idxs[s] = (size_t)((state >> 33) % total);
                         }
+                    }
+                    reference_samples(ctx, cache_dir, base, sizes[si], filters[k], cube.size, l,
+                                      ref, &info, n, idxs, count, refs);
+                    for (size_t s = 0; s < count; s++) {
+                        size_t idx = idxs[s];
                         int f = (int)(idx / ((size_t)n * n)), y = (int)(idx / n % n), x = (int)(idx % n);
-                        ibl_vec3 dir = ibl_cube_texel_direction(f, n, x, y);
-                        double r[4];
-                        ibl_specular_reference_eval(ref, &info, l, dir, r);
+                        const double *r = refs + 4 * s;
                         const float *v = ibl_cubemap_face(&out, l, f) + ((size_t)y * n + x) * 4;
                         double w = ibl_cube_texel_solid_angle(n, x, y);
                         for (int c = 0; c < 3; c++) {
@@ -190,6 +247,8 @@ int main(int argc, char **argv)
                             }
                         }
                     }
+                    free(idxs);
+                    free(refs);
                     double rms = 0;
                     for (int c = 0; c < 3; c++)
                         if (sr[c] > 0) rms = fmax(rms, sqrt(se[c] / sr[c]));
