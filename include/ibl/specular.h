@@ -18,7 +18,7 @@
  *   box:   the plain area-weighted mip chain (the seed's fastest dynamic profile);
  *   gauss: a 2D Gaussian blur per face (the seed's second dynamic profile).
  *
- * Methods: IBL_METHOD_FAST (default; deterministic hierarchical quadrature over the source's
+ * Methods: IBL_METHOD_FAST (default; deterministic multilevel summation over the source's
  * moment pyramid, see docs/SPECULAR.md) and IBL_METHOD_REFERENCE (the exact integral of the
  * piecewise-constant source over every texel with exact solid angles, in double; slow).
  * Output is bit-identical for any thread count.

@@ -18,8 +18,6 @@ typedef enum ibl__lobe_kind {
     IBL__LOBE_GGX         /* x D(h) / D(n), n.h = sqrt((1 + x) / 2)      */
 } ibl__lobe_kind;
 
-enum { IBL__LOBE_TABLE = 1024 };
-
 typedef struct ibl__lobe {
     ibl__lobe_kind kind;
     double n;           /* Phong exponent                               */
@@ -31,10 +29,6 @@ typedef struct ibl__lobe {
     double half_angle;  /* angle where f = 1/2: the blur radius         */
     double floor_angle; /* angle where f = 0.02                         */
     double horizon;
-    /* variation |df/dtheta| / max(f, 0.1) and f on a grid of LOBE_TABLE + 1 angles over
-     * [0, pi/2]: the cut's refinement test reads these instead of evaluating the lobe */
-    float vtab[IBL__LOBE_TABLE + 1];
-    float ftab[IBL__LOBE_TABLE + 1];     /* f at 0.1 rad above the horizon: is the kink there worth resolving */
 } ibl__lobe;
 
 /* The lobe of one level of the chain info describes (MIRROR for roughness 0 / no shininess). */
@@ -46,10 +40,6 @@ void ibl__lobe_f012(const ibl__lobe *lobe, double x, double out[3]);
 double ibl__lobe_log_slope(const ibl__lobe *lobe, double theta);
 /* Upper bound of the log slope over [t0, t1]. */
 double ibl__lobe_max_log_slope(const ibl__lobe *lobe, double t0, double t1);
-
-/* Tabulated versions (fast, conservative to one grid step). */
-double ibl__lobe_table_f(const ibl__lobe *lobe, double theta);
-double ibl__lobe_table_max_variation(const ibl__lobe *lobe, double t0, double t1);
 
 /* Angular radius of the face-plane rectangle [u0,u1]x[v0,v1] seen from its centre direction. */
 double ibl__rect_radius(int face, double u0, double v0, double u1, double v1, double centre[3]);

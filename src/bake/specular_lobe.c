@@ -1,7 +1,8 @@
 /* The lobes of the Phong family and of GGX as functions of x = cos(angle to the lobe axis),
- * with the derivatives the fast method's Taylor leaves need and the log slope its refinement
- * uses. Phong: Phong 1975 / seeds 000/001 "Spherical Phong kernel"; Blinn through the seeds'
- * fit cos^n(t) ~ cos^(4.2 n)(t/2); GGX: Walter et al. 2007 with v = n (Karis 2013 split sum). */
+ * with the derivatives the fast method's second-order leaves need and the log slope the
+ * reference uses to split texels. Phong: Phong 1975 / seeds 000/001 "Spherical Phong kernel";
+ * Blinn through the seeds' fit cos^n(t) ~ cos^(4.2 n)(t/2); GGX: Walter et al. 2007 with v = n
+ * (Karis 2013 split sum). */
 #include "specular_internal.h"
 
 #include <math.h>
@@ -76,41 +77,6 @@ double ibl__lobe_max_log_slope(const ibl__lobe *lobe, double t0, double t1)
     return g;
 }
 
-static void fill_tables(ibl__lobe *l)
-{
-    for (int i = 0; i <= IBL__LOBE_TABLE; i++) {
-        double th = 0.5 * PI * i / IBL__LOBE_TABLE;
-        l->vtab[i] = (float)variation(l, th);
-        l->ftab[i] = (float)ibl__lobe_f(l, cos(th));
-    }
-}
-
-double ibl__lobe_table_f(const ibl__lobe *lobe, double theta)
-{
-    /* f decreases with theta: the grid point below gives an upper bound */
-    if (theta <= 0) return 1.0;
-    int i = (int)(theta * (IBL__LOBE_TABLE / (0.5 * PI)));
-    return i >= IBL__LOBE_TABLE ? 0.0 : lobe->ftab[i];
-}
-
-double ibl__lobe_table_max_variation(const ibl__lobe *lobe, double t0, double t1)
-{
-    const double scale = IBL__LOBE_TABLE / (0.5 * PI);
-    int i0 = t0 <= 0 ? 0 : (int)(t0 * scale), i1 = (int)(t1 * scale) + 1;
-    if (i1 > IBL__LOBE_TABLE) i1 = IBL__LOBE_TABLE;
-    if (i0 > i1) i0 = i1;
-    double g = 0;
-    /* the variation is unimodal over the candidates' intervals: check ends and the peaks */
-    int cand[4] = {i0, i1, (int)(lobe->floor_angle * scale), (int)(lobe->peak_angle * scale)};
-    for (int k = 0; k < 4; k++) {
-        int c = cand[k];
-        if (c < i0 || c > i1) continue;
-        for (int j = c > 0 ? c - 1 : c; j <= c + 1 && j <= IBL__LOBE_TABLE; j++)
-            if (j >= i0 - 1 && lobe->vtab[j] > g) g = lobe->vtab[j];
-    }
-    return g;
-}
-
 /* The angle in [0, pi/2] where f falls to `value` (f decreases with the angle). */
 static double angle_where(const ibl__lobe *lobe, double value)
 {
@@ -132,7 +98,6 @@ static ibl__lobe make_phong(double n)
     l.half_angle = angle_where(&l, 0.5);
     l.horizon = ibl__lobe_f(&l, sin(0.1));
     l.floor_angle = angle_where(&l, 0.1);
-    fill_tables(&l);
     return l;
 }
 
@@ -156,7 +121,6 @@ static ibl__lobe make_ggx(double roughness)
     l.peak_angle = best_t;
     l.horizon = ibl__lobe_f(&l, sin(0.1));
     l.floor_angle = angle_where(&l, 0.1);
-    fill_tables(&l);
     return l;
 }
 
