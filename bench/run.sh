@@ -18,7 +18,9 @@ run "$B/bench_seed_kernels"
 run "$B/bench_sh" "$DATA"
 run "$B/bench_specular" --dynamic
 if [ "${BENCH_FULL:-0}" = 1 ]; then
-  run "$B/bench_specular" --sizes 128,256 --samples 2000 --filters ggx,phong,blinn "$HDRI"/*.exr
+  mkdir -p "$BUILD/refcache"
+  run "$B/bench_specular" --sizes 128,256 --samples 2000 --filters ggx,phong,blinn \
+      --ref-cache "$BUILD/refcache" "$HDRI"/*.exr
 fi
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
@@ -30,4 +32,8 @@ hyperfine -w 1 -r 5 -N \
   "$BUILD/ibl irradiance -q $IN -o $OUT/i.ktx2" \
   "$BUILD/ibl lut -q -o $OUT/l.ktx2" \
   "$BUILD/ibl render -q $IN -o $OUT/r.png --specular-size 64"
-hyperfine -w 0 -r 3 -N "$BUILD/ibl prefilter -q $IN -o $OUT/p.ktx2 --size 256"
+hyperfine -w 1 -r 5 -N "$BUILD/ibl prefilter -q $IN -o $OUT/p.ktx2 --size 256"
+# the 512-face case needs a 2048x1024 input: the same HDRI resampled up by ibl
+"$BUILD/ibl" convert -q "$IN" -o "$OUT/cube512.ktx2" --size 512 --format rgba32f
+"$BUILD/ibl" convert -q "$OUT/cube512.ktx2" -o "$OUT/big.exr"
+hyperfine -w 1 -r 3 -N "$BUILD/ibl prefilter -q $OUT/big.exr -o $OUT/p512.ktx2 --size 512"

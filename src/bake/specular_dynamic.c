@@ -14,7 +14,7 @@
 #include <math.h>
 #include <string.h>
 
-enum { MAX_ENTRIES = 1 << 25 };
+enum { MAX_ENTRIES = 1 << 25, DB = 8 };
 
 typedef struct dyn_level {
     int n, mip;           /* output edge, source mip the rows read */
@@ -28,6 +28,8 @@ struct ibl__dynamic {
     size_t mip_offset[IBL_MAX_LEVELS + 1]; /* texel index of (mip, face 0, 0, 0)        */
     float *omega[IBL_MAX_LEVELS];          /* per mip: M M texel solid angles            */
     float *centre;                         /* 3 floats per texel of every mip: direction */
+    float *cone;                           /* per DB x DB block of every mip: axis, radius */
+    size_t cone_offset[IBL_MAX_LEVELS];
     float *mipdata;                        /* 3 floats per texel of every mip (scratch)  */
     uint32_t *row_start;                   /* rows + 1                                   */
     uint32_t *index;
@@ -43,6 +45,7 @@ void ibl__dynamic_destroy(ibl__dynamic *d)
     for (int m = 0; m < d->mips; m++) ibl_free(d->ctx, d->omega[m]);
     ibl_free(d->ctx, d->mipdata);
     ibl_free(d->ctx, d->centre);
+    ibl_free(d->ctx, d->cone);
     ibl_free(d->ctx, d->row_start);
     ibl_free(d->ctx, d->index);
     ibl_free(d->ctx, d->weight);
@@ -98,22 +101,36 @@ static size_t build_rows(ibl__dynamic *d, const ibl_specular_desc *desc, const i
                 double sum = 0.0;
                 double reach = cos(cull + 0.75 * texel < PI ? cull + 0.75 * texel : PI);
                 const float *cen = d->centre + base * 3;
+                int nb = (M + DB - 1) / DB;
+                const float *cone = d->cone + d->cone_offset[lv->mip] * 4;
                 for (int sf = 0; sf < 6; sf++)
-                    for (int sy = 0; sy < M; sy++)
-                        for (int sx = 0; sx < M; sx++) {
-                            const float *c = cen + (((size_t)sf * M + sy) * M + sx) * 3;
-                            if (R[0] * c[0] + R[1] * c[1] + R[2] * c[2] < reach) continue;
-                            double w = texel_integral(lobe, R, sf, M, sx, sy, k);
-                            if (!(w > 0)) continue;
-                            if (!count_only) {
-                                d->index[entry] = (uint32_t)(base + ((size_t)sf * M + sy) * M + sx);
-                                d->weight[entry] = (float)w;
-                            }
-                            sum += w;
-                            entry++;
+                    for (int by = 0; by < nb; by++)
+                        for (int bx = 0; bx < nb; bx++) {
+                            /* skip blocks of DB x DB texels beyond the reach */
+                            const float *bc = cone + (((size_t)sf * nb + by) * nb + bx) * 4;
+                            double ca = R[0] * bc[0] + R[1] * bc[1] + R[2] * bc[2];
+                            double ang = acos(ca > 1 ? 1 : ca < -1 ? -1 : ca);
+                            if (ang - bc[3] > cull + 0.75 * texel) continue;
+                            int y1 = (by + 1) * DB < M ? (by + 1) * DB : M;
+                            int x1 = (bx + 1) * DB < M ? (bx + 1) * DB : M;
+                            for (int sy = by * DB; sy < y1; sy++)
+                                for (int sx = bx * DB; sx < x1; sx++) {
+                                    const float *c = cen + (((size_t)sf * M + sy) * M + sx) * 3;
+                                    if (R[0] * c[0] + R[1] * c[1] + R[2] * c[2] < reach) continue;
+                                    double w = texel_integral(lobe, R, sf, M, sx, sy, k);
+                                    if (!(w > 0)) continue;
+                                    if (!count_only) {
+                                        d->index[entry] =
+                                            (uint32_t)(base + ((size_t)sf * M + sy) * M + sx);
+                                        d->weight[entry] = (float)w;
+                                    }
+                                    sum += w;
+                                    entry++;
+                                }
                         }
                 if (!count_only && sum > 0)
-                    for (size_t e = first; e < entry; e++) d->weight[e] = (float)(d->weight[e] / sum);
+                    for (size_t e = first; e < entry; e++)
+                        d->weight[e] = (float)(d->weight[e] / sum);
             }
     return entry;
 }
@@ -142,7 +159,30 @@ ibl_status ibl__dynamic_create(ibl_context *ctx, const ibl_specular_desc *desc,
     d->mip_offset[d->mips] = texels;
     d->mipdata = ibl_alloc(ctx, texels * 3 * sizeof(float));
     d->centre = ibl_alloc(ctx, texels * 3 * sizeof(float));
-    if (!d->mipdata || !d->centre) goto oom;
+    size_t cones = 0;
+    for (int m = 0; m < d->mips; m++) {
+        int nb = ((source_size >> m) + DB - 1) / DB;
+        d->cone_offset[m] = cones;
+        cones += (size_t)6 * nb * nb;
+    }
+    d->cone = ibl_alloc(ctx, cones * 4 * sizeof(float));
+    if (!d->mipdata || !d->centre || !d->cone) goto oom;
+    for (int m = 0; m < d->mips; m++) {
+        int M = source_size >> m, nb = (M + DB - 1) / DB;
+        double h = 2.0 / M;
+        for (int f = 0; f < 6; f++)
+            for (int by = 0; by < nb; by++)
+                for (int bx = 0; bx < nb; bx++) {
+                    int x1 = (bx + 1) * DB < M ? (bx + 1) * DB : M;
+                    int y1 = (by + 1) * DB < M ? (by + 1) * DB : M;
+                    double c[3];
+                    double r = ibl__rect_radius(f, bx * DB * h - 1, by * DB * h - 1, x1 * h - 1,
+                                                y1 * h - 1, c);
+                    float *o = d->cone + (d->cone_offset[m] + ((size_t)f * nb + by) * nb + bx) * 4;
+                    for (int i = 0; i < 3; i++) o[i] = (float)c[i];
+                    o[3] = (float)(r + 1e-6);
+                }
+    }
     for (int m = 0; m < d->mips; m++) {
         int M = source_size >> m;
         for (int f = 0; f < 6; f++)
