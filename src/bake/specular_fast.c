@@ -609,17 +609,24 @@ static float table_weight(const piece *pc, float u, float q)
     return g + 0.5f * g2 * q;
 }
 
+/* The record of candidate ci if it can matter for direction R (NULL if it is culled). */
+static inline const float *candidate_record(const sum_args *sa, int ci, const float R[3])
+{
+    const cand *cd = &sa->cands[ci];
+    const float *bc = sa->s->block + (size_t)cd->block * BINFO;
+    float dd = R[0] * bc[0] + R[1] * bc[1] + R[2] * bc[2];
+    if (dd < cd->cos_out || dd > cd->cos_in) return NULL;
+    return sa->s->rec + (size_t)cd->block * sa->s->nf * BT;
+}
+
 /* The portable sum: one texel at a time through the piece's table. */
 static void sum_blocks_generic(const sum_args *sa, const float R[3], const float RR[6], double out[4])
 {
     int base = sa->mode == EVAL_NUMC ? F_WM : F_MX;
     float acc[4] = {0, 0, 0, 0};
     for (int ci = 0; ci < sa->ncand; ci++) {
-        const cand *cd = &sa->cands[ci];
-        const float *bc = sa->s->block + (size_t)cd->block * BINFO;
-        float dd = R[0] * bc[0] + R[1] * bc[1] + R[2] * bc[2];
-        if (dd < cd->cos_out || dd > cd->cos_in) continue;
-        const float *rec = sa->s->rec + (size_t)cd->block * sa->s->nf * BT;
+        const float *rec = candidate_record(sa, ci, R);
+        if (!rec) continue;
         const float *m = rec + base * BT, *e = m + 3 * BT, *c = m + 4 * BT;
         const float *om = rec + F_OM * BT, *L = rec + (sa->mode == EVAL_NUMC ? F_P : F_L) * BT;
         for (int t = 0; t < BT; t++) {
@@ -785,11 +792,8 @@ AVX2 static void sum_blocks_avx2(const sum_args *sa, const float R[3], const flo
     int ggx = sa->pc->ggx;
     __m256 ar = k.zero, ag = k.zero, ab = k.zero, aw = k.zero;
     for (int ci = 0; ci < sa->ncand; ci++) {
-        const cand *cd = &sa->cands[ci];
-        const float *bc = sa->s->block + (size_t)cd->block * BINFO;
-        float dd = R[0] * bc[0] + R[1] * bc[1] + R[2] * bc[2];
-        if (dd < cd->cos_out || dd > cd->cos_in) continue;
-        const float *rec = sa->s->rec + (size_t)cd->block * sa->s->nf * BT;
+        const float *rec = candidate_record(sa, ci, R);
+        if (!rec) continue;
         const float *m = rec + base * BT;
         __m256 dx = _mm256_sub_ps(r0, _mm256_loadu_ps(m));
         __m256 dy = _mm256_sub_ps(r1, _mm256_loadu_ps(m + BT));
