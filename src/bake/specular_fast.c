@@ -864,6 +864,14 @@ typedef struct tile_pts {
     double acc[TILE * TILE][4];
 } tile_pts;
 
+/* Whether the grid's directions are symmetric under the square's eight symmetries on a face
+ * (edge fixups that bend directions are not assumed to be). */
+static int grid_symmetric(const ibl_specular_plan *p, const grid *gr)
+{
+    return !gr->direct ||
+           (p->desc.edge_fixup != IBL_EDGE_FIXUP_BENT && p->desc.edge_fixup != IBL_EDGE_FIXUP_WARP);
+}
+
 typedef struct grid_job {
     ibl_specular_plan *p;
     int level, mode; /* mode: EVAL_DEN (face 0 only) or numerators (every face) */
@@ -895,6 +903,11 @@ static void grid_task(void *arg, int index)
     grid *gr = &lv->grids[g];
     int t = index - begin, face = t / (gr->tiles * gr->tiles);
     int ty = (t / gr->tiles) % gr->tiles, tx = t % gr->tiles, n = gr->n;
+    if (job->mode == EVAL_DEN && grid_symmetric(p, gr)) {
+        /* one eighth of the face: the tiles covering x <= y < ceil(n / 2) */
+        int half = ((n + 1) / 2 + TILE - 1) / TILE;
+        if (tx >= half || ty >= half || tx > ty) return;
+    }
     tile_pts tp;
     tp.count = 0;
     double axis[3] = {0, 0, 0};
@@ -981,7 +994,8 @@ static void grid_task(void *arg, int index)
 
 /* The normalisers: the geometric sums depend only on the direction's (s, t) on its face (the
  * cube's texels are carried onto themselves by the signed permutations that swap faces), so
- * they are summed for face 0 and copied. */
+ * they are summed for face 0 and copied; within the face, the reflections x -> n-1-x,
+ * y -> n-1-y and x <-> y are symmetries of the cube too, so one eighth of it is summed. */
 static void plan_denominators(ibl_specular_plan *p, int level)
 {
     level_plan *lv = &p->lv[level];
@@ -991,6 +1005,17 @@ static void plan_denominators(ibl_specular_plan *p, int level)
     ibl_parallel_for(p->ctx, tasks, grid_task, &job);
     for (int g = 0; g < lv->ngrids; g++) {
         grid *gr = &lv->grids[g];
+        int n = gr->n;
+        if (grid_symmetric(p, gr))
+            for (int y = 0; y < n; y++)
+                for (int x = 0; x < n; x++) {
+                    int a = x < n - 1 - x ? x : n - 1 - x, b = y < n - 1 - y ? y : n - 1 - y;
+                    if (a > b) {
+                        int t = a;
+                        a = b, b = t;
+                    }
+                    gr->acc[((size_t)y * n + x) * 4 + 3] = gr->acc[((size_t)b * n + a) * 4 + 3];
+                }
         size_t face = (size_t)gr->n * gr->n * 4;
         for (int f = 1; f < 6; f++)
             for (size_t i = 3; i < face; i += 4) gr->acc[f * face + i] = gr->acc[i];
