@@ -120,6 +120,9 @@ static void fast_vs_reference(void **state)
      * real HDRIs at 128 and 256 */
     fast_vs_reference_case(filters[0], 16, 16, verbose);
     for (int i = 0; i < 3; i++) fast_vs_reference_case(filters[i], 32, 16, verbose);
+    /* sizes that are not powers of two: the source is resampled to 32 for both methods, the
+     * chain is 12, 6, 3, 1 */
+    fast_vs_reference_case(filters[0], 24, 12, verbose);
 }
 
 /* A constant environment stays constant at every level of every kernel (issue 7: <= 1e-5). */

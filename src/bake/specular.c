@@ -218,6 +218,16 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
         st = ibl_specular_plan_create(ctx, &desc, &plan);
         if (st == IBL_OK) st = ibl_specular_run(plan, s, out);
         ibl_specular_plan_destroy(plan);
+        /* a mirror level the plan could only point-sample (its size does not divide the
+         * source's) is area-resampled here, as the reference does */
+        for (int l = 0; st == IBL_OK && l < L; l++) {
+            int n = ibl_level_size(N, l);
+            if (ibl__lobe_for_level(&info, l).kind != IBL__LOBE_MIRROR || n >= s->size ||
+                s->size % n == 0)
+                continue;
+            st = mirror_level(ctx, s, out, l);
+            if (st == IBL_OK) st = ibl_edge_fixup_apply(ctx, desc.edge_fixup, out, l);
+        }
     }
 done:
     if (work.owns_data) ibl_cubemap_free(ctx, &work);
