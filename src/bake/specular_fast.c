@@ -78,6 +78,7 @@ struct ibl_specular_plan {
     level_plan lv[IBL_MAX_LEVELS];
     float face_basis[6][3][3]; /* axis, s tangent, t tangent */
     ibl__dynamic *dyn; /* desc.dynamic: the precomputed operator instead of the pieces */
+    int portable;      /* tests: the portable sums even where AVX2 is available          */
     const ibl_cubemap *run_src;
     ibl_cubemap *run_dst;
     int run_level;
@@ -403,6 +404,8 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
     return IBL_OK;
 }
 
+static void plan_denominators(ibl_specular_plan *p, int level);
+
 void ibl_specular_plan_destroy(ibl_specular_plan *p)
 {
     if (!p) return;
@@ -417,12 +420,18 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
     ibl_free(ctx, p);
 }
 
+void ibl__specular_plan_set_portable(ibl_specular_plan *p, int portable)
+{
+    p->portable = portable;
+    if (!p->dyn)
+        for (int l = 0; l < p->L; l++)
+            if (p->lv[l].lobe.kind != IBL__LOBE_MIRROR) plan_denominators(p, l);
+}
+
 const ibl_specular_info *ibl_specular_plan_info(const ibl_specular_plan *plan)
 {
     return plan ? &plan->info : NULL;
 }
-
-static void plan_denominators(ibl_specular_plan *p, int level);
 
 ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *desc,
                                     ibl_specular_plan **out)
@@ -936,7 +945,7 @@ static void grid_task(void *arg, int index)
     double rho = acos(mincos > 1 ? 1 : mincos) + 1e-6;
 
     cand cands[CAND];
-    int avx2 = cpu_has_avx2();
+    int avx2 = cpu_has_avx2() && !p->portable;
     for (int pi = 0; pi < lv->npieces; pi++) {
         const piece *pc = &lv->pieces[pi];
         if (pc->grid != g) continue;

@@ -65,6 +65,10 @@ ibl_status ibl__specular_reference(ibl_context *ctx, const ibl_cubemap *src,
 void ibl__output_direction(const ibl_specular_desc *desc, const ibl__lobe *lobe, int face, int n,
                            int x, int y, double dir[3]);
 
+/* Tests: make a (static) plan use the portable sums even where AVX2 is available (its
+ * normalisers are re-summed the same way). */
+void ibl__specular_plan_set_portable(ibl_specular_plan *plan, int portable);
+
 /* The dynamic path (specular_dynamic.c): the chain as a sparse operator over box mips. */
 typedef struct ibl__dynamic ibl__dynamic;
 ibl_status ibl__dynamic_create(ibl_context *ctx, const ibl_specular_desc *desc,
