@@ -52,6 +52,7 @@ struct ibl_specular_reference {
     double *dir;        /* 6 n n x 3: texel centre directions (unit)        */
     double *omega;      /* n n: texel solid angles (same on every face)     */
     double *radius;     /* n n: texel angular radii                         */
+    double max_radius;  /* the largest of them                              */
     double *block;      /* 6 blocks^2 x 4: block centre direction, radius   */
 };
 void ibl__reference_eval_lobe(const ibl_specular_reference *ref, const ibl__lobe *lobe,

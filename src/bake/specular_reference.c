@@ -38,6 +38,7 @@ ibl_status ibl_specular_reference_create(ibl_context *ctx, const ibl_cubemap *sr
     r->omega = ibl_alloc(ctx, (size_t)n * n * sizeof(double));
     r->radius = ibl_alloc(ctx, (size_t)n * n * sizeof(double));
     r->block = ibl_alloc(ctx, (size_t)6 * nb * nb * 4 * sizeof(double));
+    r->max_radius = 0.0;
     if (!r->dir || !r->omega || !r->radius || !r->block) {
         ibl_specular_reference_destroy(r);
         return ibl_context_status(ctx);
@@ -49,6 +50,7 @@ ibl_status ibl_specular_reference_create(ibl_context *ctx, const ibl_cubemap *sr
             r->omega[(size_t)y * n + x] = ibl_cube_texel_solid_angle(n, x, y);
             r->radius[(size_t)y * n + x] =
                 ibl__rect_radius(0, x * h - 1, y * h - 1, (x + 1) * h - 1, (y + 1) * h - 1, c);
+            if (r->radius[(size_t)y * n + x] > r->max_radius) r->max_radius = r->radius[(size_t)y * n + x];
         }
     }
     for (int f = 0; f < 6; f++) {
@@ -123,6 +125,11 @@ void ibl__reference_eval_lobe(const ibl_specular_reference *r, const ibl__lobe *
     }
     const double PI_2 = 1.57079632679489661923;
     double acc[4] = {0, 0, 0, 0}, wsum = 0.0;
+    /* a lobe that varies slowly enough everywhere never splits a texel away from the horizon:
+     * those texels take the centre value without the angle and slope work (same result) */
+    double gmax = ibl__lobe_max_log_slope(lobe, 0.0, PI_2 - 0.05);
+    int smooth = ceil(2.0 * r->max_radius * gmax / 0.2) <= 1.0;
+    double sin_max_radius = sin(r->max_radius);
     for (int f = 0; f < 6; f++) {
         const float *face = ibl_cubemap_face(src, 0, f);
         for (int by = 0; by < nb; by++) {
@@ -140,7 +147,16 @@ void ibl__reference_eval_lobe(const ibl_specular_reference *r, const ibl__lobe *
                         double gamma = r->radius[(size_t)y * n + x];
                         /* cheap rejection before the acos: beyond the cut-off plus the block's
                          * radius (which bounds every texel's radius in it) */
-                        if (R[0] * d[0] + R[1] * d[1] + R[2] * d[2] < cos_skip) continue;
+                        double cd = R[0] * d[0] + R[1] * d[1] + R[2] * d[2];
+                        if (cd < cos_skip) continue;
+                        if (smooth && cd > sin_max_radius) {
+                            double w = ibl__lobe_f(lobe, cd) * r->omega[(size_t)y * n + x];
+                            if (w == 0.0) continue;
+                            const float *p = face + ((size_t)y * n + x) * 4;
+                            for (int i = 0; i < 4; i++) acc[i] += w * p[i];
+                            wsum += w;
+                            continue;
+                        }
                         double theta = angle_between(R, d);
                         double t0 = theta - gamma, t1 = theta + gamma;
                         if (t0 >= lobe->cull_angle || t0 >= PI_2) continue;
