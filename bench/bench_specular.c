@@ -217,7 +217,12 @@ int main(int argc, char **argv)
                     double mean[4];
                     ibl_cubemap_mean(&out, l, mean);
                     double se[3] = {0}, sr[3] = {0}, mx = 0;
-                    uint64_t state = 0x9E3779B97F4A7C15ull ^ (uint64_t)(l * 7919 + si * 104729);
+                    /* the sample depends on the level and the size only (log2(size) - 7:
+                     * 0 for 128, 1 for 256), so that cached references stay valid whatever
+                     * --sizes lists */
+                    int size_key = 0;
+                    while ((256 << size_key) <= sizes[si]) size_key++;
+                    uint64_t state = 0x9E3779B97F4A7C15ull ^ (uint64_t)(l * 7919 + size_key * 104729);
                     size_t *idxs = malloc(count * sizeof *idxs);
                     double *refs = malloc(count * 4 * sizeof *refs);
                     for (size_t s = 0; s < count; s++) {

@@ -605,8 +605,30 @@ typedef struct sum_args {
     int ncand;
 } sum_args;
 
+/* psi_out - psi_in of the piece at u (the partition of unity alone) */
+static float piece_phi(const piece *pc, float u)
+{
+    float v[2];
+    const float sa[2] = {pc->out_sa, pc->in_sa}, sb[2] = {pc->out_sb, pc->in_sb};
+    for (int i = 0; i < 2; i++) {
+        float s = u * sa[i] - sb[i];
+        s = s < 0 ? 0 : s > 1 ? 1 : s;
+        v[i] = 1.0f - s * s * s * (10.0f + s * (-15.0f + 6.0f * s));
+    }
+    return v[0] - v[1];
+}
+
 static float table_weight(const piece *pc, float u, float q)
 {
+    if (!pc->ggx && q > 0) {
+        /* Phong near the horizon: the closed-form mean over u0 +- a (see avx2_lobe) */
+        float a = sqrtf(3.0f * q);
+        if (u + 2.0f * a >= 1.0f && a > 1e-6f) {
+            float xl = 1.0f - u + a, xh = 1.0f - u - a, n1 = pc->n + 1.0f;
+            float pl = xl > 0 ? powf(xl, n1) : 0.0f, ph = xh > 0 ? powf(xh, n1) : 0.0f;
+            return (pl - ph) / (2.0f * a * n1) * piece_phi(pc, u);
+        }
+    }
     float ti = (u - pc->t0) * pc->tscale;
     ti = ti < 0.0f ? 0.0f : ti > (float)(TAB + 1) ? (float)(TAB + 1) : ti;
     int i = (int)ti;
@@ -666,6 +688,7 @@ typedef struct avx2_consts {
     __m256i imax;
     __m256 a2, kap, a4, kap6, osa, osb, osk, isa, isb, isk;
     __m256 n, nn1, xmin; /* Phong: n, n (n - 1), smallest x divided by */
+    __m256 n1, three, amin, tiny; /* Phong's box mean at the horizon */
     int has_in, has_out;
 } avx2_consts;
 
@@ -684,6 +707,8 @@ AVX2 static void avx2_setup(const piece *pc, avx2_consts *k)
     k->isb = _mm256_set1_ps(pc->in_sb), k->isk = _mm256_set1_ps(pc->in_sk);
     k->n = _mm256_set1_ps(pc->n), k->nn1 = _mm256_set1_ps(pc->n * (pc->n - 1.0f));
     k->xmin = _mm256_set1_ps(1e-3f);
+    k->n1 = _mm256_set1_ps(pc->n + 1.0f), k->three = _mm256_set1_ps(3.0f);
+    k->amin = _mm256_set1_ps(1e-6f), k->tiny = _mm256_set1_ps(1e-30f);
     k->has_in = pc->in_sa != 0.0f;
     k->has_out = pc->out_sa != 0.0f;
 }
@@ -748,7 +773,7 @@ AVX2 static inline void avx2_psi(const avx2_consts *k, __m256 u, __m256 sa, __m2
 /* g + g'' q / 2 of the GGX piece at u, in closed form */
 AVX2 static inline __m256 avx2_lobe(const avx2_consts *k, int ggx, __m256 u, __m256 q)
 {
-    __m256 x = _mm256_max_ps(_mm256_sub_ps(k->one, u), k->zero);
+    __m256 xraw = _mm256_sub_ps(k->one, u), x = _mm256_max_ps(xraw, k->zero);
     __m256 front = _mm256_cmp_ps(u, k->one, _CMP_LT_OQ);
     __m256 f0, f1, f2;
     if (ggx) {
@@ -777,7 +802,25 @@ AVX2 static inline __m256 avx2_lobe(const avx2_consts *k, int ggx, __m256 u, __m
     __m256 p0 = _mm256_sub_ps(po0, pi0), p1 = _mm256_sub_ps(pi1, po1), p2 = _mm256_sub_ps(pi2, po2);
     __m256 g = _mm256_mul_ps(f0, p0);
     __m256 g2 = _mm256_fmadd_ps(f2, p0, _mm256_fmadd_ps(_mm256_add_ps(f1, f1), p1, _mm256_mul_ps(f0, p2)));
-    return _mm256_fmadd_ps(_mm256_mul_ps(k->half, g2), q, g);
+    __m256 w = _mm256_fmadd_ps(_mm256_mul_ps(k->half, g2), q, g);
+    if (ggx) return w;
+    /* Phong's x^n has a kink at the horizon (and for n < 2 an unbounded f''): a texel whose
+     * u spread reaches it takes the mean of f over u0 +- a, a = sqrt(3 q), in closed form
+     * ((x + a)^(n+1) - (x - a)^(n+1)) / (2 a (n + 1)) -- the same to second order where the
+     * Taylor leaf is valid, exact at the kink for a uniform spread */
+    __m256 a = _mm256_sqrt_ps(_mm256_mul_ps(_mm256_max_ps(q, k->zero), k->three));
+    __m256 near = _mm256_and_ps(_mm256_cmp_ps(_mm256_fmadd_ps(k->two, a, u), k->one, _CMP_GE_OQ),
+                                _mm256_cmp_ps(a, k->amin, _CMP_GT_OQ));
+    if (_mm256_movemask_ps(near) == 0) return w;
+    __m256 xl = _mm256_max_ps(_mm256_add_ps(xraw, a), k->zero);
+    __m256 xh = _mm256_max_ps(_mm256_sub_ps(xraw, a), k->zero);
+    __m256 pl = _mm256_and_ps(_mm256_cmp_ps(xl, k->zero, _CMP_GT_OQ),
+                              avx2_exp(_mm256_mul_ps(k->n1, avx2_log(_mm256_max_ps(xl, k->tiny)))));
+    __m256 ph = _mm256_and_ps(_mm256_cmp_ps(xh, k->zero, _CMP_GT_OQ),
+                              avx2_exp(_mm256_mul_ps(k->n1, avx2_log(_mm256_max_ps(xh, k->tiny)))));
+    __m256 box = _mm256_div_ps(_mm256_sub_ps(pl, ph),
+                               _mm256_mul_ps(_mm256_mul_ps(k->two, _mm256_max_ps(a, k->amin)), k->n1));
+    return _mm256_blendv_ps(w, _mm256_mul_ps(box, p0), near);
 }
 
 AVX2 static double avx2_hsum(__m256 v)
