@@ -33,26 +33,21 @@ static const double POLE_ROWS = 4.0;
 static const double POLE_CELLS = 4096.0;
 static const double PI = 3.14159265358979323846;
 
+/* The batch loop below (batch_flush) vectorises once sqrt may skip errno (its arguments are
+ * sums of squares) and selects may evaluate both sides (no floating-point traps are used). */
+#if defined(__GNUC__) && !defined(__clang__)
+#define NO_ERRNO __attribute__((optimize("no-math-errno", "no-trapping-math")))
+#else
+#define NO_ERRNO
+#endif
+
 /* atan on [0, 1]: Abramowitz & Stegun 4.4.49 (|error| <= 2e-8 rad, far below any pixel). */
-static inline double atan01(double x)
+NO_ERRNO static inline double atan01(double x)
 {
     double x2 = x * x;
     return x * (1.0 + x2 * (-0.3333314528 + x2 * (0.1999355085 + x2 * (-0.1420889944 +
            x2 * (0.1065626393 + x2 * (-0.0752896400 + x2 * (0.0429096138 +
            x2 * (-0.0161657367 + x2 * 0.0028662257))))))));
-}
-
-static inline double fast_atan2(double y, double x)
-{
-    double ax = fabs(x), ay = fabs(y), r;
-    if (ax >= ay) {
-        if (ax == 0.0) return 0.0;
-        r = atan01(ay / ax);
-    } else {
-        r = 0.5 * PI - atan01(ax / ay);
-    }
-    if (x < 0.0) r = PI - r;
-    return y < 0.0 ? -r : r;
 }
 
 int ibl__equirect_dir(double u, double v, double d[3])
@@ -202,66 +197,109 @@ static double row_share(int H, long r, double py0, double py1, double c, double 
     return flat + t * (s_c + s_d * (centre - c)) + s_d * mom;
 }
 
-/* The same mean as window_value for the common case of a window at most two pixels wide and
- * tall away from the polar bands, in closed form: such a window holds at most two pixel
- * centres per axis, so the interpolant is linear on at most three pieces per axis. In longitude each
- * piece's mean is the interpolant at its middle; in latitude the integral of a linear value
- * times the linear sin(theta) over a piece of length l is l (L(m) s(m) + L' s' l^2 / 12). */
-static void narrow_window(const eq_job *job, double px0, double w, double py0, double py1,
-                          double c, double s_c, double s_d, float out[4])
+/* The unit tent's antiderivative and first moment (tent_cdf, tent_moment) without branches,
+ * for arguments clamped to [-1, 1]: T(t) = 1/2 + t - t|t|/2, M(t) = t^2 (1/2 - |t|/3) - 1/6. */
+static inline double clamp1(double t) { return t < -1.0 ? -1.0 : t > 1.0 ? 1.0 : t; }
+static inline double tent_cdf_c(double t)
 {
-    int W = job->im->width;
-    /* longitude: up to two pieces, each read by linear interpolation (two taps) */
-    long tap_at[6];
-    float tap_w[6];
-    int taps = 0;
-    double a = px0 - floor(px0 / W) * W, b = a + w;
-    /* split at the pixel centres inside (at most two for a window up to two pixels wide) */
-    double cut[4];
-    int ncut = 0;
-    cut[ncut++] = a;
-    for (double knot = floor(a - 0.5) + 1.5; knot < b && ncut < 3; knot += 1.0) cut[ncut++] = knot;
-    cut[ncut++] = b;
-    for (int k = 0; k + 1 < ncut; k++) {
-        double len = cut[k + 1] - cut[k], x = 0.5 * (cut[k] + cut[k + 1]) - 0.5;
-        double fl = floor(x), f = x - fl;
-        long i0 = (long)fl, i1 = i0 + 1;
-        i0 = i0 < 0 ? i0 + W : i0 >= W ? i0 - W : i0;
-        i1 = i1 < 0 ? i1 + W : i1 >= W ? i1 - W : i1;
-        tap_at[taps] = i0 * 4;
-        tap_w[taps++] = (float)(len * (1.0 - f));
-        tap_at[taps] = i1 * 4;
-        tap_w[taps++] = (float)(len * f);
+    t = clamp1(t);
+    return 0.5 + t - 0.5 * t * fabs(t);
+}
+static inline double tent_moment_c(double t)
+{
+    t = clamp1(t);
+    return t * t * (0.5 - fabs(t) * (1.0 / 3.0)) - 1.0 / 6.0;
+}
+
+/* Longitude weights of a window [px0, px0 + w] at most two pixels wide: it meets the tents of
+ * at most four pixel centres, tap k weighing T(b - c_k) - T(a - c_k) (row_window's weights,
+ * divided by w); taps past the window get weight 0. */
+static inline void lon_taps(int W, double px0, double w, float wx[4], size_t col[4])
+{
+    double a = px0 < 0.0 ? px0 + W : px0 >= W ? px0 - W : px0;
+    double fa = floor(a - 0.5), da = a - (fa + 0.5), inv_w = 1.0 / w;
+    long i0 = (long)fa;
+    for (int k = 0; k < 4; k++) {
+        wx[k] = (float)((tent_cdf_c(da + w - k) - tent_cdf_c(da - k)) * inv_w);
+        long i = i0 + k;
+        i = i < 0 ? i + W : i >= W ? i - W : i;
+        col[k] = (size_t)i * 4;
     }
-    /* latitude: the same pieces, each shared by the two rows around it */
-    double acc[4] = {0, 0, 0, 0}, wsum = 0;
-    double ycut[4];
-    int nycut = 0;
-    ycut[nycut++] = py0;
-    for (double knot = floor(py0 - 0.5) + 1.5; knot < py1 && nycut < 3; knot += 1.0)
-        ycut[nycut++] = knot;
-    ycut[nycut++] = py1;
-    for (int k = 0; k + 1 < nycut; k++) {
-        double len = ycut[k + 1] - ycut[k], m = 0.5 * (ycut[k] + ycut[k + 1]);
-        double y = m - 0.5, fl = floor(y), g = y - fl;
-        double sm = s_c + s_d * (m - c), corr = s_d * len * len / 12.0;
-        double wr[2] = {len * ((1.0 - g) * sm - corr), len * (g * sm + corr)};
-        for (int e = 0; e < 2; e++) {
-            const float *row = job->im->pixels + ((size_t)fl + e) * W * 4;
-            float v[4] = {0, 0, 0, 0};
-            for (int t = 0; t < taps; t++) {
-                const float *p = row + tap_at[t];
-                v[0] += tap_w[t] * p[0];
-                v[1] += tap_w[t] * p[1];
-                v[2] += tap_w[t] * p[2];
-                v[3] += tap_w[t] * p[3];
-            }
-            for (int ch = 0; ch < 4; ch++) acc[ch] += wr[e] * v[ch];
-            wsum += wr[e];
+}
+
+/* sum over rows j0 + k of share[k] times the row's longitude window, divided by the shares' sum */
+static inline void gather_4x4(const eq_job *job, long j0, const double share[4], const float wx[4],
+                              const size_t col[4], float out[4])
+{
+    int W = job->im->width, H = job->im->height;
+    double inv = 1.0 / (share[0] + share[1] + share[2] + share[3]);
+    float acc[4] = {0, 0, 0, 0};
+    for (int k = 0; k < 4; k++) {
+        long r = j0 + k < H ? j0 + k : H - 1; /* a row past the window: weight 0 */
+        const float *row = job->im->pixels + (size_t)r * W * 4;
+        float wy = (float)(share[k] * inv);
+        float v[4] = {0, 0, 0, 0};
+        for (int t = 0; t < 4; t++) {
+            const float *p = row + col[t];
+            for (int ch = 0; ch < 4; ch++) v[ch] += wx[t] * p[ch];
         }
+        for (int ch = 0; ch < 4; ch++) acc[ch] += wy * v[ch];
     }
-    double inv = 1.0 / (wsum * w);
-    for (int ch = 0; ch < 4; ch++) out[ch] = (float)(acc[ch] * inv);
+    memcpy(out, acc, sizeof acc);
+}
+
+/* The same mean as window_value for the common case of a window at most two pixels wide and
+ * tall away from the polar bands: a fixed 4 x 4 tap filter, in latitude row k weighing its
+ * row_share (tent times the linear sin(theta)); all weights without branches. */
+static void narrow_window(const eq_job *job, double px0, double w, double py0, double py1,
+                          double s_c, double s_d, float out[4])
+{
+    float wx[4];
+    size_t col[4];
+    lon_taps(job->im->width, px0, w, wx, col);
+    /* row j0 + k has centre py0 - dy + k, at k - dy - h/2 from the window's centre */
+    double h = py1 - py0, fy = floor(py0 - 0.5), dy = py0 - (fy + 0.5);
+    double share[4];
+    for (int k = 0; k < 4; k++) {
+        double t = tent_cdf_c(dy + h - k) - tent_cdf_c(dy - k);
+        double mom = tent_moment_c(dy + h - k) - tent_moment_c(dy - k);
+        share[k] = t * (s_c + s_d * (k - dy - 0.5 * h)) + s_d * mom;
+    }
+    gather_4x4(job, (long)fy, share, wx, col, out);
+}
+
+/* The same for a window at most two pixels wide and tall inside the polar bands (rows are
+ * constant there): row r weighs the exact solid angle cos(theta) difference over its part of
+ * the window. cos(theta) comes from its value and sin at the window's original centre theta_c,
+ * by the angle-sum formula with a Taylor series in the small offset (|offset| <= pi / H, the
+ * caller asks H >= 64: terms past the seventh power are below 1e-15). */
+static void polar_narrow_window(const eq_job *job, double px0, double w, double py0, double py1,
+                                double c, double sin_t, double cos_t, float out[4])
+{
+    int H = job->im->height;
+    float wx[4];
+    size_t col[4];
+    lon_taps(job->im->width, px0, w, wx, col);
+    double fy = floor(py0), k_rad = PI / H;
+    double cth[5]; /* cos(theta) at py0, the row boundaries fy + 1, fy + 2, and py1 */
+    double at[4] = {py0, fy + 1.0, fy + 2.0, py1};
+    for (int i = 0; i < 4; i++) {
+        double d = (at[i] - c) * k_rad, d2 = d * d;
+        double cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24 - d2 * (1.0 / 720)));
+        double sd = d * (1.0 - d2 * (1.0 / 6 - d2 * (1.0 / 120 - d2 * (1.0 / 5040))));
+        cth[i] = cos_t * cd - sin_t * sd;
+    }
+    /* row fy + k covers [fy + k, fy + k + 1] of the window [py0, py1] */
+    double c_py1 = cth[3];
+    double lo0 = cth[0], hi0 = py1 < fy + 1.0 ? c_py1 : cth[1];
+    double lo1 = cth[1], hi1 = py1 < fy + 2.0 ? c_py1 : cth[2];
+    double lo2 = cth[2], hi2 = c_py1;
+    double share[4] = {lo0 - hi0, py1 > fy + 1.0 ? lo1 - hi1 : 0.0, py1 > fy + 2.0 ? lo2 - hi2 : 0.0,
+                       0.0};
+    /* theta grows with the row: cos falls, so a share is positive; clamp rounding */
+    for (int k = 0; k < 3; k++) share[k] = share[k] > 0.0 ? share[k] : 0.0;
+    (void)cth[4];
+    gather_4x4(job, (long)fy, share, wx, col, out);
 }
 
 /* Mean of the bilinear interpolant of the picture over the window [px0, px1] x [py0, py1]
@@ -272,7 +310,7 @@ static void window_value(const eq_job *job, double px0, double px1, double py0, 
 {
     int W = job->im->width, H = job->im->height;
     /* sin(theta) and its slope at the window's centre (given by the caller, who has them) */
-    double k_rad = PI / H, c = 0.5 * (py0 + py1);
+    double k_rad = PI / H, c = 0.5 * (py0 + py1), c_orig = c, h_orig = py1 - py0;
     double s_c = sin_t, s_d = k_rad * cos_t;
     /* a window reaching past a pole is cut there: the far side is already covered by the
      * neighbouring cells across the pole, and counting it twice would add energy */
@@ -286,10 +324,15 @@ static void window_value(const eq_job *job, double px0, double px1, double py0, 
     c = c_cut;
     long R = POLAR_BOX_ROWS < H / 4 ? POLAR_BOX_ROWS : H / 4;
     double w = px1 - px0;
-    if (h >= 1e-6 && h <= 2.0 && w >= 1e-6 && w <= 2.0 && py0 - 0.5 >= R + 1 &&
-        py1 + 0.5 <= H - R - 1) {
-        narrow_window(job, px0, w, py0, py1, c, s_c, s_d, out);
-        return;
+    if (h >= 1e-6 && h <= 2.0 && w >= 1e-6 && w <= 2.0 && W >= 8) {
+        if (py0 - 0.5 >= R + 1 && py1 + 0.5 <= H - R - 1) {
+            narrow_window(job, px0, w, py0, py1, s_c, s_d, out);
+            return;
+        }
+        if (H >= 64 && (py1 <= R || py0 >= H - R) && h_orig <= 2.0) {
+            polar_narrow_window(job, px0, w, py0, py1, c_orig, sin_t, cos_t, out);
+            return;
+        }
     }
     long lo = (long)floor(py0 - 0.5), hi = (long)floor(py1 + 0.5);
     if (h < 1e-6) {
@@ -440,14 +483,19 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
     const double cd = cos(dphi), sd = sin(dphi);
     const double phi_start = 2.0 * PI * ((double)c0 / W - 0.5);
     const double cos_start = cos(phi_start), sin_start = sin(phi_start);
+    /* crossed pixels are cut into FINE rows of cells, each row into cells about as wide as
+     * tall (a pixel near the pole is a thin wedge: sin(theta) dphi << dtheta) */
     enum { FINE = 16 };
-    const double fine_d = dphi / FINE, fcd = cos(fine_d), fsd = sin(fine_d);
-    const double hc = cos(0.5 * fine_d), hs = sin(0.5 * fine_d);
     for (int r = r0; r < r1; r++) {
         const float *row = job->im->pixels + (size_t)r * W * 4;
         double th0 = PI * r / H, th1 = PI * (r + 1) / H;
         double st0 = sin(th0), ct0 = cos(th0), st1 = sin(th1), ct1 = cos(th1);
         double w_pixel = (ct0 - ct1) * dphi;
+        double wedge = fmax(st0, st1) * dphi / (th1 - th0) * FINE;
+        int nlon = wedge >= FINE ? FINE : (int)ceil(wedge);
+        if (nlon < 1) nlon = 1;
+        const double fine_d = dphi / nlon, fcd = cos(fine_d), fsd = sin(fine_d);
+        const double hc = cos(0.5 * fine_d), hs = sin(0.5 * fine_d);
         /* the cells of a crossed pixel: their rows' sin, cos and solid angle */
         double sub_st[FINE], sub_ct[FINE], sub_w[FINE];
         for (int j = 0; j < FINE; j++) {
@@ -473,12 +521,12 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
                 for (int c = 0; c < 4; c++) acc[c] += w_pixel * p[c];
                 wsum += w_pixel;
             } else if (inside > 0 || thin) {
-                /* the texel's edge crosses this pixel: count FINE x FINE cells by centre */
+                /* the texel's edge crosses this pixel: count its cells by centre */
                 double share = 0.0;
                 for (int j = 0; j < FINE; j++) {
                     double st = sub_st[j], ct = sub_ct[j], wcell = sub_w[j];
                     double fc = cp * hc - sp * hs, fs = sp * hc + cp * hs;
-                    for (int i = 0; i < FINE; i++) {
+                    for (int i = 0; i < nlon; i++) {
                         if (in_texel(m, a, b, half, tx, ty, st * fs, ct, -st * fc)) share += wcell;
                         double t = fc * fcd - fs * fsd;
                         fs = fs * fcd + fc * fsd;
@@ -505,6 +553,84 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
     }
 }
 
+/* atan2 from atan01, without branches so that a loop of them vectorises */
+NO_ERRNO static inline double atan2_nb(double y, double x)
+{
+    double ax = fabs(x), ay = fabs(y);
+    double mn = ax < ay ? ax : ay, mx = ax < ay ? ay : ax;
+    double r = atan01(mn / (mx > 0.0 ? mx : 1.0));
+    r = ay > ax ? 0.5 * PI - r : r;
+    r = x < 0.0 ? PI - r : r;
+    return y < 0.0 ? -r : r;
+}
+
+/* Samples are gathered in batches over a texel row: first every sample's window in one loop
+ * without branches (it vectorises), then the windows' values, summed per texel in order. */
+enum { BATCH = 128 };
+typedef struct eq_batch {
+    int n;
+    int texel[BATCH];
+    double sc[BATCH], tc[BATCH], sub[BATCH];
+    double px[BATCH], py[BATCH], wpx[BATCH], hpx[BATCH], st[BATCH], ct[BATCH], wt[BATCH];
+    /* the running sum of the texel being summed (its samples can span two batches) */
+    int cur;
+    double acc[4], wsum;
+} eq_batch;
+
+static void batch_emit(eq_batch *bt, float *out)
+{
+    if (bt->cur >= 0)
+        for (int c = 0; c < 4; c++) out[(size_t)bt->cur * 4 + c] = (float)(bt->acc[c] / bt->wsum);
+    bt->cur = -1;
+}
+
+NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
+{
+    int W = job->im->width, H = job->im->height, n = bt->n;
+    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
+    const double px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
+    for (int i = 0; i < n; i++) {
+        double sc = bt->sc[i], tc = bt->tc[i], sub = bt->sub[i];
+        double x = m[0] + tc * b[0] + sc * a[0], y = m[1] + tc * b[1] + sc * a[1],
+               z = m[2] + tc * b[2] + sc * a[2];
+        double rho2 = x * x + z * z, r2 = rho2 + y * y;
+        double inv_len = 1.0 / sqrt(r2), inv_len2 = inv_len * inv_len;
+        double rho = sqrt(rho2);
+        bt->wt[i] = inv_len2 * inv_len;
+        bt->px[i] = (atan2_nb(x, -z) * (0.5 / PI) + 0.5) * W;
+        bt->py[i] = atan2_nb(rho, y) * (H / PI);
+        /* extents of this sample's cell in longitude and latitude (pixels): the gradients of
+         * phi and theta along both face axes, times the cell size */
+        double g1 = fabs(y * (x * a[0] + z * a[2]) - rho2 * a[1]);
+        double g2 = fabs(y * (x * b[0] + z * b[2]) - rho2 * b[1]);
+        double ga = fabs(x * a[2] - z * a[0]), gb = fabs(x * b[2] - z * b[0]);
+        double safe_rho2 = rho2 > 1e-300 ? rho2 : 1.0; /* on the axis: whole rows */
+        double inv_rho2 = 1.0 / safe_rho2;
+        double wpx = (ga + gb) * inv_rho2 * sub * px_per_rad_u;
+        wpx = wpx < W ? wpx : (double)W;
+        bt->wpx[i] = rho2 > 1e-300 ? wpx : (double)W;
+        double hpx_axis = 2.0 * inv_len * sub * px_per_rad_v;
+        double hpx = (g1 + g2) * rho * inv_rho2 * inv_len2 * sub * px_per_rad_v;
+        bt->hpx[i] = rho2 > 1e-300 ? hpx : hpx_axis;
+        bt->st[i] = rho * inv_len;
+        bt->ct[i] = y * inv_len;
+    }
+    for (int i = 0; i < n; i++) {
+        if (bt->texel[i] != bt->cur) {
+            batch_emit(bt, out);
+            bt->cur = bt->texel[i];
+            bt->acc[0] = bt->acc[1] = bt->acc[2] = bt->acc[3] = bt->wsum = 0.0;
+        }
+        float val[4];
+        double px = bt->px[i], py = bt->py[i], hw = 0.5 * bt->wpx[i], hh = 0.5 * bt->hpx[i];
+        window_value(job, px - hw, px + hw, py - hh, py + hh, bt->st[i], bt->ct[i], val);
+        double wt = bt->wt[i];
+        for (int c = 0; c < 4; c++) bt->acc[c] += wt * val[c];
+        bt->wsum += wt;
+    }
+    bt->n = 0;
+}
+
 static void eq_row_task(void *arg, int index)
 {
     const eq_job *job = arg;
@@ -514,26 +640,22 @@ static void eq_row_task(void *arg, int index)
     float *out = ibl_cubemap_face(job->out, 0, face) + (size_t)ty * N * 4;
     const double cell = 2.0 / N;            /* texel edge on the face plane */
     const double px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
+    eq_batch bt;
+    bt.n = 0;
+    bt.cur = -1;
 
     for (int tx = 0; tx < N; tx++) {
-        int k = job->fixed_k, near_pole;
-        {
-            double sc = -1.0 + (tx + 0.5) * cell, tc = -1.0 + (ty + 0.5) * cell;
-            double d[3] = {m[0] + sc * a[0] + tc * b[0], m[1] + sc * a[1] + tc * b[1],
-                           m[2] + sc * a[2] + tc * b[2]};
-            double rho2 = d[0] * d[0] + d[2] * d[2], r2 = rho2 + d[1] * d[1];
-            near_pole = rho2 < job->pole_radius2 * r2;
-        }
-        if (near_pole && k == 0) {
+        int k = job->fixed_k;
+        double sc = -1.0 + (tx + 0.5) * cell, tc = -1.0 + (ty + 0.5) * cell;
+        double d[3] = {m[0] + sc * a[0] + tc * b[0], m[1] + sc * a[1] + tc * b[1],
+                       m[2] + sc * a[2] + tc * b[2]};
+        double rho2 = d[0] * d[0] + d[2] * d[2], r2 = rho2 + d[1] * d[1];
+        if (k == 0 && rho2 < job->pole_radius2 * r2) {
             eq_texel_near_pole(job, face, tx, ty, out + (size_t)tx * 4);
             continue;
         }
         if (k == 0) {
             /* latitude extent of the texel in source rows, from the gradient of theta */
-            double sc = -1.0 + (tx + 0.5) * cell, tc = -1.0 + (ty + 0.5) * cell;
-            double d[3] = {m[0] + sc * a[0] + tc * b[0], m[1] + sc * a[1] + tc * b[1],
-                           m[2] + sc * a[2] + tc * b[2]};
-            double rho2 = d[0] * d[0] + d[2] * d[2], r2 = rho2 + d[1] * d[1];
             double rho = sqrt(rho2), len = sqrt(r2), ext;
             if (rho < 2.0 * cell * len) {
                 /* at a pole theta is a cone: bound its change by the full gradient 1/|d| */
@@ -551,43 +673,21 @@ static void eq_row_task(void *arg, int index)
             if (k < 1) k = 1;
             if (k > 64) k = 64;
         }
-        double acc[4] = {0, 0, 0, 0}, wsum = 0;
         const double sub = cell / k;
         for (int j = 0; j < k; j++) {
-            double tc = -1.0 + ty * cell + (j + 0.5) * sub;
-            double e[3] = {m[0] + tc * b[0], m[1] + tc * b[1], m[2] + tc * b[2]};
+            double tcj = -1.0 + ty * cell + (j + 0.5) * sub;
             for (int i = 0; i < k; i++) {
-                double sc = -1.0 + tx * cell + (i + 0.5) * sub;
-                double x = e[0] + sc * a[0], y = e[1] + sc * a[1], z = e[2] + sc * a[2];
-                double rho2 = x * x + z * z, r2 = rho2 + y * y;
-                double inv_len = 1.0 / sqrt(r2), inv_len2 = inv_len * inv_len;
-                double wt = inv_len2 * inv_len;
-                double rho = sqrt(rho2);
-                double px = (fast_atan2(x, -z) * (0.5 / PI) + 0.5) * W;
-                double py = fast_atan2(rho, y) * (H / PI);
-                /* extents of this sample's cell in longitude and latitude (pixels): the
-                 * gradients of phi and theta along both face axes, times the cell size */
-                double wpx = W, hpx;
-                double g1 = fabs(y * (x * a[0] + z * a[2]) - rho2 * a[1]);
-                double g2 = fabs(y * (x * b[0] + z * b[2]) - rho2 * b[1]);
-                if (rho2 > 1e-300) {
-                    double ga = fabs(x * a[2] - z * a[0]), gb = fabs(x * b[2] - z * b[0]);
-                    double inv_rho2 = 1.0 / rho2;
-                    wpx = (ga + gb) * inv_rho2 * sub * px_per_rad_u;
-                    if (!(wpx < W)) wpx = W;
-                    hpx = (g1 + g2) * rho * inv_rho2 * inv_len2 * sub * px_per_rad_v;
-                } else {
-                    hpx = 2.0 * inv_len * sub * px_per_rad_v;
-                }
-                float val[4];
-                window_value(job, px - 0.5 * wpx, px + 0.5 * wpx, py - 0.5 * hpx, py + 0.5 * hpx,
-                             rho * inv_len, y * inv_len, val);
-                for (int c = 0; c < 4; c++) acc[c] += wt * val[c];
-                wsum += wt;
+                if (bt.n == BATCH) batch_flush(job, face, &bt, out);
+                bt.texel[bt.n] = tx;
+                bt.sc[bt.n] = -1.0 + tx * cell + (i + 0.5) * sub;
+                bt.tc[bt.n] = tcj;
+                bt.sub[bt.n] = sub;
+                bt.n++;
             }
         }
-        for (int c = 0; c < 4; c++) out[(size_t)tx * 4 + c] = (float)(acc[c] / wsum);
     }
+    if (bt.n) batch_flush(job, face, &bt, out);
+    batch_emit(&bt, out);
 }
 
 ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const ibl__frame *frame,
