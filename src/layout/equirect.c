@@ -199,107 +199,20 @@ static double row_share(int H, long r, double py0, double py1, double c, double 
 
 /* The unit tent's antiderivative and first moment (tent_cdf, tent_moment) without branches,
  * for arguments clamped to [-1, 1]: T(t) = 1/2 + t - t|t|/2, M(t) = t^2 (1/2 - |t|/3) - 1/6. */
-static inline double clamp1(double t) { return t < -1.0 ? -1.0 : t > 1.0 ? 1.0 : t; }
-static inline double tent_cdf_c(double t)
+NO_ERRNO static inline double clamp1(double t)
+{
+    t = t < -1.0 ? -1.0 : t;
+    return t > 1.0 ? 1.0 : t;
+}
+NO_ERRNO static inline double tent_cdf_c(double t)
 {
     t = clamp1(t);
     return 0.5 + t - 0.5 * t * fabs(t);
 }
-static inline double tent_moment_c(double t)
+NO_ERRNO static inline double tent_moment_c(double t)
 {
     t = clamp1(t);
     return t * t * (0.5 - fabs(t) * (1.0 / 3.0)) - 1.0 / 6.0;
-}
-
-/* Longitude weights of a window [px0, px0 + w] at most two pixels wide: it meets the tents of
- * at most four pixel centres, tap k weighing T(b - c_k) - T(a - c_k) (row_window's weights,
- * divided by w); taps past the window get weight 0. */
-static inline void lon_taps(int W, double px0, double w, float wx[4], size_t col[4])
-{
-    double a = px0 < 0.0 ? px0 + W : px0 >= W ? px0 - W : px0;
-    double fa = floor(a - 0.5), da = a - (fa + 0.5), inv_w = 1.0 / w;
-    long i0 = (long)fa;
-    for (int k = 0; k < 4; k++) {
-        wx[k] = (float)((tent_cdf_c(da + w - k) - tent_cdf_c(da - k)) * inv_w);
-        long i = i0 + k;
-        i = i < 0 ? i + W : i >= W ? i - W : i;
-        col[k] = (size_t)i * 4;
-    }
-}
-
-/* sum over rows j0 + k of share[k] times the row's longitude window, divided by the shares' sum */
-static inline void gather_4x4(const eq_job *job, long j0, const double share[4], const float wx[4],
-                              const size_t col[4], float out[4])
-{
-    int W = job->im->width, H = job->im->height;
-    double inv = 1.0 / (share[0] + share[1] + share[2] + share[3]);
-    float acc[4] = {0, 0, 0, 0};
-    for (int k = 0; k < 4; k++) {
-        long r = j0 + k < H ? j0 + k : H - 1; /* a row past the window: weight 0 */
-        const float *row = job->im->pixels + (size_t)r * W * 4;
-        float wy = (float)(share[k] * inv);
-        float v[4] = {0, 0, 0, 0};
-        for (int t = 0; t < 4; t++) {
-            const float *p = row + col[t];
-            for (int ch = 0; ch < 4; ch++) v[ch] += wx[t] * p[ch];
-        }
-        for (int ch = 0; ch < 4; ch++) acc[ch] += wy * v[ch];
-    }
-    memcpy(out, acc, sizeof acc);
-}
-
-/* The same mean as window_value for the common case of a window at most two pixels wide and
- * tall away from the polar bands: a fixed 4 x 4 tap filter, in latitude row k weighing its
- * row_share (tent times the linear sin(theta)); all weights without branches. */
-static void narrow_window(const eq_job *job, double px0, double w, double py0, double py1,
-                          double s_c, double s_d, float out[4])
-{
-    float wx[4];
-    size_t col[4];
-    lon_taps(job->im->width, px0, w, wx, col);
-    /* row j0 + k has centre py0 - dy + k, at k - dy - h/2 from the window's centre */
-    double h = py1 - py0, fy = floor(py0 - 0.5), dy = py0 - (fy + 0.5);
-    double share[4];
-    for (int k = 0; k < 4; k++) {
-        double t = tent_cdf_c(dy + h - k) - tent_cdf_c(dy - k);
-        double mom = tent_moment_c(dy + h - k) - tent_moment_c(dy - k);
-        share[k] = t * (s_c + s_d * (k - dy - 0.5 * h)) + s_d * mom;
-    }
-    gather_4x4(job, (long)fy, share, wx, col, out);
-}
-
-/* The same for a window at most two pixels wide and tall inside the polar bands (rows are
- * constant there): row r weighs the exact solid angle cos(theta) difference over its part of
- * the window. cos(theta) comes from its value and sin at the window's original centre theta_c,
- * by the angle-sum formula with a Taylor series in the small offset (|offset| <= pi / H, the
- * caller asks H >= 64: terms past the seventh power are below 1e-15). */
-static void polar_narrow_window(const eq_job *job, double px0, double w, double py0, double py1,
-                                double c, double sin_t, double cos_t, float out[4])
-{
-    int H = job->im->height;
-    float wx[4];
-    size_t col[4];
-    lon_taps(job->im->width, px0, w, wx, col);
-    double fy = floor(py0), k_rad = PI / H;
-    double cth[5]; /* cos(theta) at py0, the row boundaries fy + 1, fy + 2, and py1 */
-    double at[4] = {py0, fy + 1.0, fy + 2.0, py1};
-    for (int i = 0; i < 4; i++) {
-        double d = (at[i] - c) * k_rad, d2 = d * d;
-        double cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24 - d2 * (1.0 / 720)));
-        double sd = d * (1.0 - d2 * (1.0 / 6 - d2 * (1.0 / 120 - d2 * (1.0 / 5040))));
-        cth[i] = cos_t * cd - sin_t * sd;
-    }
-    /* row fy + k covers [fy + k, fy + k + 1] of the window [py0, py1] */
-    double c_py1 = cth[3];
-    double lo0 = cth[0], hi0 = py1 < fy + 1.0 ? c_py1 : cth[1];
-    double lo1 = cth[1], hi1 = py1 < fy + 2.0 ? c_py1 : cth[2];
-    double lo2 = cth[2], hi2 = c_py1;
-    double share[4] = {lo0 - hi0, py1 > fy + 1.0 ? lo1 - hi1 : 0.0, py1 > fy + 2.0 ? lo2 - hi2 : 0.0,
-                       0.0};
-    /* theta grows with the row: cos falls, so a share is positive; clamp rounding */
-    for (int k = 0; k < 3; k++) share[k] = share[k] > 0.0 ? share[k] : 0.0;
-    (void)cth[4];
-    gather_4x4(job, (long)fy, share, wx, col, out);
 }
 
 /* Mean of the bilinear interpolant of the picture over the window [px0, px1] x [py0, py1]
@@ -310,7 +223,7 @@ static void window_value(const eq_job *job, double px0, double px1, double py0, 
 {
     int W = job->im->width, H = job->im->height;
     /* sin(theta) and its slope at the window's centre (given by the caller, who has them) */
-    double k_rad = PI / H, c = 0.5 * (py0 + py1), c_orig = c, h_orig = py1 - py0;
+    double k_rad = PI / H, c = 0.5 * (py0 + py1);
     double s_c = sin_t, s_d = k_rad * cos_t;
     /* a window reaching past a pole is cut there: the far side is already covered by the
      * neighbouring cells across the pole, and counting it twice would add energy */
@@ -322,18 +235,7 @@ static void window_value(const eq_job *job, double px0, double px1, double py0, 
     double c_cut = 0.5 * (py0 + py1);
     s_c += s_d * (c_cut - c); /* the cut moved the centre */
     c = c_cut;
-    long R = POLAR_BOX_ROWS < H / 4 ? POLAR_BOX_ROWS : H / 4;
-    double w = px1 - px0;
-    if (h >= 1e-6 && h <= 2.0 && w >= 1e-6 && w <= 2.0 && W >= 8) {
-        if (py0 - 0.5 >= R + 1 && py1 + 0.5 <= H - R - 1) {
-            narrow_window(job, px0, w, py0, py1, s_c, s_d, out);
-            return;
-        }
-        if (H >= 64 && (py1 <= R || py0 >= H - R) && h_orig <= 2.0) {
-            polar_narrow_window(job, px0, w, py0, py1, c_orig, sin_t, cos_t, out);
-            return;
-        }
-    }
+    /* (windows at most two pixels wide and tall take the 4 x 4 taps of batch_flush) */
     long lo = (long)floor(py0 - 0.5), hi = (long)floor(py1 + 0.5);
     if (h < 1e-6) {
         /* a point in latitude: the two rows around it */
@@ -572,6 +474,10 @@ typedef struct eq_batch {
     int texel[BATCH];
     double sc[BATCH], tc[BATCH], sub[BATCH];
     double px[BATCH], py[BATCH], wpx[BATCH], hpx[BATCH], st[BATCH], ct[BATCH], wt[BATCH];
+    double t0[BATCH], t1[BATCH], t2[BATCH], t3[BATCH], t4[BATCH]; /* scratch */
+    /* the windows: kind (0: general, window_value), first row, 4 x 4 taps */
+    int kind[BATCH], row[BATCH], rows[BATCH], col[4][BATCH];
+    float wx[4][BATCH], wy[4][BATCH];
     /* the running sum of the texel being summed (its samples can span two batches) */
     int cur;
     double acc[4], wsum;
@@ -589,41 +495,137 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
     int W = job->im->width, H = job->im->height, n = bt->n;
     const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
     const double px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
+    double *x = bt->t0, *y = bt->t1, *z = bt->t2, *rho = bt->t3, *len = bt->t4;
     for (int i = 0; i < n; i++) {
-        double sc = bt->sc[i], tc = bt->tc[i], sub = bt->sub[i];
-        double x = m[0] + tc * b[0] + sc * a[0], y = m[1] + tc * b[1] + sc * a[1],
-               z = m[2] + tc * b[2] + sc * a[2];
-        double rho2 = x * x + z * z, r2 = rho2 + y * y;
-        double inv_len = 1.0 / sqrt(r2), inv_len2 = inv_len * inv_len;
-        double rho = sqrt(rho2);
+        double sc = bt->sc[i], tc = bt->tc[i];
+        x[i] = m[0] + tc * b[0] + sc * a[0];
+        y[i] = m[1] + tc * b[1] + sc * a[1];
+        z[i] = m[2] + tc * b[2] + sc * a[2];
+    }
+    /* (sqrt keeps this loop scalar: it may set errno) */
+    for (int i = 0; i < n; i++) {
+        double rho2 = x[i] * x[i] + z[i] * z[i];
+        rho[i] = sqrt(rho2);
+        len[i] = sqrt(rho2 + y[i] * y[i]);
+    }
+    for (int i = 0; i < n; i++) {
+        double xi = x[i], yi = y[i], zi = z[i], sub = bt->sub[i];
+        double rho2 = xi * xi + zi * zi;
+        double inv_len = 1.0 / len[i], inv_len2 = inv_len * inv_len;
         bt->wt[i] = inv_len2 * inv_len;
-        bt->px[i] = (atan2_nb(x, -z) * (0.5 / PI) + 0.5) * W;
-        bt->py[i] = atan2_nb(rho, y) * (H / PI);
+        bt->px[i] = (atan2_nb(xi, -zi) * (0.5 / PI) + 0.5) * W;
+        bt->py[i] = atan2_nb(rho[i], yi) * (H / PI);
         /* extents of this sample's cell in longitude and latitude (pixels): the gradients of
          * phi and theta along both face axes, times the cell size */
-        double g1 = fabs(y * (x * a[0] + z * a[2]) - rho2 * a[1]);
-        double g2 = fabs(y * (x * b[0] + z * b[2]) - rho2 * b[1]);
-        double ga = fabs(x * a[2] - z * a[0]), gb = fabs(x * b[2] - z * b[0]);
+        double g1 = fabs(yi * (xi * a[0] + zi * a[2]) - rho2 * a[1]);
+        double g2 = fabs(yi * (xi * b[0] + zi * b[2]) - rho2 * b[1]);
+        double ga = fabs(xi * a[2] - zi * a[0]), gb = fabs(xi * b[2] - zi * b[0]);
         double safe_rho2 = rho2 > 1e-300 ? rho2 : 1.0; /* on the axis: whole rows */
         double inv_rho2 = 1.0 / safe_rho2;
         double wpx = (ga + gb) * inv_rho2 * sub * px_per_rad_u;
         wpx = wpx < W ? wpx : (double)W;
         bt->wpx[i] = rho2 > 1e-300 ? wpx : (double)W;
         double hpx_axis = 2.0 * inv_len * sub * px_per_rad_v;
-        double hpx = (g1 + g2) * rho * inv_rho2 * inv_len2 * sub * px_per_rad_v;
+        double hpx = (g1 + g2) * rho[i] * inv_rho2 * inv_len2 * sub * px_per_rad_v;
         bt->hpx[i] = rho2 > 1e-300 ? hpx : hpx_axis;
-        bt->st[i] = rho * inv_len;
-        bt->ct[i] = y * inv_len;
+        bt->st[i] = rho[i] * inv_len;
+        bt->ct[i] = yi * inv_len;
     }
+    /* The windows (as window_value): the 4 x 4 tap weights of the narrow ones, tent rows
+     * (narrow_window) or polar bands (polar_narrow_window); kind 0 takes window_value. */
+    const long R = POLAR_BOX_ROWS < H / 4 ? POLAR_BOX_ROWS : H / 4;
+    const double k_rad = PI / H;
+    const int narrow_ok = W >= 8, polar_ok = W >= 8 && H >= 64;
+    for (int i = 0; i < n; i++) {
+        double hw = 0.5 * bt->wpx[i], hh = 0.5 * bt->hpx[i];
+        double px0 = bt->px[i] - hw, w = 2.0 * hw, c = bt->py[i];
+        double py0 = c - hh, py1 = c + hh, h_orig = 2.0 * hh;
+        double sin_t = bt->st[i], cos_t = bt->ct[i];
+        py0 = py0 < 0.0 ? 0.0 : py0;
+        py1 = py1 > H ? (double)H : py1;
+        py1 = py1 < py0 ? py0 : py1;
+        double h = py1 - py0, s_d = k_rad * cos_t;
+        double s_c = sin_t + s_d * (0.5 * (py0 + py1) - c);
+        int ok = (h >= 1e-6) & (h <= 2.0) & (w >= 1e-6) & (w <= 2.0);
+        int tent = narrow_ok & ok & (py0 - 0.5 >= R + 1) & (py1 + 0.5 <= H - R - 1);
+        int polar = polar_ok & ok & !tent & ((py1 <= R) | (py0 >= H - R)) & (h_orig <= 2.0);
+        bt->kind[i] = tent ? 1 : polar ? 2 : 0;
+        /* longitude: the first column whose tent reaches the window, then four */
+        double wa = px0 < 0.0 ? px0 + W : px0 >= W ? px0 - W : px0;
+        wa = wa < 0.0 ? 0.0 : wa > W ? (double)W : wa; /* only windows of kind 0 move */
+        int i0 = (int)(wa + 0.5) - 1;                   /* floor(wa - 1/2) */
+        /* da in [0, 1): T(da - k) is T(da), da^2 / 2, 0, 0 */
+        double da = wa - (i0 + 0.5), e = da + w, inv_w = 1.0 / (ok ? w : 1.0);
+        double lower[4] = {0.5 + da - 0.5 * da * da, 0.5 * da * da, 0.0, 0.0};
+        for (int k = 0; k < 4; k++) {
+            bt->wx[k][i] = (float)((tent_cdf_c(e - k) - lower[k]) * inv_w);
+            int col = i0 + k;
+            col = col < 0 ? col + W : col >= W ? col - W : col;
+            bt->col[k][i] = col;
+        }
+        double share[4], sum = 0.0;
+        if (tent) {
+            /* tent rows: row j0 + k has centre py0 - dy + k, dy in [0, 1) */
+            int jt = (int)(py0 + 0.5) - 1; /* floor(py0 - 1/2) */
+            double dy = py0 - (jt + 0.5), ey = dy + h, dm = dy - 1.0;
+            double t_lo[2] = {0.5 + dy - 0.5 * dy * dy, 0.5 * dy * dy};
+            double m_lo[2] = {dy * dy * (0.5 - dy * (1.0 / 3.0)) - 1.0 / 6.0,
+                              dm * dm * (0.5 + dm * (1.0 / 3.0)) - 1.0 / 6.0};
+            for (int k = 0; k < 4; k++) {
+                double t = tent_cdf_c(ey - k) - (k < 2 ? t_lo[k] : 0.0);
+                double mom = tent_moment_c(ey - k) - (k < 2 ? m_lo[k] : 0.0);
+                share[k] = t * (s_c + s_d * (k - dy - 0.5 * h)) + s_d * mom;
+            }
+            bt->row[i] = jt;
+            bt->rows[i] = ey > 2.0 ? 4 : ey > 1.0 ? 3 : 2;
+        } else {
+            /* polar bands: row jp + k covers [jp + k, jp + k + 1]; cos(theta) at the cuts
+             * from its value at the centre (polar_narrow_window) */
+            int jp = (int)py0;
+            double cth[4], at[4] = {py0, jp + 1.0, jp + 2.0, py1};
+            for (int k = 0; k < 4; k++) {
+                double d = (at[k] - c) * k_rad, d2 = d * d;
+                double cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24 - d2 * (1.0 / 720)));
+                double sd = d * (1.0 - d2 * (1.0 / 6 - d2 * (1.0 / 120 - d2 * (1.0 / 5040))));
+                cth[k] = cos_t * cd - sin_t * sd;
+            }
+            share[0] = cth[0] - (py1 < jp + 1.0 ? cth[3] : cth[1]);
+            share[1] = py1 > jp + 1.0 ? cth[1] - (py1 < jp + 2.0 ? cth[3] : cth[2]) : 0.0;
+            share[2] = py1 > jp + 2.0 ? cth[2] - cth[3] : 0.0;
+            share[3] = 0.0;
+            /* cos falls with the row: a share is positive, but for rounding */
+            for (int k = 0; k < 3; k++) share[k] = share[k] > 0.0 ? share[k] : 0.0;
+            bt->row[i] = jp;
+            bt->rows[i] = 3;
+        }
+        for (int k = 0; k < 4; k++) sum += share[k];
+        double inv = 1.0 / (sum > 0.0 ? sum : 1.0);
+        for (int k = 0; k < 4; k++) bt->wy[k][i] = (float)(share[k] * inv);
+    }
+    const float *pix = job->im->pixels;
     for (int i = 0; i < n; i++) {
         if (bt->texel[i] != bt->cur) {
             batch_emit(bt, out);
             bt->cur = bt->texel[i];
             bt->acc[0] = bt->acc[1] = bt->acc[2] = bt->acc[3] = bt->wsum = 0.0;
         }
-        float val[4];
-        double px = bt->px[i], py = bt->py[i], hw = 0.5 * bt->wpx[i], hh = 0.5 * bt->hpx[i];
-        window_value(job, px - hw, px + hw, py - hh, py + hh, bt->st[i], bt->ct[i], val);
+        float val[4] = {0, 0, 0, 0};
+        if (bt->kind[i]) {
+            for (int k = 0; k < bt->rows[i]; k++) {
+                long r = bt->row[i] + k < H ? bt->row[i] + k : H - 1; /* past the window: 0 */
+                const float *rowp = pix + (size_t)r * W * 4;
+                float wy = bt->wy[k][i], v[4] = {0, 0, 0, 0};
+                for (int t = 0; t < 4; t++) {
+                    const float *p = rowp + (size_t)bt->col[t][i] * 4;
+                    float wx = bt->wx[t][i];
+                    for (int ch = 0; ch < 4; ch++) v[ch] += wx * p[ch];
+                }
+                for (int ch = 0; ch < 4; ch++) val[ch] += wy * v[ch];
+            }
+        } else {
+            double px = bt->px[i], py = bt->py[i], hw = 0.5 * bt->wpx[i], hh = 0.5 * bt->hpx[i];
+            window_value(job, px - hw, px + hw, py - hh, py + hh, bt->st[i], bt->ct[i], val);
+        }
         double wt = bt->wt[i];
         for (int c = 0; c < 4; c++) bt->acc[c] += wt * val[c];
         bt->wsum += wt;
