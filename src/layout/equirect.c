@@ -32,6 +32,14 @@ static const double POLE_ROWS = 4.0;
 /* Cells per texel there (their solid angle is a texel's / POLE_CELLS). */
 static const double POLE_CELLS = 4096.0;
 static const double PI = 3.14159265358979323846;
+/* Texels of the faces around the poles that take this many samples per axis or more take one
+ * window per source column instead (polar_columns). The two methods blur a texel's edge
+ * differently, so their border is not exactly energy-neutral: at this k the grid's windows
+ * reach only 1/16 of the texel past it in latitude (and it lies inside the directly
+ * integrated polar region for cubes about as fine as the picture). */
+enum { POLAR_COLUMNS_K = 8 };
+/* Texels whose sample counts are found in one pass. */
+enum { TEXEL_RUN = 64 };
 
 /* The batch loop below (batch_flush) vectorises once sqrt may skip errno (its arguments are
  * sums of squares) and selects may evaluate both sides (no floating-point traps are used). */
@@ -39,6 +47,22 @@ static const double PI = 3.14159265358979323846;
 #define NO_ERRNO __attribute__((optimize("no-math-errno", "no-trapping-math")))
 #else
 #define NO_ERRNO
+#endif
+
+/* sqrt of n values: two at a time with SSE2 where there is SSE2 (the same IEEE results) */
+#if defined(__SSE2__)
+#include <emmintrin.h>
+static inline void sqrt_run(const double *in, double *out, int n)
+{
+    int i = 0;
+    for (; i + 2 <= n; i += 2) _mm_storeu_pd(out + i, _mm_sqrt_pd(_mm_loadu_pd(in + i)));
+    for (; i < n; i++) out[i] = sqrt(in[i]);
+}
+#else
+static inline void sqrt_run(const double *in, double *out, int n)
+{
+    for (int i = 0; i < n; i++) out[i] = sqrt(in[i]);
+}
 #endif
 
 /* atan on [0, 1]: Abramowitz & Stegun 4.4.49 (|error| <= 2e-8 rad, far below any pixel). */
@@ -73,6 +97,7 @@ typedef struct eq_job {
     double world[3][3];    /* world = world * picture */
     double pole_cell_area; /* solid angle of the cells near the poles (about 1/POLE_CELLS texel) */
     double pole_radius2;   /* sin^2 of the polar region's angular radius */
+    double *col_sin, *col_cos; /* sin and cos of each source column's centre longitude */
     const float *row_mean; /* height x 4 */
     ibl_cubemap *out;
     int fixed_k;
@@ -195,24 +220,6 @@ static double row_share(int H, long r, double py0, double py1, double c, double 
     double t = tent_cdf(hi - centre) - tent_cdf(lo - centre);
     double mom = tent_moment(hi - centre) - tent_moment(lo - centre);
     return flat + t * (s_c + s_d * (centre - c)) + s_d * mom;
-}
-
-/* The unit tent's antiderivative and first moment (tent_cdf, tent_moment) without branches,
- * for arguments clamped to [-1, 1]: T(t) = 1/2 + t - t|t|/2, M(t) = t^2 (1/2 - |t|/3) - 1/6. */
-NO_ERRNO static inline double clamp1(double t)
-{
-    t = t < -1.0 ? -1.0 : t;
-    return t > 1.0 ? 1.0 : t;
-}
-NO_ERRNO static inline double tent_cdf_c(double t)
-{
-    t = clamp1(t);
-    return 0.5 + t - 0.5 * t * fabs(t);
-}
-NO_ERRNO static inline double tent_moment_c(double t)
-{
-    t = clamp1(t);
-    return t * t * (0.5 - fabs(t) * (1.0 / 3.0)) - 1.0 / 6.0;
 }
 
 /* Mean of the bilinear interpolant of the picture over the window [px0, px1] x [py0, py1]
@@ -466,6 +473,36 @@ NO_ERRNO static inline double atan2_nb(double y, double x)
     return y < 0.0 ? -r : r;
 }
 
+/* Four floats at a time (GCC / Clang vector extensions; plain SSE on x86-64). */
+typedef float v4f __attribute__((vector_size(16)));
+typedef int v4i __attribute__((vector_size(16)));
+NO_ERRNO static inline v4f vsplat(float x) { return (v4f){x, x, x, x}; }
+NO_ERRNO static inline v4f vload(const float *p)
+{
+    v4f v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+NO_ERRNO static inline void vstore(float *p, v4f v) { memcpy(p, &v, sizeof v); }
+NO_ERRNO static inline v4f vsel(v4i m, v4f a, v4f b) { return (v4f)((m & (v4i)a) | (~m & (v4i)b)); }
+NO_ERRNO static inline v4f vabs(v4f x) { return (v4f)((v4i)x & (v4i){0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff}); }
+NO_ERRNO static inline v4f vclamp1(v4f t)
+{
+    t = vsel(t < vsplat(-1.0f), vsplat(-1.0f), t);
+    return vsel(t > vsplat(1.0f), vsplat(1.0f), t);
+}
+/* tent_cdf_c and tent_moment_c */
+NO_ERRNO static inline v4f vtent(v4f t)
+{
+    t = vclamp1(t);
+    return vsplat(0.5f) + t - vsplat(0.5f) * t * vabs(t);
+}
+NO_ERRNO static inline v4f vmoment(v4f t)
+{
+    t = vclamp1(t);
+    return t * t * (vsplat(0.5f) - vabs(t) * vsplat(1.0f / 3.0f)) - vsplat(1.0f / 6.0f);
+}
+
 /* Samples are gathered in batches over a texel row: first every sample's window in one loop
  * without branches (it vectorises), then the windows' values, summed per texel in order. */
 enum { BATCH = 128 };
@@ -473,11 +510,15 @@ typedef struct eq_batch {
     int n;
     int texel[BATCH];
     double sc[BATCH], tc[BATCH], sub[BATCH];
+    int preset[BATCH]; /* the window below is given (polar_columns), not the face point */
     double px[BATCH], py[BATCH], wpx[BATCH], hpx[BATCH], st[BATCH], ct[BATCH], wt[BATCH];
-    double t0[BATCH], t1[BATCH], t2[BATCH], t3[BATCH], t4[BATCH]; /* scratch */
+    double t0[BATCH], t1[BATCH], t2[BATCH], t3[BATCH], t4[BATCH], t5[2 * BATCH]; /* scratch */
     /* the windows: kind (0: general, window_value), first row, 4 x 4 taps */
     int kind[BATCH], row[BATCH], rows[BATCH], col[4][BATCH];
-    float wx[4][BATCH], wy[4][BATCH];
+    float wx[4][BATCH], wyt[4][BATCH], wyp[3][BATCH];
+    /* the tent windows' parameters (see batch_flush) */
+    float v_da[BATCH], v_e[BATCH], v_invw[BATCH], v_dy[BATCH], v_ey[BATCH], v_h[BATCH];
+    float v_sc[BATCH], v_sd[BATCH];
     /* the running sum of the texel being summed (its samples can span two batches) */
     int cur;
     double acc[4], wsum;
@@ -502,19 +543,21 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
         y[i] = m[1] + tc * b[1] + sc * a[1];
         z[i] = m[2] + tc * b[2] + sc * a[2];
     }
-    /* (sqrt keeps this loop scalar: it may set errno) */
+    double *sq = bt->t5;
     for (int i = 0; i < n; i++) {
-        double rho2 = x[i] * x[i] + z[i] * z[i];
-        rho[i] = sqrt(rho2);
-        len[i] = sqrt(rho2 + y[i] * y[i]);
+        sq[i] = x[i] * x[i] + z[i] * z[i];
+        sq[BATCH + i] = sq[i] + y[i] * y[i];
     }
+    sqrt_run(sq, rho, n);
+    sqrt_run(sq + BATCH, len, n);
     for (int i = 0; i < n; i++) {
         double xi = x[i], yi = y[i], zi = z[i], sub = bt->sub[i];
         double rho2 = xi * xi + zi * zi;
         double inv_len = 1.0 / len[i], inv_len2 = inv_len * inv_len;
-        bt->wt[i] = inv_len2 * inv_len;
-        bt->px[i] = (atan2_nb(xi, -zi) * (0.5 / PI) + 0.5) * W;
-        bt->py[i] = atan2_nb(rho[i], yi) * (H / PI);
+        int keep = bt->preset[i];
+        double wt = inv_len2 * inv_len;
+        double px = (atan2_nb(xi, -zi) * (0.5 / PI) + 0.5) * W;
+        double py = atan2_nb(rho[i], yi) * (H / PI);
         /* extents of this sample's cell in longitude and latitude (pixels): the gradients of
          * phi and theta along both face axes, times the cell size */
         double g1 = fabs(yi * (xi * a[0] + zi * a[2]) - rho2 * a[1]);
@@ -524,19 +567,32 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
         double inv_rho2 = 1.0 / safe_rho2;
         double wpx = (ga + gb) * inv_rho2 * sub * px_per_rad_u;
         wpx = wpx < W ? wpx : (double)W;
-        bt->wpx[i] = rho2 > 1e-300 ? wpx : (double)W;
+        wpx = rho2 > 1e-300 ? wpx : (double)W;
         double hpx_axis = 2.0 * inv_len * sub * px_per_rad_v;
         double hpx = (g1 + g2) * rho[i] * inv_rho2 * inv_len2 * sub * px_per_rad_v;
-        bt->hpx[i] = rho2 > 1e-300 ? hpx : hpx_axis;
-        bt->st[i] = rho[i] * inv_len;
-        bt->ct[i] = yi * inv_len;
+        hpx = rho2 > 1e-300 ? hpx : hpx_axis;
+        bt->wt[i] = keep ? bt->wt[i] : wt;
+        bt->px[i] = keep ? bt->px[i] : px;
+        bt->py[i] = keep ? bt->py[i] : py;
+        bt->wpx[i] = keep ? bt->wpx[i] : wpx;
+        bt->hpx[i] = keep ? bt->hpx[i] : hpx;
+        bt->st[i] = keep ? bt->st[i] : rho[i] * inv_len;
+        bt->ct[i] = keep ? bt->ct[i] : yi * inv_len;
     }
     /* The windows (as window_value): the 4 x 4 tap weights of the narrow ones, tent rows
-     * (narrow_window) or polar bands (polar_narrow_window); kind 0 takes window_value. */
+     * (as row_share) or polar bands (constant rows); kind 0 takes window_value. First the
+     * positions and the polar bands in double, one sample at a time. */
     const long R = POLAR_BOX_ROWS < H / 4 ? POLAR_BOX_ROWS : H / 4;
     const double k_rad = PI / H;
     const int narrow_ok = W >= 8, polar_ok = W >= 8 && H >= 64;
-    for (int i = 0; i < n; i++) {
+    int n4 = (n + 3) & ~3;
+    for (int i = 0; i < n4; i++) {
+        if (i >= n) {
+            /* lanes past the batch: any finite window */
+            bt->v_da[i] = bt->v_e[i] = bt->v_invw[i] = bt->v_dy[i] = bt->v_ey[i] = 0.0f;
+            bt->v_sc[i] = bt->v_sd[i] = bt->v_h[i] = 0.0f;
+            continue;
+        }
         double hw = 0.5 * bt->wpx[i], hh = 0.5 * bt->hpx[i];
         double px0 = bt->px[i] - hw, w = 2.0 * hw, c = bt->py[i];
         double py0 = c - hh, py1 = c + hh, h_orig = 2.0 * hh;
@@ -550,57 +606,91 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
         int tent = narrow_ok & ok & (py0 - 0.5 >= R + 1) & (py1 + 0.5 <= H - R - 1);
         int polar = polar_ok & ok & !tent & ((py1 <= R) | (py0 >= H - R)) & (h_orig <= 2.0);
         bt->kind[i] = tent ? 1 : polar ? 2 : 0;
+        if (!(tent | polar)) {
+            bt->v_da[i] = bt->v_e[i] = bt->v_invw[i] = bt->v_dy[i] = bt->v_ey[i] = 0.0f;
+            bt->v_sc[i] = bt->v_sd[i] = bt->v_h[i] = 0.0f;
+            continue;
+        }
         /* longitude: the first column whose tent reaches the window, then four */
         double wa = px0 < 0.0 ? px0 + W : px0 >= W ? px0 - W : px0;
-        wa = wa < 0.0 ? 0.0 : wa > W ? (double)W : wa; /* only windows of kind 0 move */
-        int i0 = (int)(wa + 0.5) - 1;                   /* floor(wa - 1/2) */
-        /* da in [0, 1): T(da - k) is T(da), da^2 / 2, 0, 0 */
-        double da = wa - (i0 + 0.5), e = da + w, inv_w = 1.0 / (ok ? w : 1.0);
-        double lower[4] = {0.5 + da - 0.5 * da * da, 0.5 * da * da, 0.0, 0.0};
+        int i0 = (int)(wa + 0.5) - 1; /* floor(wa - 1/2) */
+        double da = wa - (i0 + 0.5);  /* in [0, 1) */
         for (int k = 0; k < 4; k++) {
-            bt->wx[k][i] = (float)((tent_cdf_c(e - k) - lower[k]) * inv_w);
             int col = i0 + k;
             col = col < 0 ? col + W : col >= W ? col - W : col;
             bt->col[k][i] = col;
         }
-        double share[4], sum = 0.0;
+        bt->v_da[i] = (float)da;
+        bt->v_e[i] = (float)(da + w);
+        bt->v_invw[i] = (float)(1.0 / w);
         if (tent) {
-            /* tent rows: row j0 + k has centre py0 - dy + k, dy in [0, 1) */
+            /* row jt + k has centre py0 - dy + k */
             int jt = (int)(py0 + 0.5) - 1; /* floor(py0 - 1/2) */
-            double dy = py0 - (jt + 0.5), ey = dy + h, dm = dy - 1.0;
-            double t_lo[2] = {0.5 + dy - 0.5 * dy * dy, 0.5 * dy * dy};
-            double m_lo[2] = {dy * dy * (0.5 - dy * (1.0 / 3.0)) - 1.0 / 6.0,
-                              dm * dm * (0.5 + dm * (1.0 / 3.0)) - 1.0 / 6.0};
-            for (int k = 0; k < 4; k++) {
-                double t = tent_cdf_c(ey - k) - (k < 2 ? t_lo[k] : 0.0);
-                double mom = tent_moment_c(ey - k) - (k < 2 ? m_lo[k] : 0.0);
-                share[k] = t * (s_c + s_d * (k - dy - 0.5 * h)) + s_d * mom;
-            }
+            double dy = py0 - (jt + 0.5);
             bt->row[i] = jt;
-            bt->rows[i] = ey > 2.0 ? 4 : ey > 1.0 ? 3 : 2;
+            bt->rows[i] = dy + h > 2.0 ? 4 : dy + h > 1.0 ? 3 : 2;
+            bt->v_dy[i] = (float)dy;
+            bt->v_ey[i] = (float)(dy + h);
+            bt->v_h[i] = (float)h;
+            bt->v_sc[i] = (float)s_c;
+            bt->v_sd[i] = (float)s_d;
         } else {
-            /* polar bands: row jp + k covers [jp + k, jp + k + 1]; cos(theta) at the cuts
-             * from its value at the centre (polar_narrow_window) */
+            /* polar bands: row jp + k covers [jp + k, jp + k + 1]. The solid angle between
+             * theta_i < theta_j is cos theta_i - cos theta_j = 2 sin(mean) sin(half the
+             * difference), both from the window's centre theta_c (sin_t, cos_t) by the
+             * angle-sum formula and Taylor series in offsets below pi / H (H >= 64: terms
+             * past the seventh power are below 1e-15) */
             int jp = (int)py0;
-            double cth[4], at[4] = {py0, jp + 1.0, jp + 2.0, py1};
-            for (int k = 0; k < 4; k++) {
-                double d = (at[k] - c) * k_rad, d2 = d * d;
-                double cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24 - d2 * (1.0 / 720)));
-                double sd = d * (1.0 - d2 * (1.0 / 6 - d2 * (1.0 / 120 - d2 * (1.0 / 5040))));
-                cth[k] = cos_t * cd - sin_t * sd;
+            double cut[4] = {py0, fmin(py1, jp + 1.0), fmin(py1, jp + 2.0), py1}, share[3],
+                   sum = 0.0;
+            for (int k = 0; k < 3; k++) {
+                double m = (0.5 * (cut[k] + cut[k + 1]) - c) * k_rad, m2 = m * m;
+                double hd = 0.5 * (cut[k + 1] - cut[k]) * k_rad, hd2 = hd * hd;
+                double cm = 1.0 - m2 * (0.5 - m2 * (1.0 / 24 - m2 * (1.0 / 720)));
+                double sm = m * (1.0 - m2 * (1.0 / 6 - m2 * (1.0 / 120 - m2 * (1.0 / 5040))));
+                double shd = hd * (1.0 - hd2 * (1.0 / 6 - hd2 * (1.0 / 120 - hd2 * (1.0 / 5040))));
+                share[k] = 2.0 * (sin_t * cm + cos_t * sm) * shd;
+                share[k] = share[k] > 0.0 ? share[k] : 0.0;
+                sum += share[k];
             }
-            share[0] = cth[0] - (py1 < jp + 1.0 ? cth[3] : cth[1]);
-            share[1] = py1 > jp + 1.0 ? cth[1] - (py1 < jp + 2.0 ? cth[3] : cth[2]) : 0.0;
-            share[2] = py1 > jp + 2.0 ? cth[2] - cth[3] : 0.0;
-            share[3] = 0.0;
-            /* cos falls with the row: a share is positive, but for rounding */
-            for (int k = 0; k < 3; k++) share[k] = share[k] > 0.0 ? share[k] : 0.0;
+            double inv = 1.0 / sum;
+            for (int k = 0; k < 3; k++) bt->wyp[k][i] = (float)(share[k] * inv);
             bt->row[i] = jp;
-            bt->rows[i] = 3;
+            bt->rows[i] = cut[2] < py1 ? 3 : cut[1] < py1 ? 2 : 1;
+            bt->v_dy[i] = bt->v_ey[i] = bt->v_h[i] = bt->v_sc[i] = bt->v_sd[i] = 0.0f;
         }
-        for (int k = 0; k < 4; k++) sum += share[k];
-        double inv = 1.0 / (sum > 0.0 ? sum : 1.0);
-        for (int k = 0; k < 4; k++) bt->wy[k][i] = (float)(share[k] * inv);
+    }
+    /* Then the tent weights of four samples at a time, in float (the taps are float):
+     * longitude tap k weighs (T(e - k) - T(da - k)) / w, latitude row k
+     * (T(ey - k) - T(dy - k)) (s_c + s_d (k - dy - h / 2)) + s_d (M(ey - k) - M(dy - k)),
+     * with T(da - k) = T(da), da^2 / 2, 0, 0 for da in [0, 1) (the same for M). */
+    for (int i = 0; i < n4; i += 4) {
+        v4f da = vload(bt->v_da + i), e = vload(bt->v_e + i), invw = vload(bt->v_invw + i);
+        v4f dy = vload(bt->v_dy + i), ey = vload(bt->v_ey + i), h = vload(bt->v_h + i);
+        v4f sc = vload(bt->v_sc + i), sd = vload(bt->v_sd + i);
+        v4f half = vsplat(0.5f), third = vsplat(1.0f / 3.0f), sixth = vsplat(1.0f / 6.0f);
+        v4f lo_t[2] = {half + da - half * da * da, half * da * da};
+        v4f dm = dy - vsplat(1.0f);
+        v4f ly_t[2] = {half + dy - half * dy * dy, half * dy * dy};
+        v4f ly_m[2] = {dy * dy * (half - dy * third) - sixth, dm * dm * (half + dm * third) - sixth};
+        v4f share[4], sum = vsplat(0.0f);
+        for (int k = 0; k < 4; k++) {
+            v4f fk = vsplat((float)k);
+            v4f wx = vtent(e - fk);
+            if (k < 2) wx -= lo_t[k];
+            vstore(bt->wx[k] + i, wx * invw);
+            v4f t = vtent(ey - fk), mom = vmoment(ey - fk);
+            if (k < 2) {
+                t -= ly_t[k];
+                mom -= ly_m[k];
+            }
+            share[k] = t * (sc + sd * (fk - dy - half * h)) + sd * mom;
+            sum += share[k];
+        }
+        /* lanes of other kinds: any finite value (unused) */
+        sum = vsel(sum > vsplat(0.0f), sum, vsplat(1.0f));
+        v4f inv = vsplat(1.0f) / sum;
+        for (int k = 0; k < 4; k++) vstore(bt->wyt[k] + i, share[k] * inv);
     }
     const float *pix = job->im->pixels;
     for (int i = 0; i < n; i++) {
@@ -614,7 +704,7 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
             for (int k = 0; k < bt->rows[i]; k++) {
                 long r = bt->row[i] + k < H ? bt->row[i] + k : H - 1; /* past the window: 0 */
                 const float *rowp = pix + (size_t)r * W * 4;
-                float wy = bt->wy[k][i], v[4] = {0, 0, 0, 0};
+                float wy = bt->kind[i] == 1 ? bt->wyt[k][i] : bt->wyp[k][i], v[4] = {0, 0, 0, 0};
                 for (int t = 0; t < 4; t++) {
                     const float *p = rowp + (size_t)bt->col[t][i] * 4;
                     float wx = bt->wx[t][i];
@@ -633,58 +723,160 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
     bt->n = 0;
 }
 
+/* A texel of a face around a pole (the pole at the face's centre, its axes level) spanning
+ * many source columns: there a k x k grid of samples wastes most of them, as each sample's
+ * window is a pixel wide in longitude but much less tall. Instead the texel takes one window
+ * per source column j whose centre meridian phi_j crosses it: that column's longitude range by
+ * the latitude range where the meridian crosses the texel (the ray from the face's centre
+ * meets the texel's square in one segment, as the square does not hold the centre), weighted
+ * by its solid angle (2 pi / W) (cos theta_in - cos theta_out). The meridians are shared by
+ * all texels and a ray's segments in neighbouring texels share their ends, so these windows
+ * tile the sphere exactly as the columns do: energy is kept wherever a sun falls.
+ * Returns 0 when the texel is not such a texel. */
+static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *bt, float *out)
+{
+    int N = job->out->size, W = job->im->width, H = job->im->height;
+    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
+    if (!(fabs(m[1]) > 1.0 - 1e-9 && fabs(a[1]) < 1e-9 && fabs(b[1]) < 1e-9)) return 0;
+    const double cell = 2.0 / N;
+    /* the same expressions for a texel's edges as for its neighbours' */
+    double s0 = -1.0 + tx * cell, s1 = -1.0 + (tx + 1) * cell;
+    double t0 = -1.0 + ty * cell, t1 = -1.0 + (ty + 1) * cell;
+    /* longitude range from the corners, about the centre's */
+    double sm = 0.5 * (s0 + s1), tm = 0.5 * (t0 + t1);
+    double centre = atan2(sm * a[0] + tm * b[0], -(sm * a[2] + tm * b[2])), lo = 0, hi = 0;
+    for (int c = 0; c < 4; c++) {
+        double sc = c & 1 ? s1 : s0, tc = c & 2 ? t1 : t0;
+        double rel = wrap_angle(atan2(sc * a[0] + tc * b[0], -(sc * a[2] + tc * b[2])) - centre);
+        lo = rel < lo ? rel : lo;
+        hi = rel > hi ? rel : hi;
+    }
+    if (!(hi - lo < 0.5 * PI)) return 0; /* not clear of the pole */
+    /* the columns whose centres phi_j = 2 pi ((j + 1/2) / W - 1/2) lie in the range */
+    double u_lo = ((centre + lo) / (2.0 * PI) + 0.5) * W - 0.5;
+    double u_hi = ((centre + hi) / (2.0 * PI) + 0.5) * W - 0.5;
+    long j_lo = (long)ceil(u_lo), j_hi = (long)floor(u_hi);
+    if (j_hi < j_lo) return 0;
+    const double my = m[1], dphi = 2.0 * PI / W;
+    for (long j = j_lo; j <= j_hi; j++) {
+        long jj = j % W;
+        jj = jj < 0 ? jj + W : jj;
+        double hx = job->col_sin[jj], hz = -job->col_cos[jj]; /* level direction of phi_j */
+        double ua = hx * a[0] + hz * a[2], ub = hx * b[0] + hz * b[2];
+        double rin = 0.0, rout = 1e300;
+        double u[2] = {ua, ub}, l[2] = {s0, t0}, h[2] = {s1, t1};
+        for (int ax = 0; ax < 2; ax++) {
+            if (fabs(u[ax]) < 1e-300) {
+                if (l[ax] > 0.0 || h[ax] <= 0.0) rout = -1.0;
+                continue;
+            }
+            double r1 = l[ax] / u[ax], r2 = h[ax] / u[ax];
+            double near = r1 < r2 ? r1 : r2, far = r1 < r2 ? r2 : r1;
+            rin = near > rin ? near : rin;
+            rout = far < rout ? far : rout;
+        }
+        if (!(rout > rin)) continue;
+        /* theta = atan2(r, my) at both ends; cos theta = my / sqrt(r^2 + 1) */
+        double li = 1.0 / sqrt(rin * rin + 1.0), lo_ = 1.0 / sqrt(rout * rout + 1.0);
+        double wt = fabs(my * li - my * lo_) * dphi;
+        if (!(wt > 0.0)) continue;
+        double py_in = atan2_nb(rin, my) * (H / PI), py_out = atan2_nb(rout, my) * (H / PI);
+        /* sin and cos of the middle latitude: the bisector of the two ends' directions */
+        double vx = rin * li + rout * lo_, vy = my * (li + lo_), vl = 1.0 / sqrt(vx * vx + vy * vy);
+        if (bt->n == BATCH) batch_flush(job, face, bt, out);
+        int n = bt->n++;
+        bt->texel[n] = tx;
+        bt->sc[n] = bt->tc[n] = 0.0;
+        bt->sub[n] = cell;
+        bt->preset[n] = 1;
+        bt->px[n] = jj + 0.5;
+        bt->wpx[n] = 1.0;
+        bt->py[n] = 0.5 * (py_in + py_out);
+        bt->hpx[n] = fabs(py_out - py_in);
+        bt->st[n] = vx * vl;
+        bt->ct[n] = vy * vl;
+        bt->wt[n] = wt;
+    }
+    return 1;
+}
+
+/* How many samples per axis each texel of a run takes (0: near a pole), from the texel's
+ * extent in source rows and columns: SAMPLES_PER_ROW / _COLUMN per pixel it spans. */
+NO_ERRNO static void texel_ks(const eq_job *job, int face, int ty, int tx0, int n, int *ks)
+{
+    int N = job->out->size, W = job->im->width, H = job->im->height;
+    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
+    const double cell = 2.0 / N, px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
+    double rho[TEXEL_RUN], len[TEXEL_RUN], sq[2 * TEXEL_RUN];
+    const double tc = -1.0 + (ty + 0.5) * cell;
+    for (int i = 0; i < n; i++) {
+        double sc = -1.0 + (tx0 + i + 0.5) * cell;
+        double x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
+               z = m[2] + sc * a[2] + tc * b[2];
+        sq[i] = x * x + z * z;
+        sq[TEXEL_RUN + i] = sq[i] + y * y;
+    }
+    sqrt_run(sq, rho, n);
+    sqrt_run(sq + TEXEL_RUN, len, n);
+    for (int i = 0; i < n; i++) {
+        double sc = -1.0 + (tx0 + i + 0.5) * cell;
+        double x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
+               z = m[2] + sc * a[2] + tc * b[2];
+        double rho2 = sq[i], r2 = sq[TEXEL_RUN + i];
+        /* latitude extent of the texel in source rows, from the gradient of theta; at a pole
+         * theta is a cone: its change is bound by the full gradient 1/|d| */
+        double inv_rr = 1.0 / ((rho[i] > 0.0 ? rho[i] : 1.0) * r2);
+        double g0 = y * x * inv_rr, g1 = -rho2 * inv_rr, g2 = y * z * inv_rr;
+        double ext = fabs(g0 * a[0] + g1 * a[1] + g2 * a[2]) + fabs(g0 * b[0] + g1 * b[1] + g2 * b[2]);
+        ext = rho[i] < 2.0 * cell * len[i] ? 2.0 / len[i] : ext;
+        double rows = ext * cell * px_per_rad_v;
+        /* and its longitude extent in source columns */
+        double cols = (fabs(x * a[2] - z * a[0]) + fabs(x * b[2] - z * b[0])) /
+                      (rho2 > 0.0 ? rho2 : 1.0) * cell * px_per_rad_u;
+        double want = SAMPLES_PER_ROW * rows, want_c = SAMPLES_PER_COLUMN * cols;
+        want = want_c > want ? want_c : want;
+        want = want < 64.0 ? want : 64.0;
+        want = want > 1.0 ? want : 1.0; /* (and no NaN) */
+        int k = (int)want;
+        k += k < want; /* ceil */
+        ks[i] = rho2 < job->pole_radius2 * r2 ? 0 : k;
+    }
+}
+
 static void eq_row_task(void *arg, int index)
 {
     const eq_job *job = arg;
     int N = job->out->size, face = index / N, ty = index % N;
-    int W = job->im->width, H = job->im->height;
-    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
     float *out = ibl_cubemap_face(job->out, 0, face) + (size_t)ty * N * 4;
-    const double cell = 2.0 / N;            /* texel edge on the face plane */
-    const double px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
+    const double cell = 2.0 / N; /* texel edge on the face plane */
     eq_batch bt;
     bt.n = 0;
     bt.cur = -1;
-
-    for (int tx = 0; tx < N; tx++) {
-        int k = job->fixed_k;
-        double sc = -1.0 + (tx + 0.5) * cell, tc = -1.0 + (ty + 0.5) * cell;
-        double d[3] = {m[0] + sc * a[0] + tc * b[0], m[1] + sc * a[1] + tc * b[1],
-                       m[2] + sc * a[2] + tc * b[2]};
-        double rho2 = d[0] * d[0] + d[2] * d[2], r2 = rho2 + d[1] * d[1];
-        if (k == 0 && rho2 < job->pole_radius2 * r2) {
-            eq_texel_near_pole(job, face, tx, ty, out + (size_t)tx * 4);
-            continue;
-        }
-        if (k == 0) {
-            /* latitude extent of the texel in source rows, from the gradient of theta */
-            double rho = sqrt(rho2), len = sqrt(r2), ext;
-            if (rho < 2.0 * cell * len) {
-                /* at a pole theta is a cone: bound its change by the full gradient 1/|d| */
-                ext = 2.0 / len;
-            } else {
-                double g[3] = {d[1] * d[0] / rho / r2, -rho / r2, d[1] * d[2] / rho / r2};
-                ext = fabs(g[0] * a[0] + g[1] * a[1] + g[2] * a[2]) +
-                      fabs(g[0] * b[0] + g[1] * b[1] + g[2] * b[2]);
+    int ks[TEXEL_RUN];
+    for (int tx0 = 0; tx0 < N; tx0 += TEXEL_RUN) {
+        int run = N - tx0 < TEXEL_RUN ? N - tx0 : TEXEL_RUN;
+        if (job->fixed_k == 0) texel_ks(job, face, ty, tx0, run, ks);
+        for (int r = 0; r < run; r++) {
+            int tx = tx0 + r, k = job->fixed_k ? job->fixed_k : ks[r];
+            if (k == 0) {
+                eq_texel_near_pole(job, face, tx, ty, out + (size_t)tx * 4);
+                continue;
             }
-            double rows = ext * cell * px_per_rad_v;
-            /* and its longitude extent in source columns */
-            double cols = (fabs(d[0] * a[2] - d[2] * a[0]) + fabs(d[0] * b[2] - d[2] * b[0])) /
-                          rho2 * cell * px_per_rad_u;
-            k = (int)ceil(fmax(SAMPLES_PER_ROW * rows, SAMPLES_PER_COLUMN * cols));
-            if (k < 1) k = 1;
-            if (k > 64) k = 64;
-        }
-        const double sub = cell / k;
-        for (int j = 0; j < k; j++) {
-            double tcj = -1.0 + ty * cell + (j + 0.5) * sub;
-            for (int i = 0; i < k; i++) {
-                if (bt.n == BATCH) batch_flush(job, face, &bt, out);
-                bt.texel[bt.n] = tx;
-                bt.sc[bt.n] = -1.0 + tx * cell + (i + 0.5) * sub;
-                bt.tc[bt.n] = tcj;
-                bt.sub[bt.n] = sub;
-                bt.n++;
+            if (k >= POLAR_COLUMNS_K && job->fixed_k == 0 &&
+                polar_columns(job, face, tx, ty, &bt, out))
+                continue;
+            const double sub = cell / k;
+            for (int j = 0; j < k; j++) {
+                double tcj = -1.0 + ty * cell + (j + 0.5) * sub;
+                for (int i = 0; i < k; i++) {
+                    if (bt.n == BATCH) batch_flush(job, face, &bt, out);
+                    bt.texel[bt.n] = tx;
+                    bt.sc[bt.n] = -1.0 + tx * cell + (i + 0.5) * sub;
+                    bt.tc[bt.n] = tcj;
+                    bt.sub[bt.n] = sub;
+                    bt.preset[bt.n] = 0;
+                    bt.n++;
+                }
             }
         }
     }
@@ -705,8 +897,20 @@ ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const
             for (int c = 0; c < 4; c++) s[c] += p[(size_t)x * 4 + c];
         for (int c = 0; c < 4; c++) mean[(size_t)r * 4 + c] = (float)(s[c] / W);
     }
+    double *cs = ibl_alloc(ctx, (size_t)W * 2 * sizeof(double));
+    if (!cs) {
+        ibl_free(ctx, mean);
+        return ibl_context_status(ctx);
+    }
+    for (int j = 0; j < W; j++) {
+        double phi = 2.0 * PI * ((j + 0.5) / W - 0.5);
+        cs[j] = sin(phi);
+        cs[W + j] = cos(phi);
+    }
     eq_job job;
     memset(&job, 0, sizeof job);
+    job.col_sin = cs;
+    job.col_cos = cs + W;
     job.im = image;
     job.row_mean = mean;
     job.out = out;
@@ -723,6 +927,7 @@ ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const
     }
     ibl__picture_basis(frame, job.basis);
     ibl_parallel_for(ctx, 6 * out->size, eq_row_task, &job);
+    ibl_free(ctx, cs);
     ibl_free(ctx, mean);
     return IBL_OK;
 }
