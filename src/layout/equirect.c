@@ -17,8 +17,17 @@
  * wherever it falls, and a texel much larger than a pixel is a true area average (no
  * aliasing). Within a few texels of each pole, where texels turn against the meridians and
  * such windows would overlap, the texel integrates the constant source pixels directly
- * instead (eq_texel_near_pole). Measured accuracy of the energy of a 3x3-pixel sun: tests/test_layout.c
- * and docs/CONVENTIONS.md. */
+ * instead (eq_texel_near_pole). Around that region, on the faces centred on a pole, texels
+ * spanning many source columns would need k^2 thin windows; they take one window per source
+ * column crossing them instead (polar_columns), which tile the sphere exactly as well.
+ * Measured accuracy of the energy of a 3x3-pixel sun, and of texels against a brute-force
+ * footprint integral: tests/test_layout.c and docs/CONVENTIONS.md.
+ *
+ * Speed (docs/PERFORMANCE.md, "Equirect to cube"): the samples of a texel row are handled in
+ * batches: their directions, longitudes and latitudes in loops without branches (they
+ * vectorise), then the weights of windows at most two pixels wide and tall, which is nearly
+ * all of them, as fixed 4 x 4 taps (four samples at a time in float), then the taps; wider
+ * windows take window_value. */
 #include "layout_internal.h"
 
 #include <math.h>
@@ -510,7 +519,8 @@ typedef struct eq_batch {
     int n;
     int texel[BATCH];
     double sc[BATCH], tc[BATCH], sub[BATCH];
-    int preset[BATCH]; /* the window below is given (polar_columns), not the face point */
+    int preset[BATCH]; /* the window is given (polar_columns), not the face point */
+    double given[BATCH][7]; /* its weight, px, py, wpx, hpx, sin and cos theta */
     double px[BATCH], py[BATCH], wpx[BATCH], hpx[BATCH], st[BATCH], ct[BATCH], wt[BATCH];
     double t0[BATCH], t1[BATCH], t2[BATCH], t3[BATCH], t4[BATCH], t5[2 * BATCH]; /* scratch */
     /* the windows: kind (0: general, window_value), first row, 4 x 4 taps */
@@ -554,7 +564,6 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
         double xi = x[i], yi = y[i], zi = z[i], sub = bt->sub[i];
         double rho2 = xi * xi + zi * zi;
         double inv_len = 1.0 / len[i], inv_len2 = inv_len * inv_len;
-        int keep = bt->preset[i];
         double wt = inv_len2 * inv_len;
         double px = (atan2_nb(xi, -zi) * (0.5 / PI) + 0.5) * W;
         double py = atan2_nb(rho[i], yi) * (H / PI);
@@ -571,14 +580,25 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
         double hpx_axis = 2.0 * inv_len * sub * px_per_rad_v;
         double hpx = (g1 + g2) * rho[i] * inv_rho2 * inv_len2 * sub * px_per_rad_v;
         hpx = rho2 > 1e-300 ? hpx : hpx_axis;
-        bt->wt[i] = keep ? bt->wt[i] : wt;
-        bt->px[i] = keep ? bt->px[i] : px;
-        bt->py[i] = keep ? bt->py[i] : py;
-        bt->wpx[i] = keep ? bt->wpx[i] : wpx;
-        bt->hpx[i] = keep ? bt->hpx[i] : hpx;
-        bt->st[i] = keep ? bt->st[i] : rho[i] * inv_len;
-        bt->ct[i] = keep ? bt->ct[i] : yi * inv_len;
+        bt->wt[i] = wt;
+        bt->px[i] = px;
+        bt->py[i] = py;
+        bt->wpx[i] = wpx;
+        bt->hpx[i] = hpx;
+        bt->st[i] = rho[i] * inv_len;
+        bt->ct[i] = yi * inv_len;
     }
+    for (int i = 0; i < n; i++)
+        if (bt->preset[i]) {
+            const double *g = bt->given[i];
+            bt->wt[i] = g[0];
+            bt->px[i] = g[1];
+            bt->py[i] = g[2];
+            bt->wpx[i] = g[3];
+            bt->hpx[i] = g[4];
+            bt->st[i] = g[5];
+            bt->ct[i] = g[6];
+        }
     /* The windows (as window_value): the 4 x 4 tap weights of the narrow ones, tent rows
      * (as row_share) or polar bands (constant rows); kind 0 takes window_value. First the
      * positions and the polar bands in double, one sample at a time. */
@@ -789,13 +809,14 @@ static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *
         bt->sc[n] = bt->tc[n] = 0.0;
         bt->sub[n] = cell;
         bt->preset[n] = 1;
-        bt->px[n] = jj + 0.5;
-        bt->wpx[n] = 1.0;
-        bt->py[n] = 0.5 * (py_in + py_out);
-        bt->hpx[n] = fabs(py_out - py_in);
-        bt->st[n] = vx * vl;
-        bt->ct[n] = vy * vl;
-        bt->wt[n] = wt;
+        double *g = bt->given[n];
+        g[0] = wt;
+        g[1] = jj + 0.5;
+        g[2] = 0.5 * (py_in + py_out);
+        g[3] = 1.0;
+        g[4] = fabs(py_out - py_in);
+        g[5] = vx * vl;
+        g[6] = vy * vl;
     }
     return 1;
 }
