@@ -858,9 +858,11 @@ NO_ERRNO static void texel_ks(const eq_job *job, int face, int ty, int tx0, int 
         want = want_c > want ? want_c : want;
         want = want < 64.0 ? want : 64.0;
         want = want > 1.0 ? want : 1.0; /* (and no NaN) */
-        int k = (int)want;
-        k += k < want; /* ceil */
-        ks[i] = rho2 < job->pole_radius2 * r2 ? 0 : k;
+        rho[i] = rho2 < job->pole_radius2 * r2 ? 0.0 : want; /* (rho is free again) */
+    }
+    for (int i = 0; i < n; i++) {
+        int k = (int)rho[i];
+        ks[i] = k + (k < rho[i]); /* ceil */
     }
 }
 
