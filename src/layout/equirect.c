@@ -527,8 +527,10 @@ typedef struct eq_batch {
     int kind[BATCH], row[BATCH], rows[BATCH], col[4][BATCH];
     float wx[4][BATCH], wyt[4][BATCH], wyp[3][BATCH];
     /* the tent windows' parameters (see batch_flush) */
-    float v_da[BATCH], v_e[BATCH], v_invw[BATCH], v_dy[BATCH], v_ey[BATCH], v_h[BATCH];
+    float v_da[BATCH], v_e[BATCH], v_dy[BATCH], v_ey[BATCH], v_h[BATCH];
     float v_sc[BATCH], v_sd[BATCH];
+    int fine[BATCH];       /* windows whose weights are redone in double */
+    double fd[BATCH][6];   /* their da, w, dy, h, s_c, s_d */
     /* the running sum of the texel being summed (its samples can span two batches) */
     int cur;
     double acc[4], wsum;
@@ -609,7 +611,7 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
     for (int i = 0; i < n4; i++) {
         if (i >= n) {
             /* lanes past the batch: any finite window */
-            bt->v_da[i] = bt->v_e[i] = bt->v_invw[i] = bt->v_dy[i] = bt->v_ey[i] = 0.0f;
+            bt->v_da[i] = bt->v_e[i] = bt->v_dy[i] = bt->v_ey[i] = 0.0f;
             bt->v_sc[i] = bt->v_sd[i] = bt->v_h[i] = 0.0f;
             continue;
         }
@@ -627,7 +629,7 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
         int polar = polar_ok & ok & !tent & ((py1 <= R) | (py0 >= H - R)) & (h_orig <= 2.0);
         bt->kind[i] = tent ? 1 : polar ? 2 : 0;
         if (!(tent | polar)) {
-            bt->v_da[i] = bt->v_e[i] = bt->v_invw[i] = bt->v_dy[i] = bt->v_ey[i] = 0.0f;
+            bt->v_da[i] = bt->v_e[i] = bt->v_dy[i] = bt->v_ey[i] = 0.0f;
             bt->v_sc[i] = bt->v_sd[i] = bt->v_h[i] = 0.0f;
             continue;
         }
@@ -642,7 +644,11 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
         }
         bt->v_da[i] = (float)da;
         bt->v_e[i] = (float)(da + w);
-        bt->v_invw[i] = (float)(1.0 / w);
+        /* a window much narrower than a pixel loses its width to float rounding of its ends
+         * (6e-8 / w relative): its weights are redone in double below */
+        bt->fine[i] = w < 1.0 / 16 || (tent && h < 1.0 / 16);
+        bt->fd[i][0] = da;
+        bt->fd[i][1] = w;
         if (tent) {
             /* row jt + k has centre py0 - dy + k */
             int jt = (int)(py0 + 0.5) - 1; /* floor(py0 - 1/2) */
@@ -654,6 +660,10 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
             bt->v_h[i] = (float)h;
             bt->v_sc[i] = (float)s_c;
             bt->v_sd[i] = (float)s_d;
+            bt->fd[i][2] = dy;
+            bt->fd[i][3] = h;
+            bt->fd[i][4] = s_c;
+            bt->fd[i][5] = s_d;
         } else {
             /* polar bands: row jp + k covers [jp + k, jp + k + 1]. The solid angle between
              * theta_i < theta_j is cos theta_i - cos theta_j = 2 sin(mean) sin(half the
@@ -681,11 +691,11 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
         }
     }
     /* Then the tent weights of four samples at a time, in float (the taps are float):
-     * longitude tap k weighs (T(e - k) - T(da - k)) / w, latitude row k
+     * longitude tap k weighs T(e - k) - T(da - k) (over their sum, w), latitude row k
      * (T(ey - k) - T(dy - k)) (s_c + s_d (k - dy - h / 2)) + s_d (M(ey - k) - M(dy - k)),
      * with T(da - k) = T(da), da^2 / 2, 0, 0 for da in [0, 1) (the same for M). */
     for (int i = 0; i < n4; i += 4) {
-        v4f da = vload(bt->v_da + i), e = vload(bt->v_e + i), invw = vload(bt->v_invw + i);
+        v4f da = vload(bt->v_da + i), e = vload(bt->v_e + i);
         v4f dy = vload(bt->v_dy + i), ey = vload(bt->v_ey + i), h = vload(bt->v_h + i);
         v4f sc = vload(bt->v_sc + i), sd = vload(bt->v_sd + i);
         v4f half = vsplat(0.5f), third = vsplat(1.0f / 3.0f), sixth = vsplat(1.0f / 6.0f);
@@ -693,12 +703,12 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
         v4f dm = dy - vsplat(1.0f);
         v4f ly_t[2] = {half + dy - half * dy * dy, half * dy * dy};
         v4f ly_m[2] = {dy * dy * (half - dy * third) - sixth, dm * dm * (half + dm * third) - sixth};
-        v4f share[4], sum = vsplat(0.0f);
+        v4f share[4], wx[4], sum = vsplat(0.0f), wsum = vsplat(0.0f);
         for (int k = 0; k < 4; k++) {
             v4f fk = vsplat((float)k);
-            v4f wx = vtent(e - fk);
-            if (k < 2) wx -= lo_t[k];
-            vstore(bt->wx[k] + i, wx * invw);
+            wx[k] = vtent(e - fk);
+            if (k < 2) wx[k] -= lo_t[k];
+            wsum += wx[k];
             v4f t = vtent(ey - fk), mom = vmoment(ey - fk);
             if (k < 2) {
                 t -= ly_t[k];
@@ -709,8 +719,32 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
         }
         /* lanes of other kinds: any finite value (unused) */
         sum = vsel(sum > vsplat(0.0f), sum, vsplat(1.0f));
-        v4f inv = vsplat(1.0f) / sum;
-        for (int k = 0; k < 4; k++) vstore(bt->wyt[k] + i, share[k] * inv);
+        wsum = vsel(wsum > vsplat(0.0f), wsum, vsplat(1.0f));
+        v4f inv = vsplat(1.0f) / sum, inv_w = vsplat(1.0f) / wsum;
+        for (int k = 0; k < 4; k++) {
+            vstore(bt->wyt[k] + i, share[k] * inv);
+            vstore(bt->wx[k] + i, wx[k] * inv_w);
+        }
+    }
+    for (int i = 0; i < n; i++) {
+        if (!bt->kind[i] || !bt->fine[i]) continue;
+        const double *f = bt->fd[i];
+        double wx[4], sum = 0.0;
+        for (int k = 0; k < 4; k++) {
+            wx[k] = tent_cdf(f[0] + f[1] - k) - tent_cdf(f[0] - k);
+            sum += wx[k];
+        }
+        for (int k = 0; k < 4; k++) bt->wx[k][i] = (float)(wx[k] / sum);
+        if (bt->kind[i] != 1) continue;
+        double dy = f[2], h = f[3], share[4];
+        sum = 0.0;
+        for (int k = 0; k < 4; k++) {
+            double t = tent_cdf(dy + h - k) - tent_cdf(dy - k);
+            double mom = tent_moment(dy + h - k) - tent_moment(dy - k);
+            share[k] = t * (f[4] + f[5] * (k - dy - 0.5 * h)) + f[5] * mom;
+            sum += share[k];
+        }
+        for (int k = 0; k < 4; k++) bt->wyt[k][i] = (float)(share[k] / sum);
     }
     const float *pix = job->im->pixels;
     for (int i = 0; i < n; i++) {
