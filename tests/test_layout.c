@@ -742,11 +742,13 @@ static void equirect_footprint_reference(void **state)
                             double x = (phi / (2 * PI) + 0.5) * W, y = theta / PI * H;
                             /* skip the directly integrated polar region (pixels as boxes) */
                             if (fmin(y, H - y) < pole_rows) ymax = -1e9;
-                            for (int ch = 0; ch < 3; ch++) acc[ch] += w * reconstruct(&im, ch, x, y);
+                            for (int ch = 0; ch < 3; ch++)
+                                acc[ch] += w * reconstruct(&im, ch, x, y);
                             wsum += w;
                         }
                     if (ymax < 0) continue;
-                    const float *got = ibl_cubemap_face(&c, 0, faces[fi]) + ((size_t)ty * n + tx) * 4;
+                    const float *got =
+                        ibl_cubemap_face(&c, 0, faces[fi]) + ((size_t)ty * n + tx) * 4;
                     for (int ch = 0; ch < 3; ch++) {
                         double e = fabs(got[ch] - acc[ch] / wsum);
                         worst = fmax(worst, e);

@@ -494,13 +494,17 @@ NO_ERRNO static inline v4f vload(const float *p)
 }
 NO_ERRNO static inline void vstore(float *p, v4f v) { memcpy(p, &v, sizeof v); }
 NO_ERRNO static inline v4f vsel(v4i m, v4f a, v4f b) { return (v4f)((m & (v4i)a) | (~m & (v4i)b)); }
-NO_ERRNO static inline v4f vabs(v4f x) { return (v4f)((v4i)x & (v4i){0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff}); }
+NO_ERRNO static inline v4f vabs(v4f x)
+{
+    return (v4f)((v4i)x & (v4i){0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff});
+}
 NO_ERRNO static inline v4f vclamp1(v4f t)
 {
     t = vsel(t < vsplat(-1.0f), vsplat(-1.0f), t);
     return vsel(t > vsplat(1.0f), vsplat(1.0f), t);
 }
-/* tent_cdf_c and tent_moment_c */
+/* tent_cdf and tent_moment without branches, for t clamped to [-1, 1]:
+ * T(t) = 1/2 + t - t |t| / 2, M(t) = t^2 (1/2 - |t| / 3) - 1/6 */
 NO_ERRNO static inline v4f vtent(v4f t)
 {
     t = vclamp1(t);
@@ -702,7 +706,8 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
         v4f lo_t[2] = {half + da - half * da * da, half * da * da};
         v4f dm = dy - vsplat(1.0f);
         v4f ly_t[2] = {half + dy - half * dy * dy, half * dy * dy};
-        v4f ly_m[2] = {dy * dy * (half - dy * third) - sixth, dm * dm * (half + dm * third) - sixth};
+        v4f ly_m[2] = {dy * dy * (half - dy * third) - sixth,
+                       dm * dm * (half + dm * third) - sixth};
         v4f share[4], wx[4], sum = vsplat(0.0f), wsum = vsplat(0.0f);
         for (int k = 0; k < 4; k++) {
             v4f fk = vsplat((float)k);
@@ -882,7 +887,8 @@ NO_ERRNO static void texel_ks(const eq_job *job, int face, int ty, int tx0, int 
          * theta is a cone: its change is bound by the full gradient 1/|d| */
         double inv_rr = 1.0 / ((rho[i] > 0.0 ? rho[i] : 1.0) * r2);
         double g0 = y * x * inv_rr, g1 = -rho2 * inv_rr, g2 = y * z * inv_rr;
-        double ext = fabs(g0 * a[0] + g1 * a[1] + g2 * a[2]) + fabs(g0 * b[0] + g1 * b[1] + g2 * b[2]);
+        double ext = fabs(g0 * a[0] + g1 * a[1] + g2 * a[2]) +
+                     fabs(g0 * b[0] + g1 * b[1] + g2 * b[2]);
         ext = rho[i] < 2.0 * cell * len[i] ? 2.0 / len[i] : ext;
         double rows = ext * cell * px_per_rad_v;
         /* and its longitude extent in source columns */
