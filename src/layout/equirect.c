@@ -542,8 +542,10 @@ typedef struct eq_batch {
 
 static void batch_emit(eq_batch *bt, float *out)
 {
-    if (bt->cur >= 0)
-        for (int c = 0; c < 4; c++) out[(size_t)bt->cur * 4 + c] = (float)(bt->acc[c] / bt->wsum);
+    if (bt->cur >= 0) {
+        double inv = 1.0 / bt->wsum;
+        for (int c = 0; c < 4; c++) out[(size_t)bt->cur * 4 + c] = (float)(bt->acc[c] * inv);
+    }
     bt->cur = -1;
 }
 
@@ -675,8 +677,9 @@ NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, floa
              * angle-sum formula and Taylor series in offsets below pi / H (H >= 64: terms
              * past the seventh power are below 1e-15) */
             int jp = (int)py0;
-            double cut[4] = {py0, fmin(py1, jp + 1.0), fmin(py1, jp + 2.0), py1}, share[3],
-                   sum = 0.0;
+            double cut[4] = {py0, py1 < jp + 1.0 ? py1 : jp + 1.0,
+                             py1 < jp + 2.0 ? py1 : jp + 2.0, py1};
+            double share[3], sum = 0.0;
             for (int k = 0; k < 3; k++) {
                 double m = (0.5 * (cut[k] + cut[k + 1]) - c) * k_rad, m2 = m * m;
                 double hd = 0.5 * (cut[k + 1] - cut[k]) * k_rad, hd2 = hd * hd;
