@@ -24,10 +24,10 @@
  * footprint integral: tests/test_layout.c and docs/CONVENTIONS.md.
  *
  * Speed (docs/PERFORMANCE.md, "Equirect to cube"): the samples of a texel row are handled in
- * batches: their directions, longitudes and latitudes in loops without branches (they
- * vectorise), then the weights of windows at most two pixels wide and tall, which is nearly
- * all of them, as fixed 4 x 4 taps (four samples at a time in float), then the taps; wider
- * windows take window_value. */
+ * batches: their directions, longitudes and latitudes in loops without branches, then the
+ * weights of windows at most two pixels wide and tall, which is nearly all of them, as fixed
+ * 4 x 4 taps (four samples at a time in float vectors), then the taps; wider windows take
+ * window_value. */
 #include "layout_internal.h"
 
 #include <math.h>
@@ -50,14 +50,6 @@ enum { POLAR_COLUMNS_K = 8 };
 /* Texels whose sample counts are found in one pass. */
 enum { TEXEL_RUN = 64 };
 
-/* The batch loop below (batch_flush) vectorises once sqrt may skip errno (its arguments are
- * sums of squares) and selects may evaluate both sides (no floating-point traps are used). */
-#if defined(__GNUC__) && !defined(__clang__)
-#define NO_ERRNO __attribute__((optimize("no-math-errno", "no-trapping-math")))
-#else
-#define NO_ERRNO
-#endif
-
 /* sqrt of n values: two at a time with SSE2 where there is SSE2 (the same IEEE results) */
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -75,7 +67,7 @@ static inline void sqrt_run(const double *in, double *out, int n)
 #endif
 
 /* atan on [0, 1]: Abramowitz & Stegun 4.4.49 (|error| <= 2e-8 rad, far below any pixel). */
-NO_ERRNO static inline double atan01(double x)
+static inline double atan01(double x)
 {
     double x2 = x * x;
     return x * (1.0 + x2 * (-0.3333314528 + x2 * (0.1999355085 + x2 * (-0.1420889944 +
@@ -471,53 +463,56 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
     }
 }
 
-/* atan2 from atan01, without branches so that a loop of them vectorises */
-NO_ERRNO static inline double atan2_nb(double y, double x)
+/* atan2 from atan01, without branches (the selects compile to masks, not jumps) */
+static inline double atan2_nb(double y, double x)
 {
     double ax = fabs(x), ay = fabs(y);
     double mn = ax < ay ? ax : ay, mx = ax < ay ? ay : ax;
     double r = atan01(mn / (mx > 0.0 ? mx : 1.0));
-    r = ay > ax ? 0.5 * PI - r : r;
-    r = x < 0.0 ? PI - r : r;
-    return y < 0.0 ? -r : r;
+    double r_steep = 0.5 * PI - r;
+    r = ay > ax ? r_steep : r;
+    double r_back = PI - r;
+    r = x < 0.0 ? r_back : r;
+    double r_neg = -r;
+    return y < 0.0 ? r_neg : r;
 }
 
 /* Four floats at a time (GCC / Clang vector extensions; plain SSE on x86-64). */
 typedef float v4f __attribute__((vector_size(16)));
 typedef int v4i __attribute__((vector_size(16)));
-NO_ERRNO static inline v4f vsplat(float x) { return (v4f){x, x, x, x}; }
-NO_ERRNO static inline v4f vload(const float *p)
+static inline v4f vsplat(float x) { return (v4f){x, x, x, x}; }
+static inline v4f vload(const float *p)
 {
     v4f v;
     memcpy(&v, p, sizeof v);
     return v;
 }
-NO_ERRNO static inline void vstore(float *p, v4f v) { memcpy(p, &v, sizeof v); }
-NO_ERRNO static inline v4f vsel(v4i m, v4f a, v4f b) { return (v4f)((m & (v4i)a) | (~m & (v4i)b)); }
-NO_ERRNO static inline v4f vabs(v4f x)
+static inline void vstore(float *p, v4f v) { memcpy(p, &v, sizeof v); }
+static inline v4f vsel(v4i m, v4f a, v4f b) { return (v4f)((m & (v4i)a) | (~m & (v4i)b)); }
+static inline v4f vabs(v4f x)
 {
     return (v4f)((v4i)x & (v4i){0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff});
 }
-NO_ERRNO static inline v4f vclamp1(v4f t)
+static inline v4f vclamp1(v4f t)
 {
     t = vsel(t < vsplat(-1.0f), vsplat(-1.0f), t);
     return vsel(t > vsplat(1.0f), vsplat(1.0f), t);
 }
 /* tent_cdf and tent_moment without branches, for t clamped to [-1, 1]:
  * T(t) = 1/2 + t - t |t| / 2, M(t) = t^2 (1/2 - |t| / 3) - 1/6 */
-NO_ERRNO static inline v4f vtent(v4f t)
+static inline v4f vtent(v4f t)
 {
     t = vclamp1(t);
     return vsplat(0.5f) + t - vsplat(0.5f) * t * vabs(t);
 }
-NO_ERRNO static inline v4f vmoment(v4f t)
+static inline v4f vmoment(v4f t)
 {
     t = vclamp1(t);
     return t * t * (vsplat(0.5f) - vabs(t) * vsplat(1.0f / 3.0f)) - vsplat(1.0f / 6.0f);
 }
 
-/* Samples are gathered in batches over a texel row: first every sample's window in one loop
- * without branches (it vectorises), then the windows' values, summed per texel in order. */
+/* Samples are gathered in batches over a texel row: first every sample's window in loops
+ * without branches, then the windows' values, summed per texel in order. */
 enum { BATCH = 128 };
 typedef struct eq_batch {
     int n;
@@ -549,7 +544,7 @@ static void batch_emit(eq_batch *bt, float *out)
     bt->cur = -1;
 }
 
-NO_ERRNO static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
+static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
 {
     int W = job->im->width, H = job->im->height, n = bt->n;
     const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
@@ -865,7 +860,7 @@ static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *
 
 /* How many samples per axis each texel of a run takes (0: near a pole), from the texel's
  * extent in source rows and columns: SAMPLES_PER_ROW / _COLUMN per pixel it spans. */
-NO_ERRNO static void texel_ks(const eq_job *job, int face, int ty, int tx0, int n, int *ks)
+static void texel_ks(const eq_job *job, int face, int ty, int tx0, int n, int *ks)
 {
     int N = job->out->size, W = job->im->width, H = job->im->height;
     const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
@@ -892,7 +887,8 @@ NO_ERRNO static void texel_ks(const eq_job *job, int face, int ty, int tx0, int 
         double g0 = y * x * inv_rr, g1 = -rho2 * inv_rr, g2 = y * z * inv_rr;
         double ext = fabs(g0 * a[0] + g1 * a[1] + g2 * a[2]) +
                      fabs(g0 * b[0] + g1 * b[1] + g2 * b[2]);
-        ext = rho[i] < 2.0 * cell * len[i] ? 2.0 / len[i] : ext;
+        double ext_cone = 2.0 / len[i];
+        ext = rho[i] < 2.0 * cell * len[i] ? ext_cone : ext;
         double rows = ext * cell * px_per_rad_v;
         /* and its longitude extent in source columns */
         double cols = (fabs(x * a[2] - z * a[0]) + fabs(x * b[2] - z * b[0])) /
