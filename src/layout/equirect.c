@@ -17,8 +17,17 @@
  * wherever it falls, and a texel much larger than a pixel is a true area average (no
  * aliasing). Within a few texels of each pole, where texels turn against the meridians and
  * such windows would overlap, the texel integrates the constant source pixels directly
- * instead (eq_texel_near_pole). Measured accuracy of the energy of a 3x3-pixel sun: tests/test_layout.c
- * and docs/CONVENTIONS.md. */
+ * instead (eq_texel_near_pole). Around that region, on the faces centred on a pole, texels
+ * spanning many source columns would need k^2 thin windows; they take one window per source
+ * column crossing them instead (polar_columns), which tile the sphere exactly as well.
+ * Measured accuracy of the energy of a 3x3-pixel sun, and of texels against a brute-force
+ * footprint integral: tests/test_layout.c and docs/CONVENTIONS.md.
+ *
+ * Speed (docs/PERFORMANCE.md, "Equirect to cube"): the samples of a texel row are handled in
+ * batches: their directions, longitudes and latitudes in loops without branches, then the
+ * weights of windows at most two pixels wide and tall, which is nearly all of them, as fixed
+ * 4 x 4 taps (four samples at a time in float vectors), then the taps; wider windows take
+ * window_value. */
 #include "layout_internal.h"
 
 #include <math.h>
@@ -32,6 +41,30 @@ static const double POLE_ROWS = 4.0;
 /* Cells per texel there (their solid angle is a texel's / POLE_CELLS). */
 static const double POLE_CELLS = 4096.0;
 static const double PI = 3.14159265358979323846;
+/* Texels of the faces around the poles that take this many samples per axis or more take one
+ * window per source column instead (polar_columns). The two methods blur a texel's edge
+ * differently, so their border is not exactly energy-neutral: at this k the grid's windows
+ * reach only 1/16 of the texel past it in latitude (and it lies inside the directly
+ * integrated polar region for cubes about as fine as the picture). */
+enum { POLAR_COLUMNS_K = 8 };
+/* Texels whose sample counts are found in one pass. */
+enum { TEXEL_RUN = 64 };
+
+/* sqrt of n values: two at a time with SSE2 where there is SSE2 (the same IEEE results) */
+#if defined(__SSE2__)
+#include <emmintrin.h>
+static inline void sqrt_run(const double *in, double *out, int n)
+{
+    int i = 0;
+    for (; i + 2 <= n; i += 2) _mm_storeu_pd(out + i, _mm_sqrt_pd(_mm_loadu_pd(in + i)));
+    for (; i < n; i++) out[i] = sqrt(in[i]);
+}
+#else
+static inline void sqrt_run(const double *in, double *out, int n)
+{
+    for (int i = 0; i < n; i++) out[i] = sqrt(in[i]);
+}
+#endif
 
 /* atan on [0, 1]: Abramowitz & Stegun 4.4.49 (|error| <= 2e-8 rad, far below any pixel). */
 static inline double atan01(double x)
@@ -40,19 +73,6 @@ static inline double atan01(double x)
     return x * (1.0 + x2 * (-0.3333314528 + x2 * (0.1999355085 + x2 * (-0.1420889944 +
            x2 * (0.1065626393 + x2 * (-0.0752896400 + x2 * (0.0429096138 +
            x2 * (-0.0161657367 + x2 * 0.0028662257))))))));
-}
-
-static inline double fast_atan2(double y, double x)
-{
-    double ax = fabs(x), ay = fabs(y), r;
-    if (ax >= ay) {
-        if (ax == 0.0) return 0.0;
-        r = atan01(ay / ax);
-    } else {
-        r = 0.5 * PI - atan01(ax / ay);
-    }
-    if (x < 0.0) r = PI - r;
-    return y < 0.0 ? -r : r;
 }
 
 int ibl__equirect_dir(double u, double v, double d[3])
@@ -78,6 +98,7 @@ typedef struct eq_job {
     double world[3][3];    /* world = world * picture */
     double pole_cell_area; /* solid angle of the cells near the poles (about 1/POLE_CELLS texel) */
     double pole_radius2;   /* sin^2 of the polar region's angular radius */
+    double *col_sin, *col_cos; /* sin and cos of each source column's centre longitude */
     const float *row_mean; /* height x 4 */
     ibl_cubemap *out;
     int fixed_k;
@@ -202,68 +223,6 @@ static double row_share(int H, long r, double py0, double py1, double c, double 
     return flat + t * (s_c + s_d * (centre - c)) + s_d * mom;
 }
 
-/* The same mean as window_value for the common case of a window at most two pixels wide and
- * tall away from the polar bands, in closed form: such a window holds at most two pixel
- * centres per axis, so the interpolant is linear on at most three pieces per axis. In longitude each
- * piece's mean is the interpolant at its middle; in latitude the integral of a linear value
- * times the linear sin(theta) over a piece of length l is l (L(m) s(m) + L' s' l^2 / 12). */
-static void narrow_window(const eq_job *job, double px0, double w, double py0, double py1,
-                          double c, double s_c, double s_d, float out[4])
-{
-    int W = job->im->width;
-    /* longitude: up to two pieces, each read by linear interpolation (two taps) */
-    long tap_at[6];
-    float tap_w[6];
-    int taps = 0;
-    double a = px0 - floor(px0 / W) * W, b = a + w;
-    /* split at the pixel centres inside (at most two for a window up to two pixels wide) */
-    double cut[4];
-    int ncut = 0;
-    cut[ncut++] = a;
-    for (double knot = floor(a - 0.5) + 1.5; knot < b && ncut < 3; knot += 1.0) cut[ncut++] = knot;
-    cut[ncut++] = b;
-    for (int k = 0; k + 1 < ncut; k++) {
-        double len = cut[k + 1] - cut[k], x = 0.5 * (cut[k] + cut[k + 1]) - 0.5;
-        double fl = floor(x), f = x - fl;
-        long i0 = (long)fl, i1 = i0 + 1;
-        i0 = i0 < 0 ? i0 + W : i0 >= W ? i0 - W : i0;
-        i1 = i1 < 0 ? i1 + W : i1 >= W ? i1 - W : i1;
-        tap_at[taps] = i0 * 4;
-        tap_w[taps++] = (float)(len * (1.0 - f));
-        tap_at[taps] = i1 * 4;
-        tap_w[taps++] = (float)(len * f);
-    }
-    /* latitude: the same pieces, each shared by the two rows around it */
-    double acc[4] = {0, 0, 0, 0}, wsum = 0;
-    double ycut[4];
-    int nycut = 0;
-    ycut[nycut++] = py0;
-    for (double knot = floor(py0 - 0.5) + 1.5; knot < py1 && nycut < 3; knot += 1.0)
-        ycut[nycut++] = knot;
-    ycut[nycut++] = py1;
-    for (int k = 0; k + 1 < nycut; k++) {
-        double len = ycut[k + 1] - ycut[k], m = 0.5 * (ycut[k] + ycut[k + 1]);
-        double y = m - 0.5, fl = floor(y), g = y - fl;
-        double sm = s_c + s_d * (m - c), corr = s_d * len * len / 12.0;
-        double wr[2] = {len * ((1.0 - g) * sm - corr), len * (g * sm + corr)};
-        for (int e = 0; e < 2; e++) {
-            const float *row = job->im->pixels + ((size_t)fl + e) * W * 4;
-            float v[4] = {0, 0, 0, 0};
-            for (int t = 0; t < taps; t++) {
-                const float *p = row + tap_at[t];
-                v[0] += tap_w[t] * p[0];
-                v[1] += tap_w[t] * p[1];
-                v[2] += tap_w[t] * p[2];
-                v[3] += tap_w[t] * p[3];
-            }
-            for (int ch = 0; ch < 4; ch++) acc[ch] += wr[e] * v[ch];
-            wsum += wr[e];
-        }
-    }
-    double inv = 1.0 / (wsum * w);
-    for (int ch = 0; ch < 4; ch++) out[ch] = (float)(acc[ch] * inv);
-}
-
 /* Mean of the bilinear interpolant of the picture over the window [px0, px1] x [py0, py1]
  * (pixel units). Rows past a pole continue on the opposite meridian (row -1 is row 0 turned
  * by half a revolution). */
@@ -284,13 +243,7 @@ static void window_value(const eq_job *job, double px0, double px1, double py0, 
     double c_cut = 0.5 * (py0 + py1);
     s_c += s_d * (c_cut - c); /* the cut moved the centre */
     c = c_cut;
-    long R = POLAR_BOX_ROWS < H / 4 ? POLAR_BOX_ROWS : H / 4;
-    double w = px1 - px0;
-    if (h >= 1e-6 && h <= 2.0 && w >= 1e-6 && w <= 2.0 && py0 - 0.5 >= R + 1 &&
-        py1 + 0.5 <= H - R - 1) {
-        narrow_window(job, px0, w, py0, py1, c, s_c, s_d, out);
-        return;
-    }
+    /* (windows at most two pixels wide and tall take the 4 x 4 taps of batch_flush) */
     long lo = (long)floor(py0 - 0.5), hi = (long)floor(py1 + 0.5);
     if (h < 1e-6) {
         /* a point in latitude: the two rows around it */
@@ -440,14 +393,19 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
     const double cd = cos(dphi), sd = sin(dphi);
     const double phi_start = 2.0 * PI * ((double)c0 / W - 0.5);
     const double cos_start = cos(phi_start), sin_start = sin(phi_start);
+    /* crossed pixels are cut into FINE rows of cells, each row into cells about as wide as
+     * tall (a pixel near the pole is a thin wedge: sin(theta) dphi << dtheta) */
     enum { FINE = 16 };
-    const double fine_d = dphi / FINE, fcd = cos(fine_d), fsd = sin(fine_d);
-    const double hc = cos(0.5 * fine_d), hs = sin(0.5 * fine_d);
     for (int r = r0; r < r1; r++) {
         const float *row = job->im->pixels + (size_t)r * W * 4;
         double th0 = PI * r / H, th1 = PI * (r + 1) / H;
         double st0 = sin(th0), ct0 = cos(th0), st1 = sin(th1), ct1 = cos(th1);
         double w_pixel = (ct0 - ct1) * dphi;
+        double wedge = fmax(st0, st1) * dphi / (th1 - th0) * FINE;
+        int nlon = wedge >= FINE ? FINE : (int)ceil(wedge);
+        if (nlon < 1) nlon = 1;
+        const double fine_d = dphi / nlon, fcd = cos(fine_d), fsd = sin(fine_d);
+        const double hc = cos(0.5 * fine_d), hs = sin(0.5 * fine_d);
         /* the cells of a crossed pixel: their rows' sin, cos and solid angle */
         double sub_st[FINE], sub_ct[FINE], sub_w[FINE];
         for (int j = 0; j < FINE; j++) {
@@ -473,12 +431,12 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
                 for (int c = 0; c < 4; c++) acc[c] += w_pixel * p[c];
                 wsum += w_pixel;
             } else if (inside > 0 || thin) {
-                /* the texel's edge crosses this pixel: count FINE x FINE cells by centre */
+                /* the texel's edge crosses this pixel: count its cells by centre */
                 double share = 0.0;
                 for (int j = 0; j < FINE; j++) {
                     double st = sub_st[j], ct = sub_ct[j], wcell = sub_w[j];
                     double fc = cp * hc - sp * hs, fs = sp * hc + cp * hs;
-                    for (int i = 0; i < FINE; i++) {
+                    for (int i = 0; i < nlon; i++) {
                         if (in_texel(m, a, b, half, tx, ty, st * fs, ct, -st * fc)) share += wcell;
                         double t = fc * fcd - fs * fsd;
                         fs = fs * fcd + fc * fsd;
@@ -505,89 +463,487 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
     }
 }
 
+/* atan2 from atan01, without branches (the selects compile to masks, not jumps) */
+static inline double atan2_nb(double y, double x)
+{
+    double ax = fabs(x), ay = fabs(y);
+    double mn = ax < ay ? ax : ay, mx = ax < ay ? ay : ax;
+    double r = atan01(mn / (mx > 0.0 ? mx : 1.0));
+    double r_steep = 0.5 * PI - r;
+    r = ay > ax ? r_steep : r;
+    double r_back = PI - r;
+    r = x < 0.0 ? r_back : r;
+    double r_neg = -r;
+    return y < 0.0 ? r_neg : r;
+}
+
+/* Four floats at a time (GCC / Clang vector extensions; plain SSE on x86-64). */
+typedef float v4f __attribute__((vector_size(16)));
+typedef int v4i __attribute__((vector_size(16)));
+static inline v4f vsplat(float x) { return (v4f){x, x, x, x}; }
+static inline v4f vload(const float *p)
+{
+    v4f v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+static inline void vstore(float *p, v4f v) { memcpy(p, &v, sizeof v); }
+static inline v4f vsel(v4i m, v4f a, v4f b) { return (v4f)((m & (v4i)a) | (~m & (v4i)b)); }
+static inline v4f vabs(v4f x)
+{
+    return (v4f)((v4i)x & (v4i){0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff});
+}
+static inline v4f vclamp1(v4f t)
+{
+    t = vsel(t < vsplat(-1.0f), vsplat(-1.0f), t);
+    return vsel(t > vsplat(1.0f), vsplat(1.0f), t);
+}
+/* tent_cdf and tent_moment without branches, for t clamped to [-1, 1]:
+ * T(t) = 1/2 + t - t |t| / 2, M(t) = t^2 (1/2 - |t| / 3) - 1/6 */
+static inline v4f vtent(v4f t)
+{
+    t = vclamp1(t);
+    return vsplat(0.5f) + t - vsplat(0.5f) * t * vabs(t);
+}
+static inline v4f vmoment(v4f t)
+{
+    t = vclamp1(t);
+    return t * t * (vsplat(0.5f) - vabs(t) * vsplat(1.0f / 3.0f)) - vsplat(1.0f / 6.0f);
+}
+
+/* Samples are gathered in batches over a texel row: first every sample's window in loops
+ * without branches, then the windows' values, summed per texel in order. */
+enum { BATCH = 128 };
+typedef struct eq_batch {
+    int n;
+    int texel[BATCH];
+    double sc[BATCH], tc[BATCH], sub[BATCH];
+    int preset[BATCH]; /* the window is given (polar_columns), not the face point */
+    double given[BATCH][7]; /* its weight, px, py, wpx, hpx, sin and cos theta */
+    double px[BATCH], py[BATCH], wpx[BATCH], hpx[BATCH], st[BATCH], ct[BATCH], wt[BATCH];
+    double t0[BATCH], t1[BATCH], t2[BATCH], t3[BATCH], t4[BATCH], t5[2 * BATCH]; /* scratch */
+    /* the windows: kind (0: general, window_value), first row, 4 x 4 taps */
+    int kind[BATCH], row[BATCH], rows[BATCH], col[4][BATCH];
+    float wx[4][BATCH], wyt[4][BATCH], wyp[3][BATCH];
+    /* the tent windows' parameters (see batch_flush) */
+    float v_da[BATCH], v_e[BATCH], v_dy[BATCH], v_ey[BATCH], v_h[BATCH];
+    float v_sc[BATCH], v_sd[BATCH];
+    int fine[BATCH];       /* windows whose weights are redone in double */
+    double fd[BATCH][6];   /* their da, w, dy, h, s_c, s_d */
+    /* the running sum of the texel being summed (its samples can span two batches) */
+    int cur;
+    double acc[4], wsum;
+} eq_batch;
+
+static void batch_emit(eq_batch *bt, float *out)
+{
+    if (bt->cur >= 0) {
+        double inv = 1.0 / bt->wsum;
+        for (int c = 0; c < 4; c++) out[(size_t)bt->cur * 4 + c] = (float)(bt->acc[c] * inv);
+    }
+    bt->cur = -1;
+}
+
+static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
+{
+    int W = job->im->width, H = job->im->height, n = bt->n;
+    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
+    const double px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
+    double *x = bt->t0, *y = bt->t1, *z = bt->t2, *rho = bt->t3, *len = bt->t4;
+    for (int i = 0; i < n; i++) {
+        double sc = bt->sc[i], tc = bt->tc[i];
+        x[i] = m[0] + tc * b[0] + sc * a[0];
+        y[i] = m[1] + tc * b[1] + sc * a[1];
+        z[i] = m[2] + tc * b[2] + sc * a[2];
+    }
+    double *sq = bt->t5;
+    for (int i = 0; i < n; i++) {
+        sq[i] = x[i] * x[i] + z[i] * z[i];
+        sq[BATCH + i] = sq[i] + y[i] * y[i];
+    }
+    sqrt_run(sq, rho, n);
+    sqrt_run(sq + BATCH, len, n);
+    for (int i = 0; i < n; i++) {
+        double xi = x[i], yi = y[i], zi = z[i], sub = bt->sub[i];
+        double rho2 = xi * xi + zi * zi;
+        double inv_len = 1.0 / len[i], inv_len2 = inv_len * inv_len;
+        double wt = inv_len2 * inv_len;
+        double px = (atan2_nb(xi, -zi) * (0.5 / PI) + 0.5) * W;
+        double py = atan2_nb(rho[i], yi) * (H / PI);
+        /* extents of this sample's cell in longitude and latitude (pixels): the gradients of
+         * phi and theta along both face axes, times the cell size */
+        double g1 = fabs(yi * (xi * a[0] + zi * a[2]) - rho2 * a[1]);
+        double g2 = fabs(yi * (xi * b[0] + zi * b[2]) - rho2 * b[1]);
+        double ga = fabs(xi * a[2] - zi * a[0]), gb = fabs(xi * b[2] - zi * b[0]);
+        double safe_rho2 = rho2 > 1e-300 ? rho2 : 1.0; /* on the axis: whole rows */
+        double inv_rho2 = 1.0 / safe_rho2;
+        double wpx = (ga + gb) * inv_rho2 * sub * px_per_rad_u;
+        wpx = wpx < W ? wpx : (double)W;
+        wpx = rho2 > 1e-300 ? wpx : (double)W;
+        double hpx_axis = 2.0 * inv_len * sub * px_per_rad_v;
+        double hpx = (g1 + g2) * rho[i] * inv_rho2 * inv_len2 * sub * px_per_rad_v;
+        hpx = rho2 > 1e-300 ? hpx : hpx_axis;
+        bt->wt[i] = wt;
+        bt->px[i] = px;
+        bt->py[i] = py;
+        bt->wpx[i] = wpx;
+        bt->hpx[i] = hpx;
+        bt->st[i] = rho[i] * inv_len;
+        bt->ct[i] = yi * inv_len;
+    }
+    for (int i = 0; i < n; i++)
+        if (bt->preset[i]) {
+            const double *g = bt->given[i];
+            bt->wt[i] = g[0];
+            bt->px[i] = g[1];
+            bt->py[i] = g[2];
+            bt->wpx[i] = g[3];
+            bt->hpx[i] = g[4];
+            bt->st[i] = g[5];
+            bt->ct[i] = g[6];
+        }
+    /* The windows (as window_value): the 4 x 4 tap weights of the narrow ones, tent rows
+     * (as row_share) or polar bands (constant rows); kind 0 takes window_value. First the
+     * positions and the polar bands in double, one sample at a time. */
+    const long R = POLAR_BOX_ROWS < H / 4 ? POLAR_BOX_ROWS : H / 4;
+    const double k_rad = PI / H;
+    const int narrow_ok = W >= 8, polar_ok = W >= 8 && H >= 64;
+    int n4 = (n + 3) & ~3;
+    for (int i = 0; i < n4; i++) {
+        if (i >= n) {
+            /* lanes past the batch: any finite window */
+            bt->v_da[i] = bt->v_e[i] = bt->v_dy[i] = bt->v_ey[i] = 0.0f;
+            bt->v_sc[i] = bt->v_sd[i] = bt->v_h[i] = 0.0f;
+            continue;
+        }
+        double hw = 0.5 * bt->wpx[i], hh = 0.5 * bt->hpx[i];
+        double px0 = bt->px[i] - hw, w = 2.0 * hw, c = bt->py[i];
+        double py0 = c - hh, py1 = c + hh, h_orig = 2.0 * hh;
+        double sin_t = bt->st[i], cos_t = bt->ct[i];
+        py0 = py0 < 0.0 ? 0.0 : py0;
+        py1 = py1 > H ? (double)H : py1;
+        py1 = py1 < py0 ? py0 : py1;
+        double h = py1 - py0, s_d = k_rad * cos_t;
+        double s_c = sin_t + s_d * (0.5 * (py0 + py1) - c);
+        int ok = (h >= 1e-6) & (h <= 2.0) & (w >= 1e-6) & (w <= 2.0);
+        int tent = narrow_ok & ok & (py0 - 0.5 >= R + 1) & (py1 + 0.5 <= H - R - 1);
+        int polar = polar_ok & ok & !tent & ((py1 <= R) | (py0 >= H - R)) & (h_orig <= 2.0);
+        bt->kind[i] = tent ? 1 : polar ? 2 : 0;
+        if (!(tent | polar)) {
+            bt->v_da[i] = bt->v_e[i] = bt->v_dy[i] = bt->v_ey[i] = 0.0f;
+            bt->v_sc[i] = bt->v_sd[i] = bt->v_h[i] = 0.0f;
+            continue;
+        }
+        /* longitude: the first column whose tent reaches the window, then four */
+        double wa = px0 < 0.0 ? px0 + W : px0 >= W ? px0 - W : px0;
+        int i0 = (int)(wa + 0.5) - 1; /* floor(wa - 1/2) */
+        double da = wa - (i0 + 0.5);  /* in [0, 1) */
+        for (int k = 0; k < 4; k++) {
+            int col = i0 + k;
+            col = col < 0 ? col + W : col >= W ? col - W : col;
+            bt->col[k][i] = col;
+        }
+        bt->v_da[i] = (float)da;
+        bt->v_e[i] = (float)(da + w);
+        /* a window much narrower than a pixel loses its width to float rounding of its ends
+         * (6e-8 / w relative): its weights are redone in double below */
+        bt->fine[i] = w < 1.0 / 16 || (tent && h < 1.0 / 16);
+        bt->fd[i][0] = da;
+        bt->fd[i][1] = w;
+        if (tent) {
+            /* row jt + k has centre py0 - dy + k */
+            int jt = (int)(py0 + 0.5) - 1; /* floor(py0 - 1/2) */
+            double dy = py0 - (jt + 0.5);
+            bt->row[i] = jt;
+            bt->rows[i] = dy + h > 2.0 ? 4 : dy + h > 1.0 ? 3 : 2;
+            bt->v_dy[i] = (float)dy;
+            bt->v_ey[i] = (float)(dy + h);
+            bt->v_h[i] = (float)h;
+            bt->v_sc[i] = (float)s_c;
+            bt->v_sd[i] = (float)s_d;
+            bt->fd[i][2] = dy;
+            bt->fd[i][3] = h;
+            bt->fd[i][4] = s_c;
+            bt->fd[i][5] = s_d;
+        } else {
+            /* polar bands: row jp + k covers [jp + k, jp + k + 1]. The solid angle between
+             * theta_i < theta_j is cos theta_i - cos theta_j = 2 sin(mean) sin(half the
+             * difference), both from the window's centre theta_c (sin_t, cos_t) by the
+             * angle-sum formula and Taylor series in offsets below pi / H (H >= 64: terms
+             * past the seventh power are below 1e-15) */
+            int jp = (int)py0;
+            double cut[4] = {py0, py1 < jp + 1.0 ? py1 : jp + 1.0,
+                             py1 < jp + 2.0 ? py1 : jp + 2.0, py1};
+            double share[3], sum = 0.0;
+            for (int k = 0; k < 3; k++) {
+                double m = (0.5 * (cut[k] + cut[k + 1]) - c) * k_rad, m2 = m * m;
+                double hd = 0.5 * (cut[k + 1] - cut[k]) * k_rad, hd2 = hd * hd;
+                double cm = 1.0 - m2 * (0.5 - m2 * (1.0 / 24 - m2 * (1.0 / 720)));
+                double sm = m * (1.0 - m2 * (1.0 / 6 - m2 * (1.0 / 120 - m2 * (1.0 / 5040))));
+                double shd = hd * (1.0 - hd2 * (1.0 / 6 - hd2 * (1.0 / 120 - hd2 * (1.0 / 5040))));
+                share[k] = 2.0 * (sin_t * cm + cos_t * sm) * shd;
+                share[k] = share[k] > 0.0 ? share[k] : 0.0;
+                sum += share[k];
+            }
+            double inv = 1.0 / sum;
+            for (int k = 0; k < 3; k++) bt->wyp[k][i] = (float)(share[k] * inv);
+            bt->row[i] = jp;
+            bt->rows[i] = cut[2] < py1 ? 3 : cut[1] < py1 ? 2 : 1;
+            bt->v_dy[i] = bt->v_ey[i] = bt->v_h[i] = bt->v_sc[i] = bt->v_sd[i] = 0.0f;
+        }
+    }
+    /* Then the tent weights of four samples at a time, in float (the taps are float):
+     * longitude tap k weighs T(e - k) - T(da - k) (over their sum, w), latitude row k
+     * (T(ey - k) - T(dy - k)) (s_c + s_d (k - dy - h / 2)) + s_d (M(ey - k) - M(dy - k)),
+     * with T(da - k) = T(da), da^2 / 2, 0, 0 for da in [0, 1) (the same for M). */
+    for (int i = 0; i < n4; i += 4) {
+        v4f da = vload(bt->v_da + i), e = vload(bt->v_e + i);
+        v4f dy = vload(bt->v_dy + i), ey = vload(bt->v_ey + i), h = vload(bt->v_h + i);
+        v4f sc = vload(bt->v_sc + i), sd = vload(bt->v_sd + i);
+        v4f half = vsplat(0.5f), third = vsplat(1.0f / 3.0f), sixth = vsplat(1.0f / 6.0f);
+        v4f lo_t[2] = {half + da - half * da * da, half * da * da};
+        v4f dm = dy - vsplat(1.0f);
+        v4f ly_t[2] = {half + dy - half * dy * dy, half * dy * dy};
+        v4f ly_m[2] = {dy * dy * (half - dy * third) - sixth,
+                       dm * dm * (half + dm * third) - sixth};
+        v4f share[4], wx[4], sum = vsplat(0.0f), wsum = vsplat(0.0f);
+        for (int k = 0; k < 4; k++) {
+            v4f fk = vsplat((float)k);
+            wx[k] = vtent(e - fk);
+            if (k < 2) wx[k] -= lo_t[k];
+            wsum += wx[k];
+            v4f t = vtent(ey - fk), mom = vmoment(ey - fk);
+            if (k < 2) {
+                t -= ly_t[k];
+                mom -= ly_m[k];
+            }
+            share[k] = t * (sc + sd * (fk - dy - half * h)) + sd * mom;
+            sum += share[k];
+        }
+        /* lanes of other kinds: any finite value (unused) */
+        sum = vsel(sum > vsplat(0.0f), sum, vsplat(1.0f));
+        wsum = vsel(wsum > vsplat(0.0f), wsum, vsplat(1.0f));
+        v4f inv = vsplat(1.0f) / sum, inv_w = vsplat(1.0f) / wsum;
+        for (int k = 0; k < 4; k++) {
+            vstore(bt->wyt[k] + i, share[k] * inv);
+            vstore(bt->wx[k] + i, wx[k] * inv_w);
+        }
+    }
+    for (int i = 0; i < n; i++) {
+        if (!bt->kind[i] || !bt->fine[i]) continue;
+        const double *f = bt->fd[i];
+        double wx[4], sum = 0.0;
+        for (int k = 0; k < 4; k++) {
+            wx[k] = tent_cdf(f[0] + f[1] - k) - tent_cdf(f[0] - k);
+            sum += wx[k];
+        }
+        for (int k = 0; k < 4; k++) bt->wx[k][i] = (float)(wx[k] / sum);
+        if (bt->kind[i] != 1) continue;
+        double dy = f[2], h = f[3], share[4];
+        sum = 0.0;
+        for (int k = 0; k < 4; k++) {
+            double t = tent_cdf(dy + h - k) - tent_cdf(dy - k);
+            double mom = tent_moment(dy + h - k) - tent_moment(dy - k);
+            share[k] = t * (f[4] + f[5] * (k - dy - 0.5 * h)) + f[5] * mom;
+            sum += share[k];
+        }
+        for (int k = 0; k < 4; k++) bt->wyt[k][i] = (float)(share[k] / sum);
+    }
+    const float *pix = job->im->pixels;
+    for (int i = 0; i < n; i++) {
+        if (bt->texel[i] != bt->cur) {
+            batch_emit(bt, out);
+            bt->cur = bt->texel[i];
+            bt->acc[0] = bt->acc[1] = bt->acc[2] = bt->acc[3] = bt->wsum = 0.0;
+        }
+        float val[4] = {0, 0, 0, 0};
+        if (bt->kind[i]) {
+            for (int k = 0; k < bt->rows[i]; k++) {
+                long r = bt->row[i] + k < H ? bt->row[i] + k : H - 1; /* past the window: 0 */
+                const float *rowp = pix + (size_t)r * W * 4;
+                float wy = bt->kind[i] == 1 ? bt->wyt[k][i] : bt->wyp[k][i], v[4] = {0, 0, 0, 0};
+                for (int t = 0; t < 4; t++) {
+                    const float *p = rowp + (size_t)bt->col[t][i] * 4;
+                    float wx = bt->wx[t][i];
+                    for (int ch = 0; ch < 4; ch++) v[ch] += wx * p[ch];
+                }
+                for (int ch = 0; ch < 4; ch++) val[ch] += wy * v[ch];
+            }
+        } else {
+            double px = bt->px[i], py = bt->py[i], hw = 0.5 * bt->wpx[i], hh = 0.5 * bt->hpx[i];
+            window_value(job, px - hw, px + hw, py - hh, py + hh, bt->st[i], bt->ct[i], val);
+        }
+        double wt = bt->wt[i];
+        for (int c = 0; c < 4; c++) bt->acc[c] += wt * val[c];
+        bt->wsum += wt;
+    }
+    bt->n = 0;
+}
+
+/* A texel of a face around a pole (the pole at the face's centre, its axes level) spanning
+ * many source columns: there a k x k grid of samples wastes most of them, as each sample's
+ * window is a pixel wide in longitude but much less tall. Instead the texel takes one window
+ * per source column j whose centre meridian phi_j crosses it: that column's longitude range by
+ * the latitude range where the meridian crosses the texel (the ray from the face's centre
+ * meets the texel's square in one segment, as the square does not hold the centre), weighted
+ * by its solid angle (2 pi / W) (cos theta_in - cos theta_out). The meridians are shared by
+ * all texels and a ray's segments in neighbouring texels share their ends, so these windows
+ * tile the sphere exactly as the columns do: energy is kept wherever a sun falls.
+ * Returns 0 when the texel is not such a texel. */
+static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *bt, float *out)
+{
+    int N = job->out->size, W = job->im->width, H = job->im->height;
+    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
+    if (!(fabs(m[1]) > 1.0 - 1e-9 && fabs(a[1]) < 1e-9 && fabs(b[1]) < 1e-9)) return 0;
+    const double cell = 2.0 / N;
+    /* the same expressions for a texel's edges as for its neighbours' */
+    double s0 = -1.0 + tx * cell, s1 = -1.0 + (tx + 1) * cell;
+    double t0 = -1.0 + ty * cell, t1 = -1.0 + (ty + 1) * cell;
+    /* longitude range from the corners, about the centre's */
+    double sm = 0.5 * (s0 + s1), tm = 0.5 * (t0 + t1);
+    double centre = atan2(sm * a[0] + tm * b[0], -(sm * a[2] + tm * b[2])), lo = 0, hi = 0;
+    for (int c = 0; c < 4; c++) {
+        double sc = c & 1 ? s1 : s0, tc = c & 2 ? t1 : t0;
+        double rel = wrap_angle(atan2(sc * a[0] + tc * b[0], -(sc * a[2] + tc * b[2])) - centre);
+        lo = rel < lo ? rel : lo;
+        hi = rel > hi ? rel : hi;
+    }
+    if (!(hi - lo < 0.5 * PI)) return 0; /* not clear of the pole */
+    /* the columns whose centres phi_j = 2 pi ((j + 1/2) / W - 1/2) lie in the range */
+    double u_lo = ((centre + lo) / (2.0 * PI) + 0.5) * W - 0.5;
+    double u_hi = ((centre + hi) / (2.0 * PI) + 0.5) * W - 0.5;
+    long j_lo = (long)ceil(u_lo), j_hi = (long)floor(u_hi);
+    if (j_hi < j_lo) return 0;
+    const double my = m[1], dphi = 2.0 * PI / W;
+    for (long j = j_lo; j <= j_hi; j++) {
+        long jj = j % W;
+        jj = jj < 0 ? jj + W : jj;
+        double hx = job->col_sin[jj], hz = -job->col_cos[jj]; /* level direction of phi_j */
+        double ua = hx * a[0] + hz * a[2], ub = hx * b[0] + hz * b[2];
+        double rin = 0.0, rout = 1e300;
+        double u[2] = {ua, ub}, l[2] = {s0, t0}, h[2] = {s1, t1};
+        for (int ax = 0; ax < 2; ax++) {
+            if (fabs(u[ax]) < 1e-300) {
+                if (l[ax] > 0.0 || h[ax] <= 0.0) rout = -1.0;
+                continue;
+            }
+            double r1 = l[ax] / u[ax], r2 = h[ax] / u[ax];
+            double near = r1 < r2 ? r1 : r2, far = r1 < r2 ? r2 : r1;
+            rin = near > rin ? near : rin;
+            rout = far < rout ? far : rout;
+        }
+        if (!(rout > rin)) continue;
+        /* theta = atan2(r, my) at both ends; cos theta = my / sqrt(r^2 + 1) */
+        double li = 1.0 / sqrt(rin * rin + 1.0), lo_ = 1.0 / sqrt(rout * rout + 1.0);
+        double wt = fabs(my * li - my * lo_) * dphi;
+        if (!(wt > 0.0)) continue;
+        double py_in = atan2_nb(rin, my) * (H / PI), py_out = atan2_nb(rout, my) * (H / PI);
+        /* sin and cos of the middle latitude: the bisector of the two ends' directions */
+        double vx = rin * li + rout * lo_, vy = my * (li + lo_), vl = 1.0 / sqrt(vx * vx + vy * vy);
+        if (bt->n == BATCH) batch_flush(job, face, bt, out);
+        int n = bt->n++;
+        bt->texel[n] = tx;
+        bt->sc[n] = bt->tc[n] = 0.0;
+        bt->sub[n] = cell;
+        bt->preset[n] = 1;
+        double *g = bt->given[n];
+        g[0] = wt;
+        g[1] = jj + 0.5;
+        g[2] = 0.5 * (py_in + py_out);
+        g[3] = 1.0;
+        g[4] = fabs(py_out - py_in);
+        g[5] = vx * vl;
+        g[6] = vy * vl;
+    }
+    return 1;
+}
+
+/* How many samples per axis each texel of a run takes (0: near a pole), from the texel's
+ * extent in source rows and columns: SAMPLES_PER_ROW / _COLUMN per pixel it spans. */
+static void texel_ks(const eq_job *job, int face, int ty, int tx0, int n, int *ks)
+{
+    int N = job->out->size, W = job->im->width, H = job->im->height;
+    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
+    const double cell = 2.0 / N, px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
+    double rho[TEXEL_RUN], len[TEXEL_RUN], sq[2 * TEXEL_RUN];
+    const double tc = -1.0 + (ty + 0.5) * cell;
+    for (int i = 0; i < n; i++) {
+        double sc = -1.0 + (tx0 + i + 0.5) * cell;
+        double x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
+               z = m[2] + sc * a[2] + tc * b[2];
+        sq[i] = x * x + z * z;
+        sq[TEXEL_RUN + i] = sq[i] + y * y;
+    }
+    sqrt_run(sq, rho, n);
+    sqrt_run(sq + TEXEL_RUN, len, n);
+    for (int i = 0; i < n; i++) {
+        double sc = -1.0 + (tx0 + i + 0.5) * cell;
+        double x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
+               z = m[2] + sc * a[2] + tc * b[2];
+        double rho2 = sq[i], r2 = sq[TEXEL_RUN + i];
+        /* latitude extent of the texel in source rows, from the gradient of theta; at a pole
+         * theta is a cone: its change is bound by the full gradient 1/|d| */
+        double inv_rr = 1.0 / ((rho[i] > 0.0 ? rho[i] : 1.0) * r2);
+        double g0 = y * x * inv_rr, g1 = -rho2 * inv_rr, g2 = y * z * inv_rr;
+        double ext = fabs(g0 * a[0] + g1 * a[1] + g2 * a[2]) +
+                     fabs(g0 * b[0] + g1 * b[1] + g2 * b[2]);
+        double ext_cone = 2.0 / len[i];
+        ext = rho[i] < 2.0 * cell * len[i] ? ext_cone : ext;
+        double rows = ext * cell * px_per_rad_v;
+        /* and its longitude extent in source columns */
+        double cols = (fabs(x * a[2] - z * a[0]) + fabs(x * b[2] - z * b[0])) /
+                      (rho2 > 0.0 ? rho2 : 1.0) * cell * px_per_rad_u;
+        double want = SAMPLES_PER_ROW * rows, want_c = SAMPLES_PER_COLUMN * cols;
+        want = want_c > want ? want_c : want;
+        want = want < 64.0 ? want : 64.0;
+        want = want > 1.0 ? want : 1.0; /* (and no NaN) */
+        rho[i] = rho2 < job->pole_radius2 * r2 ? 0.0 : want; /* (rho is free again) */
+    }
+    for (int i = 0; i < n; i++) {
+        int k = (int)rho[i];
+        ks[i] = k + (k < rho[i]); /* ceil */
+    }
+}
+
 static void eq_row_task(void *arg, int index)
 {
     const eq_job *job = arg;
     int N = job->out->size, face = index / N, ty = index % N;
-    int W = job->im->width, H = job->im->height;
-    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
     float *out = ibl_cubemap_face(job->out, 0, face) + (size_t)ty * N * 4;
-    const double cell = 2.0 / N;            /* texel edge on the face plane */
-    const double px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
-
-    for (int tx = 0; tx < N; tx++) {
-        int k = job->fixed_k, near_pole;
-        {
-            double sc = -1.0 + (tx + 0.5) * cell, tc = -1.0 + (ty + 0.5) * cell;
-            double d[3] = {m[0] + sc * a[0] + tc * b[0], m[1] + sc * a[1] + tc * b[1],
-                           m[2] + sc * a[2] + tc * b[2]};
-            double rho2 = d[0] * d[0] + d[2] * d[2], r2 = rho2 + d[1] * d[1];
-            near_pole = rho2 < job->pole_radius2 * r2;
-        }
-        if (near_pole && k == 0) {
-            eq_texel_near_pole(job, face, tx, ty, out + (size_t)tx * 4);
-            continue;
-        }
-        if (k == 0) {
-            /* latitude extent of the texel in source rows, from the gradient of theta */
-            double sc = -1.0 + (tx + 0.5) * cell, tc = -1.0 + (ty + 0.5) * cell;
-            double d[3] = {m[0] + sc * a[0] + tc * b[0], m[1] + sc * a[1] + tc * b[1],
-                           m[2] + sc * a[2] + tc * b[2]};
-            double rho2 = d[0] * d[0] + d[2] * d[2], r2 = rho2 + d[1] * d[1];
-            double rho = sqrt(rho2), len = sqrt(r2), ext;
-            if (rho < 2.0 * cell * len) {
-                /* at a pole theta is a cone: bound its change by the full gradient 1/|d| */
-                ext = 2.0 / len;
-            } else {
-                double g[3] = {d[1] * d[0] / rho / r2, -rho / r2, d[1] * d[2] / rho / r2};
-                ext = fabs(g[0] * a[0] + g[1] * a[1] + g[2] * a[2]) +
-                      fabs(g[0] * b[0] + g[1] * b[1] + g[2] * b[2]);
+    const double cell = 2.0 / N; /* texel edge on the face plane */
+    eq_batch bt;
+    bt.n = 0;
+    bt.cur = -1;
+    int ks[TEXEL_RUN];
+    for (int tx0 = 0; tx0 < N; tx0 += TEXEL_RUN) {
+        int run = N - tx0 < TEXEL_RUN ? N - tx0 : TEXEL_RUN;
+        if (job->fixed_k == 0) texel_ks(job, face, ty, tx0, run, ks);
+        for (int r = 0; r < run; r++) {
+            int tx = tx0 + r, k = job->fixed_k ? job->fixed_k : ks[r];
+            if (k == 0) {
+                eq_texel_near_pole(job, face, tx, ty, out + (size_t)tx * 4);
+                continue;
             }
-            double rows = ext * cell * px_per_rad_v;
-            /* and its longitude extent in source columns */
-            double cols = (fabs(d[0] * a[2] - d[2] * a[0]) + fabs(d[0] * b[2] - d[2] * b[0])) /
-                          rho2 * cell * px_per_rad_u;
-            k = (int)ceil(fmax(SAMPLES_PER_ROW * rows, SAMPLES_PER_COLUMN * cols));
-            if (k < 1) k = 1;
-            if (k > 64) k = 64;
-        }
-        double acc[4] = {0, 0, 0, 0}, wsum = 0;
-        const double sub = cell / k;
-        for (int j = 0; j < k; j++) {
-            double tc = -1.0 + ty * cell + (j + 0.5) * sub;
-            double e[3] = {m[0] + tc * b[0], m[1] + tc * b[1], m[2] + tc * b[2]};
-            for (int i = 0; i < k; i++) {
-                double sc = -1.0 + tx * cell + (i + 0.5) * sub;
-                double x = e[0] + sc * a[0], y = e[1] + sc * a[1], z = e[2] + sc * a[2];
-                double rho2 = x * x + z * z, r2 = rho2 + y * y;
-                double inv_len = 1.0 / sqrt(r2), inv_len2 = inv_len * inv_len;
-                double wt = inv_len2 * inv_len;
-                double rho = sqrt(rho2);
-                double px = (fast_atan2(x, -z) * (0.5 / PI) + 0.5) * W;
-                double py = fast_atan2(rho, y) * (H / PI);
-                /* extents of this sample's cell in longitude and latitude (pixels): the
-                 * gradients of phi and theta along both face axes, times the cell size */
-                double wpx = W, hpx;
-                double g1 = fabs(y * (x * a[0] + z * a[2]) - rho2 * a[1]);
-                double g2 = fabs(y * (x * b[0] + z * b[2]) - rho2 * b[1]);
-                if (rho2 > 1e-300) {
-                    double ga = fabs(x * a[2] - z * a[0]), gb = fabs(x * b[2] - z * b[0]);
-                    double inv_rho2 = 1.0 / rho2;
-                    wpx = (ga + gb) * inv_rho2 * sub * px_per_rad_u;
-                    if (!(wpx < W)) wpx = W;
-                    hpx = (g1 + g2) * rho * inv_rho2 * inv_len2 * sub * px_per_rad_v;
-                } else {
-                    hpx = 2.0 * inv_len * sub * px_per_rad_v;
+            if (k >= POLAR_COLUMNS_K && job->fixed_k == 0 &&
+                polar_columns(job, face, tx, ty, &bt, out))
+                continue;
+            const double sub = cell / k;
+            for (int j = 0; j < k; j++) {
+                double tcj = -1.0 + ty * cell + (j + 0.5) * sub;
+                for (int i = 0; i < k; i++) {
+                    if (bt.n == BATCH) batch_flush(job, face, &bt, out);
+                    bt.texel[bt.n] = tx;
+                    bt.sc[bt.n] = -1.0 + tx * cell + (i + 0.5) * sub;
+                    bt.tc[bt.n] = tcj;
+                    bt.sub[bt.n] = sub;
+                    bt.preset[bt.n] = 0;
+                    bt.n++;
                 }
-                float val[4];
-                window_value(job, px - 0.5 * wpx, px + 0.5 * wpx, py - 0.5 * hpx, py + 0.5 * hpx,
-                             rho * inv_len, y * inv_len, val);
-                for (int c = 0; c < 4; c++) acc[c] += wt * val[c];
-                wsum += wt;
             }
         }
-        for (int c = 0; c < 4; c++) out[(size_t)tx * 4 + c] = (float)(acc[c] / wsum);
     }
+    if (bt.n) batch_flush(job, face, &bt, out);
+    batch_emit(&bt, out);
 }
 
 ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const ibl__frame *frame,
@@ -603,8 +959,20 @@ ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const
             for (int c = 0; c < 4; c++) s[c] += p[(size_t)x * 4 + c];
         for (int c = 0; c < 4; c++) mean[(size_t)r * 4 + c] = (float)(s[c] / W);
     }
+    double *cs = ibl_alloc(ctx, (size_t)W * 2 * sizeof(double));
+    if (!cs) {
+        ibl_free(ctx, mean);
+        return ibl_context_status(ctx);
+    }
+    for (int j = 0; j < W; j++) {
+        double phi = 2.0 * PI * ((j + 0.5) / W - 0.5);
+        cs[j] = sin(phi);
+        cs[W + j] = cos(phi);
+    }
     eq_job job;
     memset(&job, 0, sizeof job);
+    job.col_sin = cs;
+    job.col_cos = cs + W;
     job.im = image;
     job.row_mean = mean;
     job.out = out;
@@ -621,6 +989,7 @@ ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const
     }
     ibl__picture_basis(frame, job.basis);
     ibl_parallel_for(ctx, 6 * out->size, eq_row_task, &job);
+    ibl_free(ctx, cs);
     ibl_free(ctx, mean);
     return IBL_OK;
 }
