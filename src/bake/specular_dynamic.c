@@ -206,11 +206,13 @@ ibl_status ibl__dynamic_create(ibl_context *ctx, const ibl_specular_desc *desc,
             lv->mip = 0;
             continue;
         }
-        /* the coarsest mip with texels at most 0.8 of the lobe's half width and at least 16
-         * wide (wide lobes are cheap; coarse texels at their horizon kink are not exact) */
+        /* the coarsest mip with texels at most 0.8 of the lobe's half width (scaled by
+         * desc.accuracy as in the static method) and at least 16 wide (wide lobes are cheap;
+         * coarse texels at their horizon kink are not exact) */
+        double ratio = 0.8 * (desc->accuracy > 0 ? desc->accuracy / 0.35 : 1.0);
         lv->mip = 0;
         for (int m = 0; m < d->mips; m++)
-            if (2.0 / (source_size >> m) <= 0.8 * lobes[l].half_angle && (source_size >> m) >= 16)
+            if (2.0 / (source_size >> m) <= ratio * lobes[l].half_angle && (source_size >> m) >= 16)
                 lv->mip = m;
     }
     size_t entries = 0;
