@@ -19,9 +19,13 @@
  *     int g(1 - R.l) dl ~ Omega (g(u0) + g''(u0) R^T C R / 2),  u0 = |R - m|^2 / 2 + e,
  * (u0 written so that it keeps float precision next to the lobe's axis). The numerator uses
  * the luminance-weighted moments (a point light lies exactly at its texel's centroid), the
- * normaliser the geometric ones, so that a constant environment stays constant. Each piece
- * (lobe times partition) is tabulated in u with its second derivative.
- * Deterministic: every output value is a sum in a fixed order, independent of the threads. */
+ * normaliser the geometric ones (summed once per plan, on one eighth of a face: they depend
+ * only on the cube's geometry), so that a constant environment stays constant. The AVX2 path
+ * evaluates GGX and Phong in closed form; the portable path reads each piece (lobe times
+ * partition) from a table in u with its second derivative. Phong texels whose spread reaches
+ * the horizon, where x^n has a kink, take the closed-form mean of x^n over the spread.
+ * Deterministic: every output value is a sum in a fixed order, independent of the threads.
+ * Design and measurements: docs/SPECULAR.md "The fast method". */
 #include "specular_internal.h"
 
 #include <math.h>
