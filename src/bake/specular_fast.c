@@ -258,6 +258,44 @@ static void store_geo(const ibl_specular_plan *p, srclev *s, int x, int y, const
     }
 }
 
+typedef struct geo_job {
+    ibl_specular_plan *p;
+    srclev *s;
+    geo *g;
+    int n;
+} geo_job;
+
+static void texel_geo_task(void *arg, int y)
+{
+    const geo_job *j = arg;
+    for (int x = 0; x < j->n; x++) texel_geo(j->n, x, y, &j->g[(size_t)y * j->n + x]);
+}
+
+static void store_geo_task(void *arg, int y)
+{
+    const geo_job *j = arg;
+    for (int x = 0; x < j->n; x++) store_geo(j->p, j->s, x, y, &j->g[(size_t)y * j->n + x]);
+}
+
+static void block_cone_task(void *arg, int index)
+{
+    const geo_job *j = arg;
+    srclev *s = j->s;
+    int M = s->M, f = index / s->nby, by = index % s->nby;
+    double h = 2.0 / M;
+    for (int bx = 0; bx < s->nbx; bx++) {
+        int x1 = (bx + 1) * BW < M ? (bx + 1) * BW : M;
+        int y1 = (by + 1) * BH < M ? (by + 1) * BH : M;
+        double c[3];
+        double r = ibl__rect_radius(f, bx * BW * h - 1, by * BH * h - 1, x1 * h - 1, y1 * h - 1, c);
+        float *b = s->block + (((size_t)f * s->nby + by) * s->nbx + bx) * BINFO;
+        for (int i = 0; i < 3; i++) b[i] = (float)c[i];
+        b[3] = (float)(r + 1e-6);
+        b[4] = (float)cos(r + 1e-6);
+        b[5] = (float)sin(r + 1e-6);
+    }
+}
+
 static ibl_status build_geometry(ibl_specular_plan *p)
 {
     ibl_context *ctx = p->ctx;
@@ -269,8 +307,8 @@ static ibl_status build_geometry(ibl_specular_plan *p)
         ibl_free(ctx, next);
         return ibl_context_status(ctx);
     }
-    for (int y = 0; y < S; y++)
-        for (int x = 0; x < S; x++) texel_geo(S, x, y, &cur[(size_t)y * S + x]);
+    geo_job first = {p, NULL, cur, S};
+    ibl_parallel_for(ctx, S, texel_geo_task, &first);
     for (int l = 0; l < p->SL; l++) {
         srclev *s = &p->src[l];
         int M = s->M;
@@ -290,24 +328,9 @@ static ibl_status build_geometry(ibl_specular_plan *p)
             cur = next;
             next = t;
         }
-        for (int y = 0; y < M; y++)
-            for (int x = 0; x < M; x++) store_geo(p, s, x, y, &cur[(size_t)y * M + x]);
-        /* block cones */
-        double h = 2.0 / M;
-        for (int f = 0; f < 6; f++)
-            for (int by = 0; by < s->nby; by++)
-                for (int bx = 0; bx < s->nbx; bx++) {
-                    int x1 = (bx + 1) * BW < M ? (bx + 1) * BW : M;
-                    int y1 = (by + 1) * BH < M ? (by + 1) * BH : M;
-                    double c[3];
-                    double r = ibl__rect_radius(f, bx * BW * h - 1, by * BH * h - 1, x1 * h - 1,
-                                                y1 * h - 1, c);
-                    float *b = s->block + (((size_t)f * s->nby + by) * s->nbx + bx) * BINFO;
-                    for (int i = 0; i < 3; i++) b[i] = (float)c[i];
-                    b[3] = (float)(r + 1e-6);
-                    b[4] = (float)cos(r + 1e-6);
-                    b[5] = (float)sin(r + 1e-6);
-                }
+        geo_job job = {p, s, cur, M};
+        ibl_parallel_for(ctx, M, store_geo_task, &job);
+        ibl_parallel_for(ctx, 6 * s->nby, block_cone_task, &job);
     }
     ibl_free(ctx, cur);
     ibl_free(ctx, next);
