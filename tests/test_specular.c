@@ -307,6 +307,23 @@ static void symmetry(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* A plan from 32-face sources to a 16-face chain of `filter`, and two cubes for its output. */
+static ibl_specular_plan *plan_32_to_16(ibl_context *ctx, ibl_specular_filter filter, int dynamic,
+                                        ibl_cubemap *a, ibl_cubemap *b)
+{
+    ibl_specular_desc d = {0};
+    d.filter = filter;
+    d.size = 16;
+    d.source_size = 32;
+    d.dynamic = dynamic;
+    ibl_specular_plan *plan = NULL;
+    assert_int_equal(ibl_specular_plan_create(ctx, &d, &plan), IBL_OK);
+    int levels = ibl_specular_plan_info(plan)->levels;
+    assert_int_equal(ibl_cubemap_alloc(ctx, 16, levels, a), IBL_OK);
+    assert_int_equal(ibl_cubemap_alloc(ctx, 16, levels, b), IBL_OK);
+    return plan;
+}
+
 /* The dynamic (per-frame) plan: a constant cube stays constant (issue 7: <= 1e-5), runs into
  * caller memory repeat bit for bit, and the result stays near the reference on the sun-and-sky
  * cube. Its bound is looser than the static method's: a box mip has no radiance centroid, so
@@ -321,17 +338,9 @@ static void dynamic_plan(void **state)
     assert_int_equal(ibl_cubemap_alloc(ctx, 32, 1, &flat), IBL_OK);
     test_fill_cube(&flat, 1.5f, 0.25f, 3.0f);
     for (int i = 0; i < 3; i++) {
-        ibl_specular_desc d = {0};
-        d.filter = filters[i];
-        d.size = 16;
-        d.source_size = 32;
-        d.dynamic = 1;
-        ibl_specular_plan *plan = NULL;
-        assert_int_equal(ibl_specular_plan_create(ctx, &d, &plan), IBL_OK);
-        int levels = ibl_specular_plan_info(plan)->levels;
         ibl_cubemap dst, again, ref;
-        assert_int_equal(ibl_cubemap_alloc(ctx, 16, levels, &dst), IBL_OK);
-        assert_int_equal(ibl_cubemap_alloc(ctx, 16, levels, &again), IBL_OK);
+        ibl_specular_plan *plan = plan_32_to_16(ctx, filters[i], 1, &dst, &again);
+        int levels = dst.levels;
         assert_int_equal(ibl_specular_run(plan, &flat, &dst), IBL_OK);
         const float expect[3] = {1.5f, 0.25f, 3.0f};
         for (size_t k = 0; k < ibl_cubemap_floats(16, levels) / 4; k++)
@@ -339,7 +348,9 @@ static void dynamic_plan(void **state)
         assert_int_equal(ibl_specular_run(plan, &sun, &dst), IBL_OK);
         assert_int_equal(ibl_specular_run(plan, &sun, &again), IBL_OK);
         assert_memory_equal(dst.data, again.data, ibl_cubemap_floats(16, levels) * sizeof(float));
-        d.dynamic = 0;
+        ibl_specular_desc d = {0};
+        d.filter = filters[i];
+        d.size = 16;
         d.method = IBL_METHOD_REFERENCE;
         assert_int_equal(ibl_specular_prefilter(ctx, &sun, &d, &ref, NULL), IBL_OK);
         for (int l = 0; l < levels; l++) {
@@ -373,19 +384,15 @@ static void portable_path(void **state)
     ibl_context *ctx = test_context(2);
     ibl_specular_filter filters[2] = {IBL_FILTER_GGX, IBL_FILTER_PHONG};
     for (int i = 0; i < 2; i++) {
-        ibl_specular_desc d = {0};
-        d.filter = filters[i];
-        d.size = 16;
-        d.source_size = 32;
-        ibl_specular_plan *plan = NULL;
-        assert_int_equal(ibl_specular_plan_create(ctx, &d, &plan), IBL_OK);
-        int levels = ibl_specular_plan_info(plan)->levels;
         ibl_cubemap simd, portable, ref;
-        assert_int_equal(ibl_cubemap_alloc(ctx, 16, levels, &simd), IBL_OK);
-        assert_int_equal(ibl_cubemap_alloc(ctx, 16, levels, &portable), IBL_OK);
+        ibl_specular_plan *plan = plan_32_to_16(ctx, filters[i], 0, &simd, &portable);
+        int levels = simd.levels;
         assert_int_equal(ibl_specular_run(plan, &src, &simd), IBL_OK);
         ibl__specular_plan_set_portable(plan, 1);
         assert_int_equal(ibl_specular_run(plan, &src, &portable), IBL_OK);
+        ibl_specular_desc d = {0};
+        d.filter = filters[i];
+        d.size = 16;
         d.method = IBL_METHOD_REFERENCE;
         assert_int_equal(ibl_specular_prefilter(ctx, &src, &d, &ref, NULL), IBL_OK);
         for (int l = 0; l < levels; l++) {
