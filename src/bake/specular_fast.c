@@ -824,8 +824,14 @@ AVX2 static inline __m256 avx2_lobe(const avx2_consts *k, int ggx, __m256 u, __m
     }
     /* the core has no inner step and the last ring no outer one: psi_in = 0, psi_out = 1 */
     __m256 po0 = k->one, po1 = k->zero, po2 = k->zero, pi0 = k->zero, pi1 = k->zero, pi2 = k->zero;
-    if (k->has_out) avx2_psi(k, u, k->osa, k->osb, k->osk, &po0, &po1, &po2);
-    if (k->has_in) avx2_psi(k, u, k->isa, k->isb, k->isk, &pi0, &pi1, &pi2);
+    /* each step is flat (psi_out = 1 inside its start, psi_in = 0 beyond its end) over most
+     * of a piece: skip it when all eight texels are there */
+    if (k->has_out &&
+        _mm256_movemask_ps(_mm256_cmp_ps(_mm256_fmsub_ps(u, k->osa, k->osb), k->zero, _CMP_GT_OQ)))
+        avx2_psi(k, u, k->osa, k->osb, k->osk, &po0, &po1, &po2);
+    if (k->has_in &&
+        _mm256_movemask_ps(_mm256_cmp_ps(_mm256_fmsub_ps(u, k->isa, k->isb), k->one, _CMP_LT_OQ)))
+        avx2_psi(k, u, k->isa, k->isb, k->isk, &pi0, &pi1, &pi2);
     __m256 p0 = _mm256_sub_ps(po0, pi0), p1 = _mm256_sub_ps(pi1, po1), p2 = _mm256_sub_ps(pi2, po2);
     __m256 g = _mm256_mul_ps(f0, p0);
     __m256 g2 = _mm256_fmadd_ps(f2, p0, _mm256_fmadd_ps(_mm256_add_ps(f1, f1), p1, _mm256_mul_ps(f0, p2)));
