@@ -37,7 +37,7 @@ enum { BW = 4, BH = 2, BT = BW * BH }; /* a block: one 8-wide vector */
 enum { F_MX = 0, F_E = 3, F_C = 4, F_OM = 10, GEO_FIELDS = 11 };
 enum { F_L = GEO_FIELDS, NF0 = GEO_FIELDS + 3 };
 enum { F_WM = GEO_FIELDS, F_WE = F_WM + 3, F_WC = F_WM + 4, F_P = F_WM + 10, NFC = F_P + 3 };
-enum { BINFO = 6, TAB = 2048, TILE = 8, MAX_PIECES = 24, MAX_GRIDS = 12, CAND = 1024 };
+enum { BINFO = 6, TAB = 2048, TILE = 8, MAX_PIECES = 24, MAX_GRIDS = MAX_PIECES, CAND = 1024 };
 
 static const double PI = 3.14159265358979323846;
 
