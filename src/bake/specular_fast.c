@@ -650,7 +650,7 @@ static float table_weight(const piece *pc, float u, float q)
     if (!pc->ggx && q > 0) {
         /* Phong near the horizon: the closed-form mean over u0 +- a (see avx2_lobe) */
         float a = sqrtf(3.0f * q);
-        if (u + 2.0f * a >= 1.0f && a > 1e-6f) {
+        if (u + 2.0f * a >= 1.0f && a > 1e-6f && a <= u) {
             float xl = 1.0f - u + a, xh = 1.0f - u - a, n1 = pc->n + 1.0f;
             float pl = xl > 0 ? powf(xl, n1) : 0.0f, ph = xh > 0 ? powf(xh, n1) : 0.0f;
             return (pl - ph) / (2.0f * a * n1) * piece_phi(pc, u);
@@ -842,8 +842,11 @@ AVX2 static inline __m256 avx2_lobe(const avx2_consts *k, int ggx, __m256 u, __m
      * ((x + a)^(n+1) - (x - a)^(n+1)) / (2 a (n + 1)) -- the same to second order where the
      * Taylor leaf is valid, exact at the kink for a uniform spread */
     __m256 a = _mm256_sqrt_ps(_mm256_mul_ps(_mm256_max_ps(q, k->zero), k->three));
+    /* (and whose spread does not reach u < 0: only the coarsest texels of tiny sources, where
+     * (1 + a - u)^(n+1) could overflow; the Taylor leaf is fine there, the lobe being smooth) */
     __m256 near = _mm256_and_ps(_mm256_cmp_ps(_mm256_fmadd_ps(k->two, a, u), k->one, _CMP_GE_OQ),
                                 _mm256_cmp_ps(a, k->amin, _CMP_GT_OQ));
+    near = _mm256_and_ps(near, _mm256_cmp_ps(a, u, _CMP_LE_OQ));
     if (_mm256_movemask_ps(near) == 0) return w;
     __m256 xl = _mm256_max_ps(_mm256_add_ps(xraw, a), k->zero);
     __m256 xh = _mm256_max_ps(_mm256_sub_ps(xraw, a), k->zero);
