@@ -398,6 +398,8 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
         if (pc->u_hi > 2.0) pc->u_hi = 2.0;
         pc->th_in = acos(1.0 - pc->u_lo);
         pc->th_out = acos(1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0));
+        /* a Phong tail far below the peak is dropped (its weight is below `cull`) */
+        if (cull > 0 && j > 0 && ibl__lobe_f(lobe, 1.0 - pc->u_lo) < cull) break;
         if (j == 0) {
             pc->src = core_src;
             pc->grid = grid_index(lv, n, 1, TILE);
@@ -410,8 +412,6 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
             if (gn >= n) pc->grid = grid_index(lv, n, 1, TILE);
             else pc->grid = grid_index(lv, gn, 0, TILE);
         }
-        /* a Phong tail far below the peak is dropped (its weight is below `cull`) */
-        if (cull > 0 && j > 0 && ibl__lobe_f(lobe, 1.0 - pc->u_lo) < cull) break;
         ibl_status st = make_table(p->ctx, lobe, j == 0 ? 0.0 : prevU, last ? 0.0 : outerU, pc);
         if (st != IBL_OK) return st;
         lv->npieces++;
