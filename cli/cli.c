@@ -57,6 +57,13 @@ void cli_error(const char *fmt, ...)
     fputc('\n', stderr);
 }
 
+void cli_report_failure(ibl_context *ctx, const char *path, ibl_status status)
+{
+    const char *msg = ibl_context_message(ctx);
+    if (msg && *msg) cli_error("%s", msg);
+    else cli_error("%s: %s", path, ibl_status_name(status));
+}
+
 void cli_info(const cli_common *c, const char *fmt, ...)
 {
     if (c && c->quiet) return;

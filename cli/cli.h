@@ -46,6 +46,10 @@ void cli_usage_error(const cli_args *a, const char *fmt, ...)
     __attribute__((format(printf, 2, 3), noreturn))
 #endif
     ;
+/* The one-line error of a failed library call: the context's message, or PATH and the status
+ * name when the library left none. */
+void cli_report_failure(ibl_context *ctx, const char *path, ibl_status status);
+
 /* Prints "ibl: message" to stderr (one line). */
 void cli_error(const char *fmt, ...)
 #if defined(__GNUC__)

@@ -126,9 +126,7 @@ int cli_cmd_irradiance(int argc, char **argv)
     ibl_cubemap_free(ctx, &result);
     ibl_image_free(ctx, &flat);
     if (st != IBL_OK) {
-        const char *msg = ibl_context_message(ctx);
-        if (msg && *msg) cli_error("%s", msg);
-        else cli_error("%s: %s", in, ibl_status_name(st));
+        cli_report_failure(ctx, in, st);
         ibl_context_destroy(ctx);
         return CLI_EXIT_BAD_INPUT;
     }

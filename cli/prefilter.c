@@ -233,9 +233,7 @@ int cli_cmd_prefilter(int argc, char **argv)
     ibl_cubemap_free(ctx, &cube);
     ibl_cubemap_free(ctx, &result);
     if (st != IBL_OK) {
-        const char *msg = ibl_context_message(ctx);
-        if (msg && *msg) cli_error("%s", msg);
-        else cli_error("%s: %s", in, ibl_status_name(st));
+        cli_report_failure(ctx, in, st);
         ibl_context_destroy(ctx);
         return cli_exit_code(st) == CLI_EXIT_USAGE ? CLI_EXIT_BAD_INPUT : cli_exit_code(st);
     }

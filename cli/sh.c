@@ -202,9 +202,7 @@ int cli_cmd_sh(int argc, char **argv)
     ibl_cubemap_free(ctx, &cube);
     ibl_texture_free(ctx, &tex);
     if (st != IBL_OK) {
-        const char *msg = ibl_context_message(ctx);
-        if (msg && *msg) cli_error("%s", msg);
-        else cli_error("%s: %s", in, ibl_status_name(st));
+        cli_report_failure(ctx, in, st);
         ibl_context_destroy(ctx);
         return CLI_EXIT_BAD_INPUT;
     }
