@@ -9,28 +9,6 @@
 
 static const double PI = 3.14159265358979323846;
 
-static void texel_dir(int face, int n, int x, int y, double d[3])
-{
-    ibl_cube_direction_d(face, (x + 0.5) / n, (y + 0.5) / n, d);
-    double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    for (int i = 0; i < 3; i++) d[i] /= len;
-}
-
-static void fill_cube(ibl_cubemap *cube, void (*fn)(const double *, float *))
-{
-    int n = cube->size;
-    for (int f = 0; f < 6; f++) {
-        float *p = ibl_cubemap_face(cube, 0, f);
-        for (int y = 0; y < n; y++)
-            for (int x = 0; x < n; x++, p += 4) {
-                double d[3];
-                texel_dir(f, n, x, y, d);
-                fn(d, p);
-                p[3] = 1.0f;
-            }
-    }
-}
-
 static void radiance_z2(const double *d, float *out) { out[0] = out[1] = out[2] = (float)(d[2] * d[2]); }
 
 static void sky(const double *d, float *out)
@@ -105,7 +83,7 @@ static void analytic_z2(void **state)
     ibl_context *ctx = test_context(2);
     ibl_cubemap src;
     assert_int_equal(ibl_cubemap_alloc(ctx, 32, 1, &src), IBL_OK);
-    fill_cube(&src, radiance_z2);
+    test_fill_cube_fn(&src, radiance_z2);
     static const ibl_irradiance_method methods[] = {IBL_IRRADIANCE_REFERENCE, IBL_IRRADIANCE_SH,
                                                     IBL_IRRADIANCE_CONVOLVE};
     static const double tol[] = {2e-4, 2e-4, 5e-3};
@@ -121,7 +99,7 @@ static void analytic_z2(void **state)
             for (int y = 0; y < 8; y++)
                 for (int x = 0; x < 8; x++, p += 4) {
                     double dir[3];
-                    texel_dir(f, 8, x, y, dir);
+                    test_texel_dir(f, 8, x, y, dir);
                     double e = fabs(p[0] - 0.25 * (1 + dir[2] * dir[2]));
                     if (e > worst) worst = e;
                 }
@@ -143,7 +121,7 @@ static void reference_matches_brute_force(void **state)
     int n = 6, m = 3;
     ibl_cubemap src;
     assert_int_equal(ibl_cubemap_alloc(ctx, n, 1, &src), IBL_OK);
-    fill_cube(&src, sky);
+    test_fill_cube_fn(&src, sky);
     ibl_irradiance_desc d = {0};
     d.size = m;
     d.method = IBL_IRRADIANCE_REFERENCE;
@@ -153,12 +131,12 @@ static void reference_matches_brute_force(void **state)
         for (int y = 0; y < m; y++)
             for (int x = 0; x < m; x++) {
                 double nrm[3], acc[3] = {0, 0, 0}, wsum = 0;
-                texel_dir(f, m, x, y, nrm);
+                test_texel_dir(f, m, x, y, nrm);
                 for (int g = 0; g < 6; g++)
                     for (int j = 0; j < n; j++)
                         for (int i = 0; i < n; i++) {
                             double w[3];
-                            texel_dir(g, n, i, j, w);
+                            test_texel_dir(g, n, i, j, w);
                             double c = nrm[0] * w[0] + nrm[1] * w[1] + nrm[2] * w[2];
                             if (c <= 0) continue;
                             double wt = c * ibl_cube_texel_solid_angle(n, i, j);
@@ -184,7 +162,7 @@ static void fast_vs_reference(void **state)
     ibl_context *ctx = test_context(2);
     ibl_cubemap src;
     assert_int_equal(ibl_cubemap_alloc(ctx, 64, 1, &src), IBL_OK);
-    fill_cube(&src, sky);
+    test_fill_cube_fn(&src, sky);
     ibl_irradiance_desc d = {0};
     ibl_cubemap ref, fast, sh;
     d.method = IBL_IRRADIANCE_REFERENCE;
@@ -298,7 +276,7 @@ static void threads_bit_identical(void **state)
         ibl_context *ctx = test_context(threads[t]);
         ibl_cubemap src;
         assert_int_equal(ibl_cubemap_alloc(ctx, 20, 1, &src), IBL_OK);
-        fill_cube(&src, sky);
+        test_fill_cube_fn(&src, sky);
         for (int m = 0; m < 3; m++) {
             ibl_irradiance_desc d = {0};
             d.size = 8;
@@ -330,7 +308,7 @@ static void reduction_keeps_mean(void **state)
     for (int s = 0; s < 2; s++) {
         ibl_cubemap src, small;
         assert_int_equal(ibl_cubemap_alloc(ctx, sizes[s], 1, &src), IBL_OK);
-        fill_cube(&src, radiance_z2);
+        test_fill_cube_fn(&src, radiance_z2);
         assert_int_equal(ibl_irradiance_reduce(ctx, &src, 8, &small), IBL_OK);
         double a[4], b[4];
         ibl_cubemap_mean(&src, 0, a);

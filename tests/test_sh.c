@@ -53,13 +53,6 @@ static void random_dir(double d[3])
     d[2] = z;
 }
 
-static void texel_dir(int face, int n, int x, int y, double d[3])
-{
-    ibl_cube_direction_d(face, (x + 0.5) / n, (y + 0.5) / n, d);
-    double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    for (int i = 0; i < 3; i++) d[i] /= len;
-}
-
 /* Deterministic test pattern with structure at every band and a bright spot. */
 static void pattern(const double d[3], float out[3])
 {
@@ -67,21 +60,6 @@ static void pattern(const double d[3], float out[3])
     out[0] = (float)(1.0 + 0.5 * d[0] + 0.3 * d[1] * d[2] + 20 * sun);
     out[1] = (float)(0.7 + 0.2 * d[1] + 0.4 * d[0] * d[0] * d[1] + 15 * sun);
     out[2] = (float)(0.2 + 0.6 * fabs(d[2]) + 0.1 * d[0] * d[1] * d[2] + 5 * sun);
-}
-
-static void fill_cube(ibl_cubemap *cube, void (*fn)(const double *, float *))
-{
-    int n = cube->size;
-    for (int f = 0; f < 6; f++) {
-        float *p = ibl_cubemap_face(cube, 0, f);
-        for (int y = 0; y < n; y++)
-            for (int x = 0; x < n; x++, p += 4) {
-                double d[3];
-                texel_dir(f, n, x, y, d);
-                fn(d, p);
-                p[3] = 1.0f;
-            }
-    }
 }
 
 /* ---- basis ------------------------------------------------------------------------------ */
@@ -193,14 +171,14 @@ static void cube_projection_matches_brute_force(void **state)
         int n = sizes[s];
         ibl_cubemap cube;
         assert_int_equal(ibl_cubemap_alloc(ctx, n, 1, &cube), IBL_OK);
-        fill_cube(&cube, pattern);
+        test_fill_cube_fn(&cube, pattern);
         double ref[25][3] = {{0}};
         for (int f = 0; f < 6; f++) {
             const float *p = ibl_cubemap_face(&cube, 0, f);
             for (int y = 0; y < n; y++)
                 for (int x = 0; x < n; x++, p += 4) {
                     double d[3];
-                    texel_dir(f, n, x, y, d);
+                    test_texel_dir(f, n, x, y, d);
                     double w = ibl_cube_texel_solid_angle(n, x, y);
                     for (int l = 0; l < 5; l++)
                         for (int m = -l; m <= l; m++)
@@ -276,7 +254,7 @@ static void threads_bit_identical(void **state)
         ibl_context *ctx = test_context(threads[t]);
         ibl_cubemap cube;
         assert_int_equal(ibl_cubemap_alloc(ctx, 70, 1, &cube), IBL_OK);
-        fill_cube(&cube, pattern);
+        test_fill_cube_fn(&cube, pattern);
         ibl_image im;
         assert_int_equal(ibl_image_alloc(ctx, 130, 65, &im), IBL_OK);
         for (int i = 0; i < 130 * 65 * 4; i++) im.pixels[i] = (float)((i * 7919) % 1000) / 100.0f;
@@ -353,7 +331,7 @@ static void band_limited_z2(void **state)
     ibl_context *ctx = test_context(2);
     ibl_cubemap cube;
     assert_int_equal(ibl_cubemap_alloc(ctx, 64, 1, &cube), IBL_OK);
-    fill_cube(&cube, radiance_z2);
+    test_fill_cube_fn(&cube, radiance_z2);
     ibl_sh sh, e;
     assert_int_equal(ibl_sh_project_cubemap(ctx, &cube, 0, 3, &sh), IBL_OK);
     ibl_sh_irradiance(&sh, &e);
@@ -425,7 +403,7 @@ static void windowing(void **state)
     ibl_context *ctx = test_context(2);
     ibl_cubemap cube;
     assert_int_equal(ibl_cubemap_alloc(ctx, 64, 1, &cube), IBL_OK);
-    fill_cube(&cube, sunny);
+    test_fill_cube_fn(&cube, sunny);
     for (int bands = 3; bands <= 5; bands++) {
         ibl_sh sh, orig;
         assert_int_equal(ibl_sh_project_cubemap(ctx, &cube, 0, bands, &sh), IBL_OK);
@@ -443,7 +421,7 @@ static void windowing(void **state)
             for (int y = 0; y < 48; y++)
                 for (int x = 0; x < 48; x++) {
                     double d[3], v[3];
-                    texel_dir(f, 48, x, y, d);
+                    test_texel_dir(f, 48, x, y, d);
                     ibl_sh_eval(&e, d, v);
                     assert_true(v[0] >= -1e-9 * mean);
                 }
@@ -496,14 +474,14 @@ static void face_centres(void **state)
     ibl_context *ctx = test_context(1);
     ibl_cubemap cube;
     assert_int_equal(ibl_cubemap_alloc(ctx, 15, 1, &cube), IBL_OK);
-    fill_cube(&cube, quad_radiance);
+    test_fill_cube_fn(&cube, quad_radiance);
     ibl_sh sh;
     assert_int_equal(ibl_sh_project_face_centres(&cube, 0, 3, &sh), IBL_OK);
     for (int i = 0; i < 9; i++) assert_near(sh.c[i][0], quad_coeffs[i], 1e-5);
     ibl_cubemap_free(ctx, &cube);
 
     assert_int_equal(ibl_cubemap_alloc(ctx, 64, 7, &cube), IBL_OK);
-    fill_cube(&cube, quad_radiance);
+    test_fill_cube_fn(&cube, quad_radiance);
     assert_int_equal(ibl_cubemap_build_mips(ctx, &cube), IBL_OK);
     assert_int_equal(ibl_sh_project_face_centres(&cube, 6, 3, &sh), IBL_OK);
     for (int i = 0; i < 9; i++) assert_near(sh.c[i][1], quad_coeffs[i], 2e-3);
@@ -511,7 +489,7 @@ static void face_centres(void **state)
      * quadrature of the means, 2e-3 */
     ibl_cubemap c48;
     assert_int_equal(ibl_cubemap_alloc(ctx, 48, 1, &c48), IBL_OK);
-    fill_cube(&c48, quad_radiance);
+    test_fill_cube_fn(&c48, quad_radiance);
     ibl_sh means;
     assert_int_equal(ibl_sh_project_face_means(&c48, 0, 3, &means), IBL_OK);
     for (int i = 0; i < 9; i++) assert_near(means.c[i][2], quad_coeffs[i], 2e-3);

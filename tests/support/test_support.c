@@ -1,5 +1,6 @@
 #include "test_support.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -97,5 +98,27 @@ void test_fill_cube(ibl_cubemap *cube, float r, float g, float b)
         cube->data[i * 4 + 1] = g;
         cube->data[i * 4 + 2] = b;
         cube->data[i * 4 + 3] = 1.0f;
+    }
+}
+
+void test_texel_dir(int face, int n, int x, int y, double d[3])
+{
+    ibl_cube_direction_d(face, (x + 0.5) / n, (y + 0.5) / n, d);
+    double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (int i = 0; i < 3; i++) d[i] /= len;
+}
+
+void test_fill_cube_fn(ibl_cubemap *cube, void (*fn)(const double *, float *))
+{
+    int n = cube->size;
+    for (int f = 0; f < 6; f++) {
+        float *p = ibl_cubemap_face(cube, 0, f);
+        for (int y = 0; y < n; y++)
+            for (int x = 0; x < n; x++, p += 4) {
+                double d[3];
+                test_texel_dir(f, n, x, y, d);
+                fn(d, p);
+                p[3] = 1.0f;
+            }
     }
 }

@@ -27,5 +27,9 @@ int test_file_exists(const char *path);
 void test_assert_near(double a, double b, double tol, const char *expr, const char *file, int line);
 /* Fills a cube with a constant colour. */
 void test_fill_cube(ibl_cubemap *cube, float r, float g, float b);
+/* The unit direction (double) through the centre of texel (x, y) of a face of edge n. */
+void test_texel_dir(int face, int n, int x, int y, double d[3]);
+/* Fills level 0 with fn(direction, rgb) at every texel centre, alpha 1. */
+void test_fill_cube_fn(ibl_cubemap *cube, void (*fn)(const double *, float *));
 
 #endif
