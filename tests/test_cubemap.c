@@ -89,21 +89,6 @@ static void face_orientation(void **state)
     }
 }
 
-static void fill_gradient(ibl_cubemap *cube)
-{
-    int n = cube->size;
-    for (int f = 0; f < 6; f++) {
-        float *p = ibl_cubemap_face(cube, 0, f);
-        for (int y = 0; y < n; y++)
-            for (int x = 0; x < n; x++, p += 4) {
-                ibl_vec3 d = ibl_cube_texel_direction(f, n, x, y);
-                p[0] = 1.0f + d.x;
-                p[1] = 2.0f + d.y * d.z;
-                p[2] = expf(3.0f * d.z);
-                p[3] = 1.0f;
-            }
-    }
-}
 
 static void mips_constant_and_energy(void **state)
 {
@@ -125,7 +110,7 @@ static void mips_constant_and_energy(void **state)
             }
         }
     }
-    fill_gradient(&cube);
+    test_fill_smooth(&cube);
     assert_int_equal(ibl_cubemap_build_mips(ctx, &cube), IBL_OK);
     double m0[4];
     ibl_cubemap_mean(&cube, 0, m0);
@@ -146,7 +131,7 @@ static void seamless_sampling(void **state)
     ibl_context *ctx = test_context(1);
     ibl_cubemap cube;
     assert_int_equal(ibl_cubemap_alloc(ctx, 8, 1, &cube), IBL_OK);
-    fill_gradient(&cube);
+    test_fill_smooth(&cube);
     srand(3);
     for (int i = 0; i < 20000; i++) {
         /* a point on an edge or corner, then two sides a hair apart */

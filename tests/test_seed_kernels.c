@@ -12,21 +12,6 @@
 
 static const double PI = 3.14159265358979323846;
 
-static void fill_smooth(ibl_cubemap *cube)
-{
-    int n = cube->size;
-    for (int f = 0; f < 6; f++) {
-        float *p = ibl_cubemap_face(cube, 0, f);
-        for (int y = 0; y < n; y++)
-            for (int x = 0; x < n; x++, p += 4) {
-                ibl_vec3 d = ibl_cube_texel_direction(f, n, x, y);
-                p[0] = 1.0f + d.x;
-                p[1] = 2.0f + d.y * d.z;
-                p[2] = expf(3.0f * d.z);
-                p[3] = 1.0f;
-            }
-    }
-}
 
 /* sum of L * solid angle over a level, per channel, in double */
 static void level_energy(const ibl_cubemap *c, int level, double out[4])
@@ -64,7 +49,7 @@ static void box_constant_and_energy(void **state)
             }
         }
     }
-    fill_smooth(&src);
+    test_fill_smooth(&src);
     assert_int_equal(ibl__specular_box(ctx, &src, &dst), IBL_OK);
     double e0[4], es[4];
     level_energy(&dst, 0, e0);
@@ -77,7 +62,7 @@ static void box_constant_and_energy(void **state)
         ibl_cubemap odd, out;
         assert_int_equal(ibl_cubemap_alloc(ctx, 24, 1, &odd), IBL_OK);
         assert_int_equal(ibl_cubemap_alloc(ctx, 16, 1, &out), IBL_OK);
-        fill_smooth(&odd);
+        test_fill_smooth(&odd);
         assert_int_equal(ibl__specular_box(ctx, &odd, &out), IBL_OK);
         double eo[4], ei[4];
         level_energy(&out, 0, eo);
@@ -365,7 +350,7 @@ static void gauss_arguments(void **state)
     assert_int_equal(ibl__specular_box(ctx, NULL, &dst), IBL_ERR_INVALID_ARGUMENT);
     /* infinite shininess: no blur, the box chain */
     float mirror[2] = {INFINITY, INFINITY};
-    fill_smooth(&src);
+    test_fill_smooth(&src);
     assert_int_equal(ibl__specular_gauss(ctx, &src, &dst, mirror), IBL_OK);
     assert_memory_equal(src.data, dst.data, 6 * 8 * 8 * 4 * sizeof(float));
     ibl_cubemap_free(ctx, &src);
@@ -387,7 +372,7 @@ static void threads_bit_identical(void **state)
         assert_int_equal(ibl_cubemap_alloc(ctx, t < 3 ? 64 : 48, 1, &src), IBL_OK);
         assert_int_equal(ibl_cubemap_alloc(ctx, 32, 6, &box), IBL_OK);
         assert_int_equal(ibl_cubemap_alloc(ctx, 32, 6, &gauss), IBL_OK);
-        fill_smooth(&src);
+        test_fill_smooth(&src);
         assert_int_equal(ibl__specular_box(ctx, &src, &box), IBL_OK);
         assert_int_equal(ibl__specular_gauss(ctx, &src, &gauss, shininess), IBL_OK);
         if (t % 3 == 0) {

@@ -122,3 +122,19 @@ void test_fill_cube_fn(ibl_cubemap *cube, void (*fn)(const double *, float *))
             }
     }
 }
+
+void test_fill_smooth(ibl_cubemap *cube)
+{
+    int n = cube->size;
+    for (int f = 0; f < 6; f++) {
+        float *p = ibl_cubemap_face(cube, 0, f);
+        for (int y = 0; y < n; y++)
+            for (int x = 0; x < n; x++, p += 4) {
+                ibl_vec3 d = ibl_cube_texel_direction(f, n, x, y);
+                p[0] = 1.0f + d.x;
+                p[1] = 2.0f + d.y * d.z;
+                p[2] = expf(3.0f * d.z);
+                p[3] = 1.0f;
+            }
+    }
+}

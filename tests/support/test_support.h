@@ -27,6 +27,8 @@ int test_file_exists(const char *path);
 void test_assert_near(double a, double b, double tol, const char *expr, const char *file, int line);
 /* Fills a cube with a constant colour. */
 void test_fill_cube(ibl_cubemap *cube, float r, float g, float b);
+/* Fills level 0 with a smooth colour field of the texel direction (1 + x, 2 + y z, e^(3 z)). */
+void test_fill_smooth(ibl_cubemap *cube);
 /* The unit direction (double) through the centre of texel (x, y) of a face of edge n. */
 void test_texel_dir(int face, int n, int x, int y, double d[3]);
 /* Fills level 0 with fn(direction, rgb) at every texel centre, alpha 1. */
