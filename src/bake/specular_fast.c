@@ -29,6 +29,7 @@
 #include "specular_internal.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 enum { BW = 4, BH = 2, BT = BW * BH }; /* a block: one 8-wide vector */
@@ -57,6 +58,7 @@ typedef struct piece {
     float a2, kap, a4, out_sa, out_sb, out_sk, in_sa, in_sb, in_sk;
     float n;  /* Phong exponent */
     int ggx;
+    struct core *core; /* the core summed by precomputed weights (NULL: by leaves) */
 } piece;
 
 typedef struct grid {
@@ -97,6 +99,70 @@ static size_t rec_index(const srclev *s, int face, int x, int y, int field)
 }
 
 static size_t block_count(const srclev *s) { return (size_t)6 * s->nby * s->nbx; }
+
+/* ---- the core as precomputed weights (a core summed from the source texels themselves) ---- */
+
+/* When a level's core is summed over level 0 (K = 1), its weights depend only on geometry, and
+ * the cube's symmetries carry them over: the weights of the output texels of one quadrant of
+ * face 0 serve the four quadrants of all six faces (the maps x -> n-1-x, y -> n-1-y and the
+ * signed permutations taking face 0 to face F are symmetries of the cube and of its texels).
+ * They are stored as rows over the *padded* face: the face with a border W deep taken from its
+ * four neighbours unfolded about the shared edges (the corner squares of the border are empty),
+ * so that texels across an edge stay in rows. A run is then a plain product of those rows with
+ * the padded source: no lobe evaluation, ~10x cheaper per texel than a leaf. */
+struct core {
+    int S, W, P, O, n, nb; /* source edge, border, padded edge, offset of cell 0, output edge, base edge */
+    int32_t *map;          /* 6 P P: source texel (f S S + y S + x) or -1                           */
+    uint32_t *row0;        /* nb nb + 1: each base texel's first row                                 */
+    size_t *w0;            /* nb nb + 1: each base texel's first weight                              */
+    int32_t *rows;         /* per row: y, x (padded coordinates), len (a multiple of 8)              */
+    float *w;
+    double *den;           /* nb nb: sum of the weights                                              */
+    float *pad;            /* run: 6 faces x (r, g, b) x P P                                         */
+};
+
+enum { CORE_GEO = 12 }; /* geometry fields of a padded cell: GEO_FIELDS, then |m| */
+
+static void core_destroy(ibl_context *ctx, struct core *c)
+{
+    if (!c) return;
+    ibl_free(ctx, c->map);
+    ibl_free(ctx, c->row0);
+    ibl_free(ctx, c->w0);
+    ibl_free(ctx, c->rows);
+    ibl_free(ctx, c->w);
+    ibl_free(ctx, c->den);
+    ibl_free(ctx, c->pad);
+    ibl_free(ctx, c);
+}
+
+/* The source texel under padded cell (X, Y) of face f (-1 in the border's corner squares): a
+ * border cell k texels beyond an edge is the neighbour's texel k texels in from that edge. */
+static int32_t core_cell_texel(const ibl_specular_plan *p, int S, int f, int X, int Y)
+{
+    int outx = X < 0 || X >= S, outy = Y < 0 || Y >= S;
+    if (outx && outy) return -1;
+    if (!outx && !outy) return (int32_t)(((size_t)f * S + Y) * S + X);
+    /* local (u, v, w) of the point: the edge point, then depth delta along -axis */
+    double u, v, depth;
+    if (outx) {
+        int k = X < 0 ? -1 - X : X - S;
+        u = X < 0 ? -1.0 : 1.0, v = -1.0 + (2.0 * Y + 1.0) / S, depth = (2.0 * k + 1.0) / S;
+    } else {
+        int k = Y < 0 ? -1 - Y : Y - S;
+        v = Y < 0 ? -1.0 : 1.0, u = -1.0 + (2.0 * X + 1.0) / S, depth = (2.0 * k + 1.0) / S;
+    }
+    if (depth >= 2.0) return -1;
+    const float(*B)[3] = p->face_basis[f];
+    double d[3], s, t;
+    for (int i = 0; i < 3; i++) d[i] = B[0][i] * (1.0 - depth) + B[1][i] * u + B[2][i] * v;
+    int g = ibl_cube_face_st_d(d, &s, &t);
+    int x = (int)floor(s * S), y = (int)floor(t * S);
+    x = x < 0 ? 0 : x >= S ? S - 1 : x;
+    y = y < 0 ? 0 : y >= S ? S - 1 : y;
+    return (int32_t)(((size_t)g * S + y) * S + x);
+}
+
 
 /* ---- the partition of unity and the tabulated pieces ---- */
 
@@ -432,6 +498,8 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
 }
 
 static void plan_denominators(ibl_specular_plan *p, int level);
+static ibl_status core_create(ibl_specular_plan *p, int level);
+static ibl_status core_build_weights(ibl_specular_plan *p, int level);
 
 void ibl_specular_plan_destroy(ibl_specular_plan *p)
 {
@@ -441,7 +509,10 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
     for (int l = 0; l < IBL_MAX_LEVELS; l++) {
         ibl_free(ctx, p->src[l].rec);
         ibl_free(ctx, p->src[l].block);
-        for (int k = 0; k < p->lv[l].npieces; k++) ibl_free(ctx, p->lv[l].pieces[k].tab);
+        for (int k = 0; k < p->lv[l].npieces; k++) {
+            ibl_free(ctx, p->lv[l].pieces[k].tab);
+            core_destroy(ctx, p->lv[l].pieces[k].core);
+        }
         for (int g = 0; g < p->lv[l].ngrids; g++) ibl_free(ctx, p->lv[l].grids[g].acc);
     }
     ibl_free(ctx, p);
@@ -452,7 +523,10 @@ void ibl__specular_plan_set_portable(ibl_specular_plan *p, int portable)
     p->portable = portable;
     if (!p->dyn)
         for (int l = 0; l < p->L; l++)
-            if (p->lv[l].lobe.kind != IBL__LOBE_MIRROR) plan_denominators(p, l);
+            if (p->lv[l].lobe.kind != IBL__LOBE_MIRROR) {
+                core_build_weights(p, l);
+                plan_denominators(p, l);
+            }
 }
 
 const ibl_specular_info *ibl_specular_plan_info(const ibl_specular_plan *plan)
@@ -533,6 +607,7 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         p->lv[l].lobe = ibl__lobe_for_level(&p->info, l);
         if (p->lv[l].lobe.kind == IBL__LOBE_MIRROR) continue;
         st = plan_level(p, l);
+        if (st == IBL_OK) st = core_create(p, l);
         if (st != IBL_OK) goto fail;
         plan_denominators(p, l);
     }
@@ -708,6 +783,7 @@ static void sum_blocks_generic(const sum_args *sa, const float R[3], const float
 #include <immintrin.h>
 
 #define AVX2 __attribute__((target("avx2,fma")))
+#define AVX2_INLINE __attribute__((target("avx2,fma"), always_inline))
 
 typedef struct avx2_consts {
     __m256 half, zero, one, two, c4, c6, cm15, c10, c30, c60;
@@ -742,7 +818,7 @@ AVX2 static void avx2_setup(const piece *pc, avx2_consts *k)
 
 /* ln x for x in (0, 1]: x = m 2^e with m in [sqrt(1/2), sqrt(2)), ln m = 2 atanh(r),
  * r = (m - 1) / (m + 1), |r| <= 0.172, its odd series to r^9 (error < 1e-9) */
-AVX2 static inline __m256 avx2_log(__m256 x)
+AVX2_INLINE static inline __m256 avx2_log(__m256 x)
 {
     __m256i bits = _mm256_castps_si256(x);
     __m256i e = _mm256_sub_epi32(_mm256_srli_epi32(bits, 23), _mm256_set1_epi32(127));
@@ -763,7 +839,7 @@ AVX2 static inline __m256 avx2_log(__m256 x)
 
 /* e^y for y <= 0: 2^(y log2 e) = 2^k 2^f, f in [-1/2, 1/2] by a degree-6 Taylor polynomial of
  * e^(f ln 2) (relative error < 3e-8); 0 below 2^-126 */
-AVX2 static inline __m256 avx2_exp(__m256 y)
+AVX2_INLINE static inline __m256 avx2_exp(__m256 y)
 {
     __m256 t = _mm256_mul_ps(y, _mm256_set1_ps(1.44269504088896f));
     t = _mm256_max_ps(t, _mm256_set1_ps(-126.0f));
@@ -783,7 +859,7 @@ AVX2 static inline __m256 avx2_exp(__m256 y)
 
 /* psi = 1 - S(s), s = clamp(u sa - sb, 0, 1), S the quintic smootherstep; v1, v2 are
  * -psi' and -psi'' */
-AVX2 static inline void avx2_psi(const avx2_consts *k, __m256 u, __m256 sa, __m256 sb, __m256 sk,
+AVX2_INLINE static inline void avx2_psi(const avx2_consts *k, __m256 u, __m256 sa, __m256 sb, __m256 sk,
                                  __m256 *v0, __m256 *v1, __m256 *v2)
 {
     __m256 s = _mm256_min_ps(_mm256_max_ps(_mm256_fmsub_ps(u, sa, sb), k->zero), k->one);
@@ -798,7 +874,7 @@ AVX2 static inline void avx2_psi(const avx2_consts *k, __m256 u, __m256 sa, __m2
 }
 
 /* g + g'' q / 2 of the GGX piece at u, in closed form */
-AVX2 static inline __m256 avx2_lobe(const avx2_consts *k, int ggx, __m256 u, __m256 q)
+AVX2_INLINE static inline __m256 avx2_lobe(const avx2_consts *k, int ggx, __m256 u, __m256 q)
 {
     __m256 xraw = _mm256_sub_ps(k->one, u), x = _mm256_max_ps(xraw, k->zero);
     __m256 front = _mm256_cmp_ps(u, k->one, _CMP_LT_OQ);
@@ -909,12 +985,75 @@ AVX2 static void sum_blocks_avx2(const sum_args *sa, const float R[3], const flo
     out[0] += avx2_hsum(ar), out[1] += avx2_hsum(ag), out[2] += avx2_hsum(ab), out[3] += avx2_hsum(aw);
 }
 
+
+/* The weights of `len` consecutive padded cells (geometry planes `plane` apart) for R. */
+AVX2 static void avx2_cell_weights(const piece *pc, const float R[3], const float RR[6], const float *g,
+                                   size_t plane, int len, float *out)
+{
+    avx2_consts k;
+    avx2_setup(pc, &k);
+    const __m256 r0 = _mm256_set1_ps(R[0]), r1 = _mm256_set1_ps(R[1]), r2 = _mm256_set1_ps(R[2]);
+    __m256 qk[6];
+    for (int i = 0; i < 6; i++) qk[i] = _mm256_set1_ps(RR[i]);
+    for (int i = 0; i < len; i += 8) {
+        __m256 dx = _mm256_sub_ps(r0, _mm256_loadu_ps(g + i));
+        __m256 dy = _mm256_sub_ps(r1, _mm256_loadu_ps(g + plane + i));
+        __m256 dz = _mm256_sub_ps(r2, _mm256_loadu_ps(g + 2 * plane + i));
+        __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
+        __m256 u = _mm256_fmadd_ps(k.half, d2, _mm256_loadu_ps(g + F_E * plane + i));
+        __m256 q = _mm256_mul_ps(qk[0], _mm256_loadu_ps(g + F_C * plane + i));
+        for (int c = 1; c < 6; c++) q = _mm256_fmadd_ps(qk[c], _mm256_loadu_ps(g + (F_C + c) * plane + i), q);
+        __m256 w = avx2_lobe(&k, pc->ggx, u, q);
+        _mm256_storeu_ps(out + i, _mm256_mul_ps(w, _mm256_loadu_ps(g + F_OM * plane + i)));
+    }
+}
+
+/* The core's product for one image of a base texel (see core_mac_generic). */
+AVX2 static void avx2_core_mac(const struct core *c, const float *w, const int32_t *rows, int nrows,
+                               const float *planes, int fx, int fy, double out[3])
+{
+    size_t plane = (size_t)c->P * c->P;
+    __m256 ar = _mm256_setzero_ps(), ag = ar, ab = ar;
+    const __m256i rev = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
+    for (int r = 0; r < nrows; r++) {
+        const int32_t *row = rows + 3 * r;
+        int Y = fy ? c->S - 1 - row[0] : row[0];
+        const float *base = planes + (size_t)(Y + c->O) * c->P + c->O;
+        if (!fx) {
+            const float *q = base + row[1];
+            for (int i = 0; i < row[2]; i += 8) {
+                __m256 wv = _mm256_loadu_ps(w + i);
+                ar = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + i), ar);
+                ag = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + plane + i), ag);
+                ab = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + 2 * plane + i), ab);
+            }
+        } else {
+            /* cells X.. of the base row are columns S-1-X.. of the flipped face: reversed */
+            const float *q = base + (c->S - 1 - row[1]) - 7;
+            for (int i = 0; i < row[2]; i += 8) {
+                __m256 wv = _mm256_permutevar8x32_ps(_mm256_loadu_ps(w + i), rev);
+                ar = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q - i), ar);
+                ag = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + plane - i), ag);
+                ab = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + 2 * plane - i), ab);
+            }
+        }
+        w += row[2];
+    }
+    out[0] = avx2_hsum(ar), out[1] = avx2_hsum(ag), out[2] = avx2_hsum(ab);
+}
+
 static int cpu_has_avx2(void)
 {
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 }
 #else
 #define sum_blocks_avx2 sum_blocks_generic
+#define avx2_core_mac core_mac_generic
+static void avx2_cell_weights(const piece *pc, const float R[3], const float RR[6], const float *g,
+                              size_t plane, int len, float *out)
+{
+    (void)pc, (void)R, (void)RR, (void)g, (void)plane, (void)len, (void)out;
+}
 static int cpu_has_avx2(void) { return 0; }
 #endif
 
@@ -1027,7 +1166,7 @@ static void grid_task(void *arg, int index)
     int avx2 = cpu_has_avx2() && !p->portable;
     for (int pi = 0; pi < lv->npieces; pi++) {
         const piece *pc = &lv->pieces[pi];
-        if (pc->grid != g) continue;
+        if (pc->grid != g || pc->core) continue;
         const srclev *s = &p->src[pc->src];
         sum_args sa = {job->mode == EVAL_DEN ? EVAL_DEN : pc->src == 0 ? EVAL_NUM0 : EVAL_NUMC,
                        avx2, s, pc, cands, 0};
@@ -1080,6 +1219,344 @@ static void grid_task(void *arg, int index)
     }
 }
 
+typedef struct core_job {
+    ibl_specular_plan *p;
+    struct core *c;
+    const piece *pc;
+    const ibl__lobe *lobe;
+    const float *geo;    /* CORE_GEO x P P, face 0 */
+    int32_t *tmp_rows;   /* nb nb x (2 W + 1) x 3 */
+    int *tmp_count;      /* nb nb: rows found (-1: the border is too narrow) */
+    double cos_reach;
+    int avx2;
+    const ibl_cubemap *src; /* run */
+    float *acc;             /* run: the direct grid */
+} core_job;
+
+static void core_map_task(void *arg, int f)
+{
+    core_job *j = arg;
+    struct core *c = j->c;
+    for (int Y = -c->W; Y < c->S + c->W; Y++)
+        for (int X = -c->W; X < c->S + c->W; X++)
+            c->map[((size_t)f * c->P + Y + c->O) * c->P + X + c->O] = core_cell_texel(j->p, c->S, f, X, Y);
+}
+
+/* Whether padded cell i is within reach of R: 1 yes, 0 no, -1 no texel there. */
+static int core_in_reach(const core_job *j, const double R[3], size_t i)
+{
+    size_t plane = (size_t)j->c->P * j->c->P;
+    const float *g = j->geo;
+    if (!(g[F_OM * plane + i] > 0)) return -1;
+    double d = R[0] * g[i] + R[1] * g[plane + i] + R[2] * g[2 * plane + i];
+    return d >= j->cos_reach * g[GEO_FIELDS * plane + i];
+}
+
+/* The cells of row Y within reach of R, scanning out from column `start` (the set is an
+ * interval: a cap seen on the unfolded faces; empty corner cells are stepped over); the whole
+ * row when `start` itself is out of reach. */
+static int core_scan_row(const core_job *j, const double R[3], int Y, int start, int lo, int hi,
+                         int *first, int *last)
+{
+    const struct core *c = j->c;
+    size_t row = (size_t)(Y + c->O) * c->P + c->O;
+    *first = INT32_MAX, *last = INT32_MIN;
+    if (core_in_reach(j, R, row + start) != 1) {
+        for (int X = lo; X <= hi; X++)
+            if (core_in_reach(j, R, row + X) == 1) {
+                if (X < *first) *first = X;
+                *last = X;
+            }
+        return *first <= *last;
+    }
+    *first = *last = start;
+    for (int X = start - 1; X >= lo; X--) {
+        int r = core_in_reach(j, R, row + X);
+        if (r == 0) break;
+        if (r == 1) *first = X;
+    }
+    for (int X = start + 1; X <= hi; X++) {
+        int r = core_in_reach(j, R, row + X);
+        if (r == 0) break;
+        if (r == 1) *last = X;
+    }
+    return 1;
+}
+
+/* The rows of the window around base texel `index` that hold cells within reach. */
+static void core_rows_task(void *arg, int index)
+{
+    core_job *j = arg;
+    const struct core *c = j->c;
+    int a = index % c->nb, b = index / c->nb, S = c->S, W = c->W;
+    double R[3];
+    ibl__output_direction(&j->p->desc, j->lobe, 0, c->n, a, b, R);
+    int XC = (int)floor((a + 0.5) * S / c->n), YC = (int)floor((b + 0.5) * S / c->n);
+    int lo = XC - W > -W ? XC - W : -W, hi = XC + W < S + W - 1 ? XC + W : S + W - 1;
+    int32_t *out = j->tmp_rows + (size_t)index * (2 * W + 1) * 3;
+    int first, last, count = 0;
+    /* rows from YC down, then from YC + 1 up, each scan started at the previous row's middle */
+    for (int dir = -1; dir <= 1; dir += 2) {
+        int start = XC;
+        for (int Y = dir < 0 ? YC : YC + 1; Y >= YC - W && Y <= YC + W; Y += dir) {
+            if (Y < -W || Y >= S + W || !core_scan_row(j, R, Y, start, lo, hi, &first, &last)) break;
+            if (first == lo || last == hi || Y == YC - W || Y == YC + W || Y == -W || Y == S + W - 1) {
+                j->tmp_count[index] = -1; /* within reach at the window's edge: W is too small */
+                return;
+            }
+            int32_t *r = out + 3 * count++;
+            r[0] = Y, r[1] = first, r[2] = (last - first + 8) & ~7;
+            start = (first + last) / 2;
+        }
+        if (dir < 0) /* ascending order: the runs read the rows in order */
+            for (int i = 0, k = count - 1; i < k; i++, k--)
+                for (int f = 0; f < 3; f++) {
+                    int32_t t = out[3 * i + f];
+                    out[3 * i + f] = out[3 * k + f];
+                    out[3 * k + f] = t;
+                }
+    }
+    j->tmp_count[index] = count;
+}
+
+/* The weights of base texel `index` (and their sum), from the padded geometry. */
+static void core_weights_task(void *arg, int index)
+{
+    core_job *j = arg;
+    struct core *c = j->c;
+    int a = index % c->nb, b = index / c->nb, P = c->P, O = c->O;
+    double Rd[3];
+    ibl__output_direction(&j->p->desc, j->lobe, 0, c->n, a, b, Rd);
+    float R[3] = {(float)Rd[0], (float)Rd[1], (float)Rd[2]};
+    float RR[6] = {R[0] * R[0], R[1] * R[1], R[2] * R[2], 2 * R[0] * R[1], 2 * R[0] * R[2], 2 * R[1] * R[2]};
+    size_t plane = (size_t)P * P;
+    float *w = c->w + c->w0[index];
+    double den = 0;
+    for (uint32_t r = c->row0[index]; r < c->row0[index + 1]; r++) {
+        const int32_t *row = c->rows + 3 * (size_t)r;
+        const float *g = j->geo + (size_t)(row[0] + O) * P + row[1] + O;
+        if (j->avx2) {
+            avx2_cell_weights(j->pc, R, RR, g, plane, row[2], w);
+        } else {
+            for (int i = 0; i < row[2]; i++) {
+                float dx = R[0] - g[i], dy = R[1] - g[plane + i], dz = R[2] - g[2 * plane + i];
+                float u = 0.5f * (dx * dx + dy * dy + dz * dz) + g[F_E * plane + i];
+                float q = 0;
+                for (int k = 0; k < 6; k++) q += RR[k] * g[(F_C + k) * plane + i];
+                w[i] = table_weight(j->pc, u, q) * g[F_OM * plane + i];
+            }
+        }
+        for (int i = 0; i < row[2]; i++) den += w[i];
+        w += row[2];
+    }
+    c->den[index] = den;
+}
+
+/* Visits the distinct output texels that base texel (a, b) stands for: face, flips, (x, y). */
+#define CORE_IMAGES(c, a, b, BODY)                                                            \
+    for (int face_ = 0; face_ < 6; face_++)                                                   \
+        for (int fy_ = 0; fy_ < 2; fy_++)                                                     \
+            for (int fx_ = 0; fx_ < 2; fx_++) {                                               \
+                int x_ = fx_ ? (c)->n - 1 - (a) : (a), y_ = fy_ ? (c)->n - 1 - (b) : (b);      \
+                if ((fx_ && x_ == (a)) || (fy_ && y_ == (b))) continue;                       \
+                BODY                                                                          \
+            }
+
+static void core_add_normalisers(const struct core *c, float *acc)
+{
+    for (int b = 0; b < c->nb; b++)
+        for (int a = 0; a < c->nb; a++) {
+            double den = c->den[b * c->nb + a];
+            CORE_IMAGES(c, a, b, {
+                float *o = acc + (((size_t)face_ * c->n + y_) * c->n + x_) * 4;
+                o[3] = (float)(o[3] + den);
+            })
+        }
+}
+
+static void core_pad_task(void *arg, int index)
+{
+    core_job *j = arg;
+    const struct core *c = j->c;
+    int f = index / c->P, row = index % c->P;
+    size_t plane = (size_t)c->P * c->P, S2 = (size_t)c->S * c->S;
+    const int32_t *map = c->map + (size_t)index * c->P;
+    float *out = c->pad + (size_t)f * 3 * plane + (size_t)row * c->P;
+    for (int X = 0; X < c->P; X++) {
+        int32_t t = map[X];
+        const float *v = t >= 0 ? ibl_cubemap_face(j->src, 0, (int)(t / S2)) + (t % S2) * 4 : NULL;
+        for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = v ? v[ch] : 0.0f;
+    }
+}
+
+/* sum over the rows of weights x source texels of padded face `planes` (r, g, b), the source
+ * flipped by fx / fy */
+static void core_mac_generic(const struct core *c, const float *w, const int32_t *rows, int nrows,
+                             const float *planes, int fx, int fy, double out[3])
+{
+    size_t plane = (size_t)c->P * c->P;
+    float acc[3][8] = {{0}};
+    for (int r = 0; r < nrows; r++) {
+        const int32_t *row = rows + 3 * r;
+        int Y = fy ? c->S - 1 - row[0] : row[0];
+        const float *base = planes + (size_t)(Y + c->O) * c->P + c->O;
+        for (int i = 0; i < row[2]; i += 8)
+            for (int l = 0; l < 8; l++) {
+                int X = fx ? c->S - 1 - (row[1] + i + l) : row[1] + i + l;
+                for (int ch = 0; ch < 3; ch++) acc[ch][l] += w[i + l] * base[ch * plane + X];
+            }
+        w += row[2];
+    }
+    for (int ch = 0; ch < 3; ch++) {
+        double s = 0;
+        for (int l = 0; l < 8; l++) s += acc[ch][l];
+        out[ch] = s;
+    }
+}
+
+static void core_mac_task(void *arg, int b)
+{
+    core_job *j = arg;
+    const struct core *c = j->c;
+    size_t plane = (size_t)c->P * c->P;
+    for (int a = 0; a < c->nb; a++) {
+        int index = b * c->nb + a;
+        const float *w = c->w + c->w0[index];
+        const int32_t *rows = c->rows + 3 * (size_t)c->row0[index];
+        int nrows = (int)(c->row0[index + 1] - c->row0[index]);
+        CORE_IMAGES(c, a, b, {
+            double s[3];
+            const float *planes = c->pad + (size_t)face_ * 3 * plane;
+            if (j->avx2) avx2_core_mac(c, w, rows, nrows, planes, fx_, fy_, s);
+            else core_mac_generic(c, w, rows, nrows, planes, fx_, fy_, s);
+            float *o = j->acc + (((size_t)face_ * c->n + y_) * c->n + x_) * 4;
+            for (int ch = 0; ch < 3; ch++) o[ch] = (float)(o[ch] + s[ch]);
+        })
+    }
+}
+
+
+/* The padded geometry of face 0 (CORE_GEO planes of P P; cells without a texel: no weight). */
+static float *core_geometry(ibl_specular_plan *p, const struct core *c)
+{
+    size_t plane = (size_t)c->P * c->P, S2 = (size_t)c->S * c->S;
+    float *geo = ibl_alloc(p->ctx, CORE_GEO * plane * sizeof(float));
+    if (!geo) return NULL;
+    const srclev *s = &p->src[0];
+    for (size_t i = 0; i < plane; i++) {
+        int32_t t = c->map[i];
+        if (t < 0) {
+            for (int f = 0; f < CORE_GEO; f++) geo[f * plane + i] = 0.0f;
+            geo[F_E * plane + i] = 4.0f; /* u > 2: beyond every lobe */
+            geo[GEO_FIELDS * plane + i] = 1.0f;
+            continue;
+        }
+        int f = (int)(t / S2), y = (int)(t % S2) / c->S, x = (int)(t % S2) % c->S;
+        for (int k = 0; k < GEO_FIELDS; k++) geo[k * plane + i] = s->rec[rec_index(s, f, x, y, k)];
+        double m0 = geo[i], m1 = geo[plane + i], m2 = geo[2 * plane + i];
+        geo[GEO_FIELDS * plane + i] = (float)sqrt(m0 * m0 + m1 * m1 + m2 * m2);
+    }
+    return geo;
+}
+
+static ibl_status core_build_weights(ibl_specular_plan *p, int level)
+{
+    level_plan *lv = &p->lv[level];
+    struct core *c = lv->pieces[0].core;
+    if (!c) return IBL_OK;
+    float *geo = core_geometry(p, c);
+    if (!geo) return ibl_context_status(p->ctx);
+    core_job job = {p, c, &lv->pieces[0], &lv->lobe, geo, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
+                    NULL, NULL};
+    ibl_parallel_for(p->ctx, c->nb * c->nb, core_weights_task, &job);
+    ibl_free(p->ctx, geo);
+    return IBL_OK;
+}
+
+/* Sets up the precomputed core of a level when its core sums level 0 (not for lobes split into
+ * sub-texels, nor for edge fixups that bend the directions); leaves the level as it is when
+ * the border would be too deep or the weights too many. */
+static ibl_status core_create(ibl_specular_plan *p, int level)
+{
+    level_plan *lv = &p->lv[level];
+    piece *pc = &lv->pieces[0];
+    grid *gr = &lv->grids[pc->grid];
+    if (p->K != 1 || pc->src != 0 || !gr->direct || !grid_symmetric(p, gr)) return IBL_OK;
+    int S = p->S;
+    /* reach: the core's end plus a texel's angular radius; a cell subtends at least 1 / (1.5 S)
+     * radians (radially, at a face corner), so W cells of border hold everything in reach */
+    double reach = pc->th_out + 2.0 / S;
+    int W = (int)ceil(1.5 * S * reach) + 2;
+    if (2 * W > S) return IBL_OK;
+    ibl_context *ctx = p->ctx;
+    struct core *c = ibl_calloc(ctx, 1, sizeof *c);
+    if (!c) return ibl_context_status(ctx);
+    c->S = S, c->W = W, c->O = W + 8, c->P = S + 2 * W + 16, c->n = gr->n, c->nb = (gr->n + 1) / 2;
+    size_t plane = (size_t)c->P * c->P, nbase = (size_t)c->nb * c->nb;
+    ibl_status st = IBL_OK;
+    float *geo = NULL;
+    int32_t *tmp_rows = NULL;
+    int *tmp_count = NULL;
+    c->map = ibl_alloc(ctx, 6 * plane * sizeof(int32_t));
+    c->row0 = ibl_alloc(ctx, (nbase + 1) * sizeof(uint32_t));
+    c->w0 = ibl_alloc(ctx, (nbase + 1) * sizeof(size_t));
+    c->den = ibl_alloc(ctx, nbase * sizeof(double));
+    c->pad = ibl_alloc(ctx, 6 * 3 * plane * sizeof(float));
+    tmp_rows = ibl_alloc(ctx, nbase * (2 * W + 1) * 3 * sizeof(int32_t));
+    tmp_count = ibl_alloc(ctx, nbase * sizeof(int));
+    if (!c->map || !c->row0 || !c->w0 || !c->den || !c->pad || !tmp_rows || !tmp_count) goto fail;
+    for (size_t i = 0; i < 6 * plane; i++) c->map[i] = -1;
+    core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), 0, NULL, NULL};
+    ibl_parallel_for(ctx, 6, core_map_task, &job);
+    job.geo = geo = core_geometry(p, c);
+    if (!geo) goto fail;
+    ibl_parallel_for(ctx, (int)nbase, core_rows_task, &job);
+    size_t rows = 0, weights = 0;
+    for (size_t i = 0; i < nbase; i++) {
+        if (tmp_count[i] < 0) goto give_up;
+        c->row0[i] = (uint32_t)rows;
+        c->w0[i] = weights;
+        for (int r = 0; r < tmp_count[i]; r++) weights += (size_t)tmp_rows[(i * (2 * W + 1) + r) * 3 + 2];
+        rows += (size_t)tmp_count[i];
+    }
+    c->row0[nbase] = (uint32_t)rows;
+    c->w0[nbase] = weights;
+    if (weights > ((size_t)1 << 25)) goto give_up; /* 128 MiB of weights: sum by leaves instead */
+    c->rows = ibl_alloc(ctx, (rows ? rows : 1) * 3 * sizeof(int32_t));
+    c->w = ibl_alloc(ctx, (weights ? weights : 1) * sizeof(float));
+    if (!c->rows || !c->w) goto fail;
+    for (size_t i = 0; i < nbase; i++)
+        memcpy(c->rows + 3 * (size_t)c->row0[i], tmp_rows + i * (2 * W + 1) * 3,
+               (size_t)tmp_count[i] * 3 * sizeof(int32_t));
+    ibl_free(ctx, tmp_rows);
+    ibl_free(ctx, tmp_count);
+    job.avx2 = cpu_has_avx2() && !p->portable;
+    ibl_parallel_for(ctx, (int)nbase, core_weights_task, &job);
+    ibl_free(ctx, geo);
+    pc->core = c;
+    return IBL_OK;
+fail:
+    st = ibl_context_status(ctx);
+give_up:
+    ibl_free(ctx, geo);
+    ibl_free(ctx, tmp_rows);
+    ibl_free(ctx, tmp_count);
+    core_destroy(ctx, c);
+    return st;
+}
+
+/* Adds the level's precomputed core to the numerators of its direct grid. */
+static void core_run(ibl_specular_plan *p, int level, const ibl_cubemap *src)
+{
+    level_plan *lv = &p->lv[level];
+    struct core *c = lv->pieces[0].core;
+    if (!c) return;
+    core_job job = {p, c, &lv->pieces[0], &lv->lobe, NULL, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
+                    src, lv->grids[lv->pieces[0].grid].acc};
+    ibl_parallel_for(p->ctx, 6 * c->P, core_pad_task, &job);
+    ibl_parallel_for(p->ctx, c->nb, core_mac_task, &job);
+}
+
 /* The normalisers: the geometric sums depend only on the direction's (s, t) on its face (the
  * cube's texels are carried onto themselves by the signed permutations that swap faces), so
  * they are summed for face 0 and copied; within the face, the reflections x -> n-1-x,
@@ -1108,6 +1585,7 @@ static void plan_denominators(ibl_specular_plan *p, int level)
         for (int f = 1; f < 6; f++)
             for (size_t i = 3; i < face; i += 4) gr->acc[f * face + i] = gr->acc[i];
     }
+    if (lv->pieces[0].core) core_add_normalisers(lv->pieces[0].core, lv->grids[lv->pieces[0].grid].acc);
 }
 
 /* ---- run: combining the grids into the output level ---- */
@@ -1224,6 +1702,7 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
             p->run_level = l;
             grid_job job = {p, l, EVAL_NUM0};
             ibl_parallel_for(ctx, p->lv[l].tasks, grid_task, &job);
+            core_run(p, l, src);
             ibl_parallel_for(ctx, 6 * ibl_level_size(p->N, l), combine_task, p);
         }
         ibl_status st = ibl_edge_fixup_apply(ctx, p->desc.edge_fixup, dst, l);
