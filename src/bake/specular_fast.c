@@ -37,15 +37,27 @@ enum { BW = 4, BH = 2, BT = BW * BH }; /* a block: one 8-wide vector */
  * or a coarse level's luminance-weighted moments and power */
 enum { F_MX = 0, F_E = 3, F_C = 4, F_OM = 10, GEO_FIELDS = 11 };
 enum { F_L = GEO_FIELDS, NF0 = GEO_FIELDS + 3 };
-enum { F_WM = GEO_FIELDS, F_WE = F_WM + 3, F_WC = F_WM + 4, F_P = F_WM + 10, NFC = F_P + 3 };
+/* F_PD: the power of a texel that is not bright (0 for a bright one; see "bright texels") */
+enum { F_WM = GEO_FIELDS, F_WE = F_WM + 3, F_WC = F_WM + 4, F_P = F_WM + 10, F_PD = F_P + 3, NFC = F_PD + 3 };
+/* Bright texels: a split ring's grid may be spaced BETA_SPLIT of its inner radius because a
+ * texel whose largest contribution to an output exceeds BRIGHT_TAU times the mean radiance is
+ * summed at the output texels instead (at most BRIGHT_BLOCKS blocks of them per level). */
+#define BETA_SPLIT 0.6
+#define BRIGHT_TAU 0.02
+enum { BRIGHT_BLOCKS = 256 };
 enum { BINFO = 6, TAB = 2048, TILE = 8, MAX_PIECES = 24, MAX_GRIDS = MAX_PIECES, CAND = 1024 };
 
 static const double PI = 3.14159265358979323846;
+static const double LUM[3] = {0.2126, 0.7152, 0.0722}; /* Rec. 709 luminance */
 
 typedef struct srclev {
     int M, nbx, nby, nf;
     float *rec;    /* 6 nby nbx blocks x nf fields x BT                     */
     float *block;  /* per block: centre direction (unit), angular radius r, cos r, sin r */
+    /* bright texels (levels read by split rings): their records gathered in blocks */
+    double bright_c;     /* threshold on a texel's luminance power / mean radiance (0: unused) */
+    int bright_cap, nbright; /* capacity and count of bright blocks                     */
+    float *bright_rec, *bright_block;
 } srclev;
 
 typedef struct piece {
@@ -58,6 +70,7 @@ typedef struct piece {
     float a2, kap, a4, out_sa, out_sb, out_sk, in_sa, in_sb, in_sk;
     float n;  /* Phong exponent */
     int ggx;
+    int split; /* a ring on a coarse grid without the bright texels, which go direct */
     struct core *core; /* the core summed by precomputed weights (NULL: by leaves) */
 } piece;
 
@@ -444,6 +457,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
     const double c0 = 2.0;          /* the core ends (psi starts) at c0 half widths */
     const double gamma = 0.6 * acc; /* ring source texel / ring inner radius        */
     const double beta = 0.2 * acc;  /* ring grid spacing / ring inner radius        */
+    const double beta_split = BETA_SPLIT * acc; /* the same without the bright texels */
     const double cull = lobe->kind == IBL__LOBE_PHONG ? 1e-9 : 0.0;
 
     int core_src = source_level_for(p, lobe->half_angle / kappa, 32);
@@ -472,11 +486,18 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
         } else {
             double b = pc->th_in;
             pc->src = source_level_for(p, gamma * b, 16);
+            /* a ring summed from a coarse level leaves its bright texels to a direct sum, so
+             * that its grid may be coarser (see "bright texels") */
+            int split = pc->src > 0;
             int gn = 1;
-            while (texel_angle(gn) > beta * b) gn *= 2;
+            while (texel_angle(gn) > (split ? beta_split : beta) * b) gn *= 2;
             if (gn < 8) gn = 8;
-            if (gn >= n) pc->grid = grid_index(lv, n, 1, TILE);
-            else pc->grid = grid_index(lv, gn, 0, TILE);
+            if (gn >= n) {
+                pc->grid = grid_index(lv, n, 1, TILE);
+            } else {
+                pc->grid = grid_index(lv, gn, 0, TILE);
+                pc->split = split;
+            }
         }
         ibl_status st = make_table(p->ctx, lobe, j == 0 ? 0.0 : prevU, last ? 0.0 : outerU, pc);
         if (st != IBL_OK) return st;
@@ -499,6 +520,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
 
 static void plan_denominators(ibl_specular_plan *p, int level);
 static ibl_status core_create(ibl_specular_plan *p, int level);
+static void plan_bright(ibl_specular_plan *p, int level);
 static ibl_status core_build_weights(ibl_specular_plan *p, int level);
 
 void ibl_specular_plan_destroy(ibl_specular_plan *p)
@@ -509,6 +531,8 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
     for (int l = 0; l < IBL_MAX_LEVELS; l++) {
         ibl_free(ctx, p->src[l].rec);
         ibl_free(ctx, p->src[l].block);
+        ibl_free(ctx, p->src[l].bright_rec);
+        ibl_free(ctx, p->src[l].bright_block);
         for (int k = 0; k < p->lv[l].npieces; k++) {
             ibl_free(ctx, p->lv[l].pieces[k].tab);
             core_destroy(ctx, p->lv[l].pieces[k].core);
@@ -610,12 +634,112 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         if (st == IBL_OK) st = core_create(p, l);
         if (st != IBL_OK) goto fail;
         plan_denominators(p, l);
+        plan_bright(p, l);
+    }
+    for (int l = 0; l < p->SL; l++) {
+        srclev *s = &p->src[l];
+        if (s->bright_c == 0) continue;
+        s->bright_cap = BRIGHT_BLOCKS;
+        s->bright_rec = ibl_alloc(ctx, (size_t)s->bright_cap * NFC * BT * sizeof(float));
+        s->bright_block = ibl_alloc(ctx, (size_t)s->bright_cap * BINFO * sizeof(float));
+        if (!s->bright_rec || !s->bright_block) {
+            st = ibl_context_status(ctx);
+            goto fail;
+        }
     }
     *out = p;
     return IBL_OK;
 fail:
     ibl_specular_plan_destroy(p);
     return st;
+}
+
+
+/* The constant of a split ring's bright test on its source level: a texel of power P adds at
+ * most P gmax / den to an output (gmax the piece's peak, den the level's normaliser), so the
+ * test P > BRIGHT_TAU mean_radiance den / gmax; the level keeps the strictest of its rings. */
+static void plan_bright(ibl_specular_plan *p, int level)
+{
+    level_plan *lv = &p->lv[level];
+    const grid *dg = &lv->grids[lv->pieces[0].grid];
+    size_t face = (size_t)dg->n * dg->n;
+    double den = 0;
+    for (size_t i = 0; i < face; i++) den += dg->acc[4 * i + 3];
+    den /= (double)face;
+    for (int k = 0; k < lv->npieces; k++) {
+        const piece *pc = &lv->pieces[k];
+        if (!pc->split) continue;
+        double gmax = 0;
+        for (int i = 0; i <= TAB; i++) gmax = fabs(pc->tab[2 * i]) > gmax ? fabs(pc->tab[2 * i]) : gmax;
+        if (!(gmax > 0)) continue;
+        double c = den / gmax;
+        srclev *s = &p->src[pc->src];
+        if (s->bright_c == 0 || c < s->bright_c) s->bright_c = c;
+    }
+}
+
+/* Picks the bright texels of source level l (largest luminance power first), gathers their
+ * records into blocks and writes every texel's power without them (F_PD). */
+static void select_bright(ibl_specular_plan *p, int l)
+{
+    srclev *s = &p->src[l];
+    size_t blocks = block_count(s);
+    double total = 0;
+    for (size_t b = 0; b < blocks; b++) {
+        const float *P = s->rec + (b * s->nf + F_P) * BT;
+        for (int t = 0; t < BT; t++) total += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
+    }
+    double thr = BRIGHT_TAU * total / (4.0 * PI) * s->bright_c;
+    for (;;) { /* raise the bar until the brightest fit (a bounded direct sum) */
+        int count = 0;
+        for (size_t b = 0; b < blocks; b++) {
+            const float *P = s->rec + (b * s->nf + F_P) * BT;
+            for (int t = 0; t < BT; t++)
+                count += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t] > thr;
+        }
+        if (count <= s->bright_cap * BT) break;
+        thr *= 2.0;
+    }
+    memset(s->bright_rec, 0, (size_t)s->bright_cap * NFC * BT * sizeof(float));
+    int k = 0;
+    for (size_t b = 0; b < blocks; b++) {
+        float *rec = s->rec + b * s->nf * BT;
+        for (int t = 0; t < BT; t++) {
+            const float *P = rec + F_P * BT;
+            int is_bright = LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t] > thr;
+            for (int c = 0; c < 3; c++) rec[(F_PD + c) * BT + t] = is_bright ? 0.0f : P[c * BT + t];
+            if (!is_bright) continue;
+            float *dst = s->bright_rec + (size_t)(k / BT) * NFC * BT;
+            for (int f = 0; f < NFC; f++) dst[f * BT + k % BT] = rec[f * BT + t];
+            k++;
+        }
+    }
+    s->nbright = (k + BT - 1) / BT;
+    /* each block's cone: around the mean of its texels' directions, out to the farthest one
+     * plus a texel's half diagonal */
+    double tr = 1.5 / s->M;
+    for (int b = 0; b < s->nbright; b++) {
+        const float *rec = s->bright_rec + (size_t)b * NFC * BT;
+        int n = k - b * BT < BT ? k - b * BT : BT;
+        double d[BT][3], c[3] = {0, 0, 0};
+        for (int t = 0; t < n; t++) {
+            double len = 0;
+            for (int i = 0; i < 3; i++) d[t][i] = rec[(F_MX + i) * BT + t], len += d[t][i] * d[t][i];
+            len = sqrt(len);
+            for (int i = 0; i < 3; i++) d[t][i] /= len, c[i] += d[t][i];
+        }
+        double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]), r = 0;
+        for (int i = 0; i < 3; i++) c[i] /= len;
+        for (int t = 0; t < n; t++) {
+            double dd = c[0] * d[t][0] + c[1] * d[t][1] + c[2] * d[t][2];
+            double a = acos(dd > 1 ? 1 : dd < -1 ? -1 : dd);
+            r = a > r ? a : r;
+        }
+        r += tr + 1e-6;
+        float *bc = s->bright_block + (size_t)b * BINFO;
+        for (int i = 0; i < 3; i++) bc[i] = (float)c[i];
+        bc[3] = (float)r, bc[4] = (float)cos(r), bc[5] = (float)sin(r);
+    }
 }
 
 /* ---- run: the radiance pyramid ---- */
@@ -626,7 +750,6 @@ typedef struct pyr_job {
     int level;
 } pyr_job;
 
-static const double LUM[3] = {0.2126, 0.7152, 0.0722};
 
 static void level0_task(void *arg, int index)
 {
@@ -705,6 +828,7 @@ typedef struct sum_args {
     const piece *pc;
     const cand *cands;
     int ncand;
+    int dim; /* a split ring's grid: the power of the texels that are not bright */
 } sum_args;
 
 /* psi_out - psi_in of the piece at u (the partition of unity alone) */
@@ -761,7 +885,7 @@ static void sum_blocks_generic(const sum_args *sa, const float R[3], const float
         const float *rec = candidate_record(sa, ci, R);
         if (!rec) continue;
         const float *m = rec + base * BT, *e = m + 3 * BT, *c = m + 4 * BT;
-        const float *om = rec + F_OM * BT, *L = rec + (sa->mode == EVAL_NUMC ? F_P : F_L) * BT;
+        const float *om = rec + F_OM * BT, *L = rec + (sa->mode == EVAL_NUMC ? (sa->dim ? F_PD : F_P) : F_L) * BT;
         for (int t = 0; t < BT; t++) {
             float dx = R[0] - m[t], dy = R[1] - m[BT + t], dz = R[2] - m[2 * BT + t];
             float u = 0.5f * (dx * dx + dy * dy + dz * dz) + e[t];
@@ -952,7 +1076,7 @@ AVX2 static void sum_blocks_avx2(const sum_args *sa, const float R[3], const flo
     const __m256 q0 = _mm256_set1_ps(RR[0]), q1 = _mm256_set1_ps(RR[1]), q2 = _mm256_set1_ps(RR[2]);
     const __m256 q3 = _mm256_set1_ps(RR[3]), q4 = _mm256_set1_ps(RR[4]), q5 = _mm256_set1_ps(RR[5]);
     int base = sa->mode == EVAL_NUMC ? F_WM : F_MX;
-    int lfield = sa->mode == EVAL_NUMC ? F_P : F_L;
+    int lfield = sa->mode == EVAL_NUMC ? (sa->dim ? F_PD : F_P) : F_L;
     int ggx = sa->pc->ggx;
     __m256 ar = k.zero, ag = k.zero, ab = k.zero, aw = k.zero;
     for (int ci = 0; ci < sa->ncand; ci++) {
@@ -1116,6 +1240,29 @@ static void sum_candidates(const sum_args *sa, tile_pts *tp)
     }
 }
 
+typedef struct reach_test {
+    const double *axis;     /* the tile's axis                                             */
+    double T, cT, sT;       /* the tile's reach (the piece's end + the tile's radius)       */
+    double hole, cH, sH;    /* the piece's hole seen from the tile (its start - the radius) */
+    double th_out, th_in, cO, sO, cI, sI;
+} reach_test;
+
+/* Appends block b (cone info in `blocks`) to the candidates if it can matter for the tile;
+ * 1 when the list is full. */
+static int add_candidate(sum_args *sa, const reach_test *t, const float *blocks, uint32_t b)
+{
+    const float *bc = blocks + (size_t)b * BINFO;
+    double c = dot3(t->axis, bc), r = bc[3], cr = bc[4], sr = bc[5];
+    /* angle(axis, centre) > T + r: out of reach; < hole - r: inside the hole */
+    if (t->T + r < PI && c < t->cT * cr - t->sT * sr - 1e-7) return 0;
+    if (t->hole - r > 0 && c > t->cH * cr + t->sH * sr + 1e-7) return 0;
+    cand *cd = (cand *)&sa->cands[sa->ncand++];
+    cd->block = b;
+    cd->cos_out = t->th_out + r >= PI ? -2.0f : (float)(t->cO * cr - t->sO * sr) - 1e-6f;
+    cd->cos_in = t->th_in - r <= 0 ? 2.0f : (float)(t->cI * cr + t->sI * sr) + 1e-6f;
+    return sa->ncand == CAND;
+}
+
 static void grid_task(void *arg, int index)
 {
     const grid_job *job = arg;
@@ -1166,16 +1313,18 @@ static void grid_task(void *arg, int index)
     int avx2 = cpu_has_avx2() && !p->portable;
     for (int pi = 0; pi < lv->npieces; pi++) {
         const piece *pc = &lv->pieces[pi];
-        if (pc->grid != g || pc->core) continue;
         const srclev *s = &p->src[pc->src];
+        int main_sum = pc->grid == g && !pc->core;
+        /* a split ring's bright texels are summed at the output texels (the direct grid) */
+        int bright = pc->split && gr->direct && job->mode != EVAL_DEN && s->nbright > 0;
+        if (!main_sum && !bright) continue;
         sum_args sa = {job->mode == EVAL_DEN ? EVAL_DEN : pc->src == 0 ? EVAL_NUM0 : EVAL_NUMC,
-                       avx2, s, pc, cands, 0};
+                       avx2, s, pc, cands, 0, pc->split && !gr->direct};
         double T = pc->th_out + rho;
-        /* cos / sin of the tile's reach (th_out + rho) and of its hole (th_in - rho) */
-        double cT = cos(T), sT = sin(T), hole = pc->th_in - rho;
-        double cH = cos(hole), sH = sin(hole);
-        double cO = cos(pc->th_out), sO = sin(pc->th_out), cI = cos(pc->th_in), sI = sin(pc->th_in);
-        for (int f = 0; f < 6; f++) {
+        reach_test reach = {axis, T, cos(T), sin(T), pc->th_in - rho, cos(pc->th_in - rho),
+                            sin(pc->th_in - rho), pc->th_out, pc->th_in, cos(pc->th_out),
+                            sin(pc->th_out), cos(pc->th_in), sin(pc->th_in)};
+        for (int f = 0; main_sum && f < 6; f++) {
             const float(*B)[3] = p->face_basis[f];
             double u0, u1, v0, v1;
             if (T >= 0.5 * PI - 1e-9) {
@@ -1192,22 +1341,24 @@ static void grid_task(void *arg, int index)
             for (int by = y0 / BH; by <= y1 / BH; by++)
                 for (int bx = x0 / BW; bx <= x1 / BW; bx++) {
                     uint32_t b = (uint32_t)(((size_t)f * s->nby + by) * s->nbx + bx);
-                    const float *bc = s->block + (size_t)b * BINFO;
-                    double c = dot3(axis, bc), r = bc[3], cr = bc[4], sr = bc[5];
-                    /* angle(axis, centre) > T + r: out of reach; < hole - r: inside the hole */
-                    if (T + r < PI && c < cT * cr - sT * sr - 1e-7) continue;
-                    if (hole - r > 0 && c > cH * cr + sH * sr + 1e-7) continue;
-                    cand *cd = &cands[sa.ncand++];
-                    cd->block = b;
-                    cd->cos_out = pc->th_out + r >= PI ? -2.0f : (float)(cO * cr - sO * sr) - 1e-6f;
-                    cd->cos_in = pc->th_in - r <= 0 ? 2.0f : (float)(cI * cr + sI * sr) + 1e-6f;
-                    if (sa.ncand == CAND) {
+                    if (add_candidate(&sa, &reach, s->block, b)) {
                         sum_candidates(&sa, &tp);
                         sa.ncand = 0;
                     }
                 }
         }
         if (sa.ncand) sum_candidates(&sa, &tp);
+        if (bright) {
+            srclev bs = *s;
+            bs.rec = s->bright_rec, bs.block = s->bright_block, bs.nf = NFC;
+            sa.s = &bs, sa.dim = 0, sa.ncand = 0;
+            for (int k = 0; k < s->nbright; k++)
+                if (add_candidate(&sa, &reach, bs.block, (uint32_t)k)) {
+                    sum_candidates(&sa, &tp);
+                    sa.ncand = 0;
+                }
+            if (sa.ncand) sum_candidates(&sa, &tp);
+        }
     }
     for (int k = 0; k < tp.count; k++) {
         float *o = gr->acc + (((size_t)face * n + tp.y[k]) * n + tp.x[k]) * 4;
@@ -1691,6 +1842,7 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
     for (int l = 1; l < p->SL; l++) {
         pyr_job job = {p, src, l};
         ibl_parallel_for(ctx, 6 * p->src[l].M, pyramid_task, &job);
+        if (p->src[l].bright_c > 0) select_bright(p, l);
     }
     p->run_src = src;
     p->run_dst = dst;
