@@ -309,30 +309,38 @@ static void combine(const geo *const *parts, const double *w, int count, geo *ou
     }
 }
 
+/* The signed permutation taking face-local (s, t, axis) coordinates to world coordinates on
+ * face f: world[i] = sign[i] local[axis[i]] (the face basis is made of signed unit vectors). */
+static void face_perm(const ibl_specular_plan *p, int f, int axis[3], double sign[3])
+{
+    const float(*B)[3] = p->face_basis[f];
+    for (int i = 0; i < 3; i++) {
+        axis[i] = 0, sign[i] = 1.0;
+        /* local columns: s tangent B[1], t tangent B[2], axis B[0] */
+        const float col[3] = {B[1][i], B[2][i], B[0][i]};
+        for (int k = 0; k < 3; k++)
+            if (col[k] != 0.0f) axis[i] = k, sign[i] = col[k] > 0 ? 1.0 : -1.0;
+    }
+}
+
 /* Writes the geometric fields of texel (x, y) of every face from face-local moments. */
 static void store_geo(const ibl_specular_plan *p, srclev *s, int x, int y, const geo *g)
 {
+    /* local covariance as a matrix (c: xx yy zz xy xz yz) */
+    const double Cl[3][3] = {{g->c[0], g->c[3], g->c[4]}, {g->c[3], g->c[1], g->c[5]},
+                             {g->c[4], g->c[5], g->c[2]}};
     for (int f = 0; f < 6; f++) {
-        const float(*B)[3] = p->face_basis[f];
-        /* local (s, t, axis) -> world: columns b1, b2, b0 */
-        double M[3][3];
-        for (int i = 0; i < 3; i++) M[i][0] = B[1][i], M[i][1] = B[2][i], M[i][2] = B[0][i];
-        double Cl[3][3] = {{g->c[0], g->c[3], g->c[4]}, {g->c[3], g->c[1], g->c[5]},
-                           {g->c[4], g->c[5], g->c[2]}};
-        double mw[3], Cw[3][3];
-        for (int i = 0; i < 3; i++) mw[i] = M[i][0] * g->m[0] + M[i][1] * g->m[1] + M[i][2] * g->m[2];
-        for (int i = 0; i < 3; i++)
-            for (int j = 0; j < 3; j++) {
-                double v = 0;
-                for (int a = 0; a < 3; a++)
-                    for (int b = 0; b < 3; b++) v += M[i][a] * Cl[a][b] * M[j][b];
-                Cw[i][j] = v;
-            }
+        int ax[3];
+        double sg[3];
+        face_perm(p, f, ax, sg);
         float *r = s->rec;
-        for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_MX + c)] = (float)mw[c];
+        for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_MX + c)] = (float)(sg[c] * g->m[ax[c]]);
         r[rec_index(s, f, x, y, F_E)] = (float)g->e;
-        const double cw[6] = {Cw[0][0], Cw[1][1], Cw[2][2], Cw[0][1], Cw[0][2], Cw[1][2]};
-        for (int c = 0; c < 6; c++) r[rec_index(s, f, x, y, F_C + c)] = (float)cw[c];
+        static const int ci[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+        for (int c = 0; c < 6; c++) {
+            int i = ci[c][0], j = ci[c][1];
+            r[rec_index(s, f, x, y, F_C + c)] = (float)(sg[i] * sg[j] * Cl[ax[i]][ax[j]]);
+        }
         r[rec_index(s, f, x, y, F_OM)] = (float)g->om;
     }
 }
@@ -342,12 +350,59 @@ typedef struct geo_job {
     srclev *s;
     geo *g;
     int n;
+    const geo *fine; /* texel_combine_task: the level below */
 } geo_job;
 
-static void texel_geo_task(void *arg, int y)
+/* Row b of one eighth of the face: texels (a, b), a <= b < ceil(n / 2). */
+static void texel_geo_task(void *arg, int b)
 {
     const geo_job *j = arg;
-    for (int x = 0; x < j->n; x++) texel_geo(j->n, x, y, &j->g[(size_t)y * j->n + x]);
+    for (int a = 0; a <= b; a++) texel_geo(j->n, a, b, &j->g[(size_t)b * j->n + a]);
+}
+
+/* Row y of the face from its eighth: the reflections s -> -s, t -> -t and the swap s <-> t
+ * are symmetries of the face, and they act on the moments by sign flips and swaps. */
+static void texel_geo_fill_task(void *arg, int y)
+{
+    const geo_job *j = arg;
+    int n = j->n;
+    for (int x = 0; x < n; x++) {
+        int fx = x > n - 1 - x, fy = y > n - 1 - y;
+        int a = fx ? n - 1 - x : x, b = fy ? n - 1 - y : y, sw = a > b;
+        if (sw) {
+            int t = a;
+            a = b, b = t;
+        }
+        if (!fx && !fy && !sw) continue;
+        geo g = j->g[(size_t)b * n + a];
+        if (sw) { /* back from the eighth: swap s and t first */
+            double t = g.m[0];
+            g.m[0] = g.m[1], g.m[1] = t;
+            t = g.c[0], g.c[0] = g.c[1], g.c[1] = t;
+            t = g.c[4], g.c[4] = g.c[5], g.c[5] = t;
+        }
+        if (fx) g.m[0] = -g.m[0], g.c[3] = -g.c[3], g.c[4] = -g.c[4];
+        if (fy) g.m[1] = -g.m[1], g.c[3] = -g.c[3], g.c[5] = -g.c[5];
+        j->g[(size_t)y * n + x] = g;
+    }
+}
+
+/* Row y of a level's moments from its children (the parallel-axis rule). */
+static void texel_combine_task(void *arg, int y)
+{
+    const geo_job *j = arg;
+    int M = j->n;
+    const geo *fine = j->fine;
+    for (int x = 0; x < M; x++) {
+        const geo *parts[4];
+        double w[4];
+        for (int k = 0; k < 4; k++) {
+            parts[k] = &fine[(size_t)(2 * y + (k >> 1)) * (2 * M) + 2 * x + (k & 1)];
+            w[k] = parts[k]->om;
+        }
+        combine(parts, w, 4, &j->g[(size_t)y * M + x]);
+        j->g[(size_t)y * M + x].om = w[0] + w[1] + w[2] + w[3];
+    }
 }
 
 static void store_geo_task(void *arg, int y)
@@ -356,22 +411,29 @@ static void store_geo_task(void *arg, int y)
     for (int x = 0; x < j->n; x++) store_geo(j->p, j->s, x, y, &j->g[(size_t)y * j->n + x]);
 }
 
-static void block_cone_task(void *arg, int index)
+/* The bounding cones of block row `by` on every face: computed on face 0 and carried to the
+ * others by the signed permutation between the faces. */
+static void block_cone_task(void *arg, int by)
 {
     const geo_job *j = arg;
     srclev *s = j->s;
-    int M = s->M, f = index / s->nby, by = index % s->nby;
-    double h = 2.0 / M;
+    int M = s->M, ax0[3], ax[3];
+    double h = 2.0 / M, sg0[3], sg[3];
+    face_perm(j->p, 0, ax0, sg0);
     for (int bx = 0; bx < s->nbx; bx++) {
         int x1 = (bx + 1) * BW < M ? (bx + 1) * BW : M;
         int y1 = (by + 1) * BH < M ? (by + 1) * BH : M;
-        double c[3];
-        double r = ibl__rect_radius(f, bx * BW * h - 1, by * BH * h - 1, x1 * h - 1, y1 * h - 1, c);
-        float *b = s->block + (((size_t)f * s->nby + by) * s->nbx + bx) * BINFO;
-        for (int i = 0; i < 3; i++) b[i] = (float)c[i];
-        b[3] = (float)(r + 1e-6);
-        b[4] = (float)cos(r + 1e-6);
-        b[5] = (float)sin(r + 1e-6);
+        double c[3], local[3];
+        double r = ibl__rect_radius(0, bx * BW * h - 1, by * BH * h - 1, x1 * h - 1, y1 * h - 1, c);
+        for (int i = 0; i < 3; i++) local[ax0[i]] = sg0[i] * c[i];
+        for (int f = 0; f < 6; f++) {
+            face_perm(j->p, f, ax, sg);
+            float *b = s->block + (((size_t)f * s->nby + by) * s->nbx + bx) * BINFO;
+            for (int i = 0; i < 3; i++) b[i] = (float)(sg[i] * local[ax[i]]);
+            b[3] = (float)(r + 1e-6);
+            b[4] = (float)cos(r + 1e-6);
+            b[5] = (float)sin(r + 1e-6);
+        }
     }
 }
 
@@ -386,30 +448,22 @@ static ibl_status build_geometry(ibl_specular_plan *p)
         ibl_free(ctx, next);
         return ibl_context_status(ctx);
     }
-    geo_job first = {p, NULL, cur, S};
-    ibl_parallel_for(ctx, S, texel_geo_task, &first);
+    geo_job first = {p, NULL, cur, S, NULL};
+    ibl_parallel_for(ctx, (S + 1) / 2, texel_geo_task, &first);
+    ibl_parallel_for(ctx, S, texel_geo_fill_task, &first);
     for (int l = 0; l < p->SL; l++) {
         srclev *s = &p->src[l];
         int M = s->M;
         if (l > 0) {
-            for (int y = 0; y < M; y++)
-                for (int x = 0; x < M; x++) {
-                    const geo *parts[4];
-                    double w[4];
-                    for (int k = 0; k < 4; k++) {
-                        parts[k] = &cur[(size_t)(2 * y + (k >> 1)) * (2 * M) + 2 * x + (k & 1)];
-                        w[k] = parts[k]->om;
-                    }
-                    combine(parts, w, 4, &next[(size_t)y * M + x]);
-                    next[(size_t)y * M + x].om = w[0] + w[1] + w[2] + w[3];
-                }
+            geo_job cj = {p, s, next, M, cur};
+            ibl_parallel_for(ctx, M, texel_combine_task, &cj);
             geo *t = cur;
             cur = next;
             next = t;
         }
-        geo_job job = {p, s, cur, M};
+        geo_job job = {p, s, cur, M, NULL};
         ibl_parallel_for(ctx, M, store_geo_task, &job);
-        ibl_parallel_for(ctx, 6 * s->nby, block_cone_task, &job);
+        ibl_parallel_for(ctx, s->nby, block_cone_task, &job);
     }
     ibl_free(ctx, cur);
     ibl_free(ctx, next);
