@@ -1537,6 +1537,7 @@ static void core_weights_task(void *arg, int index)
     size_t plane = (size_t)P * P;
     float *w = c->w + c->w0[index];
     double den = 0;
+    float lanes[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     for (uint32_t r = c->row0[index]; r < c->row0[index + 1]; r++) {
         const int32_t *row = c->rows + 3 * (size_t)r;
         const float *g = j->geo + (size_t)(row[0] + O) * P + row[1] + O;
@@ -1551,9 +1552,11 @@ static void core_weights_task(void *arg, int index)
                 w[i] = table_weight(j->pc, u, q) * g[F_OM * plane + i];
             }
         }
-        for (int i = 0; i < row[2]; i++) den += w[i];
+        for (int i = 0; i < row[2]; i += 8)
+            for (int l = 0; l < 8; l++) lanes[l] += w[i + l];
         w += row[2];
     }
+    for (int l = 0; l < 8; l++) den += lanes[l];
     c->den[index] = den;
 }
 
@@ -1587,10 +1590,19 @@ static void core_pad_task(void *arg, int index)
     size_t plane = (size_t)c->P * c->P, S2 = (size_t)c->S * c->S;
     const int32_t *map = c->map + (size_t)index * c->P;
     float *out = c->pad + (size_t)f * 3 * plane + (size_t)row * c->P;
+    const float *face[6];
+    for (int g = 0; g < 6; g++) face[g] = ibl_cubemap_face(j->src, 0, g);
     for (int X = 0; X < c->P; X++) {
         int32_t t = map[X];
-        const float *v = t >= 0 ? ibl_cubemap_face(j->src, 0, (int)(t / S2)) + (t % S2) * 4 : NULL;
-        for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = v ? v[ch] : 0.0f;
+        if (t < 0) {
+            out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
+            continue;
+        }
+        /* t = g S^2 + offset: the face by comparison (no division per texel) */
+        int g = 0;
+        while ((size_t)t >= (size_t)(g + 1) * S2) g++;
+        const float *v = face[g] + ((size_t)t - (size_t)g * S2) * 4;
+        out[X] = v[0], out[plane + X] = v[1], out[2 * plane + X] = v[2];
     }
 }
 
@@ -1641,14 +1653,20 @@ static void core_mac_task(void *arg, int b)
 }
 
 
-/* The padded geometry of face 0 (CORE_GEO planes of P P; cells without a texel: no weight). */
-static float *core_geometry(ibl_specular_plan *p, const struct core *c)
+typedef struct core_geo_job {
+    const ibl_specular_plan *p;
+    const struct core *c;
+    float *geo;
+} core_geo_job;
+
+static void core_geometry_task(void *arg, int row)
 {
+    const core_geo_job *j = arg;
+    const struct core *c = j->c;
     size_t plane = (size_t)c->P * c->P, S2 = (size_t)c->S * c->S;
-    float *geo = ibl_alloc(p->ctx, CORE_GEO * plane * sizeof(float));
-    if (!geo) return NULL;
-    const srclev *s = &p->src[0];
-    for (size_t i = 0; i < plane; i++) {
+    const srclev *s = &j->p->src[0];
+    float *geo = j->geo;
+    for (size_t i = (size_t)row * c->P; i < (size_t)(row + 1) * c->P; i++) {
         int32_t t = c->map[i];
         if (t < 0) {
             for (int f = 0; f < CORE_GEO; f++) geo[f * plane + i] = 0.0f;
@@ -1657,10 +1675,20 @@ static float *core_geometry(ibl_specular_plan *p, const struct core *c)
             continue;
         }
         int f = (int)(t / S2), y = (int)(t % S2) / c->S, x = (int)(t % S2) % c->S;
-        for (int k = 0; k < GEO_FIELDS; k++) geo[k * plane + i] = s->rec[rec_index(s, f, x, y, k)];
+        const float *rec = s->rec + rec_index(s, f, x, y, 0);
+        for (int k = 0; k < GEO_FIELDS; k++) geo[k * plane + i] = rec[k * BT];
         double m0 = geo[i], m1 = geo[plane + i], m2 = geo[2 * plane + i];
         geo[GEO_FIELDS * plane + i] = (float)sqrt(m0 * m0 + m1 * m1 + m2 * m2);
     }
+}
+
+/* The padded geometry of face 0 (CORE_GEO planes of P P; cells without a texel: no weight). */
+static float *core_geometry(ibl_specular_plan *p, const struct core *c)
+{
+    float *geo = ibl_alloc(p->ctx, CORE_GEO * (size_t)c->P * c->P * sizeof(float));
+    if (!geo) return NULL;
+    core_geo_job job = {p, c, geo};
+    ibl_parallel_for(p->ctx, c->P, core_geometry_task, &job);
     return geo;
 }
 
