@@ -1832,6 +1832,8 @@ static void combine_task(void *arg, int index)
     const grid *direct = NULL;
     for (int g = 0; g < lv->ngrids; g++)
         if (lv->grids[g].direct) direct = &lv->grids[g];
+    /* output directions at the texel centres (no edge fixup bends them) */
+    int centred = p->desc.edge_fixup != IBL_EDGE_FIXUP_BENT && p->desc.edge_fixup != IBL_EDGE_FIXUP_WARP;
     for (int x = 0; x < n; x++) {
         double v[4] = {0, 0, 0, 0};
         if (direct) {
@@ -1843,6 +1845,24 @@ static void combine_task(void *arg, int index)
         for (int g = 0; g < lv->ngrids; g++) {
             const grid *gr = &lv->grids[g];
             if (gr->direct) continue;
+            int gn = gr->n;
+            if (centred && n % gn == 0) {
+                /* the texel centre's bilinear footprint on the same face of the grid, when it
+                 * does not cross an edge (else the seamless sampler below) */
+                double gx = (x + 0.5) * gn / n - 0.5, gy = (y + 0.5) * gn / n - 0.5;
+                int ix = (int)floor(gx), iy = (int)floor(gy);
+                if (ix >= 0 && iy >= 0 && ix + 1 < gn && iy + 1 < gn) {
+                    float fx = (float)(gx - ix), fy = (float)(gy - iy);
+                    const float *a = gr->acc + (((size_t)face * gn + iy) * gn + ix) * 4;
+                    const float *b = a + (size_t)gn * 4;
+                    for (int c = 0; c < 4; c++) {
+                        float top = a[c] + fx * (a[4 + c] - a[c]);
+                        float bot = b[c] + fx * (b[4 + c] - b[c]);
+                        v[c] += top + fy * (bot - top);
+                    }
+                    continue;
+                }
+            }
             if (!have_dir) {
                 double d[3];
                 ibl__output_direction(&p->desc, &lv->lobe, face, n, x, y, d);
