@@ -45,6 +45,11 @@ enum { F_WM = GEO_FIELDS, F_WE = F_WM + 3, F_WC = F_WM + 4, F_P = F_WM + 10, F_P
 #define BETA_SPLIT 0.6
 #define BRIGHT_TAU 0.02
 enum { BRIGHT_BLOCKS = 256 };
+/* A precomputed core over a coarse level treats its texels as uniform; a texel whose moment
+ * leaf could differ from that by more than CORR_TAU times the mean radiance (relative to the
+ * normaliser) is corrected at the output texels (at most CORR_BLOCKS blocks per level). */
+#define CORR_TAU 1e-2
+enum { CORR_BLOCKS = 2048 };
 enum { BINFO = 6, TAB = 2048, TILE = 8, MAX_PIECES = 24, MAX_GRIDS = MAX_PIECES, CAND = 1024 };
 
 static const double PI = 3.14159265358979323846;
@@ -58,6 +63,12 @@ typedef struct srclev {
     double bright_c;     /* threshold on a texel's luminance power / mean radiance (0: unused) */
     int bright_cap, nbright; /* capacity and count of bright blocks                     */
     float *bright_rec, *bright_block;
+    /* centroid corrections (levels summed by a precomputed core): each texel whose radiance
+     * is far from uniform twice, at its luminance moments with +P and at its geometric ones
+     * with -P, so that a sum over them turns the core's uniform texels into moment leaves */
+    double corr_a1, corr_a2, corr_a3; /* bound constants (0: unused): |dm|, |de|, |dC| per unit power */
+    int corr_cap, ncorr;   /* capacity and count of correction blocks                        */
+    float *corr_rec, *corr_block;
 } srclev;
 
 typedef struct piece {
@@ -124,6 +135,7 @@ static size_t block_count(const srclev *s) { return (size_t)6 * s->nby * s->nbx;
  * so that texels across an edge stay in rows. A run is then a plain product of those rows with
  * the padded source: no lobe evaluation, ~10x cheaper per texel than a leaf. */
 struct core {
+    int level;             /* the source level it sums (0: the source texels)                       */
     int S, W, P, O, n, nb; /* source edge, border, padded edge, offset of cell 0, output edge, base edge */
     int32_t *map;          /* 6 P P: source texel (f S S + y S + x) or -1                           */
     uint32_t *row0;        /* nb nb + 1: each base texel's first row                                 */
@@ -587,6 +599,8 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
         ibl_free(ctx, p->src[l].block);
         ibl_free(ctx, p->src[l].bright_rec);
         ibl_free(ctx, p->src[l].bright_block);
+        ibl_free(ctx, p->src[l].corr_rec);
+        ibl_free(ctx, p->src[l].corr_block);
         for (int k = 0; k < p->lv[l].npieces; k++) {
             ibl_free(ctx, p->lv[l].pieces[k].tab);
             core_destroy(ctx, p->lv[l].pieces[k].core);
@@ -692,6 +706,15 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
     }
     for (int l = 0; l < p->SL; l++) {
         srclev *s = &p->src[l];
+        if (s->corr_a1 > 0 || s->corr_a2 > 0 || s->corr_a3 > 0) {
+            s->corr_cap = CORR_BLOCKS;
+            s->corr_rec = ibl_alloc(ctx, (size_t)s->corr_cap * NFC * BT * sizeof(float));
+            s->corr_block = ibl_alloc(ctx, (size_t)s->corr_cap * BINFO * sizeof(float));
+            if (!s->corr_rec || !s->corr_block) {
+                st = ibl_context_status(ctx);
+                goto fail;
+            }
+        }
         if (s->bright_c == 0) continue;
         s->bright_cap = BRIGHT_BLOCKS;
         s->bright_rec = ibl_alloc(ctx, (size_t)s->bright_cap * NFC * BT * sizeof(float));
@@ -720,6 +743,24 @@ static void plan_bright(ibl_specular_plan *p, int level)
     double den = 0;
     for (size_t i = 0; i < face; i++) den += dg->acc[4 * i + 3];
     den /= (double)face;
+    const piece *core = &lv->pieces[0];
+    if (core->core && core->core->level > 0 && den > 0) {
+        /* largest |g'| sqrt(2u), |g'| and 3|g''|/2 over the piece (g' by differences) */
+        double step = (core->u_hi - core->u_lo) / TAB, d1 = 0, d1e = 0, d2 = 0;
+        for (int i = 0; i < TAB; i++) {
+            double u = core->u_lo + (i + 0.5) * step;
+            double g1 = fabs(core->tab[2 * i + 2] - core->tab[2 * i]) / step;
+            double g2 = fabs(core->tab[2 * i + 1]) > fabs(core->tab[2 * i + 3]) ? fabs(core->tab[2 * i + 1])
+                                                                                : fabs(core->tab[2 * i + 3]);
+            d1 = g1 * sqrt(2.0 * u) > d1 ? g1 * sqrt(2.0 * u) : d1;
+            d1e = g1 > d1e ? g1 : d1e;
+            d2 = 1.5 * g2 > d2 ? 1.5 * g2 : d2;
+        }
+        srclev *s = &p->src[core->core->level];
+        s->corr_a1 = d1 / den > s->corr_a1 ? d1 / den : s->corr_a1;
+        s->corr_a2 = d1e / den > s->corr_a2 ? d1e / den : s->corr_a2;
+        s->corr_a3 = d2 / den > s->corr_a3 ? d2 / den : s->corr_a3;
+    }
     for (int k = 0; k < lv->npieces; k++) {
         const piece *pc = &lv->pieces[k];
         if (!pc->split) continue;
@@ -734,6 +775,8 @@ static void plan_bright(ibl_specular_plan *p, int level)
 
 /* Picks the bright texels of source level l (largest luminance power first), gathers their
  * records into blocks and writes every texel's power without them (F_PD). */
+static void gathered_cones(const float *recs, float *blocks, int count, double tr);
+
 static void select_bright(ibl_specular_plan *p, int l)
 {
     srclev *s = &p->src[l];
@@ -769,11 +812,16 @@ static void select_bright(ibl_specular_plan *p, int l)
         }
     }
     s->nbright = (k + BT - 1) / BT;
-    /* each block's cone: around the mean of its texels' directions, out to the farthest one
-     * plus a texel's half diagonal */
-    double tr = 1.5 / s->M;
-    for (int b = 0; b < s->nbright; b++) {
-        const float *rec = s->bright_rec + (size_t)b * NFC * BT;
+    gathered_cones(s->bright_rec, s->bright_block, k, 1.5 / s->M);
+}
+
+/* The cones of `count` texels gathered in blocks (recs): around the mean of each block's
+ * texel directions, out to the farthest one plus tr (a texel's half diagonal). */
+static void gathered_cones(const float *recs, float *blocks, int count, double tr)
+{
+    int k = count;
+    for (int b = 0; b < (count + BT - 1) / BT; b++) {
+        const float *rec = recs + (size_t)b * NFC * BT;
         int n = k - b * BT < BT ? k - b * BT : BT;
         double d[BT][3], c[3] = {0, 0, 0};
         for (int t = 0; t < n; t++) {
@@ -790,10 +838,77 @@ static void select_bright(ibl_specular_plan *p, int l)
             r = a > r ? a : r;
         }
         r += tr + 1e-6;
-        float *bc = s->bright_block + (size_t)b * BINFO;
+        float *bc = blocks + (size_t)b * BINFO;
         for (int i = 0; i < 3; i++) bc[i] = (float)c[i];
         bc[3] = (float)r, bc[4] = (float)cos(r), bc[5] = (float)sin(r);
     }
+}
+
+
+/* How far texel t of block b's moment leaf can be from its uniform leaf, per unit of the
+ * normaliser (see plan_bright). */
+static double corr_bound(const srclev *s, size_t b, int t)
+{
+    const float *rec = s->rec + b * s->nf * BT;
+    double P = LUM[0] * rec[F_P * BT + t] + LUM[1] * rec[(F_P + 1) * BT + t] + LUM[2] * rec[(F_P + 2) * BT + t];
+    if (!(P > 0)) return 0;
+    double dm = 0, dc = 0;
+    for (int c = 0; c < 3; c++) {
+        double d = rec[(F_WM + c) * BT + t] - rec[(F_MX + c) * BT + t];
+        dm += d * d;
+    }
+    for (int c = 0; c < 6; c++) {
+        double d = fabs(rec[(F_WC + c) * BT + t] - rec[(F_C + c) * BT + t]);
+        dc = d > dc ? d : dc;
+    }
+    double de = fabs(rec[F_WE * BT + t] - rec[F_E * BT + t]);
+    return P * (s->corr_a1 * sqrt(dm) + s->corr_a2 * de + s->corr_a3 * dc);
+}
+
+/* Picks the texels of source level l whose moment leaves differ most from uniform texels
+ * (bound: luminance power times the moments' offsets, see CORR_TAU) and gathers each twice:
+ * luminance moments with +P, geometric moments with -P. */
+static void select_corrections(ibl_specular_plan *p, int l)
+{
+    srclev *s = &p->src[l];
+    size_t blocks = block_count(s), n = blocks * BT;
+    (void)n;
+    double total = 0;
+    for (size_t b = 0; b < blocks; b++) {
+        const float *P = s->rec + (b * s->nf + F_P) * BT;
+        for (int t = 0; t < BT; t++) total += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
+    }
+    double thr = CORR_TAU * total / (4.0 * PI);
+    int cap = s->corr_cap * BT / 2;
+    for (;;) {
+        int count = 0;
+        for (size_t b = 0; b < blocks; b++)
+            for (int t = 0; t < BT; t++) count += corr_bound(s, b, t) > thr;
+        if (count <= cap) break;
+        thr *= 2.0;
+    }
+    int k = 0;
+    for (size_t b = 0; b < blocks; b++) {
+        const float *rec = s->rec + b * s->nf * BT;
+        for (int t = 0; t < BT; t++) {
+            if (!(corr_bound(s, b, t) > thr)) continue;
+            for (int pass = 0; pass < 2; pass++, k++) {
+                float *dst = s->corr_rec + (size_t)(k / BT) * NFC * BT + k % BT;
+                for (int f = 0; f < NFC; f++) dst[f * BT] = rec[f * BT + t];
+                if (pass == 1) { /* the uniform texel: geometric moments, minus its power */
+                    for (int f = 0; f < 10; f++) dst[(F_WM + f) * BT] = rec[(F_MX + f) * BT + t];
+                    for (int c = 0; c < 3; c++) dst[(F_P + c) * BT] = -rec[(F_P + c) * BT + t];
+                }
+            }
+        }
+    }
+    for (int i = k; i < (k + BT - 1) / BT * BT; i++) { /* the rest of the last block: nothing */
+        float *dst = s->corr_rec + (size_t)(i / BT) * NFC * BT + i % BT;
+        for (int f = 0; f < NFC; f++) dst[f * BT] = 0.0f;
+        dst[F_WE * BT] = 0.5f;
+    }
+    s->ncorr = (k + BT - 1) / BT;
+    gathered_cones(s->corr_rec, s->corr_block, k, 1.5 / s->M);
 }
 
 /* ---- run: the radiance pyramid ---- */
@@ -1369,9 +1484,11 @@ static void grid_task(void *arg, int index)
         const piece *pc = &lv->pieces[pi];
         const srclev *s = &p->src[pc->src];
         int main_sum = pc->grid == g && !pc->core;
-        /* a split ring's bright texels are summed at the output texels (the direct grid) */
+        /* a split ring's bright texels are summed at the output texels (the direct grid), and
+         * so are the corrections of a precomputed core over a coarse level */
         int bright = pc->split && gr->direct && job->mode != EVAL_DEN && s->nbright > 0;
-        if (!main_sum && !bright) continue;
+        int corr = pc->core && pc->grid == g && pc->core->level > 0 && job->mode != EVAL_DEN && s->ncorr > 0;
+        if (!main_sum && !bright && !corr) continue;
         sum_args sa = {job->mode == EVAL_DEN ? EVAL_DEN : pc->src == 0 ? EVAL_NUM0 : EVAL_NUMC,
                        avx2, s, pc, cands, 0, pc->split && !gr->direct};
         double T = pc->th_out + rho;
@@ -1402,11 +1519,13 @@ static void grid_task(void *arg, int index)
                 }
         }
         if (sa.ncand) sum_candidates(&sa, &tp);
-        if (bright) {
+        if (bright || corr) {
             srclev bs = *s;
-            bs.rec = s->bright_rec, bs.block = s->bright_block, bs.nf = NFC;
+            bs.rec = bright ? s->bright_rec : s->corr_rec;
+            bs.block = bright ? s->bright_block : s->corr_block, bs.nf = NFC;
+            int nblocks = bright ? s->nbright : s->ncorr;
             sa.s = &bs, sa.dim = 0, sa.ncand = 0;
-            for (int k = 0; k < s->nbright; k++)
+            for (int k = 0; k < nblocks; k++)
                 if (add_candidate(&sa, &reach, bs.block, (uint32_t)k)) {
                     sum_candidates(&sa, &tp);
                     sa.ncand = 0;
@@ -1592,10 +1711,18 @@ static void core_pad_task(void *arg, int index)
     float *out = c->pad + (size_t)f * 3 * plane + (size_t)row * c->P;
     const float *face[6];
     for (int g = 0; g < 6; g++) face[g] = ibl_cubemap_face(j->src, 0, g);
+    const srclev *s = &j->p->src[c->level];
     for (int X = 0; X < c->P; X++) {
         int32_t t = map[X];
         if (t < 0) {
             out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
+            continue;
+        }
+        if (c->level > 0) { /* a coarse texel as uniform: its power over its solid angle */
+            int g = (int)(t / S2), y = (int)(t % S2) / c->S, x = (int)(t % S2) % c->S;
+            const float *rec = s->rec + rec_index(s, g, x, y, 0);
+            float om = rec[F_OM * BT];
+            for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = om > 0 ? rec[(F_P + ch) * BT] / om : 0.0f;
             continue;
         }
         /* t = g S^2 + offset: the face by comparison (no division per texel) */
@@ -1664,7 +1791,7 @@ static void core_geometry_task(void *arg, int row)
     const core_geo_job *j = arg;
     const struct core *c = j->c;
     size_t plane = (size_t)c->P * c->P, S2 = (size_t)c->S * c->S;
-    const srclev *s = &j->p->src[0];
+    const srclev *s = &j->p->src[c->level];
     float *geo = j->geo;
     for (size_t i = (size_t)row * c->P; i < (size_t)(row + 1) * c->P; i++) {
         int32_t t = c->map[i];
@@ -1714,16 +1841,19 @@ static ibl_status core_create(ibl_specular_plan *p, int level)
     level_plan *lv = &p->lv[level];
     piece *pc = &lv->pieces[0];
     grid *gr = &lv->grids[pc->grid];
-    if (p->K != 1 || pc->src != 0 || !gr->direct || !grid_symmetric(p, gr)) return IBL_OK;
-    int S = p->S;
+    if ((pc->src == 0 && p->K != 1) || !gr->direct || !grid_symmetric(p, gr)) return IBL_OK;
+    int S = p->src[pc->src].M;
     /* reach: the core's end plus a texel's angular radius; a cell subtends at least 1 / (1.5 S)
-     * radians (radially, at a face corner), so W cells of border hold everything in reach */
+     * radians (radially, at a face corner), so W cells of border hold everything in reach (the
+     * border is at most a whole neighbouring face) */
     double reach = pc->th_out + 2.0 / S;
+    if (reach > 1.2) return IBL_OK;
     int W = (int)ceil(1.5 * S * reach) + 2;
-    if (2 * W > S) return IBL_OK;
+    if (W > S) W = S;
     ibl_context *ctx = p->ctx;
     struct core *c = ibl_calloc(ctx, 1, sizeof *c);
     if (!c) return ibl_context_status(ctx);
+    c->level = pc->src;
     c->S = S, c->W = W, c->O = W + 8, c->P = S + 2 * W + 16, c->n = gr->n, c->nb = (gr->n + 1) / 2;
     size_t plane = (size_t)c->P * c->P, nbase = (size_t)c->nb * c->nb;
     ibl_status st = IBL_OK;
@@ -1945,6 +2075,7 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
         pyr_job job = {p, src, l};
         ibl_parallel_for(ctx, 6 * p->src[l].M, pyramid_task, &job);
         if (p->src[l].bright_c > 0) select_bright(p, l);
+        if (p->src[l].corr_cap > 0) select_corrections(p, l);
     }
     p->run_src = src;
     p->run_dst = dst;
