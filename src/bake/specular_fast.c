@@ -48,7 +48,7 @@ enum { BRIGHT_BLOCKS = 256 };
 /* A precomputed core over a coarse level treats its texels as uniform; a texel whose moment
  * leaf could differ from that by more than CORR_TAU times the mean radiance (relative to the
  * normaliser) is corrected at the output texels (at most CORR_BLOCKS blocks per level). */
-#define CORR_TAU 1e-2
+#define CORR_TAU 5e-2
 enum { CORR_BLOCKS = 2048 };
 enum { BINFO = 6, TAB = 2048, TILE = 8, MAX_PIECES = 24, MAX_GRIDS = MAX_PIECES, CAND = 1024 };
 
@@ -69,6 +69,8 @@ typedef struct srclev {
     double corr_a1, corr_a2, corr_a3; /* bound constants (0: unused): |dm|, |de|, |dC| per unit power */
     int corr_cap, ncorr;   /* capacity and count of correction blocks                        */
     float *corr_rec, *corr_block;
+    int ncorrd;            /* the same for split rings: the power without the bright texels  */
+    float *corrd_rec, *corrd_block;
 } srclev;
 
 typedef struct piece {
@@ -136,6 +138,7 @@ static size_t block_count(const srclev *s) { return (size_t)6 * s->nby * s->nbx;
  * the padded source: no lobe evaluation, ~10x cheaper per texel than a leaf. */
 struct core {
     int level;             /* the source level it sums (0: the source texels)                       */
+    int direct, dim;       /* on the output texels (edge-fixup directions) / without bright texels   */
     int S, W, P, O, n, nb; /* source edge, border, padded edge, offset of cell 0, output edge, base edge */
     int32_t *map;          /* 6 P P: source texel (f S S + y S + x) or -1                           */
     uint32_t *row0;        /* nb nb + 1: each base texel's first row                                 */
@@ -601,6 +604,8 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
         ibl_free(ctx, p->src[l].bright_block);
         ibl_free(ctx, p->src[l].corr_rec);
         ibl_free(ctx, p->src[l].corr_block);
+        ibl_free(ctx, p->src[l].corrd_rec);
+        ibl_free(ctx, p->src[l].corrd_block);
         for (int k = 0; k < p->lv[l].npieces; k++) {
             ibl_free(ctx, p->lv[l].pieces[k].tab);
             core_destroy(ctx, p->lv[l].pieces[k].core);
@@ -710,7 +715,9 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
             s->corr_cap = CORR_BLOCKS;
             s->corr_rec = ibl_alloc(ctx, (size_t)s->corr_cap * NFC * BT * sizeof(float));
             s->corr_block = ibl_alloc(ctx, (size_t)s->corr_cap * BINFO * sizeof(float));
-            if (!s->corr_rec || !s->corr_block) {
+            s->corrd_rec = ibl_alloc(ctx, (size_t)s->corr_cap * NFC * BT * sizeof(float));
+            s->corrd_block = ibl_alloc(ctx, (size_t)s->corr_cap * BINFO * sizeof(float));
+            if (!s->corr_rec || !s->corr_block || !s->corrd_rec || !s->corrd_block) {
                 st = ibl_context_status(ctx);
                 goto fail;
             }
@@ -743,8 +750,9 @@ static void plan_bright(ibl_specular_plan *p, int level)
     double den = 0;
     for (size_t i = 0; i < face; i++) den += dg->acc[4 * i + 3];
     den /= (double)face;
-    const piece *core = &lv->pieces[0];
-    if (core->core && core->core->level > 0 && den > 0) {
+    for (int k = 0; k < lv->npieces; k++) {
+        const piece *core = &lv->pieces[k];
+        if (!core->core || core->core->level == 0 || !(den > 0)) continue;
         /* largest |g'| sqrt(2u), |g'| and 3|g''|/2 over the piece (g' by differences) */
         double step = (core->u_hi - core->u_lo) / TAB, d1 = 0, d1e = 0, d2 = 0;
         for (int i = 0; i < TAB; i++) {
@@ -865,6 +873,37 @@ static double corr_bound(const srclev *s, size_t b, int t)
     return P * (s->corr_a1 * sqrt(dm) + s->corr_a2 * de + s->corr_a3 * dc);
 }
 
+
+/* Gathers each texel over the threshold twice (luminance moments with +power, geometric
+ * moments with -power, the power from field pf: F_P, or F_PD for split rings); the number
+ * of blocks. */
+static int gather_corrections(const srclev *s, double thr, int pf, float *recs, float *cones)
+{
+    size_t blocks = block_count(s);
+    int k = 0;
+    for (size_t b = 0; b < blocks; b++) {
+        const float *rec = s->rec + b * s->nf * BT;
+        for (int t = 0; t < BT; t++) {
+            if (!(corr_bound(s, b, t) > thr)) continue;
+            if (rec[pf * BT + t] == 0 && rec[(pf + 1) * BT + t] == 0 && rec[(pf + 2) * BT + t] == 0) continue;
+            for (int pass = 0; pass < 2; pass++, k++) {
+                float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
+                for (int f = 0; f < NFC; f++) dst[f * BT] = rec[f * BT + t];
+                for (int c = 0; c < 3; c++) dst[(F_P + c) * BT] = (pass ? -1.0f : 1.0f) * rec[(pf + c) * BT + t];
+                if (pass == 1) /* the uniform texel: its geometric moments */
+                    for (int f = 0; f < 10; f++) dst[(F_WM + f) * BT] = rec[(F_MX + f) * BT + t];
+            }
+        }
+    }
+    for (int i = k; i < (k + BT - 1) / BT * BT; i++) { /* the rest of the last block: nothing */
+        float *dst = recs + (size_t)(i / BT) * NFC * BT + i % BT;
+        for (int f = 0; f < NFC; f++) dst[f * BT] = 0.0f;
+        dst[F_WE * BT] = 0.5f;
+    }
+    gathered_cones(recs, cones, k, 1.5 / s->M);
+    return (k + BT - 1) / BT;
+}
+
 /* Picks the texels of source level l whose moment leaves differ most from uniform texels
  * (bound: luminance power times the moments' offsets, see CORR_TAU) and gathers each twice:
  * luminance moments with +P, geometric moments with -P. */
@@ -887,28 +926,8 @@ static void select_corrections(ibl_specular_plan *p, int l)
         if (count <= cap) break;
         thr *= 2.0;
     }
-    int k = 0;
-    for (size_t b = 0; b < blocks; b++) {
-        const float *rec = s->rec + b * s->nf * BT;
-        for (int t = 0; t < BT; t++) {
-            if (!(corr_bound(s, b, t) > thr)) continue;
-            for (int pass = 0; pass < 2; pass++, k++) {
-                float *dst = s->corr_rec + (size_t)(k / BT) * NFC * BT + k % BT;
-                for (int f = 0; f < NFC; f++) dst[f * BT] = rec[f * BT + t];
-                if (pass == 1) { /* the uniform texel: geometric moments, minus its power */
-                    for (int f = 0; f < 10; f++) dst[(F_WM + f) * BT] = rec[(F_MX + f) * BT + t];
-                    for (int c = 0; c < 3; c++) dst[(F_P + c) * BT] = -rec[(F_P + c) * BT + t];
-                }
-            }
-        }
-    }
-    for (int i = k; i < (k + BT - 1) / BT * BT; i++) { /* the rest of the last block: nothing */
-        float *dst = s->corr_rec + (size_t)(i / BT) * NFC * BT + i % BT;
-        for (int f = 0; f < NFC; f++) dst[f * BT] = 0.0f;
-        dst[F_WE * BT] = 0.5f;
-    }
-    s->ncorr = (k + BT - 1) / BT;
-    gathered_cones(s->corr_rec, s->corr_block, k, 1.5 / s->M);
+    s->ncorr = gather_corrections(s, thr, F_P, s->corr_rec, s->corr_block);
+    s->ncorrd = gather_corrections(s, thr, F_PD, s->corrd_rec, s->corrd_block);
 }
 
 /* ---- run: the radiance pyramid ---- */
@@ -1487,7 +1506,8 @@ static void grid_task(void *arg, int index)
         /* a split ring's bright texels are summed at the output texels (the direct grid), and
          * so are the corrections of a precomputed core over a coarse level */
         int bright = pc->split && gr->direct && job->mode != EVAL_DEN && s->nbright > 0;
-        int corr = pc->core && pc->grid == g && pc->core->level > 0 && job->mode != EVAL_DEN && s->ncorr > 0;
+        int corr = pc->core && pc->grid == g && pc->core->level > 0 && job->mode != EVAL_DEN &&
+                   (pc->split ? s->ncorrd : s->ncorr) > 0;
         if (!main_sum && !bright && !corr) continue;
         sum_args sa = {job->mode == EVAL_DEN ? EVAL_DEN : pc->src == 0 ? EVAL_NUM0 : EVAL_NUMC,
                        avx2, s, pc, cands, 0, pc->split && !gr->direct};
@@ -1521,9 +1541,10 @@ static void grid_task(void *arg, int index)
         if (sa.ncand) sum_candidates(&sa, &tp);
         if (bright || corr) {
             srclev bs = *s;
-            bs.rec = bright ? s->bright_rec : s->corr_rec;
-            bs.block = bright ? s->bright_block : s->corr_block, bs.nf = NFC;
-            int nblocks = bright ? s->nbright : s->ncorr;
+            bs.rec = bright ? s->bright_rec : pc->split ? s->corrd_rec : s->corr_rec;
+            bs.block = bright ? s->bright_block : pc->split ? s->corrd_block : s->corr_block;
+            bs.nf = NFC;
+            int nblocks = bright ? s->nbright : pc->split ? s->ncorrd : s->ncorr;
             sa.s = &bs, sa.dim = 0, sa.ncand = 0;
             for (int k = 0; k < nblocks; k++)
                 if (add_candidate(&sa, &reach, bs.block, (uint32_t)k)) {
@@ -1564,6 +1585,19 @@ static void core_map_task(void *arg, int f)
     for (int Y = -c->W; Y < c->S + c->W; Y++)
         for (int X = -c->W; X < c->S + c->W; X++)
             c->map[((size_t)f * c->P + Y + c->O) * c->P + X + c->O] = core_cell_texel(j->p, c->S, f, X, Y);
+}
+
+/* The direction of base texel (a, b) of face 0 of the core's grid. */
+static void core_direction(const core_job *j, int a, int b, double R[3])
+{
+    const struct core *c = j->c;
+    if (c->direct) {
+        ibl__output_direction(&j->p->desc, j->lobe, 0, c->n, a, b, R);
+        return;
+    }
+    ibl_cube_direction_d(0, (a + 0.5) / c->n, (b + 0.5) / c->n, R);
+    double len = sqrt(R[0] * R[0] + R[1] * R[1] + R[2] * R[2]);
+    for (int i = 0; i < 3; i++) R[i] /= len;
 }
 
 /* Whether padded cell i is within reach of R: 1 yes, 0 no, -1 no texel there. */
@@ -1614,7 +1648,7 @@ static void core_rows_task(void *arg, int index)
     const struct core *c = j->c;
     int a = index % c->nb, b = index / c->nb, S = c->S, W = c->W;
     double R[3];
-    ibl__output_direction(&j->p->desc, j->lobe, 0, c->n, a, b, R);
+    core_direction(j, a, b, R);
     int XC = (int)floor((a + 0.5) * S / c->n), YC = (int)floor((b + 0.5) * S / c->n);
     int lo = XC - W > -W ? XC - W : -W, hi = XC + W < S + W - 1 ? XC + W : S + W - 1;
     int32_t *out = j->tmp_rows + (size_t)index * (2 * W + 1) * 3;
@@ -1650,7 +1684,7 @@ static void core_weights_task(void *arg, int index)
     struct core *c = j->c;
     int a = index % c->nb, b = index / c->nb, P = c->P, O = c->O;
     double Rd[3];
-    ibl__output_direction(&j->p->desc, j->lobe, 0, c->n, a, b, Rd);
+    core_direction(j, a, b, Rd);
     float R[3] = {(float)Rd[0], (float)Rd[1], (float)Rd[2]};
     float RR[6] = {R[0] * R[0], R[1] * R[1], R[2] * R[2], 2 * R[0] * R[1], 2 * R[0] * R[2], 2 * R[1] * R[2]};
     size_t plane = (size_t)P * P;
@@ -1722,7 +1756,8 @@ static void core_pad_task(void *arg, int index)
             int g = (int)(t / S2), y = (int)(t % S2) / c->S, x = (int)(t % S2) % c->S;
             const float *rec = s->rec + rec_index(s, g, x, y, 0);
             float om = rec[F_OM * BT];
-            for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = om > 0 ? rec[(F_P + ch) * BT] / om : 0.0f;
+            int pf = c->dim ? F_PD : F_P;
+            for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = om > 0 ? rec[(pf + ch) * BT] / om : 0.0f;
             continue;
         }
         /* t = g S^2 + offset: the face by comparison (no division per texel) */
@@ -1822,26 +1857,28 @@ static float *core_geometry(ibl_specular_plan *p, const struct core *c)
 static ibl_status core_build_weights(ibl_specular_plan *p, int level)
 {
     level_plan *lv = &p->lv[level];
-    struct core *c = lv->pieces[0].core;
-    if (!c) return IBL_OK;
-    float *geo = core_geometry(p, c);
-    if (!geo) return ibl_context_status(p->ctx);
-    core_job job = {p, c, &lv->pieces[0], &lv->lobe, geo, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
-                    NULL, NULL};
-    ibl_parallel_for(p->ctx, c->nb * c->nb, core_weights_task, &job);
-    ibl_free(p->ctx, geo);
+    for (int k = 0; k < lv->npieces; k++) {
+        struct core *c = lv->pieces[k].core;
+        if (!c) continue;
+        float *geo = core_geometry(p, c);
+        if (!geo) return ibl_context_status(p->ctx);
+        core_job job = {p, c, &lv->pieces[k], &lv->lobe, geo, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
+                        NULL, NULL};
+        ibl_parallel_for(p->ctx, c->nb * c->nb, core_weights_task, &job);
+        ibl_free(p->ctx, geo);
+    }
     return IBL_OK;
 }
 
 /* Sets up the precomputed core of a level when its core sums level 0 (not for lobes split into
  * sub-texels, nor for edge fixups that bend the directions); leaves the level as it is when
  * the border would be too deep or the weights too many. */
-static ibl_status core_create(ibl_specular_plan *p, int level)
+static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
 {
     level_plan *lv = &p->lv[level];
-    piece *pc = &lv->pieces[0];
+    piece *pc = &lv->pieces[k];
     grid *gr = &lv->grids[pc->grid];
-    if ((pc->src == 0 && p->K != 1) || !gr->direct || !grid_symmetric(p, gr)) return IBL_OK;
+    if ((pc->src == 0 && p->K != 1) || !grid_symmetric(p, gr)) return IBL_OK;
     int S = p->src[pc->src].M;
     /* reach: the core's end plus a texel's angular radius; a cell subtends at least 1 / (1.5 S)
      * radians (radially, at a face corner), so W cells of border hold everything in reach (the
@@ -1854,6 +1891,8 @@ static ibl_status core_create(ibl_specular_plan *p, int level)
     struct core *c = ibl_calloc(ctx, 1, sizeof *c);
     if (!c) return ibl_context_status(ctx);
     c->level = pc->src;
+    c->direct = gr->direct;
+    c->dim = pc->split;
     c->S = S, c->W = W, c->O = W + 8, c->P = S + 2 * W + 16, c->n = gr->n, c->nb = (gr->n + 1) / 2;
     size_t plane = (size_t)c->P * c->P, nbase = (size_t)c->nb * c->nb;
     ibl_status st = IBL_OK;
@@ -1908,16 +1947,28 @@ give_up:
     return st;
 }
 
-/* Adds the level's precomputed core to the numerators of its direct grid. */
+/* Precomputes every piece of the level that can be (see core_create_piece). */
+static ibl_status core_create(ibl_specular_plan *p, int level)
+{
+    for (int k = 0; k < p->lv[level].npieces; k++) {
+        ibl_status st = core_create_piece(p, level, k);
+        if (st != IBL_OK) return st;
+    }
+    return IBL_OK;
+}
+
+/* Adds the level's precomputed pieces to the numerators of their grids. */
 static void core_run(ibl_specular_plan *p, int level, const ibl_cubemap *src)
 {
     level_plan *lv = &p->lv[level];
-    struct core *c = lv->pieces[0].core;
-    if (!c) return;
-    core_job job = {p, c, &lv->pieces[0], &lv->lobe, NULL, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
-                    src, lv->grids[lv->pieces[0].grid].acc};
-    ibl_parallel_for(p->ctx, 6 * c->P, core_pad_task, &job);
-    ibl_parallel_for(p->ctx, c->nb, core_mac_task, &job);
+    for (int k = 0; k < lv->npieces; k++) {
+        struct core *c = lv->pieces[k].core;
+        if (!c) continue;
+        core_job job = {p, c, &lv->pieces[k], &lv->lobe, NULL, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
+                        src, lv->grids[lv->pieces[k].grid].acc};
+        ibl_parallel_for(p->ctx, 6 * c->P, core_pad_task, &job);
+        ibl_parallel_for(p->ctx, c->nb, core_mac_task, &job);
+    }
 }
 
 /* The normalisers: the geometric sums depend only on the direction's (s, t) on its face (the
@@ -1948,7 +1999,8 @@ static void plan_denominators(ibl_specular_plan *p, int level)
         for (int f = 1; f < 6; f++)
             for (size_t i = 3; i < face; i += 4) gr->acc[f * face + i] = gr->acc[i];
     }
-    if (lv->pieces[0].core) core_add_normalisers(lv->pieces[0].core, lv->grids[lv->pieces[0].grid].acc);
+    for (int k = 0; k < lv->npieces; k++)
+        if (lv->pieces[k].core) core_add_normalisers(lv->pieces[k].core, lv->grids[lv->pieces[k].grid].acc);
 }
 
 /* ---- run: combining the grids into the output level ---- */
