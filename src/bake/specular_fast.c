@@ -48,7 +48,7 @@ enum { BRIGHT_BLOCKS = 256 };
 /* A precomputed core over a coarse level treats its texels as uniform; a texel whose moment
  * leaf could differ from that by more than CORR_TAU times the mean radiance (relative to the
  * normaliser) is corrected at the output texels (at most CORR_BLOCKS blocks per level). */
-#define CORR_TAU 5e-2
+#define CORR_TAU 1e-2
 enum { CORR_BLOCKS = 2048 };
 enum { BINFO = 6, TAB = 2048, TILE = 8, MAX_PIECES = 24, MAX_GRIDS = MAX_PIECES, CAND = 1024 };
 
