@@ -63,14 +63,6 @@ typedef struct srclev {
     double bright_c;     /* threshold on a texel's luminance power / mean radiance (0: unused) */
     int bright_cap, nbright; /* capacity and count of bright blocks                     */
     float *bright_rec, *bright_block;
-    /* centroid corrections (levels summed by a precomputed core): each texel whose radiance
-     * is far from uniform twice, at its luminance moments with +P and at its geometric ones
-     * with -P, so that a sum over them turns the core's uniform texels into moment leaves */
-    double corr_a1, corr_a2, corr_a3; /* bound constants (0: unused): |dm|, |de|, |dC| per unit power */
-    int corr_cap, ncorr;   /* capacity and count of correction blocks                        */
-    float *corr_rec, *corr_block;
-    int ncorrd;            /* the same for split rings: the power without the bright texels  */
-    float *corrd_rec, *corrd_block;
 } srclev;
 
 typedef struct piece {
@@ -146,6 +138,13 @@ struct core {
     int32_t *rows;         /* per row: y, x (padded coordinates), len (a multiple of 8)              */
     float *w;
     double *den;           /* nb nb: sum of the weights                                              */
+    /* centroid corrections (a coarse level's texels are summed as uniform): each texel whose
+     * moment leaf may differ from its uniform one by more than CORR_TAU (bound a1 |dm| + a2 |de|
+     * + a3 |dC| per unit of luminance power) twice, at its luminance moments with +P and at its
+     * geometric ones with -P, summed at the grid points like leaves */
+    double a1, a2, a3;
+    int corr_cap, ncorr;
+    float *corr_rec, *corr_block;
     float *pad;            /* run: 6 faces x (r, g, b) x P P                                         */
 };
 
@@ -161,6 +160,8 @@ static void core_destroy(ibl_context *ctx, struct core *c)
     ibl_free(ctx, c->w);
     ibl_free(ctx, c->den);
     ibl_free(ctx, c->pad);
+    ibl_free(ctx, c->corr_rec);
+    ibl_free(ctx, c->corr_block);
     ibl_free(ctx, c);
 }
 
@@ -589,7 +590,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
 
 static void plan_denominators(ibl_specular_plan *p, int level);
 static ibl_status core_create(ibl_specular_plan *p, int level);
-static void plan_bright(ibl_specular_plan *p, int level);
+static ibl_status plan_bright(ibl_specular_plan *p, int level);
 static ibl_status core_build_weights(ibl_specular_plan *p, int level);
 
 void ibl_specular_plan_destroy(ibl_specular_plan *p)
@@ -602,10 +603,6 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
         ibl_free(ctx, p->src[l].block);
         ibl_free(ctx, p->src[l].bright_rec);
         ibl_free(ctx, p->src[l].bright_block);
-        ibl_free(ctx, p->src[l].corr_rec);
-        ibl_free(ctx, p->src[l].corr_block);
-        ibl_free(ctx, p->src[l].corrd_rec);
-        ibl_free(ctx, p->src[l].corrd_block);
         for (int k = 0; k < p->lv[l].npieces; k++) {
             ibl_free(ctx, p->lv[l].pieces[k].tab);
             core_destroy(ctx, p->lv[l].pieces[k].core);
@@ -707,21 +704,11 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         if (st == IBL_OK) st = core_create(p, l);
         if (st != IBL_OK) goto fail;
         plan_denominators(p, l);
-        plan_bright(p, l);
+        st = plan_bright(p, l);
+        if (st != IBL_OK) goto fail;
     }
     for (int l = 0; l < p->SL; l++) {
         srclev *s = &p->src[l];
-        if (s->corr_a1 > 0 || s->corr_a2 > 0 || s->corr_a3 > 0) {
-            s->corr_cap = CORR_BLOCKS;
-            s->corr_rec = ibl_alloc(ctx, (size_t)s->corr_cap * NFC * BT * sizeof(float));
-            s->corr_block = ibl_alloc(ctx, (size_t)s->corr_cap * BINFO * sizeof(float));
-            s->corrd_rec = ibl_alloc(ctx, (size_t)s->corr_cap * NFC * BT * sizeof(float));
-            s->corrd_block = ibl_alloc(ctx, (size_t)s->corr_cap * BINFO * sizeof(float));
-            if (!s->corr_rec || !s->corr_block || !s->corrd_rec || !s->corrd_block) {
-                st = ibl_context_status(ctx);
-                goto fail;
-            }
-        }
         if (s->bright_c == 0) continue;
         s->bright_cap = BRIGHT_BLOCKS;
         s->bright_rec = ibl_alloc(ctx, (size_t)s->bright_cap * NFC * BT * sizeof(float));
@@ -742,7 +729,7 @@ fail:
 /* The constant of a split ring's bright test on its source level: a texel of power P adds at
  * most P gmax / den to an output (gmax the piece's peak, den the level's normaliser), so the
  * test P > BRIGHT_TAU mean_radiance den / gmax; the level keeps the strictest of its rings. */
-static void plan_bright(ibl_specular_plan *p, int level)
+static ibl_status plan_bright(ibl_specular_plan *p, int level)
 {
     level_plan *lv = &p->lv[level];
     const grid *dg = &lv->grids[lv->pieces[0].grid];
@@ -764,10 +751,12 @@ static void plan_bright(ibl_specular_plan *p, int level)
             d1e = g1 > d1e ? g1 : d1e;
             d2 = 1.5 * g2 > d2 ? 1.5 * g2 : d2;
         }
-        srclev *s = &p->src[core->core->level];
-        s->corr_a1 = d1 / den > s->corr_a1 ? d1 / den : s->corr_a1;
-        s->corr_a2 = d1e / den > s->corr_a2 ? d1e / den : s->corr_a2;
-        s->corr_a3 = d2 / den > s->corr_a3 ? d2 / den : s->corr_a3;
+        struct core *c = core->core;
+        c->a1 = d1 / den, c->a2 = d1e / den, c->a3 = d2 / den;
+        c->corr_cap = CORR_BLOCKS;
+        c->corr_rec = ibl_alloc(p->ctx, (size_t)c->corr_cap * NFC * BT * sizeof(float));
+        c->corr_block = ibl_alloc(p->ctx, (size_t)c->corr_cap * BINFO * sizeof(float));
+        if (!c->corr_rec || !c->corr_block) return ibl_context_status(p->ctx);
     }
     for (int k = 0; k < lv->npieces; k++) {
         const piece *pc = &lv->pieces[k];
@@ -779,6 +768,7 @@ static void plan_bright(ibl_specular_plan *p, int level)
         srclev *s = &p->src[pc->src];
         if (s->bright_c == 0 || c < s->bright_c) s->bright_c = c;
     }
+    return IBL_OK;
 }
 
 /* Picks the bright texels of source level l (largest luminance power first), gathers their
@@ -855,7 +845,7 @@ static void gathered_cones(const float *recs, float *blocks, int count, double t
 
 /* How far texel t of block b's moment leaf can be from its uniform leaf, per unit of the
  * normaliser (see plan_bright). */
-static double corr_bound(const srclev *s, size_t b, int t)
+static double corr_bound(const struct core *c, const srclev *s, size_t b, int t)
 {
     const float *rec = s->rec + b * s->nf * BT;
     double P = LUM[0] * rec[F_P * BT + t] + LUM[1] * rec[(F_P + 1) * BT + t] + LUM[2] * rec[(F_P + 2) * BT + t];
@@ -870,26 +860,27 @@ static double corr_bound(const srclev *s, size_t b, int t)
         dc = d > dc ? d : dc;
     }
     double de = fabs(rec[F_WE * BT + t] - rec[F_E * BT + t]);
-    return P * (s->corr_a1 * sqrt(dm) + s->corr_a2 * de + s->corr_a3 * dc);
+    return P * (c->a1 * sqrt(dm) + c->a2 * de + c->a3 * dc);
 }
 
 
 /* Gathers each texel over the threshold twice (luminance moments with +power, geometric
  * moments with -power, the power from field pf: F_P, or F_PD for split rings); the number
  * of blocks. */
-static int gather_corrections(const srclev *s, double thr, int pf, float *recs, float *cones)
+static int gather_corrections(const struct core *c, const srclev *s, double thr, int pf, float *recs,
+                              float *cones)
 {
     size_t blocks = block_count(s);
     int k = 0;
     for (size_t b = 0; b < blocks; b++) {
         const float *rec = s->rec + b * s->nf * BT;
         for (int t = 0; t < BT; t++) {
-            if (!(corr_bound(s, b, t) > thr)) continue;
+            if (!(corr_bound(c, s, b, t) > thr)) continue;
             if (rec[pf * BT + t] == 0 && rec[(pf + 1) * BT + t] == 0 && rec[(pf + 2) * BT + t] == 0) continue;
             for (int pass = 0; pass < 2; pass++, k++) {
                 float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
                 for (int f = 0; f < NFC; f++) dst[f * BT] = rec[f * BT + t];
-                for (int c = 0; c < 3; c++) dst[(F_P + c) * BT] = (pass ? -1.0f : 1.0f) * rec[(pf + c) * BT + t];
+                for (int ch = 0; ch < 3; ch++) dst[(F_P + ch) * BT] = (pass ? -1.0f : 1.0f) * rec[(pf + ch) * BT + t];
                 if (pass == 1) /* the uniform texel: its geometric moments */
                     for (int f = 0; f < 10; f++) dst[(F_WM + f) * BT] = rec[(F_MX + f) * BT + t];
             }
@@ -904,30 +895,28 @@ static int gather_corrections(const srclev *s, double thr, int pf, float *recs, 
     return (k + BT - 1) / BT;
 }
 
-/* Picks the texels of source level l whose moment leaves differ most from uniform texels
- * (bound: luminance power times the moments' offsets, see CORR_TAU) and gathers each twice:
- * luminance moments with +P, geometric moments with -P. */
-static void select_corrections(ibl_specular_plan *p, int l)
+/* Picks the texels of the precomputed piece's level whose moment leaves differ most from
+ * uniform texels (see struct core) and gathers them. */
+static void select_corrections(ibl_specular_plan *p, struct core *c)
 {
-    srclev *s = &p->src[l];
-    size_t blocks = block_count(s), n = blocks * BT;
-    (void)n;
+    const srclev *s = &p->src[c->level];
+    size_t blocks = block_count(s);
+    int pf = c->dim ? F_PD : F_P;
     double total = 0;
     for (size_t b = 0; b < blocks; b++) {
         const float *P = s->rec + (b * s->nf + F_P) * BT;
         for (int t = 0; t < BT; t++) total += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
     }
     double thr = CORR_TAU * total / (4.0 * PI);
-    int cap = s->corr_cap * BT / 2;
+    int cap = c->corr_cap * BT / 2;
     for (;;) {
         int count = 0;
         for (size_t b = 0; b < blocks; b++)
-            for (int t = 0; t < BT; t++) count += corr_bound(s, b, t) > thr;
+            for (int t = 0; t < BT; t++) count += corr_bound(c, s, b, t) > thr;
         if (count <= cap) break;
         thr *= 2.0;
     }
-    s->ncorr = gather_corrections(s, thr, F_P, s->corr_rec, s->corr_block);
-    s->ncorrd = gather_corrections(s, thr, F_PD, s->corrd_rec, s->corrd_block);
+    c->ncorr = gather_corrections(c, s, thr, pf, c->corr_rec, c->corr_block);
 }
 
 /* ---- run: the radiance pyramid ---- */
@@ -1506,8 +1495,7 @@ static void grid_task(void *arg, int index)
         /* a split ring's bright texels are summed at the output texels (the direct grid), and
          * so are the corrections of a precomputed core over a coarse level */
         int bright = pc->split && gr->direct && job->mode != EVAL_DEN && s->nbright > 0;
-        int corr = pc->core && pc->grid == g && pc->core->level > 0 && job->mode != EVAL_DEN &&
-                   (pc->split ? s->ncorrd : s->ncorr) > 0;
+        int corr = pc->core && pc->grid == g && job->mode != EVAL_DEN && pc->core->ncorr > 0;
         if (!main_sum && !bright && !corr) continue;
         sum_args sa = {job->mode == EVAL_DEN ? EVAL_DEN : pc->src == 0 ? EVAL_NUM0 : EVAL_NUMC,
                        avx2, s, pc, cands, 0, pc->split && !gr->direct};
@@ -1541,10 +1529,10 @@ static void grid_task(void *arg, int index)
         if (sa.ncand) sum_candidates(&sa, &tp);
         if (bright || corr) {
             srclev bs = *s;
-            bs.rec = bright ? s->bright_rec : pc->split ? s->corrd_rec : s->corr_rec;
-            bs.block = bright ? s->bright_block : pc->split ? s->corrd_block : s->corr_block;
+            bs.rec = bright ? s->bright_rec : pc->core->corr_rec;
+            bs.block = bright ? s->bright_block : pc->core->corr_block;
             bs.nf = NFC;
-            int nblocks = bright ? s->nbright : pc->split ? s->ncorrd : s->ncorr;
+            int nblocks = bright ? s->nbright : pc->core->ncorr;
             sa.s = &bs, sa.dim = 0, sa.ncand = 0;
             for (int k = 0; k < nblocks; k++)
                 if (add_candidate(&sa, &reach, bs.block, (uint32_t)k)) {
@@ -2127,8 +2115,12 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
         pyr_job job = {p, src, l};
         ibl_parallel_for(ctx, 6 * p->src[l].M, pyramid_task, &job);
         if (p->src[l].bright_c > 0) select_bright(p, l);
-        if (p->src[l].corr_cap > 0) select_corrections(p, l);
     }
+    for (int l = 0; l < p->L; l++)
+        for (int k = 0; k < p->lv[l].npieces; k++) {
+            struct core *c = p->lv[l].pieces[k].core;
+            if (c && c->corr_cap > 0) select_corrections(p, c);
+        }
     p->run_src = src;
     p->run_dst = dst;
     for (int l = 0; l < p->L; l++) {
