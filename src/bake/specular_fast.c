@@ -43,6 +43,8 @@ enum { F_WM = GEO_FIELDS, F_WE = F_WM + 3, F_WC = F_WM + 4, F_P = F_WM + 10, F_P
  * texel whose largest contribution to an output exceeds BRIGHT_TAU times the mean radiance is
  * summed at the output texels instead (at most BRIGHT_BLOCKS blocks of them per level). */
 #define BETA_SPLIT 0.6
+/* a ring summed by precomputed weights reads texels at most GAMMA_MAC of its inner radius */
+#define GAMMA_MAC 0.3
 #define BRIGHT_TAU 0.02
 enum { BRIGHT_BLOCKS = 256 };
 /* A precomputed core over a coarse level treats its texels as uniform; a texel whose moment
@@ -514,6 +516,12 @@ static int grid_index(level_plan *lv, int n, int direct, int tile_edge)
     return lv->ngrids++;
 }
 
+/* Whether the output directions are the texel centres (no edge fixup bends them). */
+static int grid_symmetric_fixup(const ibl_specular_plan *p)
+{
+    return p->desc.edge_fixup != IBL_EDGE_FIXUP_BENT && p->desc.edge_fixup != IBL_EDGE_FIXUP_WARP;
+}
+
 static ibl_status plan_level(ibl_specular_plan *p, int level)
 {
     level_plan *lv = &p->lv[level];
@@ -555,7 +563,11 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
             pc->grid = grid_index(lv, n, 1, TILE);
         } else {
             double b = pc->th_in;
-            pc->src = source_level_for(p, gamma * b, 16);
+            /* a ring that will be precomputed (symmetric grid, reach within the padded
+             * face) sums a finer level: its cells cost little, and centroid corrections are
+             * rarer on finer texels */
+            int mac = grid_symmetric_fixup(p) && acos(1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0)) < 1.1;
+            pc->src = source_level_for(p, (mac ? GAMMA_MAC : gamma) * b, 16);
             /* a ring summed from a coarse level leaves its bright texels to a direct sum, so
              * that its grid may be coarser (see "bright texels") */
             int split = pc->src > 0;
