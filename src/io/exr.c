@@ -31,6 +31,9 @@ typedef struct exr_shape {
     uint64_t pixel_bytes;  /* bytes of one pixel of all channels  */
 } exr_shape;
 
+/* Scanlines per chunk of each compression (OpenEXR file layout). */
+static const int lines_per_chunk[10] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
+
 static int32_t le32(const uint8_t *p)
 {
     return (int32_t)((uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24);
@@ -205,7 +208,6 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
                             (long long)box_extent(sh->data, 0), (long long)box_extent(sh->data, 1),
                             (long long)box_extent(sh->display, 0), (long long)box_extent(sh->display, 1));
     }
-    static const int lines_per_chunk[10] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
     if (sh->compression < 0 || sh->compression > 9)
         return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: unknown OpenEXR compression %d", name,
                         sh->compression);
@@ -253,6 +255,67 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
 
 /* ---- decode -------------------------------------------------------------------------- */
 
+/* Pixels are decoded in bands of whole chunks (scanline blocks or tile rows), each band by
+ * its own OpenEXR file object through ibl_parallel_for: a chunk decodes to the same pixels
+ * whichever band or thread reads it, so the image does not depend on the thread count. */
+enum { EXR_MAX_BANDS = 16 };
+/* Above this many bytes per chunk buffer a file is read as one band (each band's reader holds
+ * its own buffers). */
+#define EXR_BAND_BUFFER ((uint64_t)16 << 20)
+
+typedef struct exr_bands {
+    const uint8_t *bytes;
+    size_t size;
+    const ibl__exr_header *hd;
+    float *rgba;
+    int lines, count;
+    int rc[EXR_MAX_BANDS];
+    char err[EXR_MAX_BANDS][256];
+} exr_bands;
+
+static void band_task(void *arg, int index)
+{
+    exr_bands *b = arg;
+    int y0 = b->hd->data_min_y + index * b->lines;
+    int y1 = index == b->count - 1 ? b->hd->data_max_y : y0 + b->lines - 1;
+    b->rc[index] = ibl__exr_read_rows(b->bytes, b->size, b->hd, b->rgba, y0, y1, b->err[index],
+                                      sizeof b->err[index]);
+}
+
+static int read_pixels(ibl_context *ctx, const uint8_t *bytes, size_t size, const exr_shape *sh,
+                       ibl__exr_reader *reader, const ibl__exr_header *hd, float *rgba, char *err,
+                       size_t err_size)
+{
+    uint64_t w = (uint64_t)box_extent(sh->data, 0), h = (uint64_t)box_extent(sh->data, 1);
+    uint64_t lines = sh->tiled ? sh->tile_h : (uint64_t)lines_per_chunk[sh->compression];
+    uint64_t chunks = (h + lines - 1) / lines;
+    uint64_t per_band = (chunks + EXR_MAX_BANDS - 1) / EXR_MAX_BANDS;
+    if (hd->layout == IBL__EXR_LUMA_CHROMA || chunks < 2 ||
+        w * lines * (sh->pixel_bytes > 16 ? sh->pixel_bytes : 16) > EXR_BAND_BUFFER)
+        return ibl__exr_read(reader, rgba, err, err_size);
+    exr_bands *b = ibl_alloc(ctx, sizeof *b);
+    if (!b) {
+        snprintf(err, err_size, "out of memory");
+        return IBL_ERR_OUT_OF_MEMORY;
+    }
+    b->bytes = bytes;
+    b->size = size;
+    b->hd = hd;
+    b->rgba = rgba;
+    b->lines = (int)(per_band * lines);
+    b->count = (int)((h + per_band * lines - 1) / (per_band * lines));
+    ibl_parallel_for(ctx, b->count, band_task, b);
+    /* the first failing band's message: the one a reader going down the image meets first */
+    int rc = 0;
+    for (int i = 0; i < b->count && !rc; i++)
+        if (b->rc[i]) {
+            rc = b->rc[i];
+            snprintf(err, err_size, "%s", b->err[i]);
+        }
+    ibl_free(ctx, b);
+    return rc;
+}
+
 ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info)
 {
@@ -290,7 +353,7 @@ ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
             return ibl__fail_named(ctx, s, name);
         }
     }
-    rc = ibl__exr_read(reader, target, err, sizeof err);
+    rc = read_pixels(ctx, bytes, size, &sh, reader, &hd, target, err, sizeof err);
     ibl__exr_close(reader);
     if (rc) {
         if (!same) ibl_free(ctx, target);
