@@ -291,6 +291,58 @@ ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void 
 
 /* ---- reading: dispatch and pixel policy ---------------------------------------------- */
 
+/* ibl_sanitize_pixels over fixed chunks of texels through ibl_parallel_for; the counts are
+ * added in chunk order (integers: any order gives the same sums). */
+enum { SANITIZE_CHUNK = 1 << 16, SANITIZE_MAX_CHUNKS = 4096 };
+
+typedef struct sanitize_job {
+    float *rgba;
+    size_t count, chunk;
+    int clamp_infinite;
+    float clamp_value;
+    ibl_pixel_report report[SANITIZE_MAX_CHUNKS];
+} sanitize_job;
+
+static void sanitize_task(void *arg, int index)
+{
+    sanitize_job *j = arg;
+    size_t first = (size_t)index * j->chunk;
+    size_t n = j->count - first < j->chunk ? j->count - first : j->chunk;
+    /* no context: a chunk's infinities are reported by the caller, for the whole image */
+    (void)ibl_sanitize_pixels(NULL, j->rgba + first * 4, n, j->clamp_infinite, j->clamp_value,
+                              &j->report[index]);
+}
+
+static ibl_status sanitize(ibl_context *ctx, float *rgba, size_t count, int clamp_infinite,
+                           float clamp_value, ibl_pixel_report *report)
+{
+    if (count <= 2 * (size_t)SANITIZE_CHUNK || ibl_context_threads(ctx) < 2)
+        return ibl_sanitize_pixels(ctx, rgba, count, clamp_infinite, clamp_value, report);
+    sanitize_job *j = ibl_alloc(ctx, sizeof *j);
+    if (!j) return ibl_context_status(ctx);
+    j->rgba = rgba;
+    j->count = count;
+    j->chunk = SANITIZE_CHUNK;
+    while ((count + j->chunk - 1) / j->chunk > SANITIZE_MAX_CHUNKS) j->chunk *= 2;
+    j->clamp_infinite = clamp_infinite;
+    j->clamp_value = clamp_value;
+    int chunks = (int)((count + j->chunk - 1) / j->chunk);
+    ibl_parallel_for(ctx, chunks, sanitize_task, j);
+    ibl_pixel_report r = {0, 0, 0, count};
+    for (int i = 0; i < chunks; i++) {
+        r.nan_count += j->report[i].nan_count;
+        r.inf_count += j->report[i].inf_count;
+        r.negative_count += j->report[i].negative_count;
+    }
+    ibl_free(ctx, j);
+    if (report) *report = r;
+    /* the message of ibl_sanitize_pixels, for the whole image */
+    if (r.inf_count && !clamp_infinite)
+        return ibl_fail(ctx, IBL_ERR_BAD_PIXELS, "%llu texels are infinite (use --clamp to clamp them)",
+                        (unsigned long long)r.inf_count);
+    return IBL_OK;
+}
+
 ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, const char *name,
                               const ibl_read_desc *desc, ibl_texture *out, ibl_file_info *info)
 {
@@ -334,7 +386,7 @@ ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, 
     if (fi.format == IBL_FORMAT_DEFAULT) fi.format = out->format;
     if (out->format == IBL_FORMAT_DEFAULT) out->format = fi.format;
     size_t texels = ibl_texture_floats(out->kind, out->width, out->height, out->depth, out->levels) / 4;
-    s = ibl_sanitize_pixels(ctx, out->data, texels, rd.clamp_infinite, rd.clamp_value, &fi.pixels);
+    s = sanitize(ctx, out->data, texels, rd.clamp_infinite, rd.clamp_value, &fi.pixels);
     if (info) *info = fi;
     if (s != IBL_OK) {
         ibl_texture_free(ctx, out);
