@@ -113,6 +113,66 @@ static ibl_status read_all(ibl_context *ctx, int fd, const char *path, uint8_t *
     return IBL_OK;
 }
 
+/* A large regular file is read in fixed pieces by pread through ibl_parallel_for: the kernel's
+ * copy (and the faults on the fresh buffer) then run on every thread. */
+enum { READ_CHUNK = 4 << 20 };
+
+typedef struct read_job {
+    int fd;
+    uint8_t *dst;
+    size_t size;
+    size_t got[256];
+    int err[256];
+    size_t chunk;
+} read_job;
+
+static void read_task(void *arg, int index)
+{
+    read_job *j = arg;
+    size_t first = (size_t)index * j->chunk;
+    size_t n = j->size - first < j->chunk ? j->size - first : j->chunk, done = 0;
+    while (done < n) {
+        ssize_t r = pread(j->fd, j->dst + first + done, n - done, (off_t)(first + done));
+        if (r < 0) {
+            if (errno == EINTR) continue;
+            j->err[index] = errno;
+            break;
+        }
+        if (r == 0) break;
+        done += (size_t)r;
+    }
+    j->got[index] = done;
+}
+
+static ibl_status read_parallel(ibl_context *ctx, int fd, const char *path, uint8_t *dst,
+                                size_t size, size_t *got)
+{
+    read_job *j = ibl_alloc(ctx, sizeof *j);
+    if (!j) return ibl__fail_named(ctx, ibl_context_status(ctx), path);
+    memset(j, 0, sizeof *j);
+    j->fd = fd;
+    j->dst = dst;
+    j->size = size;
+    j->chunk = READ_CHUNK;
+    while ((size + j->chunk - 1) / j->chunk > 256) j->chunk *= 2;
+    int chunks = (int)((size + j->chunk - 1) / j->chunk);
+    ibl_parallel_for(ctx, chunks, read_task, j);
+    /* as a sequential read: the bytes up to the first error or short piece */
+    size_t done = 0;
+    ibl_status s = IBL_OK;
+    for (int i = 0; i < chunks; i++) {
+        done += j->got[i];
+        if (j->err[i]) {
+            s = ibl_fail(ctx, IBL_ERR_IO, "%s: cannot read: %s", path, strerror(j->err[i]));
+            break;
+        }
+        if (j->got[i] < (i == chunks - 1 ? size - (size_t)i * j->chunk : j->chunk)) break;
+    }
+    ibl_free(ctx, j);
+    *got = done;
+    return s;
+}
+
 ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_t *size)
 {
     if (!path || !bytes || !size)
@@ -149,7 +209,9 @@ ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_
             close(fd);
             return s;
         }
-        s = read_all(ctx, fd, path, buf, want, &used);
+        s = want >= 2 * (size_t)READ_CHUNK && ibl_context_threads(ctx) > 1
+                ? read_parallel(ctx, fd, path, buf, want, &used)
+                : read_all(ctx, fd, path, buf, want, &used);
         if (s == IBL_OK && used != want)
             s = ibl_fail(ctx, IBL_ERR_IO, "%s: file shrank while being read", path);
     } else {
