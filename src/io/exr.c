@@ -512,6 +512,8 @@ static int read_fast(ibl_context *ctx, const uint8_t *bytes, size_t size, const 
     if (f->slot_count > EXR_MAX_SLOTS) f->slot_count = EXR_MAX_SLOTS;
     if (f->slot_count < 1) f->slot_count = 1;
     f->work_bytes = (size_t)f->lines * f->line_bytes; /* <= EXR_MAX_BUFFER (checked) */
+    /* huge chunks (a very wide or many-channel file): one band at a time */
+    if ((uint64_t)f->work_bytes * 2 * (uint64_t)f->slot_count > 4 * EXR_BAND_BUFFER) threads = f->slot_count = 1;
     float *table = NULL;
     int rc = ok ? 1 : 0;
     if (ok && (f->type[0] == 1 || f->type[1] == 1 || f->type[2] == 1 || f->type[3] == 1)) {

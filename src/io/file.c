@@ -336,18 +336,9 @@ ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void 
         return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot %s: %s", path, what, strerror(err));
     }
     ibl_free(ctx, tmp);
-    /* Make the rename itself durable (best effort: some file systems refuse fsync on a dir). */
-    char dir[4096];
-    if (dir_len == 0) snprintf(dir, sizeof dir, ".");
-    else if (dir_len < sizeof dir) snprintf(dir, sizeof dir, "%.*s", (int)dir_len, path);
-    else dir[0] = 0;
-    if (dir[0]) {
-        int dfd = open(dir, O_RDONLY | O_CLOEXEC);
-        if (dfd >= 0) {
-            (void)fsync(dfd);
-            close(dfd);
-        }
-    }
+    /* The folder is not fsync'ed after the rename: the data was, so after a crash the name
+     * holds the old file or the new one, each complete; syncing the folder would only make
+     * the new name durable sooner, for milliseconds per file (docs/PERFORMANCE.md). */
     return IBL_OK;
 }
 
