@@ -1260,6 +1260,67 @@ static int count_entries(const char *dir)
     return n;
 }
 
+/* The pixel policy runs in chunks on several threads and large files are read in pieces:
+ * at 1, 2 and 8 threads the same pixels and counts come back, the counts those planted
+ * (the image is over two chunks of 65,536 texels; the file over two pieces of 4 MiB). */
+static void large_inputs_threads(void **state)
+{
+    (void)state;
+    enum { W = 1000, H = 800 };
+    ibl_context *one = test_context(1);
+    ibl_image im = make_image(one, W, H);
+    uint64_t nan = 0, inf = 0, neg = 0;
+    for (size_t t = 0; t < (size_t)W * H; t++) {
+        float *p = im.pixels + t * 4;
+        p[0] = p[1] = p[2] = frand() * 4.0f;
+        p[3] = 1.0f;
+        if (t % 1009 == 5) p[1] = NAN, nan++;
+        else if (t % 1013 == 7) p[2] = (t & 1) ? INFINITY : -INFINITY, inf++;
+        else if (t % 997 == 11) p[0] = -frand() - 0.5f, neg++;
+    }
+    const char *path = test_path("large.pfm");
+    assert_int_equal(ibl_write_image(one, path, &im, NULL), IBL_OK);
+    void *file_ref;
+    size_t file_size;
+    assert_int_equal(ibl_read_file(one, path, &file_ref, &file_size), IBL_OK);
+    assert_true(file_size > 8u << 20);
+    ibl_image ref = {0};
+    const int threads[3] = {1, 2, 8};
+    for (int t = 0; t < 3; t++) {
+        ibl_context *ctx = test_context(threads[t]);
+        void *bytes;
+        size_t size;
+        assert_int_equal(ibl_read_file(ctx, path, &bytes, &size), IBL_OK);
+        assert_int_equal(size, file_size);
+        assert_memory_equal(bytes, file_ref, size);
+        ibl_free(ctx, bytes);
+        ibl_image back;
+        ibl_file_info fi;
+        assert_int_equal(ibl_read_image(ctx, path, NULL, &back, &fi), IBL_ERR_BAD_PIXELS);
+        assert_int_equal(fi.pixels.inf_count, inf);
+        char want[80];
+        snprintf(want, sizeof want, "%llu texels are infinite", (unsigned long long)inf);
+        assert_non_null(strstr(ibl_context_message(ctx), want));
+        ibl_read_desc rd = {1, 0.0f};
+        assert_int_equal(ibl_read_image(ctx, path, &rd, &back, &fi), IBL_OK);
+        assert_int_equal(fi.pixels.nan_count, nan);
+        assert_int_equal(fi.pixels.inf_count, inf);
+        assert_int_equal(fi.pixels.negative_count, neg);
+        assert_int_equal(fi.pixels.texel_count, (uint64_t)W * H);
+        if (t == 0) {
+            ref = back;
+        } else {
+            assert_memory_equal(back.pixels, ref.pixels, (size_t)W * H * 4 * sizeof(float));
+            ibl_image_free(ctx, &back);
+        }
+        ibl_context_destroy(ctx);
+    }
+    ibl_image_free(one, &ref);
+    ibl_free(one, file_ref);
+    ibl_image_free(one, &im);
+    ibl_context_destroy(one);
+}
+
 static void atomic_write(void **state)
 {
     (void)state;
@@ -1407,6 +1468,7 @@ int main(void)
         cmocka_unit_test(jpeg_round_trip),    cmocka_unit_test(png_layouts),    cmocka_unit_test(truncated_files),
         cmocka_unit_test(wrong_magic),        cmocka_unit_test(absurd_dimensions),
         cmocka_unit_test(non_finite_pixels),  cmocka_unit_test(atomic_write),
+        cmocka_unit_test(large_inputs_threads),
         cmocka_unit_test(read_file_errors),   cmocka_unit_test(api_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
