@@ -603,12 +603,26 @@ ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     }
     int dw = (int)box_extent(sh.data, 0), dh = (int)box_extent(sh.data, 1);
     int vw = (int)box_extent(sh.display, 0), vh = (int)box_extent(sh.display, 1);
-    s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, vw, vh, 1, 1, out);
+    int same = memcmp(sh.data, sh.display, sizeof sh.data) == 0;
+    if (same) {
+        /* every texel is decoded into it: not zeroed first (a serial pass that would also
+         * take all the page faults on one thread; the decoding bands take them instead) */
+        memset(out, 0, sizeof *out);
+        out->data = ibl_alloc(ctx, (size_t)vw * (size_t)vh * 4 * sizeof(float));
+        s = out->data ? IBL_OK : ibl_context_status(ctx);
+        out->kind = IBL_TEXTURE_2D;
+        out->width = vw;
+        out->height = vh;
+        out->depth = out->levels = 1;
+        out->owns_data = 1;
+    } else {
+        s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, vw, vh, 1, 1, out);
+    }
     if (s != IBL_OK) {
         ibl__exr_close(reader);
+        memset(out, 0, sizeof *out);
         return ibl__fail_named(ctx, s, name);
     }
-    int same = memcmp(sh.data, sh.display, sizeof sh.data) == 0;
     float *target = out->data;
     if (!same) {
         target = ibl_alloc(ctx, (size_t)dw * (size_t)dh * 4 * sizeof(float));
