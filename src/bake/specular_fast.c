@@ -29,6 +29,7 @@
 #include "specular_internal.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 enum { BW = 4, BH = 2, BT = BW * BH }; /* a block: one 8-wide vector */
@@ -36,15 +37,40 @@ enum { BW = 4, BH = 2, BT = BW * BH }; /* a block: one 8-wide vector */
  * or a coarse level's luminance-weighted moments and power */
 enum { F_MX = 0, F_E = 3, F_C = 4, F_OM = 10, GEO_FIELDS = 11 };
 enum { F_L = GEO_FIELDS, NF0 = GEO_FIELDS + 3 };
-enum { F_WM = GEO_FIELDS, F_WE = F_WM + 3, F_WC = F_WM + 4, F_P = F_WM + 10, NFC = F_P + 3 };
+/* F_PD: the power of a texel that is not bright (0 for a bright one; see "bright texels") */
+enum { F_WM = GEO_FIELDS, F_WE = F_WM + 3, F_WC = F_WM + 4, F_P = F_WM + 10, F_PD = F_P + 3, NFC = F_PD + 3 };
+/* Bright texels: a split ring's grid may be spaced BETA_SPLIT of its inner radius because a
+ * texel whose largest contribution to an output exceeds BRIGHT_TAU times the mean radiance is
+ * summed at the output texels instead (at most BRIGHT_BLOCKS blocks of them per level). */
+#define BETA_SPLIT 0.6
+#define BRIGHT_TAU 0.02
+enum { BRIGHT_BLOCKS = 256 };
+/* A precomputed core over a coarse level treats its texels as uniform; a texel whose moment
+ * leaf could differ from that by more than CORR_TAU times the mean radiance (relative to the
+ * normaliser) is corrected at the output texels (at most CORR_BLOCKS blocks per level). */
+#define CORR_TAU 1e-2
+enum { CORR_BLOCKS = 2048 };
 enum { BINFO = 6, TAB = 2048, TILE = 8, MAX_PIECES = 24, MAX_GRIDS = MAX_PIECES, CAND = 1024 };
 
 static const double PI = 3.14159265358979323846;
+static const double LUM[3] = {0.2126, 0.7152, 0.0722}; /* Rec. 709 luminance */
 
 typedef struct srclev {
     int M, nbx, nby, nf;
     float *rec;    /* 6 nby nbx blocks x nf fields x BT                     */
     float *block;  /* per block: centre direction (unit), angular radius r, cos r, sin r */
+    /* bright texels (levels read by split rings): their records gathered in blocks */
+    double bright_c;     /* threshold on a texel's luminance power / mean radiance (0: unused) */
+    int bright_cap, nbright; /* capacity and count of bright blocks                     */
+    float *bright_rec, *bright_block;
+    /* centroid corrections (levels summed by a precomputed core): each texel whose radiance
+     * is far from uniform twice, at its luminance moments with +P and at its geometric ones
+     * with -P, so that a sum over them turns the core's uniform texels into moment leaves */
+    double corr_a1, corr_a2, corr_a3; /* bound constants (0: unused): |dm|, |de|, |dC| per unit power */
+    int corr_cap, ncorr;   /* capacity and count of correction blocks                        */
+    float *corr_rec, *corr_block;
+    int ncorrd;            /* the same for split rings: the power without the bright texels  */
+    float *corrd_rec, *corrd_block;
 } srclev;
 
 typedef struct piece {
@@ -57,6 +83,8 @@ typedef struct piece {
     float a2, kap, a4, out_sa, out_sb, out_sk, in_sa, in_sb, in_sk;
     float n;  /* Phong exponent */
     int ggx;
+    int split; /* a ring on a coarse grid without the bright texels, which go direct */
+    struct core *core; /* the core summed by precomputed weights (NULL: by leaves) */
 } piece;
 
 typedef struct grid {
@@ -97,6 +125,72 @@ static size_t rec_index(const srclev *s, int face, int x, int y, int field)
 }
 
 static size_t block_count(const srclev *s) { return (size_t)6 * s->nby * s->nbx; }
+
+/* ---- the core as precomputed weights (a core summed from the source texels themselves) ---- */
+
+/* When a level's core is summed over level 0 (K = 1), its weights depend only on geometry, and
+ * the cube's symmetries carry them over: the weights of the output texels of one quadrant of
+ * face 0 serve the four quadrants of all six faces (the maps x -> n-1-x, y -> n-1-y and the
+ * signed permutations taking face 0 to face F are symmetries of the cube and of its texels).
+ * They are stored as rows over the *padded* face: the face with a border W deep taken from its
+ * four neighbours unfolded about the shared edges (the corner squares of the border are empty),
+ * so that texels across an edge stay in rows. A run is then a plain product of those rows with
+ * the padded source: no lobe evaluation, ~10x cheaper per texel than a leaf. */
+struct core {
+    int level;             /* the source level it sums (0: the source texels)                       */
+    int direct, dim;       /* on the output texels (edge-fixup directions) / without bright texels   */
+    int S, W, P, O, n, nb; /* source edge, border, padded edge, offset of cell 0, output edge, base edge */
+    int32_t *map;          /* 6 P P: source texel (f S S + y S + x) or -1                           */
+    uint32_t *row0;        /* nb nb + 1: each base texel's first row                                 */
+    size_t *w0;            /* nb nb + 1: each base texel's first weight                              */
+    int32_t *rows;         /* per row: y, x (padded coordinates), len (a multiple of 8)              */
+    float *w;
+    double *den;           /* nb nb: sum of the weights                                              */
+    float *pad;            /* run: 6 faces x (r, g, b) x P P                                         */
+};
+
+enum { CORE_GEO = 12 }; /* geometry fields of a padded cell: GEO_FIELDS, then |m| */
+
+static void core_destroy(ibl_context *ctx, struct core *c)
+{
+    if (!c) return;
+    ibl_free(ctx, c->map);
+    ibl_free(ctx, c->row0);
+    ibl_free(ctx, c->w0);
+    ibl_free(ctx, c->rows);
+    ibl_free(ctx, c->w);
+    ibl_free(ctx, c->den);
+    ibl_free(ctx, c->pad);
+    ibl_free(ctx, c);
+}
+
+/* The source texel under padded cell (X, Y) of face f (-1 in the border's corner squares): a
+ * border cell k texels beyond an edge is the neighbour's texel k texels in from that edge. */
+static int32_t core_cell_texel(const ibl_specular_plan *p, int S, int f, int X, int Y)
+{
+    int outx = X < 0 || X >= S, outy = Y < 0 || Y >= S;
+    if (outx && outy) return -1;
+    if (!outx && !outy) return (int32_t)(((size_t)f * S + Y) * S + X);
+    /* local (u, v, w) of the point: the edge point, then depth delta along -axis */
+    double u, v, depth;
+    if (outx) {
+        int k = X < 0 ? -1 - X : X - S;
+        u = X < 0 ? -1.0 : 1.0, v = -1.0 + (2.0 * Y + 1.0) / S, depth = (2.0 * k + 1.0) / S;
+    } else {
+        int k = Y < 0 ? -1 - Y : Y - S;
+        v = Y < 0 ? -1.0 : 1.0, u = -1.0 + (2.0 * X + 1.0) / S, depth = (2.0 * k + 1.0) / S;
+    }
+    if (depth >= 2.0) return -1;
+    const float(*B)[3] = p->face_basis[f];
+    double d[3], s, t;
+    for (int i = 0; i < 3; i++) d[i] = B[0][i] * (1.0 - depth) + B[1][i] * u + B[2][i] * v;
+    int g = ibl_cube_face_st_d(d, &s, &t);
+    int x = (int)floor(s * S), y = (int)floor(t * S);
+    x = x < 0 ? 0 : x >= S ? S - 1 : x;
+    y = y < 0 ? 0 : y >= S ? S - 1 : y;
+    return (int32_t)(((size_t)g * S + y) * S + x);
+}
+
 
 /* ---- the partition of unity and the tabulated pieces ---- */
 
@@ -230,30 +324,38 @@ static void combine(const geo *const *parts, const double *w, int count, geo *ou
     }
 }
 
+/* The signed permutation taking face-local (s, t, axis) coordinates to world coordinates on
+ * face f: world[i] = sign[i] local[axis[i]] (the face basis is made of signed unit vectors). */
+static void face_perm(const ibl_specular_plan *p, int f, int axis[3], double sign[3])
+{
+    const float(*B)[3] = p->face_basis[f];
+    for (int i = 0; i < 3; i++) {
+        axis[i] = 0, sign[i] = 1.0;
+        /* local columns: s tangent B[1], t tangent B[2], axis B[0] */
+        const float col[3] = {B[1][i], B[2][i], B[0][i]};
+        for (int k = 0; k < 3; k++)
+            if (col[k] != 0.0f) axis[i] = k, sign[i] = col[k] > 0 ? 1.0 : -1.0;
+    }
+}
+
 /* Writes the geometric fields of texel (x, y) of every face from face-local moments. */
 static void store_geo(const ibl_specular_plan *p, srclev *s, int x, int y, const geo *g)
 {
+    /* local covariance as a matrix (c: xx yy zz xy xz yz) */
+    const double Cl[3][3] = {{g->c[0], g->c[3], g->c[4]}, {g->c[3], g->c[1], g->c[5]},
+                             {g->c[4], g->c[5], g->c[2]}};
     for (int f = 0; f < 6; f++) {
-        const float(*B)[3] = p->face_basis[f];
-        /* local (s, t, axis) -> world: columns b1, b2, b0 */
-        double M[3][3];
-        for (int i = 0; i < 3; i++) M[i][0] = B[1][i], M[i][1] = B[2][i], M[i][2] = B[0][i];
-        double Cl[3][3] = {{g->c[0], g->c[3], g->c[4]}, {g->c[3], g->c[1], g->c[5]},
-                           {g->c[4], g->c[5], g->c[2]}};
-        double mw[3], Cw[3][3];
-        for (int i = 0; i < 3; i++) mw[i] = M[i][0] * g->m[0] + M[i][1] * g->m[1] + M[i][2] * g->m[2];
-        for (int i = 0; i < 3; i++)
-            for (int j = 0; j < 3; j++) {
-                double v = 0;
-                for (int a = 0; a < 3; a++)
-                    for (int b = 0; b < 3; b++) v += M[i][a] * Cl[a][b] * M[j][b];
-                Cw[i][j] = v;
-            }
+        int ax[3];
+        double sg[3];
+        face_perm(p, f, ax, sg);
         float *r = s->rec;
-        for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_MX + c)] = (float)mw[c];
+        for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_MX + c)] = (float)(sg[c] * g->m[ax[c]]);
         r[rec_index(s, f, x, y, F_E)] = (float)g->e;
-        const double cw[6] = {Cw[0][0], Cw[1][1], Cw[2][2], Cw[0][1], Cw[0][2], Cw[1][2]};
-        for (int c = 0; c < 6; c++) r[rec_index(s, f, x, y, F_C + c)] = (float)cw[c];
+        static const int ci[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+        for (int c = 0; c < 6; c++) {
+            int i = ci[c][0], j = ci[c][1];
+            r[rec_index(s, f, x, y, F_C + c)] = (float)(sg[i] * sg[j] * Cl[ax[i]][ax[j]]);
+        }
         r[rec_index(s, f, x, y, F_OM)] = (float)g->om;
     }
 }
@@ -263,12 +365,59 @@ typedef struct geo_job {
     srclev *s;
     geo *g;
     int n;
+    const geo *fine; /* texel_combine_task: the level below */
 } geo_job;
 
-static void texel_geo_task(void *arg, int y)
+/* Row b of one eighth of the face: texels (a, b), a <= b < ceil(n / 2). */
+static void texel_geo_task(void *arg, int b)
 {
     const geo_job *j = arg;
-    for (int x = 0; x < j->n; x++) texel_geo(j->n, x, y, &j->g[(size_t)y * j->n + x]);
+    for (int a = 0; a <= b; a++) texel_geo(j->n, a, b, &j->g[(size_t)b * j->n + a]);
+}
+
+/* Row y of the face from its eighth: the reflections s -> -s, t -> -t and the swap s <-> t
+ * are symmetries of the face, and they act on the moments by sign flips and swaps. */
+static void texel_geo_fill_task(void *arg, int y)
+{
+    const geo_job *j = arg;
+    int n = j->n;
+    for (int x = 0; x < n; x++) {
+        int fx = x > n - 1 - x, fy = y > n - 1 - y;
+        int a = fx ? n - 1 - x : x, b = fy ? n - 1 - y : y, sw = a > b;
+        if (sw) {
+            int t = a;
+            a = b, b = t;
+        }
+        if (!fx && !fy && !sw) continue;
+        geo g = j->g[(size_t)b * n + a];
+        if (sw) { /* back from the eighth: swap s and t first */
+            double t = g.m[0];
+            g.m[0] = g.m[1], g.m[1] = t;
+            t = g.c[0], g.c[0] = g.c[1], g.c[1] = t;
+            t = g.c[4], g.c[4] = g.c[5], g.c[5] = t;
+        }
+        if (fx) g.m[0] = -g.m[0], g.c[3] = -g.c[3], g.c[4] = -g.c[4];
+        if (fy) g.m[1] = -g.m[1], g.c[3] = -g.c[3], g.c[5] = -g.c[5];
+        j->g[(size_t)y * n + x] = g;
+    }
+}
+
+/* Row y of a level's moments from its children (the parallel-axis rule). */
+static void texel_combine_task(void *arg, int y)
+{
+    const geo_job *j = arg;
+    int M = j->n;
+    const geo *fine = j->fine;
+    for (int x = 0; x < M; x++) {
+        const geo *parts[4];
+        double w[4];
+        for (int k = 0; k < 4; k++) {
+            parts[k] = &fine[(size_t)(2 * y + (k >> 1)) * (2 * M) + 2 * x + (k & 1)];
+            w[k] = parts[k]->om;
+        }
+        combine(parts, w, 4, &j->g[(size_t)y * M + x]);
+        j->g[(size_t)y * M + x].om = w[0] + w[1] + w[2] + w[3];
+    }
 }
 
 static void store_geo_task(void *arg, int y)
@@ -277,22 +426,29 @@ static void store_geo_task(void *arg, int y)
     for (int x = 0; x < j->n; x++) store_geo(j->p, j->s, x, y, &j->g[(size_t)y * j->n + x]);
 }
 
-static void block_cone_task(void *arg, int index)
+/* The bounding cones of block row `by` on every face: computed on face 0 and carried to the
+ * others by the signed permutation between the faces. */
+static void block_cone_task(void *arg, int by)
 {
     const geo_job *j = arg;
     srclev *s = j->s;
-    int M = s->M, f = index / s->nby, by = index % s->nby;
-    double h = 2.0 / M;
+    int M = s->M, ax0[3], ax[3];
+    double h = 2.0 / M, sg0[3], sg[3];
+    face_perm(j->p, 0, ax0, sg0);
     for (int bx = 0; bx < s->nbx; bx++) {
         int x1 = (bx + 1) * BW < M ? (bx + 1) * BW : M;
         int y1 = (by + 1) * BH < M ? (by + 1) * BH : M;
-        double c[3];
-        double r = ibl__rect_radius(f, bx * BW * h - 1, by * BH * h - 1, x1 * h - 1, y1 * h - 1, c);
-        float *b = s->block + (((size_t)f * s->nby + by) * s->nbx + bx) * BINFO;
-        for (int i = 0; i < 3; i++) b[i] = (float)c[i];
-        b[3] = (float)(r + 1e-6);
-        b[4] = (float)cos(r + 1e-6);
-        b[5] = (float)sin(r + 1e-6);
+        double c[3], local[3];
+        double r = ibl__rect_radius(0, bx * BW * h - 1, by * BH * h - 1, x1 * h - 1, y1 * h - 1, c);
+        for (int i = 0; i < 3; i++) local[ax0[i]] = sg0[i] * c[i];
+        for (int f = 0; f < 6; f++) {
+            face_perm(j->p, f, ax, sg);
+            float *b = s->block + (((size_t)f * s->nby + by) * s->nbx + bx) * BINFO;
+            for (int i = 0; i < 3; i++) b[i] = (float)(sg[i] * local[ax[i]]);
+            b[3] = (float)(r + 1e-6);
+            b[4] = (float)cos(r + 1e-6);
+            b[5] = (float)sin(r + 1e-6);
+        }
     }
 }
 
@@ -307,30 +463,22 @@ static ibl_status build_geometry(ibl_specular_plan *p)
         ibl_free(ctx, next);
         return ibl_context_status(ctx);
     }
-    geo_job first = {p, NULL, cur, S};
-    ibl_parallel_for(ctx, S, texel_geo_task, &first);
+    geo_job first = {p, NULL, cur, S, NULL};
+    ibl_parallel_for(ctx, (S + 1) / 2, texel_geo_task, &first);
+    ibl_parallel_for(ctx, S, texel_geo_fill_task, &first);
     for (int l = 0; l < p->SL; l++) {
         srclev *s = &p->src[l];
         int M = s->M;
         if (l > 0) {
-            for (int y = 0; y < M; y++)
-                for (int x = 0; x < M; x++) {
-                    const geo *parts[4];
-                    double w[4];
-                    for (int k = 0; k < 4; k++) {
-                        parts[k] = &cur[(size_t)(2 * y + (k >> 1)) * (2 * M) + 2 * x + (k & 1)];
-                        w[k] = parts[k]->om;
-                    }
-                    combine(parts, w, 4, &next[(size_t)y * M + x]);
-                    next[(size_t)y * M + x].om = w[0] + w[1] + w[2] + w[3];
-                }
+            geo_job cj = {p, s, next, M, cur};
+            ibl_parallel_for(ctx, M, texel_combine_task, &cj);
             geo *t = cur;
             cur = next;
             next = t;
         }
-        geo_job job = {p, s, cur, M};
+        geo_job job = {p, s, cur, M, NULL};
         ibl_parallel_for(ctx, M, store_geo_task, &job);
-        ibl_parallel_for(ctx, 6 * s->nby, block_cone_task, &job);
+        ibl_parallel_for(ctx, s->nby, block_cone_task, &job);
     }
     ibl_free(ctx, cur);
     ibl_free(ctx, next);
@@ -378,6 +526,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
     const double c0 = 2.0;          /* the core ends (psi starts) at c0 half widths */
     const double gamma = 0.6 * acc; /* ring source texel / ring inner radius        */
     const double beta = 0.2 * acc;  /* ring grid spacing / ring inner radius        */
+    const double beta_split = BETA_SPLIT * acc; /* the same without the bright texels */
     const double cull = lobe->kind == IBL__LOBE_PHONG ? 1e-9 : 0.0;
 
     int core_src = source_level_for(p, lobe->half_angle / kappa, 32);
@@ -406,11 +555,18 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
         } else {
             double b = pc->th_in;
             pc->src = source_level_for(p, gamma * b, 16);
+            /* a ring summed from a coarse level leaves its bright texels to a direct sum, so
+             * that its grid may be coarser (see "bright texels") */
+            int split = pc->src > 0;
             int gn = 1;
-            while (texel_angle(gn) > beta * b) gn *= 2;
+            while (texel_angle(gn) > (split ? beta_split : beta) * b) gn *= 2;
             if (gn < 8) gn = 8;
-            if (gn >= n) pc->grid = grid_index(lv, n, 1, TILE);
-            else pc->grid = grid_index(lv, gn, 0, TILE);
+            if (gn >= n) {
+                pc->grid = grid_index(lv, n, 1, TILE);
+            } else {
+                pc->grid = grid_index(lv, gn, 0, TILE);
+                pc->split = split;
+            }
         }
         ibl_status st = make_table(p->ctx, lobe, j == 0 ? 0.0 : prevU, last ? 0.0 : outerU, pc);
         if (st != IBL_OK) return st;
@@ -432,6 +588,9 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
 }
 
 static void plan_denominators(ibl_specular_plan *p, int level);
+static ibl_status core_create(ibl_specular_plan *p, int level);
+static void plan_bright(ibl_specular_plan *p, int level);
+static ibl_status core_build_weights(ibl_specular_plan *p, int level);
 
 void ibl_specular_plan_destroy(ibl_specular_plan *p)
 {
@@ -441,7 +600,16 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
     for (int l = 0; l < IBL_MAX_LEVELS; l++) {
         ibl_free(ctx, p->src[l].rec);
         ibl_free(ctx, p->src[l].block);
-        for (int k = 0; k < p->lv[l].npieces; k++) ibl_free(ctx, p->lv[l].pieces[k].tab);
+        ibl_free(ctx, p->src[l].bright_rec);
+        ibl_free(ctx, p->src[l].bright_block);
+        ibl_free(ctx, p->src[l].corr_rec);
+        ibl_free(ctx, p->src[l].corr_block);
+        ibl_free(ctx, p->src[l].corrd_rec);
+        ibl_free(ctx, p->src[l].corrd_block);
+        for (int k = 0; k < p->lv[l].npieces; k++) {
+            ibl_free(ctx, p->lv[l].pieces[k].tab);
+            core_destroy(ctx, p->lv[l].pieces[k].core);
+        }
         for (int g = 0; g < p->lv[l].ngrids; g++) ibl_free(ctx, p->lv[l].grids[g].acc);
     }
     ibl_free(ctx, p);
@@ -452,7 +620,10 @@ void ibl__specular_plan_set_portable(ibl_specular_plan *p, int portable)
     p->portable = portable;
     if (!p->dyn)
         for (int l = 0; l < p->L; l++)
-            if (p->lv[l].lobe.kind != IBL__LOBE_MIRROR) plan_denominators(p, l);
+            if (p->lv[l].lobe.kind != IBL__LOBE_MIRROR) {
+                core_build_weights(p, l);
+                plan_denominators(p, l);
+            }
 }
 
 const ibl_specular_info *ibl_specular_plan_info(const ibl_specular_plan *plan)
@@ -533,14 +704,230 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         p->lv[l].lobe = ibl__lobe_for_level(&p->info, l);
         if (p->lv[l].lobe.kind == IBL__LOBE_MIRROR) continue;
         st = plan_level(p, l);
+        if (st == IBL_OK) st = core_create(p, l);
         if (st != IBL_OK) goto fail;
         plan_denominators(p, l);
+        plan_bright(p, l);
+    }
+    for (int l = 0; l < p->SL; l++) {
+        srclev *s = &p->src[l];
+        if (s->corr_a1 > 0 || s->corr_a2 > 0 || s->corr_a3 > 0) {
+            s->corr_cap = CORR_BLOCKS;
+            s->corr_rec = ibl_alloc(ctx, (size_t)s->corr_cap * NFC * BT * sizeof(float));
+            s->corr_block = ibl_alloc(ctx, (size_t)s->corr_cap * BINFO * sizeof(float));
+            s->corrd_rec = ibl_alloc(ctx, (size_t)s->corr_cap * NFC * BT * sizeof(float));
+            s->corrd_block = ibl_alloc(ctx, (size_t)s->corr_cap * BINFO * sizeof(float));
+            if (!s->corr_rec || !s->corr_block || !s->corrd_rec || !s->corrd_block) {
+                st = ibl_context_status(ctx);
+                goto fail;
+            }
+        }
+        if (s->bright_c == 0) continue;
+        s->bright_cap = BRIGHT_BLOCKS;
+        s->bright_rec = ibl_alloc(ctx, (size_t)s->bright_cap * NFC * BT * sizeof(float));
+        s->bright_block = ibl_alloc(ctx, (size_t)s->bright_cap * BINFO * sizeof(float));
+        if (!s->bright_rec || !s->bright_block) {
+            st = ibl_context_status(ctx);
+            goto fail;
+        }
     }
     *out = p;
     return IBL_OK;
 fail:
     ibl_specular_plan_destroy(p);
     return st;
+}
+
+
+/* The constant of a split ring's bright test on its source level: a texel of power P adds at
+ * most P gmax / den to an output (gmax the piece's peak, den the level's normaliser), so the
+ * test P > BRIGHT_TAU mean_radiance den / gmax; the level keeps the strictest of its rings. */
+static void plan_bright(ibl_specular_plan *p, int level)
+{
+    level_plan *lv = &p->lv[level];
+    const grid *dg = &lv->grids[lv->pieces[0].grid];
+    size_t face = (size_t)dg->n * dg->n;
+    double den = 0;
+    for (size_t i = 0; i < face; i++) den += dg->acc[4 * i + 3];
+    den /= (double)face;
+    for (int k = 0; k < lv->npieces; k++) {
+        const piece *core = &lv->pieces[k];
+        if (!core->core || core->core->level == 0 || !(den > 0)) continue;
+        /* largest |g'| sqrt(2u), |g'| and 3|g''|/2 over the piece (g' by differences) */
+        double step = (core->u_hi - core->u_lo) / TAB, d1 = 0, d1e = 0, d2 = 0;
+        for (int i = 0; i < TAB; i++) {
+            double u = core->u_lo + (i + 0.5) * step;
+            double g1 = fabs(core->tab[2 * i + 2] - core->tab[2 * i]) / step;
+            double g2 = fabs(core->tab[2 * i + 1]) > fabs(core->tab[2 * i + 3]) ? fabs(core->tab[2 * i + 1])
+                                                                                : fabs(core->tab[2 * i + 3]);
+            d1 = g1 * sqrt(2.0 * u) > d1 ? g1 * sqrt(2.0 * u) : d1;
+            d1e = g1 > d1e ? g1 : d1e;
+            d2 = 1.5 * g2 > d2 ? 1.5 * g2 : d2;
+        }
+        srclev *s = &p->src[core->core->level];
+        s->corr_a1 = d1 / den > s->corr_a1 ? d1 / den : s->corr_a1;
+        s->corr_a2 = d1e / den > s->corr_a2 ? d1e / den : s->corr_a2;
+        s->corr_a3 = d2 / den > s->corr_a3 ? d2 / den : s->corr_a3;
+    }
+    for (int k = 0; k < lv->npieces; k++) {
+        const piece *pc = &lv->pieces[k];
+        if (!pc->split) continue;
+        double gmax = 0;
+        for (int i = 0; i <= TAB; i++) gmax = fabs(pc->tab[2 * i]) > gmax ? fabs(pc->tab[2 * i]) : gmax;
+        if (!(gmax > 0)) continue;
+        double c = den / gmax;
+        srclev *s = &p->src[pc->src];
+        if (s->bright_c == 0 || c < s->bright_c) s->bright_c = c;
+    }
+}
+
+/* Picks the bright texels of source level l (largest luminance power first), gathers their
+ * records into blocks and writes every texel's power without them (F_PD). */
+static void gathered_cones(const float *recs, float *blocks, int count, double tr);
+
+static void select_bright(ibl_specular_plan *p, int l)
+{
+    srclev *s = &p->src[l];
+    size_t blocks = block_count(s);
+    double total = 0;
+    for (size_t b = 0; b < blocks; b++) {
+        const float *P = s->rec + (b * s->nf + F_P) * BT;
+        for (int t = 0; t < BT; t++) total += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
+    }
+    double thr = BRIGHT_TAU * total / (4.0 * PI) * s->bright_c;
+    for (;;) { /* raise the bar until the brightest fit (a bounded direct sum) */
+        int count = 0;
+        for (size_t b = 0; b < blocks; b++) {
+            const float *P = s->rec + (b * s->nf + F_P) * BT;
+            for (int t = 0; t < BT; t++)
+                count += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t] > thr;
+        }
+        if (count <= s->bright_cap * BT) break;
+        thr *= 2.0;
+    }
+    memset(s->bright_rec, 0, (size_t)s->bright_cap * NFC * BT * sizeof(float));
+    int k = 0;
+    for (size_t b = 0; b < blocks; b++) {
+        float *rec = s->rec + b * s->nf * BT;
+        for (int t = 0; t < BT; t++) {
+            const float *P = rec + F_P * BT;
+            int is_bright = LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t] > thr;
+            for (int c = 0; c < 3; c++) rec[(F_PD + c) * BT + t] = is_bright ? 0.0f : P[c * BT + t];
+            if (!is_bright) continue;
+            float *dst = s->bright_rec + (size_t)(k / BT) * NFC * BT;
+            for (int f = 0; f < NFC; f++) dst[f * BT + k % BT] = rec[f * BT + t];
+            k++;
+        }
+    }
+    s->nbright = (k + BT - 1) / BT;
+    gathered_cones(s->bright_rec, s->bright_block, k, 1.5 / s->M);
+}
+
+/* The cones of `count` texels gathered in blocks (recs): around the mean of each block's
+ * texel directions, out to the farthest one plus tr (a texel's half diagonal). */
+static void gathered_cones(const float *recs, float *blocks, int count, double tr)
+{
+    int k = count;
+    for (int b = 0; b < (count + BT - 1) / BT; b++) {
+        const float *rec = recs + (size_t)b * NFC * BT;
+        int n = k - b * BT < BT ? k - b * BT : BT;
+        double d[BT][3], c[3] = {0, 0, 0};
+        for (int t = 0; t < n; t++) {
+            double len = 0;
+            for (int i = 0; i < 3; i++) d[t][i] = rec[(F_MX + i) * BT + t], len += d[t][i] * d[t][i];
+            len = sqrt(len);
+            for (int i = 0; i < 3; i++) d[t][i] /= len, c[i] += d[t][i];
+        }
+        double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]), r = 0;
+        for (int i = 0; i < 3; i++) c[i] /= len;
+        for (int t = 0; t < n; t++) {
+            double dd = c[0] * d[t][0] + c[1] * d[t][1] + c[2] * d[t][2];
+            double a = acos(dd > 1 ? 1 : dd < -1 ? -1 : dd);
+            r = a > r ? a : r;
+        }
+        r += tr + 1e-6;
+        float *bc = blocks + (size_t)b * BINFO;
+        for (int i = 0; i < 3; i++) bc[i] = (float)c[i];
+        bc[3] = (float)r, bc[4] = (float)cos(r), bc[5] = (float)sin(r);
+    }
+}
+
+
+/* How far texel t of block b's moment leaf can be from its uniform leaf, per unit of the
+ * normaliser (see plan_bright). */
+static double corr_bound(const srclev *s, size_t b, int t)
+{
+    const float *rec = s->rec + b * s->nf * BT;
+    double P = LUM[0] * rec[F_P * BT + t] + LUM[1] * rec[(F_P + 1) * BT + t] + LUM[2] * rec[(F_P + 2) * BT + t];
+    if (!(P > 0)) return 0;
+    double dm = 0, dc = 0;
+    for (int c = 0; c < 3; c++) {
+        double d = rec[(F_WM + c) * BT + t] - rec[(F_MX + c) * BT + t];
+        dm += d * d;
+    }
+    for (int c = 0; c < 6; c++) {
+        double d = fabs(rec[(F_WC + c) * BT + t] - rec[(F_C + c) * BT + t]);
+        dc = d > dc ? d : dc;
+    }
+    double de = fabs(rec[F_WE * BT + t] - rec[F_E * BT + t]);
+    return P * (s->corr_a1 * sqrt(dm) + s->corr_a2 * de + s->corr_a3 * dc);
+}
+
+
+/* Gathers each texel over the threshold twice (luminance moments with +power, geometric
+ * moments with -power, the power from field pf: F_P, or F_PD for split rings); the number
+ * of blocks. */
+static int gather_corrections(const srclev *s, double thr, int pf, float *recs, float *cones)
+{
+    size_t blocks = block_count(s);
+    int k = 0;
+    for (size_t b = 0; b < blocks; b++) {
+        const float *rec = s->rec + b * s->nf * BT;
+        for (int t = 0; t < BT; t++) {
+            if (!(corr_bound(s, b, t) > thr)) continue;
+            if (rec[pf * BT + t] == 0 && rec[(pf + 1) * BT + t] == 0 && rec[(pf + 2) * BT + t] == 0) continue;
+            for (int pass = 0; pass < 2; pass++, k++) {
+                float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
+                for (int f = 0; f < NFC; f++) dst[f * BT] = rec[f * BT + t];
+                for (int c = 0; c < 3; c++) dst[(F_P + c) * BT] = (pass ? -1.0f : 1.0f) * rec[(pf + c) * BT + t];
+                if (pass == 1) /* the uniform texel: its geometric moments */
+                    for (int f = 0; f < 10; f++) dst[(F_WM + f) * BT] = rec[(F_MX + f) * BT + t];
+            }
+        }
+    }
+    for (int i = k; i < (k + BT - 1) / BT * BT; i++) { /* the rest of the last block: nothing */
+        float *dst = recs + (size_t)(i / BT) * NFC * BT + i % BT;
+        for (int f = 0; f < NFC; f++) dst[f * BT] = 0.0f;
+        dst[F_WE * BT] = 0.5f;
+    }
+    gathered_cones(recs, cones, k, 1.5 / s->M);
+    return (k + BT - 1) / BT;
+}
+
+/* Picks the texels of source level l whose moment leaves differ most from uniform texels
+ * (bound: luminance power times the moments' offsets, see CORR_TAU) and gathers each twice:
+ * luminance moments with +P, geometric moments with -P. */
+static void select_corrections(ibl_specular_plan *p, int l)
+{
+    srclev *s = &p->src[l];
+    size_t blocks = block_count(s), n = blocks * BT;
+    (void)n;
+    double total = 0;
+    for (size_t b = 0; b < blocks; b++) {
+        const float *P = s->rec + (b * s->nf + F_P) * BT;
+        for (int t = 0; t < BT; t++) total += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
+    }
+    double thr = CORR_TAU * total / (4.0 * PI);
+    int cap = s->corr_cap * BT / 2;
+    for (;;) {
+        int count = 0;
+        for (size_t b = 0; b < blocks; b++)
+            for (int t = 0; t < BT; t++) count += corr_bound(s, b, t) > thr;
+        if (count <= cap) break;
+        thr *= 2.0;
+    }
+    s->ncorr = gather_corrections(s, thr, F_P, s->corr_rec, s->corr_block);
+    s->ncorrd = gather_corrections(s, thr, F_PD, s->corrd_rec, s->corrd_block);
 }
 
 /* ---- run: the radiance pyramid ---- */
@@ -551,7 +938,6 @@ typedef struct pyr_job {
     int level;
 } pyr_job;
 
-static const double LUM[3] = {0.2126, 0.7152, 0.0722};
 
 static void level0_task(void *arg, int index)
 {
@@ -630,6 +1016,7 @@ typedef struct sum_args {
     const piece *pc;
     const cand *cands;
     int ncand;
+    int dim; /* a split ring's grid: the power of the texels that are not bright */
 } sum_args;
 
 /* psi_out - psi_in of the piece at u (the partition of unity alone) */
@@ -686,7 +1073,7 @@ static void sum_blocks_generic(const sum_args *sa, const float R[3], const float
         const float *rec = candidate_record(sa, ci, R);
         if (!rec) continue;
         const float *m = rec + base * BT, *e = m + 3 * BT, *c = m + 4 * BT;
-        const float *om = rec + F_OM * BT, *L = rec + (sa->mode == EVAL_NUMC ? F_P : F_L) * BT;
+        const float *om = rec + F_OM * BT, *L = rec + (sa->mode == EVAL_NUMC ? (sa->dim ? F_PD : F_P) : F_L) * BT;
         for (int t = 0; t < BT; t++) {
             float dx = R[0] - m[t], dy = R[1] - m[BT + t], dz = R[2] - m[2 * BT + t];
             float u = 0.5f * (dx * dx + dy * dy + dz * dz) + e[t];
@@ -708,6 +1095,7 @@ static void sum_blocks_generic(const sum_args *sa, const float R[3], const float
 #include <immintrin.h>
 
 #define AVX2 __attribute__((target("avx2,fma")))
+#define AVX2_INLINE __attribute__((target("avx2,fma"), always_inline))
 
 typedef struct avx2_consts {
     __m256 half, zero, one, two, c4, c6, cm15, c10, c30, c60;
@@ -742,7 +1130,7 @@ AVX2 static void avx2_setup(const piece *pc, avx2_consts *k)
 
 /* ln x for x in (0, 1]: x = m 2^e with m in [sqrt(1/2), sqrt(2)), ln m = 2 atanh(r),
  * r = (m - 1) / (m + 1), |r| <= 0.172, its odd series to r^9 (error < 1e-9) */
-AVX2 static inline __m256 avx2_log(__m256 x)
+AVX2_INLINE static inline __m256 avx2_log(__m256 x)
 {
     __m256i bits = _mm256_castps_si256(x);
     __m256i e = _mm256_sub_epi32(_mm256_srli_epi32(bits, 23), _mm256_set1_epi32(127));
@@ -763,7 +1151,7 @@ AVX2 static inline __m256 avx2_log(__m256 x)
 
 /* e^y for y <= 0: 2^(y log2 e) = 2^k 2^f, f in [-1/2, 1/2] by a degree-6 Taylor polynomial of
  * e^(f ln 2) (relative error < 3e-8); 0 below 2^-126 */
-AVX2 static inline __m256 avx2_exp(__m256 y)
+AVX2_INLINE static inline __m256 avx2_exp(__m256 y)
 {
     __m256 t = _mm256_mul_ps(y, _mm256_set1_ps(1.44269504088896f));
     t = _mm256_max_ps(t, _mm256_set1_ps(-126.0f));
@@ -783,7 +1171,7 @@ AVX2 static inline __m256 avx2_exp(__m256 y)
 
 /* psi = 1 - S(s), s = clamp(u sa - sb, 0, 1), S the quintic smootherstep; v1, v2 are
  * -psi' and -psi'' */
-AVX2 static inline void avx2_psi(const avx2_consts *k, __m256 u, __m256 sa, __m256 sb, __m256 sk,
+AVX2_INLINE static inline void avx2_psi(const avx2_consts *k, __m256 u, __m256 sa, __m256 sb, __m256 sk,
                                  __m256 *v0, __m256 *v1, __m256 *v2)
 {
     __m256 s = _mm256_min_ps(_mm256_max_ps(_mm256_fmsub_ps(u, sa, sb), k->zero), k->one);
@@ -798,7 +1186,7 @@ AVX2 static inline void avx2_psi(const avx2_consts *k, __m256 u, __m256 sa, __m2
 }
 
 /* g + g'' q / 2 of the GGX piece at u, in closed form */
-AVX2 static inline __m256 avx2_lobe(const avx2_consts *k, int ggx, __m256 u, __m256 q)
+AVX2_INLINE static inline __m256 avx2_lobe(const avx2_consts *k, int ggx, __m256 u, __m256 q)
 {
     __m256 xraw = _mm256_sub_ps(k->one, u), x = _mm256_max_ps(xraw, k->zero);
     __m256 front = _mm256_cmp_ps(u, k->one, _CMP_LT_OQ);
@@ -876,7 +1264,7 @@ AVX2 static void sum_blocks_avx2(const sum_args *sa, const float R[3], const flo
     const __m256 q0 = _mm256_set1_ps(RR[0]), q1 = _mm256_set1_ps(RR[1]), q2 = _mm256_set1_ps(RR[2]);
     const __m256 q3 = _mm256_set1_ps(RR[3]), q4 = _mm256_set1_ps(RR[4]), q5 = _mm256_set1_ps(RR[5]);
     int base = sa->mode == EVAL_NUMC ? F_WM : F_MX;
-    int lfield = sa->mode == EVAL_NUMC ? F_P : F_L;
+    int lfield = sa->mode == EVAL_NUMC ? (sa->dim ? F_PD : F_P) : F_L;
     int ggx = sa->pc->ggx;
     __m256 ar = k.zero, ag = k.zero, ab = k.zero, aw = k.zero;
     for (int ci = 0; ci < sa->ncand; ci++) {
@@ -909,12 +1297,75 @@ AVX2 static void sum_blocks_avx2(const sum_args *sa, const float R[3], const flo
     out[0] += avx2_hsum(ar), out[1] += avx2_hsum(ag), out[2] += avx2_hsum(ab), out[3] += avx2_hsum(aw);
 }
 
+
+/* The weights of `len` consecutive padded cells (geometry planes `plane` apart) for R. */
+AVX2 static void avx2_cell_weights(const piece *pc, const float R[3], const float RR[6], const float *g,
+                                   size_t plane, int len, float *out)
+{
+    avx2_consts k;
+    avx2_setup(pc, &k);
+    const __m256 r0 = _mm256_set1_ps(R[0]), r1 = _mm256_set1_ps(R[1]), r2 = _mm256_set1_ps(R[2]);
+    __m256 qk[6];
+    for (int i = 0; i < 6; i++) qk[i] = _mm256_set1_ps(RR[i]);
+    for (int i = 0; i < len; i += 8) {
+        __m256 dx = _mm256_sub_ps(r0, _mm256_loadu_ps(g + i));
+        __m256 dy = _mm256_sub_ps(r1, _mm256_loadu_ps(g + plane + i));
+        __m256 dz = _mm256_sub_ps(r2, _mm256_loadu_ps(g + 2 * plane + i));
+        __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
+        __m256 u = _mm256_fmadd_ps(k.half, d2, _mm256_loadu_ps(g + F_E * plane + i));
+        __m256 q = _mm256_mul_ps(qk[0], _mm256_loadu_ps(g + F_C * plane + i));
+        for (int c = 1; c < 6; c++) q = _mm256_fmadd_ps(qk[c], _mm256_loadu_ps(g + (F_C + c) * plane + i), q);
+        __m256 w = avx2_lobe(&k, pc->ggx, u, q);
+        _mm256_storeu_ps(out + i, _mm256_mul_ps(w, _mm256_loadu_ps(g + F_OM * plane + i)));
+    }
+}
+
+/* The core's product for one image of a base texel (see core_mac_generic). */
+AVX2 static void avx2_core_mac(const struct core *c, const float *w, const int32_t *rows, int nrows,
+                               const float *planes, int fx, int fy, double out[3])
+{
+    size_t plane = (size_t)c->P * c->P;
+    __m256 ar = _mm256_setzero_ps(), ag = ar, ab = ar;
+    const __m256i rev = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
+    for (int r = 0; r < nrows; r++) {
+        const int32_t *row = rows + 3 * r;
+        int Y = fy ? c->S - 1 - row[0] : row[0];
+        const float *base = planes + (size_t)(Y + c->O) * c->P + c->O;
+        if (!fx) {
+            const float *q = base + row[1];
+            for (int i = 0; i < row[2]; i += 8) {
+                __m256 wv = _mm256_loadu_ps(w + i);
+                ar = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + i), ar);
+                ag = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + plane + i), ag);
+                ab = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + 2 * plane + i), ab);
+            }
+        } else {
+            /* cells X.. of the base row are columns S-1-X.. of the flipped face: reversed */
+            const float *q = base + (c->S - 1 - row[1]) - 7;
+            for (int i = 0; i < row[2]; i += 8) {
+                __m256 wv = _mm256_permutevar8x32_ps(_mm256_loadu_ps(w + i), rev);
+                ar = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q - i), ar);
+                ag = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + plane - i), ag);
+                ab = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + 2 * plane - i), ab);
+            }
+        }
+        w += row[2];
+    }
+    out[0] = avx2_hsum(ar), out[1] = avx2_hsum(ag), out[2] = avx2_hsum(ab);
+}
+
 static int cpu_has_avx2(void)
 {
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 }
 #else
 #define sum_blocks_avx2 sum_blocks_generic
+#define avx2_core_mac core_mac_generic
+static void avx2_cell_weights(const piece *pc, const float R[3], const float RR[6], const float *g,
+                              size_t plane, int len, float *out)
+{
+    (void)pc, (void)R, (void)RR, (void)g, (void)plane, (void)len, (void)out;
+}
 static int cpu_has_avx2(void) { return 0; }
 #endif
 
@@ -977,6 +1428,29 @@ static void sum_candidates(const sum_args *sa, tile_pts *tp)
     }
 }
 
+typedef struct reach_test {
+    const double *axis;     /* the tile's axis                                             */
+    double T, cT, sT;       /* the tile's reach (the piece's end + the tile's radius)       */
+    double hole, cH, sH;    /* the piece's hole seen from the tile (its start - the radius) */
+    double th_out, th_in, cO, sO, cI, sI;
+} reach_test;
+
+/* Appends block b (cone info in `blocks`) to the candidates if it can matter for the tile;
+ * 1 when the list is full. */
+static int add_candidate(sum_args *sa, const reach_test *t, const float *blocks, uint32_t b)
+{
+    const float *bc = blocks + (size_t)b * BINFO;
+    double c = dot3(t->axis, bc), r = bc[3], cr = bc[4], sr = bc[5];
+    /* angle(axis, centre) > T + r: out of reach; < hole - r: inside the hole */
+    if (t->T + r < PI && c < t->cT * cr - t->sT * sr - 1e-7) return 0;
+    if (t->hole - r > 0 && c > t->cH * cr + t->sH * sr + 1e-7) return 0;
+    cand *cd = (cand *)&sa->cands[sa->ncand++];
+    cd->block = b;
+    cd->cos_out = t->th_out + r >= PI ? -2.0f : (float)(t->cO * cr - t->sO * sr) - 1e-6f;
+    cd->cos_in = t->th_in - r <= 0 ? 2.0f : (float)(t->cI * cr + t->sI * sr) + 1e-6f;
+    return sa->ncand == CAND;
+}
+
 static void grid_task(void *arg, int index)
 {
     const grid_job *job = arg;
@@ -1027,16 +1501,21 @@ static void grid_task(void *arg, int index)
     int avx2 = cpu_has_avx2() && !p->portable;
     for (int pi = 0; pi < lv->npieces; pi++) {
         const piece *pc = &lv->pieces[pi];
-        if (pc->grid != g) continue;
         const srclev *s = &p->src[pc->src];
+        int main_sum = pc->grid == g && !pc->core;
+        /* a split ring's bright texels are summed at the output texels (the direct grid), and
+         * so are the corrections of a precomputed core over a coarse level */
+        int bright = pc->split && gr->direct && job->mode != EVAL_DEN && s->nbright > 0;
+        int corr = pc->core && pc->grid == g && pc->core->level > 0 && job->mode != EVAL_DEN &&
+                   (pc->split ? s->ncorrd : s->ncorr) > 0;
+        if (!main_sum && !bright && !corr) continue;
         sum_args sa = {job->mode == EVAL_DEN ? EVAL_DEN : pc->src == 0 ? EVAL_NUM0 : EVAL_NUMC,
-                       avx2, s, pc, cands, 0};
+                       avx2, s, pc, cands, 0, pc->split && !gr->direct};
         double T = pc->th_out + rho;
-        /* cos / sin of the tile's reach (th_out + rho) and of its hole (th_in - rho) */
-        double cT = cos(T), sT = sin(T), hole = pc->th_in - rho;
-        double cH = cos(hole), sH = sin(hole);
-        double cO = cos(pc->th_out), sO = sin(pc->th_out), cI = cos(pc->th_in), sI = sin(pc->th_in);
-        for (int f = 0; f < 6; f++) {
+        reach_test reach = {axis, T, cos(T), sin(T), pc->th_in - rho, cos(pc->th_in - rho),
+                            sin(pc->th_in - rho), pc->th_out, pc->th_in, cos(pc->th_out),
+                            sin(pc->th_out), cos(pc->th_in), sin(pc->th_in)};
+        for (int f = 0; main_sum && f < 6; f++) {
             const float(*B)[3] = p->face_basis[f];
             double u0, u1, v0, v1;
             if (T >= 0.5 * PI - 1e-9) {
@@ -1053,22 +1532,27 @@ static void grid_task(void *arg, int index)
             for (int by = y0 / BH; by <= y1 / BH; by++)
                 for (int bx = x0 / BW; bx <= x1 / BW; bx++) {
                     uint32_t b = (uint32_t)(((size_t)f * s->nby + by) * s->nbx + bx);
-                    const float *bc = s->block + (size_t)b * BINFO;
-                    double c = dot3(axis, bc), r = bc[3], cr = bc[4], sr = bc[5];
-                    /* angle(axis, centre) > T + r: out of reach; < hole - r: inside the hole */
-                    if (T + r < PI && c < cT * cr - sT * sr - 1e-7) continue;
-                    if (hole - r > 0 && c > cH * cr + sH * sr + 1e-7) continue;
-                    cand *cd = &cands[sa.ncand++];
-                    cd->block = b;
-                    cd->cos_out = pc->th_out + r >= PI ? -2.0f : (float)(cO * cr - sO * sr) - 1e-6f;
-                    cd->cos_in = pc->th_in - r <= 0 ? 2.0f : (float)(cI * cr + sI * sr) + 1e-6f;
-                    if (sa.ncand == CAND) {
+                    if (add_candidate(&sa, &reach, s->block, b)) {
                         sum_candidates(&sa, &tp);
                         sa.ncand = 0;
                     }
                 }
         }
         if (sa.ncand) sum_candidates(&sa, &tp);
+        if (bright || corr) {
+            srclev bs = *s;
+            bs.rec = bright ? s->bright_rec : pc->split ? s->corrd_rec : s->corr_rec;
+            bs.block = bright ? s->bright_block : pc->split ? s->corrd_block : s->corr_block;
+            bs.nf = NFC;
+            int nblocks = bright ? s->nbright : pc->split ? s->ncorrd : s->ncorr;
+            sa.s = &bs, sa.dim = 0, sa.ncand = 0;
+            for (int k = 0; k < nblocks; k++)
+                if (add_candidate(&sa, &reach, bs.block, (uint32_t)k)) {
+                    sum_candidates(&sa, &tp);
+                    sa.ncand = 0;
+                }
+            if (sa.ncand) sum_candidates(&sa, &tp);
+        }
     }
     for (int k = 0; k < tp.count; k++) {
         float *o = gr->acc + (((size_t)face * n + tp.y[k]) * n + tp.x[k]) * 4;
@@ -1077,6 +1561,413 @@ static void grid_task(void *arg, int index)
         } else {
             for (int c = 0; c < 3; c++) o[c] = (float)tp.acc[k][c];
         }
+    }
+}
+
+typedef struct core_job {
+    ibl_specular_plan *p;
+    struct core *c;
+    const piece *pc;
+    const ibl__lobe *lobe;
+    const float *geo;    /* CORE_GEO x P P, face 0 */
+    int32_t *tmp_rows;   /* nb nb x (2 W + 1) x 3 */
+    int *tmp_count;      /* nb nb: rows found (-1: the border is too narrow) */
+    double cos_reach;
+    int avx2;
+    const ibl_cubemap *src; /* run */
+    float *acc;             /* run: the direct grid */
+} core_job;
+
+static void core_map_task(void *arg, int f)
+{
+    core_job *j = arg;
+    struct core *c = j->c;
+    for (int Y = -c->W; Y < c->S + c->W; Y++)
+        for (int X = -c->W; X < c->S + c->W; X++)
+            c->map[((size_t)f * c->P + Y + c->O) * c->P + X + c->O] = core_cell_texel(j->p, c->S, f, X, Y);
+}
+
+/* The direction of base texel (a, b) of face 0 of the core's grid. */
+static void core_direction(const core_job *j, int a, int b, double R[3])
+{
+    const struct core *c = j->c;
+    if (c->direct) {
+        ibl__output_direction(&j->p->desc, j->lobe, 0, c->n, a, b, R);
+        return;
+    }
+    ibl_cube_direction_d(0, (a + 0.5) / c->n, (b + 0.5) / c->n, R);
+    double len = sqrt(R[0] * R[0] + R[1] * R[1] + R[2] * R[2]);
+    for (int i = 0; i < 3; i++) R[i] /= len;
+}
+
+/* Whether padded cell i is within reach of R: 1 yes, 0 no, -1 no texel there. */
+static int core_in_reach(const core_job *j, const double R[3], size_t i)
+{
+    size_t plane = (size_t)j->c->P * j->c->P;
+    const float *g = j->geo;
+    if (!(g[F_OM * plane + i] > 0)) return -1;
+    double d = R[0] * g[i] + R[1] * g[plane + i] + R[2] * g[2 * plane + i];
+    return d >= j->cos_reach * g[GEO_FIELDS * plane + i];
+}
+
+/* The cells of row Y within reach of R, scanning out from column `start` (the set is an
+ * interval: a cap seen on the unfolded faces; empty corner cells are stepped over); the whole
+ * row when `start` itself is out of reach. */
+static int core_scan_row(const core_job *j, const double R[3], int Y, int start, int lo, int hi,
+                         int *first, int *last)
+{
+    const struct core *c = j->c;
+    size_t row = (size_t)(Y + c->O) * c->P + c->O;
+    *first = INT32_MAX, *last = INT32_MIN;
+    if (core_in_reach(j, R, row + start) != 1) {
+        for (int X = lo; X <= hi; X++)
+            if (core_in_reach(j, R, row + X) == 1) {
+                if (X < *first) *first = X;
+                *last = X;
+            }
+        return *first <= *last;
+    }
+    *first = *last = start;
+    for (int X = start - 1; X >= lo; X--) {
+        int r = core_in_reach(j, R, row + X);
+        if (r == 0) break;
+        if (r == 1) *first = X;
+    }
+    for (int X = start + 1; X <= hi; X++) {
+        int r = core_in_reach(j, R, row + X);
+        if (r == 0) break;
+        if (r == 1) *last = X;
+    }
+    return 1;
+}
+
+/* The rows of the window around base texel `index` that hold cells within reach. */
+static void core_rows_task(void *arg, int index)
+{
+    core_job *j = arg;
+    const struct core *c = j->c;
+    int a = index % c->nb, b = index / c->nb, S = c->S, W = c->W;
+    double R[3];
+    core_direction(j, a, b, R);
+    int XC = (int)floor((a + 0.5) * S / c->n), YC = (int)floor((b + 0.5) * S / c->n);
+    int lo = XC - W > -W ? XC - W : -W, hi = XC + W < S + W - 1 ? XC + W : S + W - 1;
+    int32_t *out = j->tmp_rows + (size_t)index * (2 * W + 1) * 3;
+    int first, last, count = 0;
+    /* rows from YC down, then from YC + 1 up, each scan started at the previous row's middle */
+    for (int dir = -1; dir <= 1; dir += 2) {
+        int start = XC;
+        for (int Y = dir < 0 ? YC : YC + 1; Y >= YC - W && Y <= YC + W; Y += dir) {
+            if (Y < -W || Y >= S + W || !core_scan_row(j, R, Y, start, lo, hi, &first, &last)) break;
+            if (first == lo || last == hi || Y == YC - W || Y == YC + W || Y == -W || Y == S + W - 1) {
+                j->tmp_count[index] = -1; /* within reach at the window's edge: W is too small */
+                return;
+            }
+            int32_t *r = out + 3 * count++;
+            r[0] = Y, r[1] = first, r[2] = (last - first + 8) & ~7;
+            start = (first + last) / 2;
+        }
+        if (dir < 0) /* ascending order: the runs read the rows in order */
+            for (int i = 0, k = count - 1; i < k; i++, k--)
+                for (int f = 0; f < 3; f++) {
+                    int32_t t = out[3 * i + f];
+                    out[3 * i + f] = out[3 * k + f];
+                    out[3 * k + f] = t;
+                }
+    }
+    j->tmp_count[index] = count;
+}
+
+/* The weights of base texel `index` (and their sum), from the padded geometry. */
+static void core_weights_task(void *arg, int index)
+{
+    core_job *j = arg;
+    struct core *c = j->c;
+    int a = index % c->nb, b = index / c->nb, P = c->P, O = c->O;
+    double Rd[3];
+    core_direction(j, a, b, Rd);
+    float R[3] = {(float)Rd[0], (float)Rd[1], (float)Rd[2]};
+    float RR[6] = {R[0] * R[0], R[1] * R[1], R[2] * R[2], 2 * R[0] * R[1], 2 * R[0] * R[2], 2 * R[1] * R[2]};
+    size_t plane = (size_t)P * P;
+    float *w = c->w + c->w0[index];
+    double den = 0;
+    float lanes[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    for (uint32_t r = c->row0[index]; r < c->row0[index + 1]; r++) {
+        const int32_t *row = c->rows + 3 * (size_t)r;
+        const float *g = j->geo + (size_t)(row[0] + O) * P + row[1] + O;
+        if (j->avx2) {
+            avx2_cell_weights(j->pc, R, RR, g, plane, row[2], w);
+        } else {
+            for (int i = 0; i < row[2]; i++) {
+                float dx = R[0] - g[i], dy = R[1] - g[plane + i], dz = R[2] - g[2 * plane + i];
+                float u = 0.5f * (dx * dx + dy * dy + dz * dz) + g[F_E * plane + i];
+                float q = 0;
+                for (int k = 0; k < 6; k++) q += RR[k] * g[(F_C + k) * plane + i];
+                w[i] = table_weight(j->pc, u, q) * g[F_OM * plane + i];
+            }
+        }
+        for (int i = 0; i < row[2]; i += 8)
+            for (int l = 0; l < 8; l++) lanes[l] += w[i + l];
+        w += row[2];
+    }
+    for (int l = 0; l < 8; l++) den += lanes[l];
+    c->den[index] = den;
+}
+
+/* Visits the distinct output texels that base texel (a, b) stands for: face, flips, (x, y). */
+#define CORE_IMAGES(c, a, b, BODY)                                                            \
+    for (int face_ = 0; face_ < 6; face_++)                                                   \
+        for (int fy_ = 0; fy_ < 2; fy_++)                                                     \
+            for (int fx_ = 0; fx_ < 2; fx_++) {                                               \
+                int x_ = fx_ ? (c)->n - 1 - (a) : (a), y_ = fy_ ? (c)->n - 1 - (b) : (b);      \
+                if ((fx_ && x_ == (a)) || (fy_ && y_ == (b))) continue;                       \
+                BODY                                                                          \
+            }
+
+static void core_add_normalisers(const struct core *c, float *acc)
+{
+    for (int b = 0; b < c->nb; b++)
+        for (int a = 0; a < c->nb; a++) {
+            double den = c->den[b * c->nb + a];
+            CORE_IMAGES(c, a, b, {
+                float *o = acc + (((size_t)face_ * c->n + y_) * c->n + x_) * 4;
+                o[3] = (float)(o[3] + den);
+            })
+        }
+}
+
+static void core_pad_task(void *arg, int index)
+{
+    core_job *j = arg;
+    const struct core *c = j->c;
+    int f = index / c->P, row = index % c->P;
+    size_t plane = (size_t)c->P * c->P, S2 = (size_t)c->S * c->S;
+    const int32_t *map = c->map + (size_t)index * c->P;
+    float *out = c->pad + (size_t)f * 3 * plane + (size_t)row * c->P;
+    const float *face[6];
+    for (int g = 0; g < 6; g++) face[g] = ibl_cubemap_face(j->src, 0, g);
+    const srclev *s = &j->p->src[c->level];
+    for (int X = 0; X < c->P; X++) {
+        int32_t t = map[X];
+        if (t < 0) {
+            out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
+            continue;
+        }
+        if (c->level > 0) { /* a coarse texel as uniform: its power over its solid angle */
+            int g = (int)(t / S2), y = (int)(t % S2) / c->S, x = (int)(t % S2) % c->S;
+            const float *rec = s->rec + rec_index(s, g, x, y, 0);
+            float om = rec[F_OM * BT];
+            int pf = c->dim ? F_PD : F_P;
+            for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = om > 0 ? rec[(pf + ch) * BT] / om : 0.0f;
+            continue;
+        }
+        /* t = g S^2 + offset: the face by comparison (no division per texel) */
+        int g = 0;
+        while ((size_t)t >= (size_t)(g + 1) * S2) g++;
+        const float *v = face[g] + ((size_t)t - (size_t)g * S2) * 4;
+        out[X] = v[0], out[plane + X] = v[1], out[2 * plane + X] = v[2];
+    }
+}
+
+/* sum over the rows of weights x source texels of padded face `planes` (r, g, b), the source
+ * flipped by fx / fy */
+static void core_mac_generic(const struct core *c, const float *w, const int32_t *rows, int nrows,
+                             const float *planes, int fx, int fy, double out[3])
+{
+    size_t plane = (size_t)c->P * c->P;
+    float acc[3][8] = {{0}};
+    for (int r = 0; r < nrows; r++) {
+        const int32_t *row = rows + 3 * r;
+        int Y = fy ? c->S - 1 - row[0] : row[0];
+        const float *base = planes + (size_t)(Y + c->O) * c->P + c->O;
+        for (int i = 0; i < row[2]; i += 8)
+            for (int l = 0; l < 8; l++) {
+                int X = fx ? c->S - 1 - (row[1] + i + l) : row[1] + i + l;
+                for (int ch = 0; ch < 3; ch++) acc[ch][l] += w[i + l] * base[ch * plane + X];
+            }
+        w += row[2];
+    }
+    for (int ch = 0; ch < 3; ch++) {
+        double s = 0;
+        for (int l = 0; l < 8; l++) s += acc[ch][l];
+        out[ch] = s;
+    }
+}
+
+static void core_mac_task(void *arg, int b)
+{
+    core_job *j = arg;
+    const struct core *c = j->c;
+    size_t plane = (size_t)c->P * c->P;
+    for (int a = 0; a < c->nb; a++) {
+        int index = b * c->nb + a;
+        const float *w = c->w + c->w0[index];
+        const int32_t *rows = c->rows + 3 * (size_t)c->row0[index];
+        int nrows = (int)(c->row0[index + 1] - c->row0[index]);
+        CORE_IMAGES(c, a, b, {
+            double s[3];
+            const float *planes = c->pad + (size_t)face_ * 3 * plane;
+            if (j->avx2) avx2_core_mac(c, w, rows, nrows, planes, fx_, fy_, s);
+            else core_mac_generic(c, w, rows, nrows, planes, fx_, fy_, s);
+            float *o = j->acc + (((size_t)face_ * c->n + y_) * c->n + x_) * 4;
+            for (int ch = 0; ch < 3; ch++) o[ch] = (float)(o[ch] + s[ch]);
+        })
+    }
+}
+
+
+typedef struct core_geo_job {
+    const ibl_specular_plan *p;
+    const struct core *c;
+    float *geo;
+} core_geo_job;
+
+static void core_geometry_task(void *arg, int row)
+{
+    const core_geo_job *j = arg;
+    const struct core *c = j->c;
+    size_t plane = (size_t)c->P * c->P, S2 = (size_t)c->S * c->S;
+    const srclev *s = &j->p->src[c->level];
+    float *geo = j->geo;
+    for (size_t i = (size_t)row * c->P; i < (size_t)(row + 1) * c->P; i++) {
+        int32_t t = c->map[i];
+        if (t < 0) {
+            for (int f = 0; f < CORE_GEO; f++) geo[f * plane + i] = 0.0f;
+            geo[F_E * plane + i] = 4.0f; /* u > 2: beyond every lobe */
+            geo[GEO_FIELDS * plane + i] = 1.0f;
+            continue;
+        }
+        int f = (int)(t / S2), y = (int)(t % S2) / c->S, x = (int)(t % S2) % c->S;
+        const float *rec = s->rec + rec_index(s, f, x, y, 0);
+        for (int k = 0; k < GEO_FIELDS; k++) geo[k * plane + i] = rec[k * BT];
+        double m0 = geo[i], m1 = geo[plane + i], m2 = geo[2 * plane + i];
+        geo[GEO_FIELDS * plane + i] = (float)sqrt(m0 * m0 + m1 * m1 + m2 * m2);
+    }
+}
+
+/* The padded geometry of face 0 (CORE_GEO planes of P P; cells without a texel: no weight). */
+static float *core_geometry(ibl_specular_plan *p, const struct core *c)
+{
+    float *geo = ibl_alloc(p->ctx, CORE_GEO * (size_t)c->P * c->P * sizeof(float));
+    if (!geo) return NULL;
+    core_geo_job job = {p, c, geo};
+    ibl_parallel_for(p->ctx, c->P, core_geometry_task, &job);
+    return geo;
+}
+
+static ibl_status core_build_weights(ibl_specular_plan *p, int level)
+{
+    level_plan *lv = &p->lv[level];
+    for (int k = 0; k < lv->npieces; k++) {
+        struct core *c = lv->pieces[k].core;
+        if (!c) continue;
+        float *geo = core_geometry(p, c);
+        if (!geo) return ibl_context_status(p->ctx);
+        core_job job = {p, c, &lv->pieces[k], &lv->lobe, geo, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
+                        NULL, NULL};
+        ibl_parallel_for(p->ctx, c->nb * c->nb, core_weights_task, &job);
+        ibl_free(p->ctx, geo);
+    }
+    return IBL_OK;
+}
+
+/* Sets up the precomputed core of a level when its core sums level 0 (not for lobes split into
+ * sub-texels, nor for edge fixups that bend the directions); leaves the level as it is when
+ * the border would be too deep or the weights too many. */
+static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
+{
+    level_plan *lv = &p->lv[level];
+    piece *pc = &lv->pieces[k];
+    grid *gr = &lv->grids[pc->grid];
+    if ((pc->src == 0 && p->K != 1) || !grid_symmetric(p, gr)) return IBL_OK;
+    int S = p->src[pc->src].M;
+    /* reach: the core's end plus a texel's angular radius; a cell subtends at least 1 / (1.5 S)
+     * radians (radially, at a face corner), so W cells of border hold everything in reach (the
+     * border is at most a whole neighbouring face) */
+    double reach = pc->th_out + 2.0 / S;
+    if (reach > 1.2) return IBL_OK;
+    int W = (int)ceil(1.5 * S * reach) + 2;
+    if (W > S) W = S;
+    ibl_context *ctx = p->ctx;
+    struct core *c = ibl_calloc(ctx, 1, sizeof *c);
+    if (!c) return ibl_context_status(ctx);
+    c->level = pc->src;
+    c->direct = gr->direct;
+    c->dim = pc->split;
+    c->S = S, c->W = W, c->O = W + 8, c->P = S + 2 * W + 16, c->n = gr->n, c->nb = (gr->n + 1) / 2;
+    size_t plane = (size_t)c->P * c->P, nbase = (size_t)c->nb * c->nb;
+    ibl_status st = IBL_OK;
+    float *geo = NULL;
+    int32_t *tmp_rows = NULL;
+    int *tmp_count = NULL;
+    c->map = ibl_alloc(ctx, 6 * plane * sizeof(int32_t));
+    c->row0 = ibl_alloc(ctx, (nbase + 1) * sizeof(uint32_t));
+    c->w0 = ibl_alloc(ctx, (nbase + 1) * sizeof(size_t));
+    c->den = ibl_alloc(ctx, nbase * sizeof(double));
+    c->pad = ibl_alloc(ctx, 6 * 3 * plane * sizeof(float));
+    tmp_rows = ibl_alloc(ctx, nbase * (2 * W + 1) * 3 * sizeof(int32_t));
+    tmp_count = ibl_alloc(ctx, nbase * sizeof(int));
+    if (!c->map || !c->row0 || !c->w0 || !c->den || !c->pad || !tmp_rows || !tmp_count) goto fail;
+    for (size_t i = 0; i < 6 * plane; i++) c->map[i] = -1;
+    core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), 0, NULL, NULL};
+    ibl_parallel_for(ctx, 6, core_map_task, &job);
+    job.geo = geo = core_geometry(p, c);
+    if (!geo) goto fail;
+    ibl_parallel_for(ctx, (int)nbase, core_rows_task, &job);
+    size_t rows = 0, weights = 0;
+    for (size_t i = 0; i < nbase; i++) {
+        if (tmp_count[i] < 0) goto give_up;
+        c->row0[i] = (uint32_t)rows;
+        c->w0[i] = weights;
+        for (int r = 0; r < tmp_count[i]; r++) weights += (size_t)tmp_rows[(i * (2 * W + 1) + r) * 3 + 2];
+        rows += (size_t)tmp_count[i];
+    }
+    c->row0[nbase] = (uint32_t)rows;
+    c->w0[nbase] = weights;
+    if (weights > ((size_t)1 << 25)) goto give_up; /* 128 MiB of weights: sum by leaves instead */
+    c->rows = ibl_alloc(ctx, (rows ? rows : 1) * 3 * sizeof(int32_t));
+    c->w = ibl_alloc(ctx, (weights ? weights : 1) * sizeof(float));
+    if (!c->rows || !c->w) goto fail;
+    for (size_t i = 0; i < nbase; i++)
+        memcpy(c->rows + 3 * (size_t)c->row0[i], tmp_rows + i * (2 * W + 1) * 3,
+               (size_t)tmp_count[i] * 3 * sizeof(int32_t));
+    ibl_free(ctx, tmp_rows);
+    ibl_free(ctx, tmp_count);
+    job.avx2 = cpu_has_avx2() && !p->portable;
+    ibl_parallel_for(ctx, (int)nbase, core_weights_task, &job);
+    ibl_free(ctx, geo);
+    pc->core = c;
+    return IBL_OK;
+fail:
+    st = ibl_context_status(ctx);
+give_up:
+    ibl_free(ctx, geo);
+    ibl_free(ctx, tmp_rows);
+    ibl_free(ctx, tmp_count);
+    core_destroy(ctx, c);
+    return st;
+}
+
+/* Precomputes every piece of the level that can be (see core_create_piece). */
+static ibl_status core_create(ibl_specular_plan *p, int level)
+{
+    for (int k = 0; k < p->lv[level].npieces; k++) {
+        ibl_status st = core_create_piece(p, level, k);
+        if (st != IBL_OK) return st;
+    }
+    return IBL_OK;
+}
+
+/* Adds the level's precomputed pieces to the numerators of their grids. */
+static void core_run(ibl_specular_plan *p, int level, const ibl_cubemap *src)
+{
+    level_plan *lv = &p->lv[level];
+    for (int k = 0; k < lv->npieces; k++) {
+        struct core *c = lv->pieces[k].core;
+        if (!c) continue;
+        core_job job = {p, c, &lv->pieces[k], &lv->lobe, NULL, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
+                        src, lv->grids[lv->pieces[k].grid].acc};
+        ibl_parallel_for(p->ctx, 6 * c->P, core_pad_task, &job);
+        ibl_parallel_for(p->ctx, c->nb, core_mac_task, &job);
     }
 }
 
@@ -1108,6 +1999,8 @@ static void plan_denominators(ibl_specular_plan *p, int level)
         for (int f = 1; f < 6; f++)
             for (size_t i = 3; i < face; i += 4) gr->acc[f * face + i] = gr->acc[i];
     }
+    for (int k = 0; k < lv->npieces; k++)
+        if (lv->pieces[k].core) core_add_normalisers(lv->pieces[k].core, lv->grids[lv->pieces[k].grid].acc);
 }
 
 /* ---- run: combining the grids into the output level ---- */
@@ -1121,6 +2014,8 @@ static void combine_task(void *arg, int index)
     const grid *direct = NULL;
     for (int g = 0; g < lv->ngrids; g++)
         if (lv->grids[g].direct) direct = &lv->grids[g];
+    /* output directions at the texel centres (no edge fixup bends them) */
+    int centred = p->desc.edge_fixup != IBL_EDGE_FIXUP_BENT && p->desc.edge_fixup != IBL_EDGE_FIXUP_WARP;
     for (int x = 0; x < n; x++) {
         double v[4] = {0, 0, 0, 0};
         if (direct) {
@@ -1132,6 +2027,24 @@ static void combine_task(void *arg, int index)
         for (int g = 0; g < lv->ngrids; g++) {
             const grid *gr = &lv->grids[g];
             if (gr->direct) continue;
+            int gn = gr->n;
+            if (centred && n % gn == 0) {
+                /* the texel centre's bilinear footprint on the same face of the grid, when it
+                 * does not cross an edge (else the seamless sampler below) */
+                double gx = (x + 0.5) * gn / n - 0.5, gy = (y + 0.5) * gn / n - 0.5;
+                int ix = (int)floor(gx), iy = (int)floor(gy);
+                if (ix >= 0 && iy >= 0 && ix + 1 < gn && iy + 1 < gn) {
+                    float fx = (float)(gx - ix), fy = (float)(gy - iy);
+                    const float *a = gr->acc + (((size_t)face * gn + iy) * gn + ix) * 4;
+                    const float *b = a + (size_t)gn * 4;
+                    for (int c = 0; c < 4; c++) {
+                        float top = a[c] + fx * (a[4 + c] - a[c]);
+                        float bot = b[c] + fx * (b[4 + c] - b[c]);
+                        v[c] += top + fy * (bot - top);
+                    }
+                    continue;
+                }
+            }
             if (!have_dir) {
                 double d[3];
                 ibl__output_direction(&p->desc, &lv->lobe, face, n, x, y, d);
@@ -1213,6 +2126,8 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
     for (int l = 1; l < p->SL; l++) {
         pyr_job job = {p, src, l};
         ibl_parallel_for(ctx, 6 * p->src[l].M, pyramid_task, &job);
+        if (p->src[l].bright_c > 0) select_bright(p, l);
+        if (p->src[l].corr_cap > 0) select_corrections(p, l);
     }
     p->run_src = src;
     p->run_dst = dst;
@@ -1224,6 +2139,7 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
             p->run_level = l;
             grid_job job = {p, l, EVAL_NUM0};
             ibl_parallel_for(ctx, p->lv[l].tasks, grid_task, &job);
+            core_run(p, l, src);
             ibl_parallel_for(ctx, 6 * ibl_level_size(p->N, l), combine_task, p);
         }
         ibl_status st = ibl_edge_fixup_apply(ctx, p->desc.edge_fixup, dst, l);
