@@ -482,8 +482,8 @@ static void fast_task(void *arg, int band)
     atomic_store(&f->busy[slot], 0);
 }
 
-/* 1: decoded; 0: not a file for this path, or it found something unexpected (nothing is
- * reported: OpenEXR reads the file then); -1: out of memory (recorded in ctx). */
+/* 1: decoded; 0: not a file for this path, it found something unexpected or its buffers
+ * could not be allocated (OpenEXR reads the file then, with its own buffers as before). */
 static int read_fast(ibl_context *ctx, const uint8_t *bytes, size_t size, const exr_shape *sh,
                      const ibl__exr_header *hd, float *rgba)
 {
@@ -492,7 +492,7 @@ static int read_fast(ibl_context *ctx, const uint8_t *bytes, size_t size, const 
         (comp != EXR_NONE && comp != EXR_ZIPS && comp != EXR_ZIP))
         return 0;
     exr_fast *f = ibl_alloc(ctx, sizeof *f);
-    if (!f) return -1;
+    if (!f) return 0;
     memset(f, 0, sizeof *f);
     f->bytes = bytes;
     f->size = size;
@@ -518,14 +518,14 @@ static int read_fast(ibl_context *ctx, const uint8_t *bytes, size_t size, const 
     int rc = ok ? 1 : 0;
     if (ok && (f->type[0] == 1 || f->type[1] == 1 || f->type[2] == 1 || f->type[3] == 1)) {
         table = ibl_alloc(ctx, 65536 * sizeof(float));
-        if (!table) rc = -1;
+        if (!table) rc = 0;
         else
             for (uint32_t i = 0; i < 65536; i++) table[i] = ibl_half_to_float((uint16_t)i);
         f->half_table = table;
     }
     if (rc == 1) {
         f->work = ibl_alloc(ctx, (size_t)f->slot_count * 2 * f->work_bytes);
-        if (!f->work) rc = -1;
+        if (!f->work) rc = 0;
     }
     if (rc == 1) {
         for (int i = 0; i < EXR_MAX_SLOTS; i++) atomic_init(&f->busy[i], 0);
@@ -550,20 +550,12 @@ static int read_pixels(ibl_context *ctx, const uint8_t *bytes, size_t size, cons
     uint64_t lines = sh->tiled ? sh->tile_h : (uint64_t)lines_per_chunk[sh->compression];
     uint64_t chunks = (h + lines - 1) / lines;
     uint64_t per_band = (chunks + EXR_MAX_BANDS - 1) / EXR_MAX_BANDS;
-    int fast = read_fast(ctx, bytes, size, sh, hd, rgba);
-    if (fast == 1) return 0;
-    if (fast < 0) {
-        snprintf(err, err_size, "out of memory");
-        return IBL_ERR_OUT_OF_MEMORY;
-    }
+    if (read_fast(ctx, bytes, size, sh, hd, rgba)) return 0;
     if (hd->layout == IBL__EXR_LUMA_CHROMA || chunks < 2 ||
         w * lines * (sh->pixel_bytes > 16 ? sh->pixel_bytes : 16) > EXR_BAND_BUFFER)
         return ibl__exr_read(reader, rgba, err, err_size);
     exr_bands *b = ibl_alloc(ctx, sizeof *b);
-    if (!b) {
-        snprintf(err, err_size, "out of memory");
-        return IBL_ERR_OUT_OF_MEMORY;
-    }
+    if (!b) return ibl__exr_read(reader, rgba, err, err_size); /* one band, as before */
     b->bytes = bytes;
     b->size = size;
     b->hd = hd;

@@ -148,7 +148,7 @@ static ibl_status read_parallel(ibl_context *ctx, int fd, const char *path, uint
                                 size_t size, size_t *got)
 {
     read_job *j = ibl_alloc(ctx, sizeof *j);
-    if (!j) return ibl__fail_named(ctx, ibl_context_status(ctx), path);
+    if (!j) return read_all(ctx, fd, path, dst, size, got); /* as without threads */
     memset(j, 0, sizeof *j);
     j->fd = fd;
     j->dst = dst;
@@ -372,7 +372,7 @@ static ibl_status sanitize(ibl_context *ctx, float *rgba, size_t count, int clam
     if (count <= 2 * (size_t)SANITIZE_CHUNK || ibl_context_threads(ctx) < 2)
         return ibl_sanitize_pixels(ctx, rgba, count, clamp_infinite, clamp_value, report);
     sanitize_job *j = ibl_alloc(ctx, sizeof *j);
-    if (!j) return ibl_context_status(ctx);
+    if (!j) return ibl_sanitize_pixels(ctx, rgba, count, clamp_infinite, clamp_value, report);
     j->rgba = rgba;
     j->count = count;
     j->chunk = SANITIZE_CHUNK;
