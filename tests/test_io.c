@@ -24,6 +24,19 @@ static float frand(void)
     return (float)((rng_state >> 8) / 16777216.0);
 }
 
+/* The float nearest to v that a half holds exactly (round to nearest, in double: independent
+ * of the library's conversion), for values inside half's normal range. */
+static float ibl_half_to_float_exact(float v)
+{
+    if (v == 0.0f) return 0.0f;
+    int e;
+    frexp((double)v, &e);
+    if (e < -13) e = -13; /* half denormals: a fixed step of 2^-24 */
+    double step = ldexp(1.0, e - 11);
+    double r = nearbyint((double)v / step) * step;
+    return (float)(r > 65504.0 ? 65504.0 : r);
+}
+
 static ibl_image make_image(ibl_context *ctx, int w, int h)
 {
     ibl_image im;
@@ -534,6 +547,115 @@ static void exr_every_compression(void **state)
     /* A file whose only colour is a named layer: that layer is read (float, exact). */
     assert_true(exr_sample_error(ctx, "exr_layer.exr", IBL_FORMAT_RGB32F) == 0.0);
     ibl_context_destroy(ctx);
+}
+
+/* Scanline EXRs without compression or with ZIP / ZIPS are decoded by src/io/exr.c itself,
+ * in bands on several threads: every value OpenEXR's writer stored must come back bit for bit
+ * (float: any finite positive value incl. float denormals; half: values exact in half), with
+ * alpha when written and 1 when not, at 1, 2 and 8 threads. The image's odd size gives a
+ * partial last chunk and, with ZIPS (one line per chunk), bands of several chunks. */
+static void exr_scanline_exact(void **state)
+{
+    (void)state;
+    enum { W = 67, H = 53 };
+    ibl_context *one = test_context(1);
+    ibl_image im;
+    assert_int_equal(ibl_image_alloc(one, W, H, &im), IBL_OK);
+    const ibl_format formats[4] = {IBL_FORMAT_RGBA32F, IBL_FORMAT_RGB32F, IBL_FORMAT_RGBA16F,
+                                   IBL_FORMAT_RGB16F};
+    const ibl_exr_compression comps[3] = {IBL_EXR_NONE, IBL_EXR_ZIPS, IBL_EXR_ZIP};
+    for (int fi = 0; fi < 4; fi++) {
+        int half = formats[fi] == IBL_FORMAT_RGBA16F || formats[fi] == IBL_FORMAT_RGB16F;
+        int alpha = formats[fi] == IBL_FORMAT_RGBA32F || formats[fi] == IBL_FORMAT_RGBA16F;
+        for (size_t i = 0; i < (size_t)W * H * 4; i++) {
+            /* log-uniform magnitudes over the whole range of the format (tiny to huge) */
+            float v = ldexpf(0.5f + 0.5f * frand(), (int)(frand() * (half ? 30 : 250)) - (half ? 14 : 140));
+            if (i % 97 == 0) v = 0.0f;
+            if (half) v = ibl_half_to_float_exact(v);
+            if (i % 4 == 3) v = alpha ? (half ? ibl_half_to_float_exact(frand()) : frand()) : 1.0f;
+            im.pixels[i] = v;
+        }
+        for (int ci = 0; ci < 3; ci++) {
+            ibl_write_desc wd = {0};
+            wd.format = formats[fi];
+            wd.exr_compression = comps[ci];
+            void *bytes;
+            size_t size;
+            ibl_texture view = {0};
+            view.kind = IBL_TEXTURE_2D;
+            view.width = W;
+            view.height = H;
+            view.depth = view.levels = 1;
+            view.data = im.pixels;
+            assert_int_equal(ibl_encode_texture(one, IBL_FILE_EXR, &view, &wd, &bytes, &size), IBL_OK);
+            const int threads[3] = {1, 2, 8};
+            for (int t = 0; t < 3; t++) {
+                ibl_context *ctx = test_context(threads[t]);
+                ibl_texture tex;
+                assert_int_equal(ibl_decode_texture(ctx, bytes, size, "x.exr", NULL, &tex, NULL), IBL_OK);
+                assert_int_equal(tex.width, W);
+                assert_int_equal(tex.height, H);
+                if (memcmp(tex.data, im.pixels, (size_t)W * H * 4 * sizeof(float)) != 0)
+                    fail_msg("format %d compression %d threads %d: pixels differ", fi, ci, threads[t]);
+                ibl_texture_free(ctx, &tex);
+                ibl_context_destroy(ctx);
+            }
+            ibl_free(one, bytes);
+            /* a damaged chunk (the last one's compressed bytes, of a smooth image that zlib
+             * does shrink): the file is refused with OpenEXR's own message, at any thread
+             * count, and nothing is left allocated */
+            if (comps[ci] != IBL_EXR_NONE) {
+                ibl_image smooth;
+                assert_int_equal(ibl_image_alloc(one, W, H, &smooth), IBL_OK);
+                for (size_t i = 0; i < (size_t)W * H * 4; i++) smooth.pixels[i] = (float)(i % 8) * 0.125f;
+                view.data = smooth.pixels;
+                assert_int_equal(ibl_encode_texture(one, IBL_FILE_EXR, &view, &wd, &bytes, &size), IBL_OK);
+                ibl_image_free(one, &smooth);
+                uint8_t *b = bytes;
+                for (size_t k = size - 40; k < size - 8; k++) b[k] ^= 0x5A;
+                for (int t = 0; t < 3; t++) {
+                    ibl_context *ctx = test_context(threads[t]);
+                    ibl_texture tex;
+                    ibl_status st = ibl_decode_texture(ctx, bytes, size, "x.exr", NULL, &tex, NULL);
+                    assert_int_equal(st, IBL_ERR_FORMAT);
+                    assert_true(strncmp(ibl_context_message(ctx), "x.exr: ", 7) == 0);
+                    ibl_context_destroy(ctx);
+                }
+                ibl_free(one, bytes);
+            }
+        }
+    }
+    ibl_image_free(one, &im);
+    ibl_context_destroy(one);
+}
+
+/* Real files through every decoding path (DWAB float, the test HDRIs; the samples of every
+ * compression) give the same pixels at 1, 2 and 8 threads. */
+static void exr_threads_identical(void **state)
+{
+    (void)state;
+    const char *files[] = {"city.exr", "forest_128x64.exr", "exr_zip.exr", "exr_zips.exr",
+                           "exr_piz.exr", "exr_tiled_mip.exr", "exr_layer.exr", "exr_yc.exr"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        ibl_texture ref = {0};
+        const int threads[3] = {1, 2, 8};
+        ibl_context *ctxs[3];
+        for (int t = 0; t < 3; t++) {
+            ctxs[t] = test_context(threads[t]);
+            ibl_texture tex;
+            assert_int_equal(ibl_read_texture(ctxs[t], test_data(files[i]), NULL, &tex, NULL), IBL_OK);
+            if (t == 0) {
+                ref = tex;
+                continue;
+            }
+            size_t n = ibl_texture_floats(tex.kind, tex.width, tex.height, tex.depth, tex.levels);
+            if (memcmp(tex.data, ref.data, n * sizeof(float)) != 0)
+                fail_msg("%s: %d threads differ from 1", files[i], threads[t]);
+            ibl_texture_free(ctxs[t], &tex);
+        }
+        ibl_texture_free(ctxs[0], &ref);
+        for (int t = 0; t < 3; t++) ibl_context_destroy(ctxs[t]);
+    }
 }
 
 /* ---- Radiance ------------------------------------------------------------------------ */
@@ -1138,6 +1260,67 @@ static int count_entries(const char *dir)
     return n;
 }
 
+/* The pixel policy runs in chunks on several threads and large files are read in pieces:
+ * at 1, 2 and 8 threads the same pixels and counts come back, the counts those planted
+ * (the image is over two chunks of 65,536 texels; the file over two pieces of 4 MiB). */
+static void large_inputs_threads(void **state)
+{
+    (void)state;
+    enum { W = 1000, H = 800 };
+    ibl_context *one = test_context(1);
+    ibl_image im = make_image(one, W, H);
+    uint64_t nan = 0, inf = 0, neg = 0;
+    for (size_t t = 0; t < (size_t)W * H; t++) {
+        float *p = im.pixels + t * 4;
+        p[0] = p[1] = p[2] = frand() * 4.0f;
+        p[3] = 1.0f;
+        if (t % 1009 == 5) p[1] = NAN, nan++;
+        else if (t % 1013 == 7) p[2] = (t & 1) ? INFINITY : -INFINITY, inf++;
+        else if (t % 997 == 11) p[0] = -frand() - 0.5f, neg++;
+    }
+    const char *path = test_path("large.pfm");
+    assert_int_equal(ibl_write_image(one, path, &im, NULL), IBL_OK);
+    void *file_ref;
+    size_t file_size;
+    assert_int_equal(ibl_read_file(one, path, &file_ref, &file_size), IBL_OK);
+    assert_true(file_size > 8u << 20);
+    ibl_image ref = {0};
+    const int threads[3] = {1, 2, 8};
+    for (int t = 0; t < 3; t++) {
+        ibl_context *ctx = test_context(threads[t]);
+        void *bytes;
+        size_t size;
+        assert_int_equal(ibl_read_file(ctx, path, &bytes, &size), IBL_OK);
+        assert_int_equal(size, file_size);
+        assert_memory_equal(bytes, file_ref, size);
+        ibl_free(ctx, bytes);
+        ibl_image back;
+        ibl_file_info fi;
+        assert_int_equal(ibl_read_image(ctx, path, NULL, &back, &fi), IBL_ERR_BAD_PIXELS);
+        assert_int_equal(fi.pixels.inf_count, inf);
+        char want[80];
+        snprintf(want, sizeof want, "%llu texels are infinite", (unsigned long long)inf);
+        assert_non_null(strstr(ibl_context_message(ctx), want));
+        ibl_read_desc rd = {1, 0.0f};
+        assert_int_equal(ibl_read_image(ctx, path, &rd, &back, &fi), IBL_OK);
+        assert_int_equal(fi.pixels.nan_count, nan);
+        assert_int_equal(fi.pixels.inf_count, inf);
+        assert_int_equal(fi.pixels.negative_count, neg);
+        assert_int_equal(fi.pixels.texel_count, (uint64_t)W * H);
+        if (t == 0) {
+            ref = back;
+        } else {
+            assert_memory_equal(back.pixels, ref.pixels, (size_t)W * H * 4 * sizeof(float));
+            ibl_image_free(ctx, &back);
+        }
+        ibl_context_destroy(ctx);
+    }
+    ibl_image_free(one, &ref);
+    ibl_free(one, file_ref);
+    ibl_image_free(one, &im);
+    ibl_context_destroy(one);
+}
+
 static void atomic_write(void **state)
 {
     (void)state;
@@ -1278,12 +1461,14 @@ int main(void)
         cmocka_unit_test(file_types),         cmocka_unit_test(pfm_round_trip),
         cmocka_unit_test(pfm_grey_big_endian), cmocka_unit_test(exr_float_round_trip),
         cmocka_unit_test(exr_half_round_trip), cmocka_unit_test(exr_real_dwab),
-        cmocka_unit_test(exr_windows_tiles_grey), cmocka_unit_test(exr_every_compression), cmocka_unit_test(hdr_uffizi),         cmocka_unit_test(hdr_round_trip),
+        cmocka_unit_test(exr_windows_tiles_grey), cmocka_unit_test(exr_every_compression),
+        cmocka_unit_test(exr_scanline_exact), cmocka_unit_test(exr_threads_identical), cmocka_unit_test(hdr_uffizi),         cmocka_unit_test(hdr_round_trip),
         cmocka_unit_test(hdr_orientations),   cmocka_unit_test(png16_round_trip),
         cmocka_unit_test(png8_round_trip),    cmocka_unit_test(png8_exposure_filmic),
         cmocka_unit_test(jpeg_round_trip),    cmocka_unit_test(png_layouts),    cmocka_unit_test(truncated_files),
         cmocka_unit_test(wrong_magic),        cmocka_unit_test(absurd_dimensions),
         cmocka_unit_test(non_finite_pixels),  cmocka_unit_test(atomic_write),
+        cmocka_unit_test(large_inputs_threads),
         cmocka_unit_test(read_file_errors),   cmocka_unit_test(api_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

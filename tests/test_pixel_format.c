@@ -312,6 +312,46 @@ static void rg11b10_reference(void **state)
 
 /* ---- texel helpers ---- */
 
+/* ibl_pack_texels to RGBA16F converts most texels several at a time: every value must still
+ * be the nearest half of the reference, whatever else shares its group (denormal halves,
+ * overflow, Inf and NaN fall back to the one-value path) and at every count and offset. */
+static void half_bulk_packing(void **state)
+{
+    (void)state;
+    for (int i = 0; i < 0x7c00; i++) half_table[i] = half_value((uint16_t)i);
+    enum { N = 67 };
+    float src[N * 4];
+    uint8_t buf[N * 8 + 8];
+    for (int round = 0; round < 400; round++) {
+        for (int i = 0; i < N * 4; i++) {
+            uint32_t kind = rnd() % 16;
+            float v;
+            if (kind == 0) v = rnd_magnitude(-40, -14);      /* half denormals, float tiny */
+            else if (kind == 1) v = rnd_magnitude(15, 20);   /* overflow region */
+            else if (kind == 2) v = (rnd() & 1) ? INFINITY : NAN;
+            else if (kind == 3) v = bitsf(rnd() & 0x007fffffu); /* float denormals and 0 */
+            else if (kind == 4) v = bitsf((rnd() % 45 + 100) << 23 | 0x1000u); /* a tie */
+            else v = rnd_magnitude(-14, 16);
+            src[i] = (rnd() & 1) ? -v : v;
+        }
+        /* mostly-ordinary rounds too: whole groups on the fast path */
+        if (round % 2)
+            for (int i = 0; i < N * 4; i++) src[i] = rnd_magnitude(-14, 16);
+        size_t count = 1 + rnd() % N, first = rnd() % (N - count + 1);
+        memset(buf, 0xAA, sizeof buf);
+        ibl_pack_texels(IBL_FORMAT_RGBA16F, src + first * 4, count, buf);
+        assert_int_equal(buf[count * 8], 0xAA);
+        for (size_t i = 0; i < count * 4; i++) {
+            float f = src[first * 4 + i];
+            uint16_t got = (uint16_t)(buf[2 * i] | buf[2 * i + 1] << 8);
+            assert_int_equal(got, ibl_float_to_half(f)); /* the one-value path, bit for bit */
+            if (isnan(f)) continue;
+            if (got != ref_float_to_half(f))
+                fail_msg("float %a: half 0x%04x, reference 0x%04x", (double)f, got, ref_float_to_half(f));
+        }
+    }
+}
+
 static void texel_packing(void **state)
 {
     (void)state;
@@ -366,6 +406,7 @@ int main(void)
         cmocka_unit_test(rgb9e5_reference),
         cmocka_unit_test(rg11b10_reference),
         cmocka_unit_test(texel_packing),
+        cmocka_unit_test(half_bulk_packing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -214,11 +214,69 @@ static uint32_t get32(const uint8_t *p)
     return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
 }
 
+/* RGBA floats to halves, 8 values (two texels) at a time where SSE2 is: the values whose
+ * halves are normal or zero are rounded on their bits exactly as ibl_float_to_half does
+ * (re-bias, then round the 13 dropped bits to nearest even), and a group holding anything
+ * else (a half denormal, an overflow, Inf or NaN) goes through ibl_float_to_half. Returns
+ * the texels done. */
+#if defined(__SSE2__)
+#include <emmintrin.h>
+static size_t pack_rgba16f_sse2(const float *rgba, size_t count, uint8_t *dst)
+{
+    const __m128i abs_mask = _mm_set1_epi32(0x7fffffff), rebias = _mm_set1_epi32(112 << 23);
+    const __m128i min_normal = _mm_set1_epi32(0x38800000 - 1), overflow = _mm_set1_epi32(0x477ff000);
+    const __m128i min_float_normal = _mm_set1_epi32(0x00800000), round = _mm_set1_epi32(0xfff);
+    const __m128i one = _mm_set1_epi32(1), sign_bit = _mm_set1_epi32(0x8000);
+    size_t i = 0;
+    for (; i + 2 <= count; i += 2) {
+        __m128i h[2];
+        int fast = 1;
+        for (int k = 0; k < 2 && fast; k++) {
+            __m128i x = _mm_loadu_si128((const __m128i *)(const void *)(rgba + (i + (size_t)k) * 4));
+            __m128i a = _mm_and_si128(x, abs_mask);
+            /* (signed compares: a < 2^31) */
+            __m128i normal = _mm_and_si128(_mm_cmpgt_epi32(a, min_normal), _mm_cmplt_epi32(a, overflow));
+            __m128i zero = _mm_cmplt_epi32(a, min_float_normal);
+            if (_mm_movemask_epi8(_mm_or_si128(normal, zero)) != 0xffff) {
+                fast = 0;
+                break;
+            }
+            __m128i v = _mm_sub_epi32(a, rebias);
+            __m128i odd = _mm_and_si128(_mm_srli_epi32(v, 13), one);
+            __m128i r = _mm_srli_epi32(_mm_add_epi32(_mm_add_epi32(v, round), odd), 13);
+            r = _mm_and_si128(r, normal);
+            r = _mm_or_si128(r, _mm_and_si128(_mm_srli_epi32(x, 16), sign_bit));
+            /* sign-extend the 16 bits so that the signed pack keeps them as they are */
+            h[k] = _mm_srai_epi32(_mm_slli_epi32(r, 16), 16);
+        }
+        if (fast) {
+            _mm_storeu_si128((__m128i *)(void *)(dst + i * 8), _mm_packs_epi32(h[0], h[1]));
+        } else {
+            for (size_t j = 0; j < 8; j++) {
+                uint16_t v = ibl_float_to_half(rgba[i * 4 + j]);
+                dst[i * 8 + 2 * j] = (uint8_t)v;
+                dst[i * 8 + 2 * j + 1] = (uint8_t)(v >> 8);
+            }
+        }
+    }
+    return i;
+}
+#endif
+
 void ibl_pack_texels(ibl_format format, const float *rgba, size_t count, uint8_t *dst)
 {
     int channels = ibl_format_channels(format);
     switch (format) {
     case IBL_FORMAT_RGBA16F:
+#if defined(__SSE2__)
+    {
+        size_t done = pack_rgba16f_sse2(rgba, count, dst);
+        rgba += done * 4;
+        dst += done * 8;
+        count -= done;
+    }
+#endif
+        /* fall through */
     case IBL_FORMAT_RG16F:
     case IBL_FORMAT_RGB16F:
         for (size_t i = 0; i < count; i++) {

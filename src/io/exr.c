@@ -12,8 +12,15 @@
 #include "io/exr_bridge.h"
 #include "io/io_internal.h"
 
+#include <stdatomic.h>
 #include <stdio.h>
 #include <string.h>
+#include <zlib.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "core/pixel_format.h"
 
 /* ---- structural check ---------------------------------------------------------------- */
 
@@ -29,7 +36,14 @@ typedef struct exr_shape {
     int tiled, multipart, deep;
     int channels;          /* in part 0's channel list            */
     uint64_t pixel_bytes;  /* bytes of one pixel of all channels  */
+    int subsampled;        /* some channel has x or y sampling > 1 */
+    const uint8_t *chlist; /* part 0's channel list (checked)     */
+    size_t chlist_len;
+    size_t table;          /* the chunk offset table's position   */
 } exr_shape;
+
+/* Scanlines per chunk of each compression (OpenEXR file layout). */
+static const int lines_per_chunk[10] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
 
 static int32_t le32(const uint8_t *p)
 {
@@ -56,6 +70,7 @@ static const char *scan_chlist(const uint8_t *v, size_t len, exr_shape *sh, int 
         if (record) {
             sh->pixel_bytes += type == 1 ? 2 : 4; /* HALF, else UINT/FLOAT */
             sh->channels++;
+            if (xs != 1 || ys != 1) sh->subsampled = 1;
         }
         pos += 16;
     }
@@ -129,10 +144,14 @@ static const char *walk_header(const uint8_t *b, size_t size, size_t *pos, size_
         *pos += 4;
         if (len < 0 || (size_t)len > size - *pos) return "attribute size beyond the end of the file";
         const uint8_t *v = b + *pos;
-        const char *bad = strcmp(type, "chlist") == 0
-                              ? scan_chlist(v, (size_t)len, sh, record && strcmp(name, "channels") == 0)
-                              : check_value(type, v, (size_t)len);
+        int channels = record && strcmp(name, "channels") == 0;
+        const char *bad = strcmp(type, "chlist") == 0 ? scan_chlist(v, (size_t)len, sh, channels)
+                                                      : check_value(type, v, (size_t)len);
         if (bad) return bad;
+        if (channels && strcmp(type, "chlist") == 0) {
+            sh->chlist = v;
+            sh->chlist_len = (size_t)len;
+        }
         if (record) {
             if (strcmp(type, "box2i") == 0 && len == 16 &&
                 (strcmp(name, "dataWindow") == 0 || strcmp(name, "displayWindow") == 0)) {
@@ -205,7 +224,6 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
                             (long long)box_extent(sh->data, 0), (long long)box_extent(sh->data, 1),
                             (long long)box_extent(sh->display, 0), (long long)box_extent(sh->display, 1));
     }
-    static const int lines_per_chunk[10] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
     if (sh->compression < 0 || sh->compression > 9)
         return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: unknown OpenEXR compression %d", name,
                         sh->compression);
@@ -234,6 +252,7 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
     /* Every chunk of level 0 must exist: offset in the file, its header and data inside. */
     if (chunks > (size - pos) / 8)
         return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated OpenEXR (offset table)", name);
+    sh->table = pos;
     size_t table_end = pos + (size_t)chunks * 8;
     size_t chunk_header = (sh->multipart ? 4u : 0u) + (sh->tiled ? 16u : 4u);
     for (uint64_t i = 0; i < chunks; i++) {
@@ -252,6 +271,308 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
 }
 
 /* ---- decode -------------------------------------------------------------------------- */
+
+/* Pixels are decoded in bands of whole chunks (scanline blocks or tile rows), each band by
+ * its own OpenEXR file object through ibl_parallel_for: a chunk decodes to the same pixels
+ * whichever band or thread reads it, so the image does not depend on the thread count. */
+enum { EXR_MAX_BANDS = 16 };
+/* Above this many bytes per chunk buffer a file is read as one band (each band's reader holds
+ * its own buffers). */
+#define EXR_BAND_BUFFER ((uint64_t)16 << 20)
+
+typedef struct exr_bands {
+    const uint8_t *bytes;
+    size_t size;
+    const ibl__exr_header *hd;
+    float *rgba;
+    int lines, count;
+    int rc[EXR_MAX_BANDS];
+    char err[EXR_MAX_BANDS][256];
+} exr_bands;
+
+static void band_task(void *arg, int index)
+{
+    exr_bands *b = arg;
+    int y0 = b->hd->data_min_y + index * b->lines;
+    int y1 = index == b->count - 1 ? b->hd->data_max_y : y0 + b->lines - 1;
+    b->rc[index] = ibl__exr_read_rows(b->bytes, b->size, b->hd, b->rgba, y0, y1, b->err[index],
+                                      sizeof b->err[index]);
+}
+
+/* ---- fast path: scanline files without compression or with ZIP / ZIPS ----------------- *
+ * These are decoded here, chunk by chunk, as OpenEXR does (zlib's uncompress, then the
+ * predictor and the byte interleaving of OpenEXR's Zip codec, then each channel's samples
+ * into its slot), for lack of per-chunk parallelism and speed in OpenEXR's own path. Any
+ * chunk this path does not find exactly as expected (sizes, y coordinates, zlib errors)
+ * sends the whole file back to OpenEXR, whose result and messages are then the answer. The
+ * samples are copied (float) or converted exactly (half), so both paths give the same bits
+ * (tests/test_io.c compares them). */
+enum { EXR_NONE = 0, EXR_ZIPS = 2, EXR_ZIP = 3, EXR_MAX_SLOTS = 64 };
+
+typedef struct exr_fast {
+    const uint8_t *bytes;
+    size_t size;
+    const exr_shape *sh;
+    const ibl__exr_header *hd;
+    float *rgba;
+    const float *half_table; /* 65536 entries, or NULL when no half channel is read */
+    int w, h, lines, chunks_per_band, bands;
+    size_t line_bytes;
+    /* per slot (R, G, B, A): the channel's type (1 HALF, 2 FLOAT, 0 absent) and its offset
+     * in a line (bytes) */
+    int type[4];
+    size_t offset[4];
+    /* work buffers: slot_count pairs of chunk buffers, claimed by running bands */
+    uint8_t *work;
+    size_t work_bytes;
+    int slot_count;
+    atomic_int busy[EXR_MAX_SLOTS];
+    int failed[EXR_MAX_BANDS];
+} exr_fast;
+
+/* Finds the channels the reader wants (the names OpenEXR is asked for in exr_cpp.cpp) in the
+ * checked channel list; 0 when the file does not suit the fast path. */
+static int fast_channels(exr_fast *f)
+{
+    const exr_shape *sh = f->sh;
+    const ibl__exr_header *hd = f->hd;
+    char want[4][160];
+    const char *layer = hd->layer;
+    if (hd->layout == IBL__EXR_RGB) {
+        static const char *rgba = "RGBA";
+        for (int c = 0; c < 4; c++)
+            snprintf(want[c], sizeof want[c], "%s%s%c", layer, layer[0] ? "." : "", rgba[c]);
+    } else if (hd->layout == IBL__EXR_GREY) {
+        snprintf(want[0], sizeof want[0], "Y");
+        want[1][0] = want[2][0] = 0;
+        snprintf(want[3], sizeof want[3], "%s%sA", layer, layer[0] ? "." : "");
+    } else {
+        return 0;
+    }
+    int found[4] = {0, 0, 0, 0};
+    for (int c = 0; c < 4; c++) f->type[c] = 0;
+    const uint8_t *v = sh->chlist;
+    size_t pos = 0, offset = 0;
+    while (pos < sh->chlist_len && v[pos] != 0) {
+        const char *name = (const char *)v + pos;
+        pos += strlen(name) + 1; /* scan_chlist checked the NUL and the 16 bytes after it */
+        int32_t type = le32(v + pos);
+        pos += 16;
+        for (int c = 0; c < 4; c++)
+            if (want[c][0] && strcmp(name, want[c]) == 0) {
+                f->type[c] = type;
+                f->offset[c] = offset;
+                found[c] = 1;
+            }
+        offset += type == 1 ? 2 : 4;
+    }
+    if (offset != sh->pixel_bytes) return 0; /* (more than one channel list) */
+    for (int c = 0; c < 4; c++) {
+        if (found[c] && f->type[c] != 1 && f->type[c] != 2) return 0; /* UINT: OpenEXR's path */
+        if (!found[c] && want[c][0] && c != 3) return 0;
+    }
+    if (!found[3]) f->type[3] = -1; /* no alpha: 1 */
+    for (int c = 0; c < 4; c++) f->offset[c] *= (size_t)f->w;
+    return 1;
+}
+
+/* OpenEXR's Zip codec stores the bytes b[0], b[2], ... then b[1], b[3], ..., each as the
+ * difference to the previous stored byte plus 128: undo the differences (a running sum, 16
+ * bytes at a time with SSE2) and the interleaving. */
+static void zip_unpredict(uint8_t *t, size_t n, uint8_t *out)
+{
+    size_t i = 0;
+    uint8_t prev = 128; /* the first byte is stored as is: 128 + (t[0] - 128) */
+#if defined(__SSE2__)
+    const __m128i bias = _mm_set1_epi8((char)-128);
+    __m128i carry = _mm_set1_epi8((char)prev);
+    for (; i + 16 <= n; i += 16) {
+        __m128i x = _mm_add_epi8(_mm_loadu_si128((const __m128i *)(const void *)(t + i)), bias);
+        x = _mm_add_epi8(x, _mm_slli_si128(x, 1));
+        x = _mm_add_epi8(x, _mm_slli_si128(x, 2));
+        x = _mm_add_epi8(x, _mm_slli_si128(x, 4));
+        x = _mm_add_epi8(x, _mm_slli_si128(x, 8));
+        x = _mm_add_epi8(x, carry);
+        _mm_storeu_si128((__m128i *)(void *)(t + i), x);
+        carry = _mm_set1_epi8((char)t[i + 15]);
+    }
+    if (i) prev = t[i - 1];
+#endif
+    for (; i < n; i++) prev = t[i] = (uint8_t)(prev + t[i] - 128);
+    const uint8_t *t1 = t, *t2 = t + (n + 1) / 2;
+    size_t k = 0;
+#if defined(__SSE2__)
+    for (; 2 * k + 32 <= n; k += 16) {
+        __m128i a = _mm_loadu_si128((const __m128i *)(const void *)(t1 + k));
+        __m128i b = _mm_loadu_si128((const __m128i *)(const void *)(t2 + k));
+        _mm_storeu_si128((__m128i *)(void *)(out + 2 * k), _mm_unpacklo_epi8(a, b));
+        _mm_storeu_si128((__m128i *)(void *)(out + 2 * k + 16), _mm_unpackhi_epi8(a, b));
+    }
+#endif
+    for (; 2 * k < n; k++) {
+        out[2 * k] = t1[k];
+        if (2 * k + 1 < n) out[2 * k + 1] = t2[k];
+    }
+}
+
+/* Decodes the chunks of one band; returns 0 on success, 1 when OpenEXR must do the file. */
+static int fast_band(exr_fast *f, int band, uint8_t *buf, uint8_t *raw)
+{
+    const exr_shape *sh = f->sh;
+    int first = band * f->chunks_per_band, chunks = (f->h + f->lines - 1) / f->lines;
+    int last = first + f->chunks_per_band < chunks ? first + f->chunks_per_band : chunks;
+    size_t w = (size_t)f->w;
+    for (int i = first; i < last; i++) {
+        uint64_t off = le64(f->bytes + sh->table + (size_t)i * 8); /* checked in range */
+        int32_t y = le32(f->bytes + off), packed = le32(f->bytes + off + 4);
+        const uint8_t *data = f->bytes + off + 8;
+        int row0 = i * f->lines;
+        int n_lines = f->h - row0 < f->lines ? f->h - row0 : f->lines;
+        size_t expect = (size_t)n_lines * f->line_bytes;
+        if ((int64_t)y != (int64_t)sh->data[1] + row0) return 1;
+        const uint8_t *lines;
+        if ((size_t)packed == expect) {
+            lines = data; /* stored: compression did not pay */
+        } else if (sh->compression == EXR_NONE || (size_t)packed > expect) {
+            return 1;
+        } else {
+            uLongf got = (uLongf)expect;
+            if (uncompress(buf, &got, data, (uLong)packed) != Z_OK || got != expect) return 1;
+            zip_unpredict(buf, expect, raw);
+            lines = raw;
+        }
+        for (int j = 0; j < n_lines; j++) {
+            const uint8_t *line = lines + (size_t)j * f->line_bytes;
+            float *dst = f->rgba + (size_t)(row0 + j) * w * 4;
+            for (int c = 0; c < 4; c++) {
+                float *d = dst + c;
+                if (f->type[c] == 2) {
+                    const uint8_t *src = line + f->offset[c];
+                    for (size_t x = 0; x < w; x++) {
+                        uint32_t u = (uint32_t)le32(src + 4 * x);
+                        memcpy(d + 4 * x, &u, sizeof u);
+                    }
+                } else if (f->type[c] == 1) {
+                    const uint8_t *src = line + f->offset[c];
+                    for (size_t x = 0; x < w; x++)
+                        d[4 * x] = f->half_table[src[2 * x] | src[2 * x + 1] << 8];
+                } else if (f->type[c] == -1) {
+                    for (size_t x = 0; x < w; x++) d[4 * x] = 1.0f;
+                }
+            }
+            if (f->hd->layout == IBL__EXR_GREY)
+                for (size_t x = 0; x < w; x++) dst[4 * x + 1] = dst[4 * x + 2] = dst[4 * x];
+        }
+    }
+    return 0;
+}
+
+static void fast_task(void *arg, int band)
+{
+    exr_fast *f = arg;
+    /* at most slot_count bands run at once (one per thread): one of the slots is free */
+    int slot = band % f->slot_count;
+    for (;;) {
+        int expected = 0;
+        if (atomic_compare_exchange_strong(&f->busy[slot], &expected, 1)) break;
+        slot = (slot + 1) % f->slot_count;
+    }
+    uint8_t *buf = f->work + (size_t)slot * 2 * f->work_bytes;
+    f->failed[band] = fast_band(f, band, buf, buf + f->work_bytes);
+    atomic_store(&f->busy[slot], 0);
+}
+
+/* 1: decoded; 0: not a file for this path, it found something unexpected or its buffers
+ * could not be allocated (OpenEXR reads the file then, with its own buffers as before). */
+static int read_fast(ibl_context *ctx, const uint8_t *bytes, size_t size, const exr_shape *sh,
+                     const ibl__exr_header *hd, float *rgba)
+{
+    int comp = sh->compression;
+    if (sh->tiled || sh->multipart || sh->subsampled || !sh->chlist ||
+        (comp != EXR_NONE && comp != EXR_ZIPS && comp != EXR_ZIP))
+        return 0;
+    exr_fast *f = ibl_alloc(ctx, sizeof *f);
+    if (!f) return 0;
+    memset(f, 0, sizeof *f);
+    f->bytes = bytes;
+    f->size = size;
+    f->sh = sh;
+    f->hd = hd;
+    f->rgba = rgba;
+    f->w = (int)box_extent(sh->data, 0);
+    f->h = (int)box_extent(sh->data, 1);
+    f->lines = lines_per_chunk[comp];
+    f->line_bytes = (size_t)f->w * (size_t)sh->pixel_bytes;
+    int ok = fast_channels(f);
+    int chunks = (f->h + f->lines - 1) / f->lines;
+    f->chunks_per_band = (chunks + EXR_MAX_BANDS - 1) / EXR_MAX_BANDS;
+    f->bands = (chunks + f->chunks_per_band - 1) / f->chunks_per_band;
+    int threads = ibl_context_threads(ctx);
+    f->slot_count = threads < f->bands ? threads : f->bands;
+    if (f->slot_count > EXR_MAX_SLOTS) f->slot_count = EXR_MAX_SLOTS;
+    if (f->slot_count < 1) f->slot_count = 1;
+    f->work_bytes = (size_t)f->lines * f->line_bytes; /* <= EXR_MAX_BUFFER (checked) */
+    /* huge chunks (a very wide or many-channel file): one band at a time */
+    if ((uint64_t)f->work_bytes * 2 * (uint64_t)f->slot_count > 4 * EXR_BAND_BUFFER) threads = f->slot_count = 1;
+    float *table = NULL;
+    int rc = ok ? 1 : 0;
+    if (ok && (f->type[0] == 1 || f->type[1] == 1 || f->type[2] == 1 || f->type[3] == 1)) {
+        table = ibl_alloc(ctx, 65536 * sizeof(float));
+        if (!table) rc = 0;
+        else
+            for (uint32_t i = 0; i < 65536; i++) table[i] = ibl_half_to_float((uint16_t)i);
+        f->half_table = table;
+    }
+    if (rc == 1) {
+        f->work = ibl_alloc(ctx, (size_t)f->slot_count * 2 * f->work_bytes);
+        if (!f->work) rc = 0;
+    }
+    if (rc == 1) {
+        for (int i = 0; i < EXR_MAX_SLOTS; i++) atomic_init(&f->busy[i], 0);
+        /* one thread (or a host's parallel_for, whose concurrency is unknown): in order here */
+        if (threads > 1) ibl_parallel_for(ctx, f->bands, fast_task, f);
+        else
+            for (int b = 0; b < f->bands; b++) f->failed[b] = fast_band(f, b, f->work, f->work + f->work_bytes);
+        for (int b = 0; b < f->bands; b++)
+            if (f->failed[b]) rc = 0;
+    }
+    ibl_free(ctx, f->work);
+    ibl_free(ctx, table);
+    ibl_free(ctx, f);
+    return rc;
+}
+
+static int read_pixels(ibl_context *ctx, const uint8_t *bytes, size_t size, const exr_shape *sh,
+                       ibl__exr_reader *reader, const ibl__exr_header *hd, float *rgba, char *err,
+                       size_t err_size)
+{
+    uint64_t w = (uint64_t)box_extent(sh->data, 0), h = (uint64_t)box_extent(sh->data, 1);
+    uint64_t lines = sh->tiled ? sh->tile_h : (uint64_t)lines_per_chunk[sh->compression];
+    uint64_t chunks = (h + lines - 1) / lines;
+    uint64_t per_band = (chunks + EXR_MAX_BANDS - 1) / EXR_MAX_BANDS;
+    if (read_fast(ctx, bytes, size, sh, hd, rgba)) return 0;
+    if (hd->layout == IBL__EXR_LUMA_CHROMA || chunks < 2 ||
+        w * lines * (sh->pixel_bytes > 16 ? sh->pixel_bytes : 16) > EXR_BAND_BUFFER)
+        return ibl__exr_read(reader, rgba, err, err_size);
+    exr_bands *b = ibl_alloc(ctx, sizeof *b);
+    if (!b) return ibl__exr_read(reader, rgba, err, err_size); /* one band, as before */
+    b->bytes = bytes;
+    b->size = size;
+    b->hd = hd;
+    b->rgba = rgba;
+    b->lines = (int)(per_band * lines);
+    b->count = (int)((h + per_band * lines - 1) / (per_band * lines));
+    ibl_parallel_for(ctx, b->count, band_task, b);
+    /* the first failing band's message: the one a reader going down the image meets first */
+    int rc = 0;
+    for (int i = 0; i < b->count && !rc; i++)
+        if (b->rc[i]) {
+            rc = b->rc[i];
+            snprintf(err, err_size, "%s", b->err[i]);
+        }
+    ibl_free(ctx, b);
+    return rc;
+}
 
 ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info)
@@ -274,12 +595,26 @@ ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     }
     int dw = (int)box_extent(sh.data, 0), dh = (int)box_extent(sh.data, 1);
     int vw = (int)box_extent(sh.display, 0), vh = (int)box_extent(sh.display, 1);
-    s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, vw, vh, 1, 1, out);
+    int same = memcmp(sh.data, sh.display, sizeof sh.data) == 0;
+    if (same) {
+        /* every texel is decoded into it: not zeroed first (a serial pass that would also
+         * take all the page faults on one thread; the decoding bands take them instead) */
+        memset(out, 0, sizeof *out);
+        out->data = ibl_alloc(ctx, (size_t)vw * (size_t)vh * 4 * sizeof(float));
+        s = out->data ? IBL_OK : ibl_context_status(ctx);
+        out->kind = IBL_TEXTURE_2D;
+        out->width = vw;
+        out->height = vh;
+        out->depth = out->levels = 1;
+        out->owns_data = 1;
+    } else {
+        s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, vw, vh, 1, 1, out);
+    }
     if (s != IBL_OK) {
         ibl__exr_close(reader);
+        memset(out, 0, sizeof *out);
         return ibl__fail_named(ctx, s, name);
     }
-    int same = memcmp(sh.data, sh.display, sizeof sh.data) == 0;
     float *target = out->data;
     if (!same) {
         target = ibl_alloc(ctx, (size_t)dw * (size_t)dh * 4 * sizeof(float));
@@ -290,7 +625,7 @@ ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
             return ibl__fail_named(ctx, s, name);
         }
     }
-    rc = ibl__exr_read(reader, target, err, sizeof err);
+    rc = read_pixels(ctx, bytes, size, &sh, reader, &hd, target, err, sizeof err);
     ibl__exr_close(reader);
     if (rc) {
         if (!same) ibl_free(ctx, target);

@@ -29,6 +29,11 @@ int ibl__exr_open(const void *bytes, size_t size, ibl__exr_reader **out, ibl__ex
 /* Reads the whole data window into rgba (data-window width x height texels, 4 floats each,
  * top row first); missing alpha becomes 1, grey is copied to R, G and B. */
 int ibl__exr_read(ibl__exr_reader *reader, float *rgba, char *err, size_t err_size);
+/* Reads rows y0..y1 (data-window coordinates) of a file whose header ibl__exr_open gave
+ * (not for IBL__EXR_LUMA_CHROMA) into rgba, laid out as for ibl__exr_read. Opens its own
+ * OpenEXR file over bytes: calls for different rows may run at the same time. */
+int ibl__exr_read_rows(const void *bytes, size_t size, const ibl__exr_header *header, float *rgba,
+                       int y0, int y1, char *err, size_t err_size);
 void ibl__exr_close(ibl__exr_reader *reader);
 
 /* compression: the Imf::Compression value. alloc returns the output buffer (or NULL). */

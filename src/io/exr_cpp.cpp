@@ -173,11 +173,37 @@ extern "C" int ibl__exr_open(const void *bytes, size_t size, ibl__exr_reader **o
     });
 }
 
+// Reads rows [y0, y1] (data-window coordinates) of the RGB, grey or layer channels through
+// `file` into rgba, which covers the whole data window.
+static void read_rows(Imf::InputFile &file, const ibl__exr_header &hd, float *rgba, int y0, int y1)
+{
+    const Imath::Box2i dw(Imath::V2i(hd.data_min_x, hd.data_min_y), Imath::V2i(hd.data_max_x, hd.data_max_y));
+    const size_t w = static_cast<size_t>(static_cast<int64_t>(hd.data_max_x) - hd.data_min_x + 1);
+    std::string prefix = hd.layer[0] ? std::string(hd.layer) + "." : std::string();
+    char *base = reinterpret_cast<char *>(rgba);
+    const size_t xs = 4 * sizeof(float), ys = xs * w;
+    Imf::FrameBuffer fb;
+    if (hd.layout == IBL__EXR_RGB) {
+        fb.insert(prefix + "R", Imf::Slice::Make(Imf::FLOAT, base, dw, xs, ys));
+        fb.insert(prefix + "G", Imf::Slice::Make(Imf::FLOAT, base + 4, dw, xs, ys));
+        fb.insert(prefix + "B", Imf::Slice::Make(Imf::FLOAT, base + 8, dw, xs, ys));
+    } else {
+        fb.insert("Y", Imf::Slice::Make(Imf::FLOAT, base, dw, xs, ys));
+    }
+    // A missing alpha channel is filled with 1 (opaque).
+    fb.insert(prefix + "A", Imf::Slice::Make(Imf::FLOAT, base + 12, dw, xs, ys, 1, 1, 1.0));
+    file.setFrameBuffer(fb);
+    file.readPixels(y0, y1);
+    if (hd.layout == IBL__EXR_GREY) {
+        float *p = rgba + static_cast<size_t>(static_cast<int64_t>(y0) - hd.data_min_y) * w * 4;
+        for (size_t i = 0; i < static_cast<size_t>(y1 - y0 + 1) * w; i++) p[i * 4 + 1] = p[i * 4 + 2] = p[i * 4];
+    }
+}
+
 extern "C" int ibl__exr_read(ibl__exr_reader *r, float *rgba, char *err, size_t err_size)
 {
     return guarded(err, err_size, [&]() -> int {
         const ibl__exr_header &hd = r->header;
-        const Imath::Box2i dw(Imath::V2i(hd.data_min_x, hd.data_min_y), Imath::V2i(hd.data_max_x, hd.data_max_y));
         const size_t w = static_cast<size_t>(static_cast<int64_t>(hd.data_max_x) - hd.data_min_x + 1);
         const size_t h = static_cast<size_t>(static_cast<int64_t>(hd.data_max_y) - hd.data_min_y + 1);
         if (hd.layout == IBL__EXR_LUMA_CHROMA) {
@@ -200,23 +226,21 @@ extern "C" int ibl__exr_read(ibl__exr_reader *r, float *rgba, char *err, size_t 
             }
             return 0;
         }
-        std::string prefix = hd.layer[0] ? std::string(hd.layer) + "." : std::string();
-        char *base = reinterpret_cast<char *>(rgba);
-        const size_t xs = 4 * sizeof(float), ys = xs * w;
-        Imf::FrameBuffer fb;
-        if (hd.layout == IBL__EXR_RGB) {
-            fb.insert(prefix + "R", Imf::Slice::Make(Imf::FLOAT, base, dw, xs, ys));
-            fb.insert(prefix + "G", Imf::Slice::Make(Imf::FLOAT, base + 4, dw, xs, ys));
-            fb.insert(prefix + "B", Imf::Slice::Make(Imf::FLOAT, base + 8, dw, xs, ys));
-        } else {
-            fb.insert("Y", Imf::Slice::Make(Imf::FLOAT, base, dw, xs, ys));
-        }
-        // A missing alpha channel is filled with 1 (opaque).
-        fb.insert(prefix + "A", Imf::Slice::Make(Imf::FLOAT, base + 12, dw, xs, ys, 1, 1, 1.0));
-        r->file->setFrameBuffer(fb);
-        r->file->readPixels(hd.data_min_y, hd.data_max_y);
-        if (hd.layout == IBL__EXR_GREY)
-            for (size_t i = 0; i < w * h; i++) rgba[i * 4 + 1] = rgba[i * 4 + 2] = rgba[i * 4];
+        read_rows(*r->file, hd, rgba, hd.data_min_y, hd.data_max_y);
+        return 0;
+    });
+}
+
+extern "C" int ibl__exr_read_rows(const void *bytes, size_t size, const ibl__exr_header *hd, float *rgba,
+                                  int y0, int y1, char *err, size_t err_size)
+{
+    return guarded(err, err_size, [&]() -> int {
+        // Its own stream and file: bands run on different threads, and every OpenEXR object
+        // here is private to this call (the library's global state was set up by
+        // ibl__exr_open, which ran first on the calling thread).
+        MemIStream stream(static_cast<const char *>(bytes), size);
+        Imf::InputFile file(stream, 0);
+        read_rows(file, *hd, rgba, y0, y1);
         return 0;
     });
 }

@@ -113,6 +113,66 @@ static ibl_status read_all(ibl_context *ctx, int fd, const char *path, uint8_t *
     return IBL_OK;
 }
 
+/* A large regular file is read in fixed pieces by pread through ibl_parallel_for: the kernel's
+ * copy (and the faults on the fresh buffer) then run on every thread. */
+enum { READ_CHUNK = 4 << 20 };
+
+typedef struct read_job {
+    int fd;
+    uint8_t *dst;
+    size_t size;
+    size_t got[256];
+    int err[256];
+    size_t chunk;
+} read_job;
+
+static void read_task(void *arg, int index)
+{
+    read_job *j = arg;
+    size_t first = (size_t)index * j->chunk;
+    size_t n = j->size - first < j->chunk ? j->size - first : j->chunk, done = 0;
+    while (done < n) {
+        ssize_t r = pread(j->fd, j->dst + first + done, n - done, (off_t)(first + done));
+        if (r < 0) {
+            if (errno == EINTR) continue;
+            j->err[index] = errno;
+            break;
+        }
+        if (r == 0) break;
+        done += (size_t)r;
+    }
+    j->got[index] = done;
+}
+
+static ibl_status read_parallel(ibl_context *ctx, int fd, const char *path, uint8_t *dst,
+                                size_t size, size_t *got)
+{
+    read_job *j = ibl_alloc(ctx, sizeof *j);
+    if (!j) return read_all(ctx, fd, path, dst, size, got); /* as without threads */
+    memset(j, 0, sizeof *j);
+    j->fd = fd;
+    j->dst = dst;
+    j->size = size;
+    j->chunk = READ_CHUNK;
+    while ((size + j->chunk - 1) / j->chunk > 256) j->chunk *= 2;
+    int chunks = (int)((size + j->chunk - 1) / j->chunk);
+    ibl_parallel_for(ctx, chunks, read_task, j);
+    /* as a sequential read: the bytes up to the first error or short piece */
+    size_t done = 0;
+    ibl_status s = IBL_OK;
+    for (int i = 0; i < chunks; i++) {
+        done += j->got[i];
+        if (j->err[i]) {
+            s = ibl_fail(ctx, IBL_ERR_IO, "%s: cannot read: %s", path, strerror(j->err[i]));
+            break;
+        }
+        if (j->got[i] < (i == chunks - 1 ? size - (size_t)i * j->chunk : j->chunk)) break;
+    }
+    ibl_free(ctx, j);
+    *got = done;
+    return s;
+}
+
 ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_t *size)
 {
     if (!path || !bytes || !size)
@@ -149,7 +209,9 @@ ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_
             close(fd);
             return s;
         }
-        s = read_all(ctx, fd, path, buf, want, &used);
+        s = want >= 2 * (size_t)READ_CHUNK && ibl_context_threads(ctx) > 1
+                ? read_parallel(ctx, fd, path, buf, want, &used)
+                : read_all(ctx, fd, path, buf, want, &used);
         if (s == IBL_OK && used != want)
             s = ibl_fail(ctx, IBL_ERR_IO, "%s: file shrank while being read", path);
     } else {
@@ -274,22 +336,65 @@ ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void 
         return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot %s: %s", path, what, strerror(err));
     }
     ibl_free(ctx, tmp);
-    /* Make the rename itself durable (best effort: some file systems refuse fsync on a dir). */
-    char dir[4096];
-    if (dir_len == 0) snprintf(dir, sizeof dir, ".");
-    else if (dir_len < sizeof dir) snprintf(dir, sizeof dir, "%.*s", (int)dir_len, path);
-    else dir[0] = 0;
-    if (dir[0]) {
-        int dfd = open(dir, O_RDONLY | O_CLOEXEC);
-        if (dfd >= 0) {
-            (void)fsync(dfd);
-            close(dfd);
-        }
-    }
+    /* The folder is not fsync'ed after the rename: the data was, so after a crash the name
+     * holds the old file or the new one, each complete; syncing the folder would only make
+     * the new name durable sooner, for milliseconds per file (docs/PERFORMANCE.md). */
     return IBL_OK;
 }
 
 /* ---- reading: dispatch and pixel policy ---------------------------------------------- */
+
+/* ibl_sanitize_pixels over fixed chunks of texels through ibl_parallel_for; the counts are
+ * added in chunk order (integers: any order gives the same sums). */
+enum { SANITIZE_CHUNK = 1 << 16, SANITIZE_MAX_CHUNKS = 4096 };
+
+typedef struct sanitize_job {
+    float *rgba;
+    size_t count, chunk;
+    int clamp_infinite;
+    float clamp_value;
+    ibl_pixel_report report[SANITIZE_MAX_CHUNKS];
+} sanitize_job;
+
+static void sanitize_task(void *arg, int index)
+{
+    sanitize_job *j = arg;
+    size_t first = (size_t)index * j->chunk;
+    size_t n = j->count - first < j->chunk ? j->count - first : j->chunk;
+    /* no context: a chunk's infinities are reported by the caller, for the whole image */
+    (void)ibl_sanitize_pixels(NULL, j->rgba + first * 4, n, j->clamp_infinite, j->clamp_value,
+                              &j->report[index]);
+}
+
+static ibl_status sanitize(ibl_context *ctx, float *rgba, size_t count, int clamp_infinite,
+                           float clamp_value, ibl_pixel_report *report)
+{
+    if (count <= 2 * (size_t)SANITIZE_CHUNK || ibl_context_threads(ctx) < 2)
+        return ibl_sanitize_pixels(ctx, rgba, count, clamp_infinite, clamp_value, report);
+    sanitize_job *j = ibl_alloc(ctx, sizeof *j);
+    if (!j) return ibl_sanitize_pixels(ctx, rgba, count, clamp_infinite, clamp_value, report);
+    j->rgba = rgba;
+    j->count = count;
+    j->chunk = SANITIZE_CHUNK;
+    while ((count + j->chunk - 1) / j->chunk > SANITIZE_MAX_CHUNKS) j->chunk *= 2;
+    j->clamp_infinite = clamp_infinite;
+    j->clamp_value = clamp_value;
+    int chunks = (int)((count + j->chunk - 1) / j->chunk);
+    ibl_parallel_for(ctx, chunks, sanitize_task, j);
+    ibl_pixel_report r = {0, 0, 0, count};
+    for (int i = 0; i < chunks; i++) {
+        r.nan_count += j->report[i].nan_count;
+        r.inf_count += j->report[i].inf_count;
+        r.negative_count += j->report[i].negative_count;
+    }
+    ibl_free(ctx, j);
+    if (report) *report = r;
+    /* the message of ibl_sanitize_pixels, for the whole image */
+    if (r.inf_count && !clamp_infinite)
+        return ibl_fail(ctx, IBL_ERR_BAD_PIXELS, "%llu texels are infinite (use --clamp to clamp them)",
+                        (unsigned long long)r.inf_count);
+    return IBL_OK;
+}
 
 ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, const char *name,
                               const ibl_read_desc *desc, ibl_texture *out, ibl_file_info *info)
@@ -334,7 +439,7 @@ ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, 
     if (fi.format == IBL_FORMAT_DEFAULT) fi.format = out->format;
     if (out->format == IBL_FORMAT_DEFAULT) out->format = fi.format;
     size_t texels = ibl_texture_floats(out->kind, out->width, out->height, out->depth, out->levels) / 4;
-    s = ibl_sanitize_pixels(ctx, out->data, texels, rd.clamp_infinite, rd.clamp_value, &fi.pixels);
+    s = sanitize(ctx, out->data, texels, rd.clamp_infinite, rd.clamp_value, &fi.pixels);
     if (info) *info = fi;
     if (s != IBL_OK) {
         ibl_texture_free(ctx, out);

@@ -217,11 +217,17 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
         level_len[l] = (size_t)n;
         total += n;
     }
-    uint8_t *buf = ibl_calloc(ctx, (size_t)total, 1);
+    /* Only the bytes outside the levels are zeroed here: the level images are written in full
+     * by ibl__pack, whose threads then also take the buffer's first-touch page faults. */
+    uint8_t *buf = ibl_alloc(ctx, (size_t)total);
     if (!buf) {
         ibl_free(ctx, kvd);
         return ibl__fail_named(ctx, ibl_context_status(ctx), name);
     }
+    memset(buf, 0, level_off[tex->levels - 1]);
+    for (int l = tex->levels - 1; l > 0; l--) /* the alignment padding after each level */
+        memset(buf + level_off[l] + level_len[l], 0, level_off[l - 1] - (level_off[l] + level_len[l]));
+    memset(buf + level_off[0] + level_len[0], 0, (size_t)total - (level_off[0] + level_len[0]));
     memcpy(buf, KTX2_IDENTIFIER, 12);
     ibl__wr32(buf + 12, vk->vk);
     ibl__wr32(buf + 16, vk->type_size);

@@ -946,19 +946,35 @@ static void eq_row_task(void *arg, int index)
     batch_emit(&bt, out);
 }
 
+/* The mean of each source row (the value of windows a whole turn wide), MEAN_ROWS rows per
+ * task: each row is summed alone, in order, whichever thread takes it. */
+enum { MEAN_ROWS = 16 };
+typedef struct row_mean_job {
+    const ibl_image *image;
+    float *mean;
+} row_mean_job;
+
+static void row_mean_task(void *arg, int index)
+{
+    const row_mean_job *j = arg;
+    int W = j->image->width, H = j->image->height;
+    for (int r = index * MEAN_ROWS; r < H && r < (index + 1) * MEAN_ROWS; r++) {
+        double s[4] = {0, 0, 0, 0};
+        const float *p = j->image->pixels + (size_t)r * W * 4;
+        for (int x = 0; x < W; x++)
+            for (int c = 0; c < 4; c++) s[c] += p[(size_t)x * 4 + c];
+        for (int c = 0; c < 4; c++) j->mean[(size_t)r * 4 + c] = (float)(s[c] / W);
+    }
+}
+
 ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const ibl__frame *frame,
                                  int samples_per_axis, ibl_cubemap *out)
 {
     int W = image->width, H = image->height;
     float *mean = ibl_alloc(ctx, (size_t)H * 4 * sizeof(float));
     if (!mean) return ibl_context_status(ctx);
-    for (int r = 0; r < H; r++) {
-        double s[4] = {0, 0, 0, 0};
-        const float *p = image->pixels + (size_t)r * W * 4;
-        for (int x = 0; x < W; x++)
-            for (int c = 0; c < 4; c++) s[c] += p[(size_t)x * 4 + c];
-        for (int c = 0; c < 4; c++) mean[(size_t)r * 4 + c] = (float)(s[c] / W);
-    }
+    row_mean_job rm = {image, mean};
+    ibl_parallel_for(ctx, (H + MEAN_ROWS - 1) / MEAN_ROWS, row_mean_task, &rm);
     double *cs = ibl_alloc(ctx, (size_t)W * 2 * sizeof(double));
     if (!cs) {
         ibl_free(ctx, mean);
