@@ -700,7 +700,10 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         s->nbx = (s->M + BW - 1) / BW;
         s->nby = (s->M + BH - 1) / BH;
         s->nf = l == 0 ? NF0 : NFC;
-        s->rec = ibl_calloc(ctx, block_count(s) * s->nf * BT, sizeof(float));
+        /* every field of every texel is written before it is read; only the lanes beyond a
+         * face of fewer than one block's texels stay as they are (zero) */
+        s->rec = s->M % BW || s->M % BH ? ibl_calloc(ctx, block_count(s) * s->nf * BT, sizeof(float))
+                                        : ibl_alloc(ctx, block_count(s) * s->nf * BT * sizeof(float));
         s->block = ibl_alloc(ctx, block_count(s) * BINFO * sizeof(float));
         if (!s->rec || !s->block) {
             st = ibl_context_status(ctx);
@@ -1321,6 +1324,28 @@ AVX2 static void avx2_cell_weights(const piece *pc, const float R[3], const floa
     }
 }
 
+/* First and last of n cells (geometry planes `plane` apart from g) within reach of R:
+ * m.R >= cos_reach |m| and a texel there; -1 if none. */
+AVX2 static void avx2_row_extent(const float *g, size_t plane, int n, const float R[3], float cr,
+                                 int *first, int *last)
+{
+    const __m256 r0 = _mm256_set1_ps(R[0]), r1 = _mm256_set1_ps(R[1]), r2 = _mm256_set1_ps(R[2]);
+    const __m256 c = _mm256_set1_ps(cr), zero = _mm256_setzero_ps();
+    *first = *last = -1;
+    for (int i = 0; i < n; i += 8) {
+        __m256 d = _mm256_fmadd_ps(r0, _mm256_loadu_ps(g + i),
+                                   _mm256_fmadd_ps(r1, _mm256_loadu_ps(g + plane + i),
+                                                   _mm256_mul_ps(r2, _mm256_loadu_ps(g + 2 * plane + i))));
+        __m256 in = _mm256_and_ps(_mm256_cmp_ps(d, _mm256_mul_ps(c, _mm256_loadu_ps(g + GEO_FIELDS * plane + i)), _CMP_GE_OQ),
+                                  _mm256_cmp_ps(_mm256_loadu_ps(g + F_OM * plane + i), zero, _CMP_GT_OQ));
+        unsigned mask = (unsigned)_mm256_movemask_ps(in);
+        if (i + 8 > n) mask &= (1u << (n - i)) - 1u;
+        if (!mask) continue;
+        if (*first < 0) *first = i + __builtin_ctz(mask);
+        *last = i + 31 - __builtin_clz(mask);
+    }
+}
+
 /* The core's product for one image of a base texel (see core_mac_generic). */
 AVX2 static void avx2_core_mac(const struct core *c, const float *w, const int32_t *rows, int nrows,
                                const float *planes, int fx, int fy, double out[3])
@@ -1362,6 +1387,7 @@ static int cpu_has_avx2(void)
 #else
 #define sum_blocks_avx2 sum_blocks_generic
 #define avx2_core_mac core_mac_generic
+#define avx2_row_extent row_extent_generic
 static void avx2_cell_weights(const piece *pc, const float R[3], const float RR[6], const float *g,
                               size_t plane, int len, float *out)
 {
@@ -1600,45 +1626,17 @@ static void core_direction(const core_job *j, int a, int b, double R[3])
     for (int i = 0; i < 3; i++) R[i] /= len;
 }
 
-/* Whether padded cell i is within reach of R: 1 yes, 0 no, -1 no texel there. */
-static int core_in_reach(const core_job *j, const double R[3], size_t i)
+/* The portable avx2_row_extent. */
+static void row_extent_generic(const float *g, size_t plane, int n, const float R[3], float cr,
+                               int *first, int *last)
 {
-    size_t plane = (size_t)j->c->P * j->c->P;
-    const float *g = j->geo;
-    if (!(g[F_OM * plane + i] > 0)) return -1;
-    double d = R[0] * g[i] + R[1] * g[plane + i] + R[2] * g[2 * plane + i];
-    return d >= j->cos_reach * g[GEO_FIELDS * plane + i];
-}
-
-/* The cells of row Y within reach of R, scanning out from column `start` (the set is an
- * interval: a cap seen on the unfolded faces; empty corner cells are stepped over); the whole
- * row when `start` itself is out of reach. */
-static int core_scan_row(const core_job *j, const double R[3], int Y, int start, int lo, int hi,
-                         int *first, int *last)
-{
-    const struct core *c = j->c;
-    size_t row = (size_t)(Y + c->O) * c->P + c->O;
-    *first = INT32_MAX, *last = INT32_MIN;
-    if (core_in_reach(j, R, row + start) != 1) {
-        for (int X = lo; X <= hi; X++)
-            if (core_in_reach(j, R, row + X) == 1) {
-                if (X < *first) *first = X;
-                *last = X;
-            }
-        return *first <= *last;
+    *first = *last = -1;
+    for (int i = 0; i < n; i++) {
+        float d = R[0] * g[i] + R[1] * g[plane + i] + R[2] * g[2 * plane + i];
+        if (!(g[F_OM * plane + i] > 0) || !(d >= cr * g[GEO_FIELDS * plane + i])) continue;
+        if (*first < 0) *first = i;
+        *last = i;
     }
-    *first = *last = start;
-    for (int X = start - 1; X >= lo; X--) {
-        int r = core_in_reach(j, R, row + X);
-        if (r == 0) break;
-        if (r == 1) *first = X;
-    }
-    for (int X = start + 1; X <= hi; X++) {
-        int r = core_in_reach(j, R, row + X);
-        if (r == 0) break;
-        if (r == 1) *last = X;
-    }
-    return 1;
 }
 
 /* The rows of the window around base texel `index` that hold cells within reach. */
@@ -1647,32 +1645,28 @@ static void core_rows_task(void *arg, int index)
     core_job *j = arg;
     const struct core *c = j->c;
     int a = index % c->nb, b = index / c->nb, S = c->S, W = c->W;
-    double R[3];
-    core_direction(j, a, b, R);
+    double Rd[3];
+    core_direction(j, a, b, Rd);
+    float R[3] = {(float)Rd[0], (float)Rd[1], (float)Rd[2]};
     int XC = (int)floor((a + 0.5) * S / c->n), YC = (int)floor((b + 0.5) * S / c->n);
     int lo = XC - W > -W ? XC - W : -W, hi = XC + W < S + W - 1 ? XC + W : S + W - 1;
+    int ylo = YC - W > -W ? YC - W : -W, yhi = YC + W < S + W - 1 ? YC + W : S + W - 1;
+    size_t plane = (size_t)c->P * c->P;
     int32_t *out = j->tmp_rows + (size_t)index * (2 * W + 1) * 3;
-    int first, last, count = 0;
-    /* rows from YC down, then from YC + 1 up, each scan started at the previous row's middle */
-    for (int dir = -1; dir <= 1; dir += 2) {
-        int start = XC;
-        for (int Y = dir < 0 ? YC : YC + 1; Y >= YC - W && Y <= YC + W; Y += dir) {
-            if (Y < -W || Y >= S + W || !core_scan_row(j, R, Y, start, lo, hi, &first, &last)) break;
-            if (first == lo || last == hi || Y == YC - W || Y == YC + W || Y == -W || Y == S + W - 1) {
-                j->tmp_count[index] = -1; /* within reach at the window's edge: W is too small */
-                return;
-            }
-            int32_t *r = out + 3 * count++;
-            r[0] = Y, r[1] = first, r[2] = (last - first + 8) & ~7;
-            start = (first + last) / 2;
+    int count = 0;
+    for (int Y = ylo; Y <= yhi; Y++) {
+        int first, last;
+        const float *g = j->geo + (size_t)(Y + c->O) * c->P + c->O + lo;
+        if (j->avx2) avx2_row_extent(g, plane, hi - lo + 1, R, (float)j->cos_reach, &first, &last);
+        else row_extent_generic(g, plane, hi - lo + 1, R, (float)j->cos_reach, &first, &last);
+        if (first < 0) continue;
+        first += lo, last += lo;
+        if (first == lo || last == hi || Y == ylo || Y == yhi) {
+            j->tmp_count[index] = -1; /* within reach at the window's edge: W is too small */
+            return;
         }
-        if (dir < 0) /* ascending order: the runs read the rows in order */
-            for (int i = 0, k = count - 1; i < k; i++, k--)
-                for (int f = 0; f < 3; f++) {
-                    int32_t t = out[3 * i + f];
-                    out[3 * i + f] = out[3 * k + f];
-                    out[3 * k + f] = t;
-                }
+        int32_t *r = out + 3 * count++;
+        r[0] = Y, r[1] = first, r[2] = (last - first + 8) & ~7;
     }
     j->tmp_count[index] = count;
 }
@@ -1908,7 +1902,8 @@ static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
     tmp_count = ibl_alloc(ctx, nbase * sizeof(int));
     if (!c->map || !c->row0 || !c->w0 || !c->den || !c->pad || !tmp_rows || !tmp_count) goto fail;
     for (size_t i = 0; i < 6 * plane; i++) c->map[i] = -1;
-    core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), 0, NULL, NULL};
+    core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), cpu_has_avx2() && !p->portable,
+                    NULL, NULL};
     ibl_parallel_for(ctx, 6, core_map_task, &job);
     job.geo = geo = core_geometry(p, c);
     if (!geo) goto fail;
