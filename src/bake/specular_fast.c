@@ -1604,13 +1604,59 @@ typedef struct core_job {
     float *acc;             /* run: the direct grid */
 } core_job;
 
-static void core_map_task(void *arg, int f)
+/* Row Y of face 0's padded map. */
+static void core_map_task(void *arg, int row)
 {
     core_job *j = arg;
     struct core *c = j->c;
-    for (int Y = -c->W; Y < c->S + c->W; Y++)
-        for (int X = -c->W; X < c->S + c->W; X++)
-            c->map[((size_t)f * c->P + Y + c->O) * c->P + X + c->O] = core_cell_texel(j->p, c->S, f, X, Y);
+    int Y = row - c->O;
+    if (Y < -c->W || Y >= c->S + c->W) return;
+    for (int X = -c->W; X < c->S + c->W; X++)
+        c->map[(size_t)row * c->P + X + c->O] = core_cell_texel(j->p, c->S, 0, X, Y);
+}
+
+/* Where the signed permutation taking face 0 to face F carries the texels of face g: face
+ * out[0] and x' = out[1] + out[2] x + out[3] y, y' = out[4] + out[5] x + out[6] y. */
+static void carry_face(const ibl_specular_plan *p, int S, int F, int g, int out[7])
+{
+    const float(*B0)[3] = p->face_basis[0], (*BF)[3] = p->face_basis[F];
+    int xs[3], ys[3];
+    for (int k = 0; k < 3; k++) {
+        int x = k == 1, y = k == 2;
+        double d[3], w[3], s, t;
+        ibl_cube_direction_d(g, (x + 0.5) / S, (y + 0.5) / S, d);
+        double l[3] = {0, 0, 0};
+        for (int i = 0; i < 3; i++) l[0] += d[i] * B0[1][i], l[1] += d[i] * B0[2][i], l[2] += d[i] * B0[0][i];
+        for (int i = 0; i < 3; i++) w[i] = l[0] * BF[1][i] + l[1] * BF[2][i] + l[2] * BF[0][i];
+        out[0] = ibl_cube_face_st_d(w, &s, &t);
+        xs[k] = (int)floor(s * S), ys[k] = (int)floor(t * S);
+    }
+    out[1] = xs[0], out[2] = xs[1] - xs[0], out[3] = xs[2] - xs[0];
+    out[4] = ys[0], out[5] = ys[1] - ys[0], out[6] = ys[2] - ys[0];
+}
+
+/* Face f's padded map from face 0's: the permutation carries the border as well. */
+static void core_map_face_task(void *arg, int f)
+{
+    core_job *j = arg;
+    struct core *c = j->c;
+    if (f == 0) return;
+    int S = c->S, tf[6][7];
+    for (int g = 0; g < 6; g++) carry_face(j->p, S, f, g, tf[g]);
+    size_t plane = (size_t)c->P * c->P, S2 = (size_t)S * S;
+    const int32_t *m0 = c->map;
+    int32_t *mf = c->map + (size_t)f * plane;
+    for (size_t i = 0; i < plane; i++) {
+        int32_t t = m0[i];
+        if (t < 0) {
+            mf[i] = -1;
+            continue;
+        }
+        int g = (int)(t / (int32_t)S2), r = (int)(t % (int32_t)S2), y = r / S, x = r % S;
+        const int *m = tf[g];
+        int xx = m[1] + m[2] * x + m[3] * y, yy = m[4] + m[5] * x + m[6] * y;
+        mf[i] = (int32_t)(((size_t)m[0] * S + yy) * S + xx);
+    }
 }
 
 /* The direction of base texel (a, b) of face 0 of the core's grid. */
@@ -1904,7 +1950,8 @@ static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
     for (size_t i = 0; i < 6 * plane; i++) c->map[i] = -1;
     core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), cpu_has_avx2() && !p->portable,
                     NULL, NULL};
-    ibl_parallel_for(ctx, 6, core_map_task, &job);
+    ibl_parallel_for(ctx, c->P, core_map_task, &job);
+    ibl_parallel_for(ctx, 6, core_map_face_task, &job);
     job.geo = geo = core_geometry(p, c);
     if (!geo) goto fail;
     ibl_parallel_for(ctx, (int)nbase, core_rows_task, &job);
