@@ -538,7 +538,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
     const double beta_split = BETA_SPLIT * acc; /* the same without the bright texels */
     const double cull = lobe->kind == IBL__LOBE_PHONG ? 1e-9 : 0.0;
 
-    int core_src = source_level_for(p, lobe->half_angle / kappa, 32);
+    int core_src = source_level_for(p, lobe->half_angle / kappa, 16);
     double b0 = c0 * lobe->half_angle;
     double min_b0 = 2.0 * texel_angle(p->src[core_src].M);
     if (b0 < min_b0) b0 = min_b0;
