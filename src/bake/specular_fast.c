@@ -147,6 +147,7 @@ struct core {
     double a1, a2, a3;
     int corr_cap, ncorr;
     float *corr_rec, *corr_block;
+    float *bound;          /* run: each texel's bound (block order)                                  */
     float *pad;            /* run: 6 faces x (r, g, b) x P P                                         */
 };
 
@@ -164,6 +165,7 @@ static void core_destroy(ibl_context *ctx, struct core *c)
     ibl_free(ctx, c->pad);
     ibl_free(ctx, c->corr_rec);
     ibl_free(ctx, c->corr_block);
+    ibl_free(ctx, c->bound);
     ibl_free(ctx, c);
 }
 
@@ -771,7 +773,8 @@ static ibl_status plan_bright(ibl_specular_plan *p, int level)
         c->corr_cap = CORR_BLOCKS;
         c->corr_rec = ibl_alloc(p->ctx, (size_t)c->corr_cap * NFC * BT * sizeof(float));
         c->corr_block = ibl_alloc(p->ctx, (size_t)c->corr_cap * BINFO * sizeof(float));
-        if (!c->corr_rec || !c->corr_block) return ibl_context_status(p->ctx);
+        c->bound = ibl_alloc(p->ctx, block_count(&p->src[c->level]) * BT * sizeof(float));
+        if (!c->corr_rec || !c->corr_block || !c->bound) return ibl_context_status(p->ctx);
     }
     for (int k = 0; k < lv->npieces; k++) {
         const piece *pc = &lv->pieces[k];
@@ -890,7 +893,7 @@ static int gather_corrections(const struct core *c, const srclev *s, double thr,
     for (size_t b = 0; b < blocks; b++) {
         const float *rec = s->rec + b * s->nf * BT;
         for (int t = 0; t < BT; t++) {
-            if (!(corr_bound(c, s, b, t) > thr)) continue;
+            if (!(c->bound[b * BT + t] > thr)) continue;
             if (rec[pf * BT + t] == 0 && rec[(pf + 1) * BT + t] == 0 && rec[(pf + 2) * BT + t] == 0) continue;
             for (int pass = 0; pass < 2; pass++, k++) {
                 float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
@@ -912,6 +915,22 @@ static int gather_corrections(const struct core *c, const srclev *s, double thr,
 
 /* Picks the texels of the precomputed piece's level whose moment leaves differ most from
  * uniform texels (see struct core) and gathers them. */
+typedef struct bound_job {
+    const ibl_specular_plan *p;
+    struct core *c;
+} bound_job;
+
+enum { BOUND_CHUNK = 256 }; /* blocks per task */
+
+static void bound_task(void *arg, int index)
+{
+    const bound_job *j = arg;
+    const srclev *s = &j->p->src[j->c->level];
+    size_t b0 = (size_t)index * BOUND_CHUNK, b1 = b0 + BOUND_CHUNK, blocks = block_count(s);
+    for (size_t b = b0; b < b1 && b < blocks; b++)
+        for (int t = 0; t < BT; t++) j->c->bound[b * BT + t] = (float)corr_bound(j->c, s, b, t);
+}
+
 static void select_corrections(ibl_specular_plan *p, struct core *c)
 {
     const srclev *s = &p->src[c->level];
@@ -922,12 +941,13 @@ static void select_corrections(ibl_specular_plan *p, struct core *c)
         const float *P = s->rec + (b * s->nf + F_P) * BT;
         for (int t = 0; t < BT; t++) total += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
     }
+    bound_job bj = {p, c};
+    ibl_parallel_for(p->ctx, (int)((blocks + BOUND_CHUNK - 1) / BOUND_CHUNK), bound_task, &bj);
     double thr = CORR_TAU * total / (4.0 * PI);
     int cap = c->corr_cap * BT / 2;
     for (;;) {
         int count = 0;
-        for (size_t b = 0; b < blocks; b++)
-            for (int t = 0; t < BT; t++) count += corr_bound(c, s, b, t) > thr;
+        for (size_t i = 0; i < blocks * BT; i++) count += c->bound[i] > thr;
         if (count <= cap) break;
         thr *= 2.0;
     }
