@@ -1706,17 +1706,14 @@ static void row_extent_generic(const float *g, size_t plane, int n, const float 
 }
 
 /* The rows of the window around base texel `index` that hold cells within reach. */
-static void core_rows_task(void *arg, int index)
+/* The rows within reach of base texel `index`, scanning a window of half width w; 0 when a
+ * row reaches the window's edge (the window is too small). */
+static int core_rows_window(core_job *j, int index, const float R[3], int XC, int YC, int w)
 {
-    core_job *j = arg;
     const struct core *c = j->c;
-    int a = index % c->nb, b = index / c->nb, S = c->S, W = c->W;
-    double Rd[3];
-    core_direction(j, a, b, Rd);
-    float R[3] = {(float)Rd[0], (float)Rd[1], (float)Rd[2]};
-    int XC = (int)floor((a + 0.5) * S / c->n), YC = (int)floor((b + 0.5) * S / c->n);
-    int lo = XC - W > -W ? XC - W : -W, hi = XC + W < S + W - 1 ? XC + W : S + W - 1;
-    int ylo = YC - W > -W ? YC - W : -W, yhi = YC + W < S + W - 1 ? YC + W : S + W - 1;
+    int S = c->S, W = c->W;
+    int lo = XC - w > -W ? XC - w : -W, hi = XC + w < S + W - 1 ? XC + w : S + W - 1;
+    int ylo = YC - w > -W ? YC - w : -W, yhi = YC + w < S + W - 1 ? YC + w : S + W - 1;
     size_t plane = (size_t)c->P * c->P;
     int32_t *out = j->tmp_rows + (size_t)index * (2 * W + 1) * 3;
     int count = 0;
@@ -1727,14 +1724,30 @@ static void core_rows_task(void *arg, int index)
         else row_extent_generic(g, plane, hi - lo + 1, R, (float)j->cos_reach, &first, &last);
         if (first < 0) continue;
         first += lo, last += lo;
-        if (first == lo || last == hi || Y == ylo || Y == yhi) {
-            j->tmp_count[index] = -1; /* within reach at the window's edge: W is too small */
-            return;
-        }
+        if (first == lo || last == hi || Y == ylo || Y == yhi) return 0;
         int32_t *r = out + 3 * count++;
         r[0] = Y, r[1] = first, r[2] = (last - first + 8) & ~7;
     }
     j->tmp_count[index] = count;
+    return 1;
+}
+
+static void core_rows_task(void *arg, int index)
+{
+    core_job *j = arg;
+    const struct core *c = j->c;
+    int a = index % c->nb, b = index / c->nb, S = c->S, W = c->W;
+    double Rd[3];
+    core_direction(j, a, b, Rd);
+    float R[3] = {(float)Rd[0], (float)Rd[1], (float)Rd[2]};
+    int XC = (int)floor((a + 0.5) * S / c->n), YC = (int)floor((b + 0.5) * S / c->n);
+    /* first a window sized by the texels around the base texel (radial size (2 / S) / (1 +
+     * u^2 + v^2) on the face plane), then, if something lies on its edge, the whole border */
+    double u = (XC + 0.5) * 2.0 / S - 1.0, v = (YC + 0.5) * 2.0 / S - 1.0;
+    double cells = acos(j->cos_reach) * S * 0.5 * (1.0 + u * u + v * v);
+    int w = (int)ceil(1.3 * cells) + 2;
+    if (w < W && core_rows_window(j, index, R, XC, YC, w)) return;
+    if (!core_rows_window(j, index, R, XC, YC, W)) j->tmp_count[index] = -1; /* W too small */
 }
 
 /* The weights of base texel `index` (and their sum), from the padded geometry. */
