@@ -344,24 +344,22 @@ static void face_perm(const ibl_specular_plan *p, int f, int axis[3], double sig
 }
 
 /* Writes the geometric fields of texel (x, y) of every face from face-local moments. */
-static void store_geo(const ibl_specular_plan *p, srclev *s, int x, int y, const geo *g)
+static void store_geo(srclev *s, const int ax[6][3], const double sg[6][3], int x, int y, const geo *g)
 {
     /* local covariance as a matrix (c: xx yy zz xy xz yz) */
     const double Cl[3][3] = {{g->c[0], g->c[3], g->c[4]}, {g->c[3], g->c[1], g->c[5]},
                              {g->c[4], g->c[5], g->c[2]}};
+    static const int ci[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
     for (int f = 0; f < 6; f++) {
-        int ax[3];
-        double sg[3];
-        face_perm(p, f, ax, sg);
-        float *r = s->rec;
-        for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_MX + c)] = (float)(sg[c] * g->m[ax[c]]);
-        r[rec_index(s, f, x, y, F_E)] = (float)g->e;
-        static const int ci[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+        /* the fields of one texel are BT floats apart */
+        float *r = s->rec + rec_index(s, f, x, y, 0);
+        for (int c = 0; c < 3; c++) r[(F_MX + c) * BT] = (float)(sg[f][c] * g->m[ax[f][c]]);
+        r[F_E * BT] = (float)g->e;
         for (int c = 0; c < 6; c++) {
             int i = ci[c][0], j = ci[c][1];
-            r[rec_index(s, f, x, y, F_C + c)] = (float)(sg[i] * sg[j] * Cl[ax[i]][ax[j]]);
+            r[(F_C + c) * BT] = (float)(sg[f][i] * sg[f][j] * Cl[ax[f][i]][ax[f][j]]);
         }
-        r[rec_index(s, f, x, y, F_OM)] = (float)g->om;
+        r[F_OM * BT] = (float)g->om;
     }
 }
 
@@ -428,7 +426,11 @@ static void texel_combine_task(void *arg, int y)
 static void store_geo_task(void *arg, int y)
 {
     const geo_job *j = arg;
-    for (int x = 0; x < j->n; x++) store_geo(j->p, j->s, x, y, &j->g[(size_t)y * j->n + x]);
+    int ax[6][3];
+    double sg[6][3];
+    for (int f = 0; f < 6; f++) face_perm(j->p, f, ax[f], sg[f]);
+    for (int x = 0; x < j->n; x++)
+        store_geo(j->s, (const int(*)[3])ax, (const double(*)[3])sg, x, y, &j->g[(size_t)y * j->n + x]);
 }
 
 /* The bounding cones of block row `by` on every face: computed on face 0 and carried to the
