@@ -2230,3 +2230,19 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
     }
     return IBL_OK;
 }
+
+void ibl__specular_plan_stats(const ibl_specular_plan *p, ibl__specular_stats *out)
+{
+    memset(out, 0, sizeof *out);
+    for (int l = 0; l < p->L; l++)
+        for (int k = 0; k < p->lv[l].npieces; k++) {
+            const piece *pc = &p->lv[l].pieces[k];
+            out->pieces++;
+            out->split += pc->split;
+            if (!pc->core) continue;
+            out->precomputed++;
+            out->precomputed_coarse += pc->core->level > 0;
+            out->correction_blocks += pc->core->ncorr;
+        }
+    for (int l = 0; l < p->SL; l++) out->bright_blocks += p->src[l].nbright;
+}
