@@ -24,6 +24,15 @@
  * evaluates GGX and Phong in closed form; the portable path reads each piece (lobe times
  * partition) from a table in u with its second derivative. Phong texels whose spread reaches
  * the horizon, where x^n has a kink, take the closed-form mean of x^n over the spread.
+ *
+ * Most of the work is not leaf by leaf: a piece whose leaves use geometric moments only (the
+ * core over the source texels, or a piece over a coarse level read as uniform texels) has
+ * weights that depend on geometry alone; they are precomputed for one quadrant of face 0 and
+ * carried to the rest by the cube's symmetries ("struct core"), and a run is a product of
+ * weights and padded source rows. A coarse level read as uniform texels is then corrected
+ * leaf by leaf where a texel's light is far from uniform (centroid corrections), and a ring on
+ * a coarse grid leaves its bright texels to a direct sum at the output texels, where bilinear
+ * interpolation would smear them (bright texels).
  * Deterministic: every output value is a sum in a fixed order, independent of the threads.
  * Design and measurements: docs/SPECULAR.md "The fast method". */
 #include "specular_internal.h"
@@ -120,11 +129,12 @@ static size_t rec_index(const srclev *s, int face, int x, int y, int field)
 
 static size_t block_count(const srclev *s) { return (size_t)6 * s->nby * s->nbx; }
 
-/* ---- the core as precomputed weights (a core summed from the source texels themselves) ---- */
+/* ---- pieces as precomputed weights ("core": first used for the cores over level 0) ---- */
 
-/* When a level's core is summed over level 0 (K = 1), its weights depend only on geometry, and
- * the cube's symmetries carry them over: the weights of the output texels of one quadrant of
- * face 0 serve the four quadrants of all six faces (the maps x -> n-1-x, y -> n-1-y and the
+/* When a piece's leaves use geometric moments only (the core over the source texels, K = 1, or
+ * any piece over a coarse level read as uniform texels, corrected below), its weights depend
+ * only on geometry, and the cube's symmetries carry them over: the weights of the points of one
+ * quadrant of face 0 of its grid serve the four quadrants of all six faces (the maps x -> n-1-x, y -> n-1-y and the
  * signed permutations taking face 0 to face F are symmetries of the cube and of its texels).
  * They are stored as rows over the *padded* face: the face with a border W deep taken from its
  * four neighbours unfolded about the shared edges (the corner squares of the border are empty),
@@ -1945,8 +1955,8 @@ static ibl_status core_build_weights(ibl_specular_plan *p, int level)
     return IBL_OK;
 }
 
-/* Sets up the precomputed core of a level when its core sums level 0 (not for lobes split into
- * sub-texels, nor for edge fixups that bend the directions); leaves the level as it is when
+/* Sets up piece k of a level as precomputed weights when it can be (a symmetric grid, level 0
+ * only without sub-texels, a reach the padded face holds); leaves it to the leaf sums when
  * the border would be too deep or the weights too many. */
 static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
 {
