@@ -113,6 +113,13 @@ struct ibl_specular_plan {
     level_plan lv[IBL_MAX_LEVELS];
     float face_basis[6][3][3]; /* axis, s tangent, t tangent */
     ibl__dynamic *dyn; /* desc.dynamic: the precomputed operator instead of the pieces */
+    /* level 0's geometric moments once, face-local (GEO_FIELDS floats per texel of face 0):
+     * the other faces by the signed permutations. Level 0's records (src[0].rec) exist only
+     * when some piece sums level 0 leaf by leaf (rec0). */
+    float *geo0;
+    int rec0;
+    int perm_ax[6][3]; /* face f's local (s, t, axis) -> world: world[i] = perm_sg[i] local[perm_ax[i]] */
+    float perm_sg[6][3];
     int portable;      /* tests: the portable sums even where AVX2 is available          */
     const ibl_cubemap *run_src;
     ibl_cubemap *run_dst;
@@ -469,6 +476,69 @@ static void block_cone_task(void *arg, int by)
     }
 }
 
+/* Row y of level 0's face-local moments (floats, as the records would hold them). */
+static void store_geo0_task(void *arg, int y)
+{
+    const geo_job *j = arg;
+    for (int x = 0; x < j->n; x++) {
+        const geo *g = &j->g[(size_t)y * j->n + x];
+        float *o = j->p->geo0 + ((size_t)y * j->n + x) * GEO_FIELDS;
+        for (int c = 0; c < 3; c++) o[F_MX + c] = (float)g->m[c];
+        o[F_E] = (float)g->e;
+        for (int c = 0; c < 6; c++) o[F_C + c] = (float)g->c[c];
+        o[F_OM] = (float)g->om;
+    }
+}
+
+/* The geometric fields of level-0 texel (f, x, y) in world coordinates (the same floats as
+ * its records would hold: the permutation only moves and negates them). */
+static void geo0_world(const ibl_specular_plan *p, int f, int x, int y, float out[GEO_FIELDS])
+{
+    static const int ci[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    const float *g = p->geo0 + ((size_t)y * p->src[0].M + x) * GEO_FIELDS;
+    const int *ax = p->perm_ax[f];
+    const float *sg = p->perm_sg[f];
+    /* local covariance (xx yy zz xy xz yz) as a matrix */
+    const float Cl[3][3] = {{g[F_C], g[F_C + 3], g[F_C + 4]}, {g[F_C + 3], g[F_C + 1], g[F_C + 5]},
+                            {g[F_C + 4], g[F_C + 5], g[F_C + 2]}};
+    for (int c = 0; c < 3; c++) out[F_MX + c] = sg[c] * g[F_MX + ax[c]];
+    out[F_E] = g[F_E];
+    for (int c = 0; c < 6; c++) {
+        int i = ci[c][0], k = ci[c][1];
+        out[F_C + c] = sg[i] * sg[k] * Cl[ax[i]][ax[k]];
+    }
+    out[F_OM] = g[F_OM];
+}
+
+static void store_rec0_task(void *arg, int y)
+{
+    const ibl_specular_plan *p = arg;
+    const srclev *s = &p->src[0];
+    for (int f = 0; f < 6; f++)
+        for (int x = 0; x < s->M; x++) {
+            float v[GEO_FIELDS];
+            geo0_world(p, f, x, y, v);
+            float *r = s->rec + rec_index(s, f, x, y, 0);
+            for (int k = 0; k < GEO_FIELDS; k++) r[k * BT] = v[k];
+        }
+}
+
+/* Level 0's records, for the pieces that sum it leaf by leaf. */
+static ibl_status level0_records(ibl_specular_plan *p)
+{
+    srclev *s = &p->src[0];
+    ibl_context *ctx = p->ctx;
+    s->rec = s->M % BW || s->M % BH ? ibl_calloc(ctx, block_count(s) * s->nf * BT, sizeof(float))
+                                    : ibl_alloc(ctx, block_count(s) * s->nf * BT * sizeof(float));
+    s->block = ibl_alloc(ctx, block_count(s) * BINFO * sizeof(float));
+    if (!s->rec || !s->block) return ibl_context_status(ctx);
+    ibl_parallel_for(ctx, s->M, store_rec0_task, p);
+    geo_job job = {p, s, NULL, s->M, NULL};
+    ibl_parallel_for(ctx, s->nby, block_cone_task, &job);
+    p->rec0 = 1;
+    return IBL_OK;
+}
+
 static ibl_status build_geometry(ibl_specular_plan *p)
 {
     ibl_context *ctx = p->ctx;
@@ -476,6 +546,12 @@ static ibl_status build_geometry(ibl_specular_plan *p)
     geo *cur = ibl_alloc(ctx, (size_t)S * S * sizeof(geo));
     geo *next = ibl_alloc(ctx, (size_t)(S > 1 ? S / 2 : 1) * (S > 1 ? S / 2 : 1) * sizeof(geo));
     if (!cur || !next) {
+        ibl_free(ctx, cur);
+        ibl_free(ctx, next);
+        return ibl_context_status(ctx);
+    }
+    p->geo0 = ibl_alloc(ctx, (size_t)S * S * GEO_FIELDS * sizeof(float));
+    if (!p->geo0) {
         ibl_free(ctx, cur);
         ibl_free(ctx, next);
         return ibl_context_status(ctx);
@@ -494,6 +570,10 @@ static ibl_status build_geometry(ibl_specular_plan *p)
             next = t;
         }
         geo_job job = {p, s, cur, M, NULL};
+        if (l == 0) {
+            ibl_parallel_for(ctx, M, store_geo0_task, &job);
+            continue;
+        }
         ibl_parallel_for(ctx, M, store_geo_task, &job);
         ibl_parallel_for(ctx, s->nby, block_cone_task, &job);
     }
@@ -624,6 +704,7 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
     if (!p) return;
     ibl_context *ctx = p->ctx;
     ibl__dynamic_destroy(p->dyn);
+    ibl_free(ctx, p->geo0);
     for (int l = 0; l < IBL_MAX_LEVELS; l++) {
         ibl_free(ctx, p->src[l].rec);
         ibl_free(ctx, p->src[l].block);
@@ -692,6 +773,11 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
             p->face_basis[f][2][i] = (float)(ty[i] - c[i]);
         }
     }
+    for (int f = 0; f < 6; f++) {
+        double sg[3];
+        face_perm(p, f, p->perm_ax[f], sg);
+        for (int i = 0; i < 3; i++) p->perm_sg[f][i] = (float)sg[i];
+    }
     if (desc->dynamic) {
         st = ibl__dynamic_create(ctx, &p->desc, &p->info, S, &p->dyn);
         if (st != IBL_OK) goto fail;
@@ -714,6 +800,7 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         s->nbx = (s->M + BW - 1) / BW;
         s->nby = (s->M + BH - 1) / BH;
         s->nf = l == 0 ? NF0 : NFC;
+        if (l == 0) continue; /* level0_records, when some piece needs them */
         /* every field of every texel is written before it is read; only the lanes beyond a
          * face of fewer than one block's texels stay as they are (zero) */
         s->rec = s->M % BW || s->M % BH ? ibl_calloc(ctx, block_count(s) * s->nf * BT, sizeof(float))
@@ -732,6 +819,19 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         st = plan_level(p, l);
         if (st == IBL_OK) st = core_create(p, l);
         if (st != IBL_OK) goto fail;
+    }
+    /* level 0's records only for pieces that sum it leaf by leaf */
+    int need_rec0 = p->K > 1;
+    for (int l = 0; l < p->L; l++)
+        for (int k = 0; k < p->lv[l].npieces; k++)
+            if (p->lv[l].lobe.kind != IBL__LOBE_MIRROR && p->lv[l].pieces[k].src == 0 && !p->lv[l].pieces[k].core)
+                need_rec0 = 1;
+    if (need_rec0) {
+        st = level0_records(p);
+        if (st != IBL_OK) goto fail;
+    }
+    for (int l = 0; l < p->L; l++) {
+        if (p->lv[l].lobe.kind == IBL__LOBE_MIRROR) continue;
         plan_denominators(p, l);
         st = plan_bright(p, l);
         if (st != IBL_OK) goto fail;
@@ -1001,7 +1101,16 @@ static void pyramid_task(void *arg, int index)
             int cx = 2 * x + (k & 1), cy = 2 * y + (k >> 1);
             geo *g = &parts[k];
             double pw[3];
-            if (job->level == 1) {
+            if (job->level == 1 && !job->p->rec0) {
+                /* the source texel (K = 1 here) and level 0's moments */
+                float v[GEO_FIELDS];
+                geo0_world(job->p, f, cx, cy, v);
+                const float *L = ibl_cubemap_face(job->src, 0, f) + ((size_t)cy * lo->M + cx) * 4;
+                for (int c = 0; c < 3; c++) pw[c] = (double)v[F_OM] * L[c];
+                for (int c = 0; c < 3; c++) g->m[c] = v[F_MX + c];
+                g->e = v[F_E];
+                for (int c = 0; c < 6; c++) g->c[c] = v[F_C + c];
+            } else if (job->level == 1) {
                 double om = r0[rec_index(lo, f, cx, cy, F_OM)];
                 for (int c = 0; c < 3; c++) pw[c] = om * r0[rec_index(lo, f, cx, cy, F_L + c)];
                 for (int c = 0; c < 3; c++) g->m[c] = r0[rec_index(lo, f, cx, cy, F_MX + c)];
@@ -1922,8 +2031,14 @@ static void core_geometry_task(void *arg, int row)
             continue;
         }
         int f = (int)(t / S2), y = (int)(t % S2) / c->S, x = (int)(t % S2) % c->S;
-        const float *rec = s->rec + rec_index(s, f, x, y, 0);
-        for (int k = 0; k < GEO_FIELDS; k++) geo[k * plane + i] = rec[k * BT];
+        if (c->level == 0 && !j->p->rec0) {
+            float v[GEO_FIELDS];
+            geo0_world(j->p, f, x, y, v);
+            for (int k = 0; k < GEO_FIELDS; k++) geo[k * plane + i] = v[k];
+        } else {
+            const float *rec = s->rec + rec_index(s, f, x, y, 0);
+            for (int k = 0; k < GEO_FIELDS; k++) geo[k * plane + i] = rec[k * BT];
+        }
         double m0 = geo[i], m1 = geo[plane + i], m2 = geo[2 * plane + i];
         geo[GEO_FIELDS * plane + i] = (float)sqrt(m0 * m0 + m1 * m1 + m2 * m2);
     }
@@ -2209,7 +2324,7 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
         return ibl_progress(ctx, "prefilter", 1.0);
     }
     pyr_job pj = {p, src, 0};
-    ibl_parallel_for(ctx, 6 * p->src[0].M, level0_task, &pj);
+    if (p->rec0) ibl_parallel_for(ctx, 6 * p->src[0].M, level0_task, &pj);
     for (int l = 1; l < p->SL; l++) {
         pyr_job job = {p, src, l};
         ibl_parallel_for(ctx, 6 * p->src[l].M, pyramid_task, &job);
