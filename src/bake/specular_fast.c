@@ -1466,7 +1466,7 @@ AVX2 static void avx2_cell_weights(const piece *pc, const float R[3], const floa
 }
 
 /* First and last of n cells (geometry planes `plane` apart from g) within reach of R:
- * m.R >= cos_reach |m| and a texel there; -1 if none. */
+ * m.R >= cr (the piece's end, u = 1 - R.m < u_hi) and a texel there; -1 if none. */
 AVX2 static void avx2_row_extent(const float *g, size_t plane, int n, const float R[3], float cr,
                                  int *first, int *last)
 {
@@ -1477,7 +1477,7 @@ AVX2 static void avx2_row_extent(const float *g, size_t plane, int n, const floa
         __m256 d = _mm256_fmadd_ps(r0, _mm256_loadu_ps(g + i),
                                    _mm256_fmadd_ps(r1, _mm256_loadu_ps(g + plane + i),
                                                    _mm256_mul_ps(r2, _mm256_loadu_ps(g + 2 * plane + i))));
-        __m256 in = _mm256_and_ps(_mm256_cmp_ps(d, _mm256_mul_ps(c, _mm256_loadu_ps(g + GEO_FIELDS * plane + i)), _CMP_GE_OQ),
+        __m256 in = _mm256_and_ps(_mm256_cmp_ps(d, c, _CMP_GE_OQ),
                                   _mm256_cmp_ps(_mm256_loadu_ps(g + F_OM * plane + i), zero, _CMP_GT_OQ));
         unsigned mask = (unsigned)_mm256_movemask_ps(in);
         if (i + 8 > n) mask &= (1u << (n - i)) - 1u;
@@ -1739,7 +1739,8 @@ typedef struct core_job {
     const float *geo;    /* CORE_GEO x P P, face 0 */
     int32_t *tmp_rows;   /* nb nb x (2 W + 1) x 3 */
     int *tmp_count;      /* nb nb: rows found (-1: the border is too narrow) */
-    double cos_reach;
+    double cos_reach;       /* the window's reach (sizing)                          */
+    double dot_min;         /* a cell counts when R.m >= dot_min: u < the piece's end */
     int avx2;
     const ibl_cubemap *src; /* run */
     float *acc;             /* run: the direct grid */
@@ -1820,7 +1821,7 @@ static void row_extent_generic(const float *g, size_t plane, int n, const float 
     *first = *last = -1;
     for (int i = 0; i < n; i++) {
         float d = R[0] * g[i] + R[1] * g[plane + i] + R[2] * g[2 * plane + i];
-        if (!(g[F_OM * plane + i] > 0) || !(d >= cr * g[GEO_FIELDS * plane + i])) continue;
+        if (!(g[F_OM * plane + i] > 0) || !(d >= cr)) continue;
         if (*first < 0) *first = i;
         *last = i;
     }
@@ -1841,8 +1842,8 @@ static int core_rows_window(core_job *j, int index, const float R[3], int XC, in
     for (int Y = ylo; Y <= yhi; Y++) {
         int first, last;
         const float *g = j->geo + (size_t)(Y + c->O) * c->P + c->O + lo;
-        if (j->avx2) avx2_row_extent(g, plane, hi - lo + 1, R, (float)j->cos_reach, &first, &last);
-        else row_extent_generic(g, plane, hi - lo + 1, R, (float)j->cos_reach, &first, &last);
+        if (j->avx2) avx2_row_extent(g, plane, hi - lo + 1, R, (float)j->dot_min, &first, &last);
+        else row_extent_generic(g, plane, hi - lo + 1, R, (float)j->dot_min, &first, &last);
         if (first < 0) continue;
         first += lo, last += lo;
         if (first == lo || last == hi || Y == ylo || Y == yhi) return 0;
@@ -2062,7 +2063,7 @@ static ibl_status core_build_weights(ibl_specular_plan *p, int level)
         if (!c) continue;
         float *geo = core_geometry(p, c);
         if (!geo) return ibl_context_status(p->ctx);
-        core_job job = {p, c, &lv->pieces[k], &lv->lobe, geo, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
+        core_job job = {p, c, &lv->pieces[k], &lv->lobe, geo, NULL, NULL, 0, 0, cpu_has_avx2() && !p->portable,
                         NULL, NULL};
         ibl_parallel_for(p->ctx, c->nb * c->nb, core_weights_task, &job);
         ibl_free(p->ctx, geo);
@@ -2108,7 +2109,9 @@ static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
     tmp_count = ibl_alloc(ctx, nbase * sizeof(int));
     if (!c->map || !c->row0 || !c->w0 || !c->den || !c->pad || !tmp_rows || !tmp_count) goto fail;
     for (size_t i = 0; i < 6 * plane; i++) c->map[i] = -1;
-    core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), cpu_has_avx2() && !p->portable,
+    /* u0 = 1 - R.m for a leaf at centroid m: the piece is zero from u_hi on, exactly */
+    double dot_min = 1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0) - 1e-6;
+    core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), dot_min, cpu_has_avx2() && !p->portable,
                     NULL, NULL};
     ibl_parallel_for(ctx, c->P, core_map_task, &job);
     ibl_parallel_for(ctx, 6, core_map_face_task, &job);
@@ -2166,7 +2169,7 @@ static void core_run(ibl_specular_plan *p, int level, const ibl_cubemap *src)
     for (int k = 0; k < lv->npieces; k++) {
         struct core *c = lv->pieces[k].core;
         if (!c) continue;
-        core_job job = {p, c, &lv->pieces[k], &lv->lobe, NULL, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
+        core_job job = {p, c, &lv->pieces[k], &lv->lobe, NULL, NULL, NULL, 0, 0, cpu_has_avx2() && !p->portable,
                         src, lv->grids[lv->pieces[k].grid].acc};
         ibl_parallel_for(p->ctx, 6 * c->P, core_pad_task, &job);
         ibl_parallel_for(p->ctx, c->nb, core_mac_task, &job);
