@@ -118,6 +118,7 @@ struct ibl_specular_plan {
      * when some piece sums level 0 leaf by leaf (rec0). */
     float *geo0;
     int rec0;
+    float *pad; /* run: the padded source of the precomputed piece being summed (6 x rgb x P P) */
     int perm_ax[6][3]; /* face f's local (s, t, axis) -> world: world[i] = perm_sg[i] local[perm_ax[i]] */
     float perm_sg[6][3];
     int portable;      /* tests: the portable sums even where AVX2 is available          */
@@ -151,7 +152,8 @@ struct core {
     int level;             /* the source level it sums (0: the source texels)                       */
     int direct, dim;       /* on the output texels (edge-fixup directions) / without bright texels   */
     int S, W, P, O, n, nb; /* source edge, border, padded edge, offset of cell 0, output edge, base edge */
-    int32_t *map;          /* 6 P P: source texel (f S S + y S + x) or -1                           */
+    int32_t *map;          /* P P: face 0's source texel (f S S + y S + x) or -1                     */
+    int carry[6][6][7];    /* face F: where face 0's map entries on face g go (see carry_face)       */
     uint32_t *row0;        /* nb nb + 1: each base texel's first row                                 */
     size_t *w0;            /* nb nb + 1: each base texel's first weight                              */
     int32_t *rows;         /* per row: y, x (padded coordinates), len (a multiple of 8)              */
@@ -165,7 +167,6 @@ struct core {
     int corr_cap, ncorr;
     float *corr_rec, *corr_block;
     float *bound;          /* run: each texel's bound (block order)                                  */
-    float *pad;            /* run: 6 faces x (r, g, b) x P P                                         */
 };
 
 enum { CORE_GEO = 12 }; /* geometry fields of a padded cell: GEO_FIELDS, then |m| */
@@ -179,7 +180,6 @@ static void core_destroy(ibl_context *ctx, struct core *c)
     ibl_free(ctx, c->rows);
     ibl_free(ctx, c->w);
     ibl_free(ctx, c->den);
-    ibl_free(ctx, c->pad);
     ibl_free(ctx, c->corr_rec);
     ibl_free(ctx, c->corr_block);
     ibl_free(ctx, c->bound);
@@ -705,6 +705,7 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
     ibl_context *ctx = p->ctx;
     ibl__dynamic_destroy(p->dyn);
     ibl_free(ctx, p->geo0);
+    ibl_free(ctx, p->pad);
     for (int l = 0; l < IBL_MAX_LEVELS; l++) {
         ibl_free(ctx, p->src[l].rec);
         ibl_free(ctx, p->src[l].block);
@@ -819,6 +820,20 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         st = plan_level(p, l);
         if (st == IBL_OK) st = core_create(p, l);
         if (st != IBL_OK) goto fail;
+    }
+    /* one padded source for the precomputed pieces, which run one after the other */
+    size_t pad = 0;
+    for (int l = 0; l < p->L; l++)
+        for (int k = 0; k < p->lv[l].npieces; k++) {
+            const struct core *c = p->lv[l].pieces[k].core;
+            if (c && (size_t)18 * c->P * c->P > pad) pad = (size_t)18 * c->P * c->P;
+        }
+    if (pad) {
+        p->pad = ibl_alloc(ctx, pad * sizeof(float));
+        if (!p->pad) {
+            st = ibl_context_status(ctx);
+            goto fail;
+        }
     }
     /* level 0's records only for pieces that sum it leaf by leaf */
     int need_rec0 = p->K > 1;
@@ -1777,29 +1792,6 @@ static void carry_face(const ibl_specular_plan *p, int S, int F, int g, int out[
     out[4] = ys[0], out[5] = ys[1] - ys[0], out[6] = ys[2] - ys[0];
 }
 
-/* Face f's padded map from face 0's: the permutation carries the border as well. */
-static void core_map_face_task(void *arg, int f)
-{
-    core_job *j = arg;
-    struct core *c = j->c;
-    if (f == 0) return;
-    int S = c->S, tf[6][7];
-    for (int g = 0; g < 6; g++) carry_face(j->p, S, f, g, tf[g]);
-    size_t plane = (size_t)c->P * c->P, S2 = (size_t)S * S;
-    const int32_t *m0 = c->map;
-    int32_t *mf = c->map + (size_t)f * plane;
-    for (size_t i = 0; i < plane; i++) {
-        int32_t t = m0[i];
-        if (t < 0) {
-            mf[i] = -1;
-            continue;
-        }
-        int g = (int)(t / (int32_t)S2), r = (int)(t % (int32_t)S2), y = r / S, x = r % S;
-        const int *m = tf[g];
-        int xx = m[1] + m[2] * x + m[3] * y, yy = m[4] + m[5] * x + m[6] * y;
-        mf[i] = (int32_t)(((size_t)m[0] * S + yy) * S + xx);
-    }
-}
 
 /* The direction of base texel (a, b) of face 0 of the core's grid. */
 static void core_direction(const core_job *j, int a, int b, double R[3])
@@ -1934,31 +1926,31 @@ static void core_pad_task(void *arg, int index)
 {
     core_job *j = arg;
     const struct core *c = j->c;
-    int f = index / c->P, row = index % c->P;
-    size_t plane = (size_t)c->P * c->P, S2 = (size_t)c->S * c->S;
-    const int32_t *map = c->map + (size_t)index * c->P;
-    float *out = c->pad + (size_t)f * 3 * plane + (size_t)row * c->P;
+    int f = index / c->P, row = index % c->P, S = c->S;
+    size_t plane = (size_t)c->P * c->P, S2 = (size_t)S * S;
+    const int32_t *map = c->map + (size_t)row * c->P;
+    float *out = j->p->pad + (size_t)f * 3 * plane + (size_t)row * c->P;
     const float *face[6];
     for (int g = 0; g < 6; g++) face[g] = ibl_cubemap_face(j->src, 0, g);
     const srclev *s = &j->p->src[c->level];
     for (int X = 0; X < c->P; X++) {
-        int32_t t = map[X];
-        if (t < 0) {
+        int32_t t0 = map[X];
+        if (t0 < 0) {
             out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
             continue;
         }
+        /* face 0's texel carried to face f by the permutation between the faces */
+        int g0 = (int)(t0 / (int32_t)S2), r0 = (int)(t0 % (int32_t)S2), y0 = r0 / S, x0 = r0 % S;
+        const int *m = c->carry[f][g0];
+        int g = m[0], x = m[1] + m[2] * x0 + m[3] * y0, y = m[4] + m[5] * x0 + m[6] * y0;
         if (c->level > 0) { /* a coarse texel as uniform: its power over its solid angle */
-            int g = (int)(t / S2), y = (int)(t % S2) / c->S, x = (int)(t % S2) % c->S;
             const float *rec = s->rec + rec_index(s, g, x, y, 0);
             float om = rec[F_OM * BT];
             int pf = c->dim ? F_PD : F_P;
             for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = om > 0 ? rec[(pf + ch) * BT] / om : 0.0f;
             continue;
         }
-        /* t = g S^2 + offset: the face by comparison (no division per texel) */
-        int g = 0;
-        while ((size_t)t >= (size_t)(g + 1) * S2) g++;
-        const float *v = face[g] + ((size_t)t - (size_t)g * S2) * 4;
+        const float *v = face[g] + ((size_t)y * S + x) * 4;
         out[X] = v[0], out[plane + X] = v[1], out[2 * plane + X] = v[2];
     }
 }
@@ -2000,7 +1992,7 @@ static void core_mac_task(void *arg, int b)
         int nrows = (int)(c->row0[index + 1] - c->row0[index]);
         CORE_IMAGES(c, a, b, {
             double s[3];
-            const float *planes = c->pad + (size_t)face_ * 3 * plane;
+            const float *planes = j->p->pad + (size_t)face_ * 3 * plane;
             if (j->avx2) avx2_core_mac(c, w, rows, nrows, planes, fx_, fy_, s);
             else core_mac_generic(c, w, rows, nrows, planes, fx_, fy_, s);
             float *o = j->acc + (((size_t)face_ * c->n + y_) * c->n + x_) * 4;
@@ -2100,21 +2092,21 @@ static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
     float *geo = NULL;
     int32_t *tmp_rows = NULL;
     int *tmp_count = NULL;
-    c->map = ibl_alloc(ctx, 6 * plane * sizeof(int32_t));
+    c->map = ibl_alloc(ctx, plane * sizeof(int32_t));
     c->row0 = ibl_alloc(ctx, (nbase + 1) * sizeof(uint32_t));
     c->w0 = ibl_alloc(ctx, (nbase + 1) * sizeof(size_t));
     c->den = ibl_alloc(ctx, nbase * sizeof(double));
-    c->pad = ibl_alloc(ctx, 6 * 3 * plane * sizeof(float));
     tmp_rows = ibl_alloc(ctx, nbase * (2 * W + 1) * 3 * sizeof(int32_t));
     tmp_count = ibl_alloc(ctx, nbase * sizeof(int));
-    if (!c->map || !c->row0 || !c->w0 || !c->den || !c->pad || !tmp_rows || !tmp_count) goto fail;
-    for (size_t i = 0; i < 6 * plane; i++) c->map[i] = -1;
+    if (!c->map || !c->row0 || !c->w0 || !c->den || !tmp_rows || !tmp_count) goto fail;
+    for (size_t i = 0; i < plane; i++) c->map[i] = -1;
+    for (int f = 0; f < 6; f++)
+        for (int g = 0; g < 6; g++) carry_face(p, S, f, g, c->carry[f][g]);
     /* u0 = 1 - R.m for a leaf at centroid m: the piece is zero from u_hi on, exactly */
     double dot_min = 1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0) - 1e-6;
     core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), dot_min, cpu_has_avx2() && !p->portable,
                     NULL, NULL};
     ibl_parallel_for(ctx, c->P, core_map_task, &job);
-    ibl_parallel_for(ctx, 6, core_map_face_task, &job);
     job.geo = geo = core_geometry(p, c);
     if (!geo) goto fail;
     ibl_parallel_for(ctx, (int)nbase, core_rows_task, &job);
