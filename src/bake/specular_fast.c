@@ -1926,8 +1926,9 @@ static void core_pad_task(void *arg, int index)
 {
     core_job *j = arg;
     const struct core *c = j->c;
-    int f = index / c->P, row = index % c->P, S = c->S;
-    size_t plane = (size_t)c->P * c->P, S2 = (size_t)S * S;
+    int f = index / c->P, row = index % c->P, S = c->S, sh = 0;
+    while ((1 << sh) < S) sh++;
+    size_t plane = (size_t)c->P * c->P;
     const int32_t *map = c->map + (size_t)row * c->P;
     float *out = j->p->pad + (size_t)f * 3 * plane + (size_t)row * c->P;
     const float *face[6];
@@ -1939,8 +1940,9 @@ static void core_pad_task(void *arg, int index)
             out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
             continue;
         }
-        /* face 0's texel carried to face f by the permutation between the faces */
-        int g0 = (int)(t0 / (int32_t)S2), r0 = (int)(t0 % (int32_t)S2), y0 = r0 / S, x0 = r0 % S;
+        /* face 0's texel carried to face f by the permutation between the faces (S is a
+         * power of two: shifts) */
+        int g0 = t0 >> (2 * sh), y0 = (t0 >> sh) & (S - 1), x0 = t0 & (S - 1);
         const int *m = c->carry[f][g0];
         int g = m[0], x = m[1] + m[2] * x0 + m[3] * y0, y = m[4] + m[5] * x0 + m[6] * y0;
         if (c->level > 0) { /* a coarse texel as uniform: its power over its solid angle */
