@@ -161,12 +161,13 @@ struct core {
     double *den;           /* nb nb: sum of the weights                                              */
     /* centroid corrections (a coarse level's texels are summed as uniform): each texel whose
      * moment leaf may differ from its uniform one by more than CORR_TAU (bound a1 |dm| + a2 |de|
-     * + a3 |dC| per unit of luminance power) twice, at its luminance moments with +P and at its
-     * geometric ones with -P, summed at the grid points like leaves */
+     * + a3 |dC| per unit of luminance power) is left out of the padded source and summed at
+     * the grid points as a leaf at its luminance moments */
     double a1, a2, a3;
     int corr_cap, ncorr;
     float *corr_rec, *corr_block;
     float *bound;          /* run: each texel's bound (block order)                                  */
+    float corr_thr;        /* run: the texels over it are summed as leaves, left out of the padded source */
 };
 
 enum { CORE_GEO = 12 }; /* geometry fields of a padded cell: GEO_FIELDS, then |m| */
@@ -1009,9 +1010,10 @@ static double corr_bound(const struct core *c, const srclev *s, size_t b, int t)
 }
 
 
-/* Gathers each texel over the threshold twice (luminance moments with +power, geometric
- * moments with -power, the power from field pf: F_P, or F_PD for split rings); the number
- * of blocks. */
+/* Gathers each texel over the threshold with its luminance moments and its power from field
+ * pf (F_P, or F_PD for split rings): summed as a leaf, while the padded source leaves it out
+ * (core_pad_task), it turns the texel's uniform share into its moment leaf; the number of
+ * blocks. */
 static int gather_corrections(const struct core *c, const srclev *s, double thr, int pf, float *recs,
                               float *cones)
 {
@@ -1022,13 +1024,10 @@ static int gather_corrections(const struct core *c, const srclev *s, double thr,
         for (int t = 0; t < BT; t++) {
             if (!(c->bound[b * BT + t] > thr)) continue;
             if (rec[pf * BT + t] == 0 && rec[(pf + 1) * BT + t] == 0 && rec[(pf + 2) * BT + t] == 0) continue;
-            for (int pass = 0; pass < 2; pass++, k++) {
-                float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
-                for (int f = 0; f < NFC; f++) dst[f * BT] = rec[f * BT + t];
-                for (int ch = 0; ch < 3; ch++) dst[(F_P + ch) * BT] = (pass ? -1.0f : 1.0f) * rec[(pf + ch) * BT + t];
-                if (pass == 1) /* the uniform texel: its geometric moments */
-                    for (int f = 0; f < 10; f++) dst[(F_WM + f) * BT] = rec[(F_MX + f) * BT + t];
-            }
+            float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
+            for (int f = 0; f < NFC; f++) dst[f * BT] = rec[f * BT + t];
+            for (int ch = 0; ch < 3; ch++) dst[(F_P + ch) * BT] = rec[(pf + ch) * BT + t];
+            k++;
         }
     }
     for (int i = k; i < (k + BT - 1) / BT * BT; i++) { /* the rest of the last block: nothing */
@@ -1071,14 +1070,15 @@ static void select_corrections(ibl_specular_plan *p, struct core *c)
     bound_job bj = {p, c};
     ibl_parallel_for(p->ctx, (int)((blocks + BOUND_CHUNK - 1) / BOUND_CHUNK), bound_task, &bj);
     double thr = CORR_TAU * total / (4.0 * PI);
-    int cap = c->corr_cap * BT / 2;
+    int cap = c->corr_cap * BT;
     for (;;) {
         int count = 0;
         for (size_t i = 0; i < blocks * BT; i++) count += c->bound[i] > thr;
         if (count <= cap) break;
         thr *= 2.0;
     }
-    c->ncorr = gather_corrections(c, s, thr, pf, c->corr_rec, c->corr_block);
+    c->corr_thr = (float)thr; /* the pad and the gathering compare the same floats */
+    c->ncorr = gather_corrections(c, s, c->corr_thr, pf, c->corr_rec, c->corr_block);
 }
 
 /* ---- run: the radiance pyramid ---- */
@@ -1946,8 +1946,14 @@ static void core_pad_task(void *arg, int index)
         const int *m = c->carry[f][g0];
         int g = m[0], x = m[1] + m[2] * x0 + m[3] * y0, y = m[4] + m[5] * x0 + m[6] * y0;
         if (c->level > 0) { /* a coarse texel as uniform: its power over its solid angle */
-            const float *rec = s->rec + rec_index(s, g, x, y, 0);
+            size_t at = rec_index(s, g, x, y, 0), b = at / ((size_t)s->nf * BT);
+            const float *rec = s->rec + at;
             float om = rec[F_OM * BT];
+            if (c->ncorr > 0 && c->bound[b * BT + (y % BH) * BW + x % BW] > c->corr_thr) {
+                /* a corrected texel: its moment leaf is summed instead */
+                out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
+                continue;
+            }
             int pf = c->dim ? F_PD : F_P;
             for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = om > 0 ? rec[(pf + ch) * BT] / om : 0.0f;
             continue;
