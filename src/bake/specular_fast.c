@@ -129,6 +129,12 @@ struct ibl_specular_plan {
 
 static int is_pow2(int n) { return n > 0 && (n & (n - 1)) == 0; }
 
+/* desc.accuracy relative to the default 0.35: scales every step and bar of the method */
+static double accuracy_scale(const ibl_specular_plan *p)
+{
+    return p->desc.accuracy > 0 ? p->desc.accuracy / 0.35 : 1.0;
+}
+
 static size_t rec_index(const srclev *s, int face, int x, int y, int field)
 {
     size_t b = ((size_t)face * s->nby + y / BH) * s->nbx + x / BW;
@@ -622,7 +628,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
     level_plan *lv = &p->lv[level];
     const ibl__lobe *lobe = &lv->lobe;
     int n = ibl_level_size(p->N, level);
-    double acc = p->desc.accuracy > 0 ? p->desc.accuracy / 0.35 : 1.0;
+    double acc = accuracy_scale(p);
     /* measured on the six test HDRIs at 128 and 256 against the reference (docs/SPECULAR.md
      * "Accuracy"): these keep every level of ggx, phong and blinn within 0.44% RMS and 3.2%
      * max; accuracy 0.175 (half the default) brings the max to 2.0% at 2-5 times the cost */
@@ -662,7 +668,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
              * face) sums a finer level: its cells cost little, and centroid corrections are
              * rarer on finer texels */
             int mac = grid_symmetric_fixup(p) && acos(1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0)) < 1.1;
-            pc->src = source_level_for(p, (mac ? GAMMA_MAC : gamma) * b, 16);
+            pc->src = source_level_for(p, (mac ? GAMMA_MAC * acc : gamma) * b, 16);
             /* a ring summed from a coarse level leaves its bright texels to a direct sum, so
              * that its grid may be coarser (see "bright texels") */
             int split = pc->src > 0;
@@ -930,7 +936,7 @@ static void select_bright(ibl_specular_plan *p, int l)
         const float *P = s->rec + (b * s->nf + F_P) * BT;
         for (int t = 0; t < BT; t++) total += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
     }
-    double thr = BRIGHT_TAU * total / (4.0 * PI) * s->bright_c;
+    double thr = BRIGHT_TAU * accuracy_scale(p) * total / (4.0 * PI) * s->bright_c;
     for (;;) { /* raise the bar until the brightest fit (a bounded direct sum) */
         int count = 0;
         for (size_t b = 0; b < blocks; b++) {
@@ -1069,7 +1075,7 @@ static void select_corrections(ibl_specular_plan *p, struct core *c)
     }
     bound_job bj = {p, c};
     ibl_parallel_for(p->ctx, (int)((blocks + BOUND_CHUNK - 1) / BOUND_CHUNK), bound_task, &bj);
-    double thr = CORR_TAU * total / (4.0 * PI);
+    double thr = CORR_TAU * accuracy_scale(p) * total / (4.0 * PI);
     int cap = c->corr_cap * BT;
     for (;;) {
         int count = 0;
