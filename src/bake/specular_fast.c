@@ -1940,7 +1940,16 @@ static void core_pad_task(void *arg, int index)
     const float *face[6];
     for (int g = 0; g < 6; g++) face[g] = ibl_cubemap_face(j->src, 0, g);
     const srclev *s = &j->p->src[c->level];
+    /* inside the face itself the padded source is the source face: copied by rows */
+    int Y = row - c->O, inside = c->level == 0 && Y >= 0 && Y < S;
+    if (inside) {
+        const float *v = face[f] + (size_t)Y * S * 4;
+        float *o = out + c->O;
+        for (int x = 0; x < S; x++) o[x] = v[4 * x], o[plane + x] = v[4 * x + 1], o[2 * plane + x] = v[4 * x + 2];
+    }
     for (int X = 0; X < c->P; X++) {
+        if (inside && X == c->O) X += S;
+        if (X >= c->P) break;
         int32_t t0 = map[X];
         if (t0 < 0) {
             out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
@@ -1952,16 +1961,18 @@ static void core_pad_task(void *arg, int index)
         const int *m = c->carry[f][g0];
         int g = m[0], x = m[1] + m[2] * x0 + m[3] * y0, y = m[4] + m[5] * x0 + m[6] * y0;
         if (c->level > 0) { /* a coarse texel as uniform: its power over its solid angle */
-            size_t at = rec_index(s, g, x, y, 0), b = at / ((size_t)s->nf * BT);
-            const float *rec = s->rec + at;
+            size_t b = ((size_t)g * s->nby + y / BH) * s->nbx + x / BW;
+            int t = (y % BH) * BW + x % BW;
+            const float *rec = s->rec + b * s->nf * BT + t;
             float om = rec[F_OM * BT];
-            if (c->ncorr > 0 && c->bound[b * BT + (y % BH) * BW + x % BW] > c->corr_thr) {
+            if (c->ncorr > 0 && c->bound[b * BT + t] > c->corr_thr) {
                 /* a corrected texel: its moment leaf is summed instead */
                 out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
                 continue;
             }
             int pf = c->dim ? F_PD : F_P;
-            for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = om > 0 ? rec[(pf + ch) * BT] / om : 0.0f;
+            float inv = om > 0 ? 1.0f / om : 0.0f;
+            for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = rec[(pf + ch) * BT] * inv;
             continue;
         }
         const float *v = face[g] + ((size_t)y * S + x) * 4;
