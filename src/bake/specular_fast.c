@@ -36,6 +36,7 @@
  * Deterministic: every output value is a sum in a fixed order, independent of the threads.
  * Design and measurements: docs/SPECULAR.md "The fast method". */
 #include "specular_internal.h"
+#include "core/pixel_format.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -163,8 +164,9 @@ struct core {
     uint32_t *row0;        /* nb nb + 1: each base texel's first row                                 */
     size_t *w0;            /* nb nb + 1: each base texel's first weight                              */
     int32_t *rows;         /* per row: y, x (padded coordinates), len (a multiple of 8)              */
-    float *w;
-    double *den;           /* nb nb: sum of the weights                                              */
+    uint16_t *w;           /* half floats, times wscale: the weights (half the memory of floats)     */
+    float wscale;          /* an upper bound of the weights: stored values are at most ~1            */
+    double *den;           /* nb nb: sum of the weights (as stored)                                  */
     /* centroid corrections (a coarse level's texels are summed as uniform): each texel whose
      * moment leaf may differ from its uniform one by more than CORR_TAU (bound a1 |dm| + a2 |de|
      * + a3 |dC| per unit of luminance power) is left out of the padded source and summed at
@@ -1260,8 +1262,8 @@ static void sum_blocks_generic(const sum_args *sa, const float R[3], const float
 #if (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__)
 #include <immintrin.h>
 
-#define AVX2 __attribute__((target("avx2,fma")))
-#define AVX2_INLINE __attribute__((target("avx2,fma"), always_inline))
+#define AVX2 __attribute__((target("avx2,fma,f16c")))
+#define AVX2_INLINE __attribute__((target("avx2,fma,f16c"), always_inline))
 
 typedef struct avx2_consts {
     __m256 half, zero, one, two, c4, c6, cm15, c10, c30, c60;
@@ -1509,7 +1511,7 @@ AVX2 static void avx2_row_extent(const float *g, size_t plane, int n, const floa
 }
 
 /* The core's product for one image of a base texel (see core_mac_generic). */
-AVX2 static void avx2_core_mac(const struct core *c, const float *w, const int32_t *rows, int nrows,
+AVX2 static void avx2_core_mac(const struct core *c, const uint16_t *w, const int32_t *rows, int nrows,
                                const float *planes, int fx, int fy, double out[3])
 {
     size_t plane = (size_t)c->P * c->P;
@@ -1522,7 +1524,7 @@ AVX2 static void avx2_core_mac(const struct core *c, const float *w, const int32
         if (!fx) {
             const float *q = base + row[1];
             for (int i = 0; i < row[2]; i += 8) {
-                __m256 wv = _mm256_loadu_ps(w + i);
+                __m256 wv = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i)));
                 ar = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + i), ar);
                 ag = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + plane + i), ag);
                 ab = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + 2 * plane + i), ab);
@@ -1531,7 +1533,7 @@ AVX2 static void avx2_core_mac(const struct core *c, const float *w, const int32
             /* cells X.. of the base row are columns S-1-X.. of the flipped face: reversed */
             const float *q = base + (c->S - 1 - row[1]) - 7;
             for (int i = 0; i < row[2]; i += 8) {
-                __m256 wv = _mm256_permutevar8x32_ps(_mm256_loadu_ps(w + i), rev);
+                __m256 wv = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i))), rev);
                 ar = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q - i), ar);
                 ag = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + plane - i), ag);
                 ab = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + 2 * plane - i), ab);
@@ -1539,17 +1541,33 @@ AVX2 static void avx2_core_mac(const struct core *c, const float *w, const int32
         }
         w += row[2];
     }
-    out[0] = avx2_hsum(ar), out[1] = avx2_hsum(ag), out[2] = avx2_hsum(ab);
+    out[0] = avx2_hsum(ar) * c->wscale, out[1] = avx2_hsum(ag) * c->wscale, out[2] = avx2_hsum(ab) * c->wscale;
+}
+
+/* n floats (a multiple of 8) to half floats (round to nearest even), and their sum as halves */
+AVX2 static void avx2_to_half(const float *in, int n, uint16_t *out, float lanes[8])
+{
+    __m256 acc = _mm256_loadu_ps(lanes);
+    for (int i = 0; i < n; i += 8) {
+        __m128i h = _mm256_cvtps_ph(_mm256_loadu_ps(in + i), _MM_FROUND_TO_NEAREST_INT);
+        _mm_storeu_si128((__m128i *)(out + i), h);
+        acc = _mm256_add_ps(acc, _mm256_cvtph_ps(h));
+    }
+    _mm256_storeu_ps(lanes, acc);
 }
 
 static int cpu_has_avx2(void)
 {
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("f16c");
 }
 #else
 #define sum_blocks_avx2 sum_blocks_generic
 #define avx2_core_mac core_mac_generic
 #define avx2_row_extent row_extent_generic
+static void avx2_to_half(const float *in, int n, uint16_t *out, float lanes[8])
+{
+    (void)in, (void)n, (void)out, (void)lanes;
+}
 static void avx2_cell_weights(const piece *pc, const float R[3], const float RR[6], const float *g,
                               size_t plane, int len, float *out)
 {
@@ -1881,28 +1899,42 @@ static void core_weights_task(void *arg, int index)
     float R[3] = {(float)Rd[0], (float)Rd[1], (float)Rd[2]};
     float RR[6] = {R[0] * R[0], R[1] * R[1], R[2] * R[2], 2 * R[0] * R[1], 2 * R[0] * R[2], 2 * R[1] * R[2]};
     size_t plane = (size_t)P * P;
-    float *w = c->w + c->w0[index];
+    uint16_t *w = c->w + c->w0[index];
     double den = 0;
-    float lanes[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    float lanes[8] = {0, 0, 0, 0, 0, 0, 0, 0}, buf[64];
+    float inv = 1.0f / c->wscale;
     for (uint32_t r = c->row0[index]; r < c->row0[index + 1]; r++) {
         const int32_t *row = c->rows + 3 * (size_t)r;
-        const float *g = j->geo + (size_t)(row[0] + O) * P + row[1] + O;
-        if (j->avx2) {
-            avx2_cell_weights(j->pc, R, RR, g, plane, row[2], w);
-        } else {
-            for (int i = 0; i < row[2]; i++) {
-                float dx = R[0] - g[i], dy = R[1] - g[plane + i], dz = R[2] - g[2 * plane + i];
-                float u = 0.5f * (dx * dx + dy * dy + dz * dz) + g[F_E * plane + i];
-                float q = 0;
-                for (int k = 0; k < 6; k++) q += RR[k] * g[(F_C + k) * plane + i];
-                w[i] = table_weight(j->pc, u, q) * g[F_OM * plane + i];
+        const float *g0 = j->geo + (size_t)(row[0] + O) * P + row[1] + O;
+        /* in chunks of 64 (rows are multiples of 8): weights, scaled, stored as halves */
+        for (int i0 = 0; i0 < row[2]; i0 += 64) {
+            int len = row[2] - i0 < 64 ? row[2] - i0 : 64;
+            const float *g = g0 + i0;
+            if (j->avx2) {
+                avx2_cell_weights(j->pc, R, RR, g, plane, len, buf);
+            } else {
+                for (int i = 0; i < len; i++) {
+                    float dx = R[0] - g[i], dy = R[1] - g[plane + i], dz = R[2] - g[2 * plane + i];
+                    float u = 0.5f * (dx * dx + dy * dy + dz * dz) + g[F_E * plane + i];
+                    float q = 0;
+                    for (int k = 0; k < 6; k++) q += RR[k] * g[(F_C + k) * plane + i];
+                    buf[i] = table_weight(j->pc, u, q) * g[F_OM * plane + i];
+                }
+            }
+            for (int i = 0; i < len; i++) buf[i] *= inv;
+            if (j->avx2) {
+                avx2_to_half(buf, len, w + i0, lanes);
+            } else {
+                for (int i = 0; i < len; i++) {
+                    w[i0 + i] = ibl_float_to_half(buf[i]);
+                    lanes[i % 8] += ibl_half_to_float(w[i0 + i]);
+                }
             }
         }
-        for (int i = 0; i < row[2]; i += 8)
-            for (int l = 0; l < 8; l++) lanes[l] += w[i + l];
         w += row[2];
     }
     for (int l = 0; l < 8; l++) den += lanes[l];
+    den *= c->wscale;
     c->den[index] = den;
 }
 
@@ -1982,7 +2014,7 @@ static void core_pad_task(void *arg, int index)
 
 /* sum over the rows of weights x source texels of padded face `planes` (r, g, b), the source
  * flipped by fx / fy */
-static void core_mac_generic(const struct core *c, const float *w, const int32_t *rows, int nrows,
+static void core_mac_generic(const struct core *c, const uint16_t *w, const int32_t *rows, int nrows,
                              const float *planes, int fx, int fy, double out[3])
 {
     size_t plane = (size_t)c->P * c->P;
@@ -1994,14 +2026,15 @@ static void core_mac_generic(const struct core *c, const float *w, const int32_t
         for (int i = 0; i < row[2]; i += 8)
             for (int l = 0; l < 8; l++) {
                 int X = fx ? c->S - 1 - (row[1] + i + l) : row[1] + i + l;
-                for (int ch = 0; ch < 3; ch++) acc[ch][l] += w[i + l] * base[ch * plane + X];
+                float wl = ibl_half_to_float(w[i + l]);
+                for (int ch = 0; ch < 3; ch++) acc[ch][l] += wl * base[ch * plane + X];
             }
         w += row[2];
     }
     for (int ch = 0; ch < 3; ch++) {
         double s = 0;
         for (int l = 0; l < 8; l++) s += acc[ch][l];
-        out[ch] = s;
+        out[ch] = s * c->wscale;
     }
 }
 
@@ -2012,7 +2045,7 @@ static void core_mac_task(void *arg, int b)
     size_t plane = (size_t)c->P * c->P;
     for (int a = 0; a < c->nb; a++) {
         int index = b * c->nb + a;
-        const float *w = c->w + c->w0[index];
+        const uint16_t *w = c->w + c->w0[index];
         const int32_t *rows = c->rows + 3 * (size_t)c->row0[index];
         int nrows = (int)(c->row0[index + 1] - c->row0[index]);
         CORE_IMAGES(c, a, b, {
@@ -2147,7 +2180,14 @@ static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
     c->w0[nbase] = weights;
     if (weights > ((size_t)1 << 25)) goto give_up; /* 128 MiB of weights: sum by leaves instead */
     c->rows = ibl_alloc(ctx, (rows ? rows : 1) * 3 * sizeof(int32_t));
-    c->w = ibl_alloc(ctx, (weights ? weights : 1) * sizeof(float));
+    c->w = ibl_alloc(ctx, (weights ? weights : 1) * sizeof(uint16_t));
+    /* the weights' bound: the largest texel (a face centre) times twice the piece's peak
+     * (the second-order term can add a little); stored weights are then at most ~1, where
+     * half floats keep 11 bits */
+    double gmax = 0;
+    for (int i = 0; i <= TAB; i++) gmax = fabs(pc->tab[2 * i]) > gmax ? fabs(pc->tab[2 * i]) : gmax;
+    c->wscale = (float)(2.0 * gmax * ibl_cube_texel_solid_angle(S, S / 2, S / 2));
+    if (!(c->wscale > 0)) c->wscale = 1.0f;
     if (!c->rows || !c->w) goto fail;
     for (size_t i = 0; i < nbase; i++)
         memcpy(c->rows + 3 * (size_t)c->row0[i], tmp_rows + i * (2 * W + 1) * 3,
