@@ -92,6 +92,13 @@ void ibl__equirect_uv(const double d[3], double *u, double *v)
     *v = atan2(rho, d[1]) / PI;
 }
 
+/* A face's axes and the picture's sizes, for the fast path (fast_windows) */
+typedef struct eq_fast_face {
+    float m[3], a[3], b[3];
+    int W, H, R, narrow_ok, N;
+    float pole_radius2;
+} eq_fast_face;
+
 typedef struct eq_job {
     const ibl_image *im;
     double basis[6][3][3]; /* per face: major, s axis, t axis, in the picture frame */
@@ -102,6 +109,8 @@ typedef struct eq_job {
     const float *row_mean; /* height x 4 */
     ibl_cubemap *out;
     int fixed_k;
+    eq_fast_face fast[6];
+    int avx2; /* the fast path may use AVX2 */
 } eq_job;
 
 /* Antiderivative of the unit tent max(0, 1 - |t|). */
@@ -511,12 +520,13 @@ static inline v4f vmoment(v4f t)
     return t * t * (vsplat(0.5f) - vabs(t) * vsplat(1.0f / 3.0f)) - vsplat(1.0f / 6.0f);
 }
 
-/* Samples are gathered in batches over a texel row: first every sample's window in loops
- * without branches, then the windows' values, summed per texel in order. */
+/* Samples are gathered in batches over a texel row. Most take the fast path (fast_windows,
+ * below: float vectors, 4 x 4 taps); the rest (windows given by polar_columns, polar bands,
+ * wide or very narrow windows) go to a second batch handled in double (slow_values). */
 enum { BATCH = 128 };
-typedef struct eq_batch {
+typedef double v4d __attribute__((vector_size(32)));
+typedef struct eq_slow {
     int n;
-    int texel[BATCH];
     double sc[BATCH], tc[BATCH], sub[BATCH];
     int preset[BATCH]; /* the window is given (polar_columns), not the face point */
     double given[BATCH][7]; /* its weight, px, py, wpx, hpx, sin and cos theta */
@@ -525,14 +535,28 @@ typedef struct eq_batch {
     /* the windows: kind (0: general, window_value), first row, 4 x 4 taps */
     int kind[BATCH], row[BATCH], rows[BATCH], col[4][BATCH];
     float wx[4][BATCH], wyt[4][BATCH], wyp[3][BATCH];
-    /* the tent windows' parameters (see batch_flush) */
+    /* the tent windows' parameters (see slow_values) */
     float v_da[BATCH], v_e[BATCH], v_dy[BATCH], v_ey[BATCH], v_h[BATCH];
     float v_sc[BATCH], v_sd[BATCH];
     int fine[BATCH];       /* windows whose weights are redone in double */
     double fd[BATCH][6];   /* their da, w, dy, h, s_c, s_d */
+    float val[BATCH][4];   /* the result: each window's value */
+} eq_slow;
+
+typedef struct eq_batch {
+    int n;
+    int texel[BATCH];
+    double given[BATCH][7]; /* a window given by polar_columns (as eq_slow's), where fsub is 0 */
+    /* the face point and cell size; the fast path's windows: weight, first row, rows, columns,
+     * tap weights */
+    float fsc[BATCH], ftc[BATCH], fsub[BATCH];
+    int fast[BATCH], frow[BATCH], frows[BATCH], fcol[4][BATCH];
+    float fwt[BATCH], fwx[4][BATCH], fwy[4][BATCH];
+    eq_slow *slow;
     /* the running sum of the texel being summed (its samples can span two batches) */
     int cur;
-    double acc[4], wsum;
+    v4d acc;
+    double wsum;
 } eq_batch;
 
 static void batch_emit(eq_batch *bt, float *out)
@@ -544,7 +568,8 @@ static void batch_emit(eq_batch *bt, float *out)
     bt->cur = -1;
 }
 
-static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
+/* The value of each window of a batch, in double (the samples the fast path leaves). */
+static void slow_values(const eq_job *job, int face, eq_slow *bt)
 {
     int W = job->im->width, H = job->im->height, n = bt->n;
     const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
@@ -751,12 +776,8 @@ static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
     }
     const float *pix = job->im->pixels;
     for (int i = 0; i < n; i++) {
-        if (bt->texel[i] != bt->cur) {
-            batch_emit(bt, out);
-            bt->cur = bt->texel[i];
-            bt->acc[0] = bt->acc[1] = bt->acc[2] = bt->acc[3] = bt->wsum = 0.0;
-        }
-        float val[4] = {0, 0, 0, 0};
+        float *val = bt->val[i];
+        val[0] = val[1] = val[2] = val[3] = 0.0f;
         if (bt->kind[i]) {
             for (int k = 0; k < bt->rows[i]; k++) {
                 long r = bt->row[i] + k < H ? bt->row[i] + k : H - 1; /* past the window: 0 */
@@ -773,8 +794,235 @@ static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
             double px = bt->px[i], py = bt->py[i], hw = 0.5 * bt->wpx[i], hh = 0.5 * bt->hpx[i];
             window_value(job, px - hw, px + hw, py - hh, py + hh, bt->st[i], bt->ct[i], val);
         }
-        double wt = bt->wt[i];
-        for (int c = 0; c < 4; c++) bt->acc[c] += wt * val[c];
+    }
+}
+
+/* The fast path: the windows of samples whose window is at most two pixels wide and tall in
+ * the interpolated rows, which is nearly all of them, in float vectors of eight lanes (plain
+ * SSE as two halves, one AVX2 register where the CPU has it: the same operations in the same
+ * order, no fused multiply-adds, so the same bits either way). Float is enough here: a
+ * window's ends move by under 3e-4 pixel (float spacing at 2048 pixels, and the float
+ * polynomial atan2), against windows 1/16 pixel and wider (narrower ones are slow windows). */
+#if defined(__GNUC__) && !defined(__clang__)
+/* (f8load returns a vector; it is always inlined, so no call passes one in any ABI) */
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+typedef float v8f __attribute__((vector_size(32)));
+typedef int v8i __attribute__((vector_size(32)));
+#define EQ_AI static inline __attribute__((always_inline))
+EQ_AI v8f f8load(const float *p)
+{
+    v8f v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+/* The rest are macros (statement expressions): GCC notes an ABI change for every function
+ * taking a 32-byte vector, even an always inlined one. */
+#define F8STORE(p, v) do { v8f v_ = (v); memcpy((p), &v_, sizeof v_); } while (0)
+#define I8STORE(p, v) do { v8i v_ = (v); memcpy((p), &v_, sizeof v_); } while (0)
+#define F8SEL(m, a, b) ({ v8i m_ = (m); (v8f)((m_ & (v8i)(a)) | (~m_ & (v8i)(b))); })
+#define F8ABS(x) ((v8f)((v8i)(x) & 0x7fffffff))
+#define F8CLAMP1(t) ({ v8f c_ = (t); c_ = F8SEL(c_ < -1.0f, (v8f){} - 1.0f, c_); \
+                       F8SEL(c_ > 1.0f, (v8f){} + 1.0f, c_); })
+/* tent_cdf and tent_moment without branches (as vtent, vmoment) */
+#define F8TENT(t) ({ v8f u_ = F8CLAMP1(t); 0.5f + u_ - 0.5f * u_ * F8ABS(u_); })
+#define F8MOMENT(t) ({ v8f u_ = F8CLAMP1(t); \
+                       u_ * u_ * (0.5f - F8ABS(u_) * (1.0f / 3.0f)) - 1.0f / 6.0f; })
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#define F8SQRT(x) ({ v8f s_ = (x); __m128 h_[2]; memcpy(h_, &s_, sizeof s_); \
+                     h_[0] = _mm_sqrt_ps(h_[0]); h_[1] = _mm_sqrt_ps(h_[1]); \
+                     memcpy(&s_, h_, sizeof s_); s_; })
+#else
+#define F8SQRT(x) ({ v8f s_ = (x); for (int l_ = 0; l_ < 8; l_++) s_[l_] = sqrtf(s_[l_]); s_; })
+#endif
+/* atan2 from atan01 (the same polynomial, in float), without branches */
+#define F8ATAN2(y, x) ({ \
+    v8f y_ = (y), x_ = (x), ax_ = F8ABS(x_), ay_ = F8ABS(y_); \
+    v8i steep_ = ay_ > ax_; \
+    v8f mn_ = F8SEL(steep_, ax_, ay_), mx_ = F8SEL(steep_, ay_, ax_); \
+    v8f t_ = mn_ / F8SEL(mx_ > 0.0f, mx_, (v8f){} + 1.0f), t2_ = t_ * t_; \
+    v8f r_ = t_ * (1.0f + t2_ * (-0.3333314528f + t2_ * (0.1999355085f + \
+             t2_ * (-0.1420889944f + t2_ * (0.1065626393f + t2_ * (-0.0752896400f + \
+             t2_ * (0.0429096138f + t2_ * (-0.0161657367f + t2_ * 0.0028662257f)))))))); \
+    r_ = F8SEL(steep_, (float)(0.5 * PI) - r_, r_); \
+    r_ = F8SEL(x_ < 0.0f, (float)PI - r_, r_); \
+    F8SEL(y_ < 0.0f, -r_, r_); })
+
+/* For lanes [0, n) of a batch (n a multiple of 8): each sample's direction, weight dA / |d|^3
+ * and window (as slow_values computes them), then, for the tent windows, the first row and
+ * column, the row count and the 4 x 4 tap weights; fast[i] says whether sample i took it. */
+EQ_AI void fast_windows_impl(const eq_fast_face *ff, eq_batch *bt, int n)
+{
+    const float *m = ff->m, *a = ff->a, *b = ff->b;
+    const int Wi = ff->W;
+    const float W = (float)ff->W, H = (float)ff->H;
+    const float px_per_rad_u = (float)(ff->W / (2.0 * PI)), px_per_rad_v = (float)(ff->H / PI);
+    const float k_rad = (float)(PI / ff->H), row_lo = (float)ff->R + 1.0f;
+    const float row_hi = (float)(ff->H - ff->R - 1);
+    const v8i narrow_ok = (v8i){} - (ff->narrow_ok != 0);
+    for (int i = 0; i < n; i += 8) {
+        v8f sc = f8load(bt->fsc + i), tc = f8load(bt->ftc + i), sub = f8load(bt->fsub + i);
+        v8f x = m[0] + tc * b[0] + sc * a[0];
+        v8f y = m[1] + tc * b[1] + sc * a[1];
+        v8f z = m[2] + tc * b[2] + sc * a[2];
+        v8f rho2 = x * x + z * z, len2 = rho2 + y * y;
+        v8f rho = F8SQRT(rho2), len = F8SQRT(len2);
+        v8f inv_len = 1.0f / len, inv_len2 = inv_len * inv_len;
+        v8f wt = inv_len2 * inv_len;
+        v8f px = (F8ATAN2(x, -z) * (float)(0.5 / PI) + 0.5f) * W;
+        v8f py = F8ATAN2(rho, y) * (float)(ff->H / PI);
+        v8f g1 = F8ABS(y * (x * a[0] + z * a[2]) - rho2 * a[1]);
+        v8f g2 = F8ABS(y * (x * b[0] + z * b[2]) - rho2 * b[1]);
+        v8f ga = F8ABS(x * a[2] - z * a[0]), gb = F8ABS(x * b[2] - z * b[0]);
+        v8i off_axis = rho2 > 1e-30f;
+        v8f inv_rho2 = 1.0f / F8SEL(off_axis, rho2, (v8f){} + 1.0f);
+        v8f wpx = (ga + gb) * inv_rho2 * sub * px_per_rad_u;
+        wpx = F8SEL(wpx < W, wpx, (v8f){} + W);
+        wpx = F8SEL(off_axis, wpx, (v8f){} + W);
+        v8f hpx = F8SEL(off_axis, (g1 + g2) * rho * inv_rho2 * inv_len2 * sub * px_per_rad_v,
+                        2.0f * inv_len * sub * px_per_rad_v);
+        v8f st = rho * inv_len, ct = y * inv_len;
+        /* the window, cut at the poles */
+        v8f hw = 0.5f * wpx, hh = 0.5f * hpx;
+        v8f px0 = px - hw, w = wpx, c = py;
+        v8f py0 = c - hh, py1 = c + hh;
+        py0 = F8SEL(py0 < 0.0f, (v8f){}, py0);
+        py1 = F8SEL(py1 > H, (v8f){} + H, py1);
+        py1 = F8SEL(py1 < py0, py0, py1);
+        v8f h = py1 - py0, s_d = k_rad * ct;
+        v8f s_c = st + s_d * (0.5f * (py0 + py1) - c);
+        v8i fast = narrow_ok & (h >= 1.0f / 16) & (h <= 2.0f) & (w >= 1.0f / 16) & (w <= 2.0f) &
+                   (py0 - 0.5f >= row_lo) & (py1 + 0.5f <= row_hi);
+        /* other lanes: any finite window (unused) */
+        px0 = F8SEL(fast, px0, (v8f){});
+        py0 = F8SEL(fast, py0, (v8f){} + row_lo);
+        w = F8SEL(fast, w, (v8f){} + 1.0f);
+        h = F8SEL(fast, h, (v8f){} + 1.0f);
+        /* longitude: the first column whose tent reaches the window, then four */
+        v8f wa = F8SEL(px0 < 0.0f, px0 + W, F8SEL(px0 >= W, px0 - W, px0));
+        v8i i0 = __builtin_convertvector(wa + 0.5f, v8i) - 1; /* floor(wa - 1/2) */
+        v8f da = wa - (__builtin_convertvector(i0, v8f) + 0.5f); /* in [0, 1) */
+        v8f e = da + w;
+        for (int k = 0; k < 4; k++) {
+            v8i col = i0 + k;
+            col += (col < 0) & Wi;
+            col -= (col >= Wi) & Wi;
+            I8STORE(bt->fcol[k] + i, col * 4);
+        }
+        /* latitude: row jt + k has centre py0 - dy + k */
+        v8i jt = __builtin_convertvector(py0 + 0.5f, v8i) - 1; /* floor(py0 - 1/2) */
+        v8f dy = py0 - (__builtin_convertvector(jt, v8f) + 0.5f), ey = dy + h;
+        v8i rows = 2 - (ey > 1.0f) - (ey > 2.0f);
+        I8STORE(bt->frow + i, jt);
+        I8STORE(bt->frows + i, rows);
+        I8STORE(bt->fast + i, fast);
+        F8STORE(bt->fwt + i, wt);
+        /* the tent weights (as slow_values): longitude tap k weighs T(e - k) - T(da - k) (over
+         * their sum), latitude row k (T(ey - k) - T(dy - k)) (s_c + s_d (k - dy - h / 2)) +
+         * s_d (M(ey - k) - M(dy - k)), with T(da - k) = T(da), da^2 / 2, 0, 0 for da in
+         * [0, 1) (the same for M) */
+        v8f lo_t[2] = {0.5f + da - 0.5f * da * da, 0.5f * da * da};
+        v8f dm = dy - 1.0f;
+        v8f ly_t[2] = {0.5f + dy - 0.5f * dy * dy, 0.5f * dy * dy};
+        v8f ly_m[2] = {dy * dy * (0.5f - dy * (1.0f / 3.0f)) - 1.0f / 6.0f,
+                       dm * dm * (0.5f + dm * (1.0f / 3.0f)) - 1.0f / 6.0f};
+        v8f share[4], wx[4], sum = {0}, wsum = {0};
+        for (int k = 0; k < 4; k++) {
+            float fk = (float)k;
+            wx[k] = F8TENT(e - fk);
+            if (k < 2) wx[k] -= lo_t[k];
+            wsum += wx[k];
+            v8f t = F8TENT(ey - fk), mom = F8MOMENT(ey - fk);
+            if (k < 2) {
+                t -= ly_t[k];
+                mom -= ly_m[k];
+            }
+            share[k] = t * (s_c + s_d * (fk - dy - 0.5f * h)) + s_d * mom;
+            sum += share[k];
+        }
+        sum = F8SEL(sum > 0.0f, sum, (v8f){} + 1.0f);
+        wsum = F8SEL(wsum > 0.0f, wsum, (v8f){} + 1.0f);
+        v8f inv = 1.0f / sum, inv_w = 1.0f / wsum;
+        for (int k = 0; k < 4; k++) {
+            F8STORE(bt->fwy[k] + i, share[k] * inv);
+            F8STORE(bt->fwx[k] + i, wx[k] * inv_w);
+        }
+    }
+}
+
+static void fast_windows(const eq_fast_face *ff, eq_batch *bt, int n)
+{
+    fast_windows_impl(ff, bt, n);
+}
+
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define EQ_HAVE_AVX2 1
+__attribute__((target("avx2"))) static void fast_windows_avx2(const eq_fast_face *ff,
+                                                              eq_batch *bt, int n)
+{
+    fast_windows_impl(ff, bt, n);
+}
+#endif
+
+/* The samples of a batch: the fast windows' values from their 4 x 4 taps, the others' from
+ * slow_values, summed per texel in the samples' order. */
+static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
+{
+    int n = bt->n, W = job->im->width, n8 = (n + 7) & ~7;
+    for (int i = n; i < n8; i++) {
+        /* lanes past the batch: the face's centre (unused) */
+        bt->fsc[i] = bt->ftc[i] = 0.0f;
+        bt->fsub[i] = 1.0f;
+    }
+#ifdef EQ_HAVE_AVX2
+    if (job->avx2) fast_windows_avx2(&job->fast[face], bt, n8);
+    else
+#endif
+        fast_windows(&job->fast[face], bt, n8);
+    eq_slow *sl = bt->slow;
+    sl->n = 0;
+    for (int i = 0; i < n; i++) {
+        if (bt->fast[i]) continue;
+        int j = sl->n++;
+        sl->sc[j] = bt->fsc[i];
+        sl->tc[j] = bt->ftc[i];
+        sl->sub[j] = bt->fsub[i];
+        sl->preset[j] = bt->fsub[i] == 0.0f;
+        if (sl->preset[j]) memcpy(sl->given[j], bt->given[i], sizeof sl->given[j]);
+    }
+    if (sl->n) slow_values(job, face, sl);
+    const float *pix = job->im->pixels;
+    const size_t stride = (size_t)W * 4;
+    for (int i = 0, j = 0; i < n; i++) {
+        if (bt->texel[i] != bt->cur) {
+            batch_emit(bt, out);
+            bt->cur = bt->texel[i];
+            bt->acc = (v4d){0, 0, 0, 0};
+            bt->wsum = 0.0;
+        }
+        v4f val;
+        double wt;
+        if (bt->fast[i]) {
+            const float *rowp = pix + (size_t)bt->frow[i] * stride;
+            const float *c0 = rowp + bt->fcol[0][i], *c1 = rowp + bt->fcol[1][i];
+            const float *c2 = rowp + bt->fcol[2][i], *c3 = rowp + bt->fcol[3][i];
+            v4f w0 = vsplat(bt->fwx[0][i]), w1 = vsplat(bt->fwx[1][i]);
+            v4f w2 = vsplat(bt->fwx[2][i]), w3 = vsplat(bt->fwx[3][i]);
+            val = vsplat(0.0f);
+            for (int k = 0, rows = bt->frows[i]; k < rows; k++) {
+                size_t o = (size_t)k * stride;
+                v4f v = w0 * vload(c0 + o) + w1 * vload(c1 + o) + w2 * vload(c2 + o) +
+                        w3 * vload(c3 + o);
+                val += vsplat(bt->fwy[k][i]) * v;
+            }
+            wt = bt->fwt[i];
+        } else {
+            val = vload(sl->val[j]);
+            wt = sl->wt[j];
+            j++;
+        }
+        bt->acc += wt * __builtin_convertvector(val, v4d);
         bt->wsum += wt;
     }
     bt->n = 0;
@@ -843,9 +1091,7 @@ static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *
         if (bt->n == BATCH) batch_flush(job, face, bt, out);
         int n = bt->n++;
         bt->texel[n] = tx;
-        bt->sc[n] = bt->tc[n] = 0.0;
-        bt->sub[n] = cell;
-        bt->preset[n] = 1;
+        bt->fsc[n] = bt->ftc[n] = bt->fsub[n] = 0.0f;
         double *g = bt->given[n];
         g[0] = wt;
         g[1] = jj + 0.5;
@@ -859,50 +1105,65 @@ static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *
 }
 
 /* How many samples per axis each texel of a run takes (0: near a pole), from the texel's
- * extent in source rows and columns: SAMPLES_PER_ROW / _COLUMN per pixel it spans. */
-static void texel_ks(const eq_job *job, int face, int ty, int tx0, int n, int *ks)
+ * extent in source rows and columns: SAMPLES_PER_ROW / _COLUMN per pixel it spans. Eight
+ * texels at a time in float (n rounded up to 8; ks holds TEXEL_RUN). */
+EQ_AI void texel_ks_impl(const eq_fast_face *ff, int ty, int tx0, int n, int *ks)
 {
-    int N = job->out->size, W = job->im->width, H = job->im->height;
-    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
-    const double cell = 2.0 / N, px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
-    double rho[TEXEL_RUN], len[TEXEL_RUN], sq[2 * TEXEL_RUN];
-    const double tc = -1.0 + (ty + 0.5) * cell;
-    for (int i = 0; i < n; i++) {
-        double sc = -1.0 + (tx0 + i + 0.5) * cell;
-        double x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
-               z = m[2] + sc * a[2] + tc * b[2];
-        sq[i] = x * x + z * z;
-        sq[TEXEL_RUN + i] = sq[i] + y * y;
-    }
-    sqrt_run(sq, rho, n);
-    sqrt_run(sq + TEXEL_RUN, len, n);
-    for (int i = 0; i < n; i++) {
-        double sc = -1.0 + (tx0 + i + 0.5) * cell;
-        double x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
-               z = m[2] + sc * a[2] + tc * b[2];
-        double rho2 = sq[i], r2 = sq[TEXEL_RUN + i];
+    const float *m = ff->m, *a = ff->a, *b = ff->b;
+    const double cell = 2.0 / ff->N;
+    const float rows_per = (float)(SAMPLES_PER_ROW * cell * ff->H / PI);
+    const float cols_per = (float)(SAMPLES_PER_COLUMN * cell * ff->W / (2.0 * PI));
+    const float fcell = (float)cell, tc = (float)(-1.0 + (ty + 0.5) * cell);
+    for (int i = 0; i < n; i += 8) {
+        v8f sc;
+        for (int l = 0; l < 8; l++) sc[l] = (float)(-1.0 + (tx0 + i + l + 0.5) * cell);
+        v8f x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
+            z = m[2] + sc * a[2] + tc * b[2];
+        v8f rho2 = x * x + z * z, r2 = rho2 + y * y;
+        v8f rho = F8SQRT(rho2), len = F8SQRT(r2);
         /* latitude extent of the texel in source rows, from the gradient of theta; at a pole
          * theta is a cone: its change is bound by the full gradient 1/|d| */
-        double inv_rr = 1.0 / ((rho[i] > 0.0 ? rho[i] : 1.0) * r2);
-        double g0 = y * x * inv_rr, g1 = -rho2 * inv_rr, g2 = y * z * inv_rr;
-        double ext = fabs(g0 * a[0] + g1 * a[1] + g2 * a[2]) +
-                     fabs(g0 * b[0] + g1 * b[1] + g2 * b[2]);
-        double ext_cone = 2.0 / len[i];
-        ext = rho[i] < 2.0 * cell * len[i] ? ext_cone : ext;
-        double rows = ext * cell * px_per_rad_v;
+        v8f inv_rr = 1.0f / (F8SEL(rho > 0.0f, rho, (v8f){} + 1.0f) * r2);
+        v8f g0 = y * x * inv_rr, g1 = -rho2 * inv_rr, g2 = y * z * inv_rr;
+        v8f ext = F8ABS(g0 * a[0] + g1 * a[1] + g2 * a[2]) + F8ABS(g0 * b[0] + g1 * b[1] + g2 * b[2]);
+        ext = F8SEL(rho < 2.0f * fcell * len, 2.0f / len, ext);
+        v8f want = ext * rows_per;
         /* and its longitude extent in source columns */
-        double cols = (fabs(x * a[2] - z * a[0]) + fabs(x * b[2] - z * b[0])) /
-                      (rho2 > 0.0 ? rho2 : 1.0) * cell * px_per_rad_u;
-        double want = SAMPLES_PER_ROW * rows, want_c = SAMPLES_PER_COLUMN * cols;
-        want = want_c > want ? want_c : want;
-        want = want < 64.0 ? want : 64.0;
-        want = want > 1.0 ? want : 1.0; /* (and no NaN) */
-        rho[i] = rho2 < job->pole_radius2 * r2 ? 0.0 : want; /* (rho is free again) */
+        v8f want_c = (F8ABS(x * a[2] - z * a[0]) + F8ABS(x * b[2] - z * b[0])) /
+                     F8SEL(rho2 > 0.0f, rho2, (v8f){} + 1.0f) * cols_per;
+        want = F8SEL(want_c > want, want_c, want);
+        want = F8SEL(want < 64.0f, want, (v8f){} + 64.0f);
+        want = F8SEL(want > 1.0f, want, (v8f){} + 1.0f); /* (and no NaN) */
+        v8i k = __builtin_convertvector(want, v8i);
+        k -= __builtin_convertvector(k, v8f) < want; /* ceil */
+        k &= ~(rho2 < ff->pole_radius2 * r2);
+        I8STORE(ks + i, k);
     }
-    for (int i = 0; i < n; i++) {
-        int k = (int)rho[i];
-        ks[i] = k + (k < rho[i]); /* ceil */
+}
+
+static void texel_ks_plain(const eq_fast_face *ff, int ty, int tx0, int n, int *ks)
+{
+    texel_ks_impl(ff, ty, tx0, n, ks);
+}
+
+#ifdef EQ_HAVE_AVX2
+__attribute__((target("avx2"))) static void texel_ks_avx2(const eq_fast_face *ff, int ty,
+                                                          int tx0, int n, int *ks)
+{
+    texel_ks_impl(ff, ty, tx0, n, ks);
+}
+#endif
+
+static void texel_ks(const eq_job *job, int face, int ty, int tx0, int n, int *ks)
+{
+    n = (n + 7) & ~7;
+#ifdef EQ_HAVE_AVX2
+    if (job->avx2) {
+        texel_ks_avx2(&job->fast[face], ty, tx0, n, ks);
+        return;
     }
+#endif
+    texel_ks_plain(&job->fast[face], ty, tx0, n, ks);
 }
 
 static void eq_row_task(void *arg, int index)
@@ -912,8 +1173,10 @@ static void eq_row_task(void *arg, int index)
     float *out = ibl_cubemap_face(job->out, 0, face) + (size_t)ty * N * 4;
     const double cell = 2.0 / N; /* texel edge on the face plane */
     eq_batch bt;
+    eq_slow slow;
     bt.n = 0;
     bt.cur = -1;
+    bt.slow = &slow;
     int ks[TEXEL_RUN];
     for (int tx0 = 0; tx0 < N; tx0 += TEXEL_RUN) {
         int run = N - tx0 < TEXEL_RUN ? N - tx0 : TEXEL_RUN;
@@ -927,18 +1190,21 @@ static void eq_row_task(void *arg, int index)
             if (k >= POLAR_COLUMNS_K && job->fixed_k == 0 &&
                 polar_columns(job, face, tx, ty, &bt, out))
                 continue;
+            /* k x k samples, a row of them at a time (k <= 64 < BATCH) */
             const double sub = cell / k;
+            const float fsub = (float)sub;
             for (int j = 0; j < k; j++) {
-                double tcj = -1.0 + ty * cell + (j + 0.5) * sub;
+                if (bt.n + k > BATCH) batch_flush(job, face, &bt, out);
+                float tcj = (float)(-1.0 + ty * cell + (j + 0.5) * sub);
+                int *texel = bt.texel + bt.n;
+                float *fsc = bt.fsc + bt.n, *ftc = bt.ftc + bt.n, *fs = bt.fsub + bt.n;
                 for (int i = 0; i < k; i++) {
-                    if (bt.n == BATCH) batch_flush(job, face, &bt, out);
-                    bt.texel[bt.n] = tx;
-                    bt.sc[bt.n] = -1.0 + tx * cell + (i + 0.5) * sub;
-                    bt.tc[bt.n] = tcj;
-                    bt.sub[bt.n] = sub;
-                    bt.preset[bt.n] = 0;
-                    bt.n++;
+                    texel[i] = tx;
+                    fsc[i] = (float)(-1.0 + tx * cell + (i + 0.5) * sub);
+                    ftc[i] = tcj;
+                    fs[i] = fsub;
                 }
+                bt.n += k;
             }
         }
     }
@@ -1004,6 +1270,26 @@ ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const
         job.pole_cell_area = cell * cell / POLE_CELLS;
     }
     ibl__picture_basis(frame, job.basis);
+    {
+        int R = POLAR_BOX_ROWS < H / 4 ? POLAR_BOX_ROWS : H / 4;
+        for (int f = 0; f < 6; f++) {
+            eq_fast_face *ff = &job.fast[f];
+            for (int i = 0; i < 3; i++) {
+                ff->m[i] = (float)job.basis[f][0][i];
+                ff->a[i] = (float)job.basis[f][1][i];
+                ff->b[i] = (float)job.basis[f][2][i];
+            }
+            ff->W = W;
+            ff->H = H;
+            ff->R = R;
+            ff->narrow_ok = W >= 8;
+            ff->N = out->size;
+            ff->pole_radius2 = (float)job.pole_radius2;
+        }
+#ifdef EQ_HAVE_AVX2
+        job.avx2 = __builtin_cpu_supports("avx2");
+#endif
+    }
     ibl_parallel_for(ctx, 6 * out->size, eq_row_task, &job);
     ibl_free(ctx, cs);
     ibl_free(ctx, mean);
