@@ -562,8 +562,8 @@ typedef struct eq_batch {
 static void batch_emit(eq_batch *bt, float *out)
 {
     if (bt->cur >= 0) {
-        double inv = 1.0 / bt->wsum;
-        for (int c = 0; c < 4; c++) out[(size_t)bt->cur * 4 + c] = (float)(bt->acc[c] * inv);
+        v4f mean = __builtin_convertvector(bt->acc * (1.0 / bt->wsum), v4f);
+        memcpy(out + (size_t)bt->cur * 4, &mean, sizeof mean);
     }
     bt->cur = -1;
 }
@@ -994,12 +994,18 @@ static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
     if (sl->n) slow_values(job, face, sl);
     const float *pix = job->im->pixels;
     const size_t stride = (size_t)W * 4;
+    int cur = bt->cur;
+    v4d acc = bt->acc;
+    double wsum = bt->wsum;
     for (int i = 0, j = 0; i < n; i++) {
-        if (bt->texel[i] != bt->cur) {
-            batch_emit(bt, out);
-            bt->cur = bt->texel[i];
-            bt->acc = (v4d){0, 0, 0, 0};
-            bt->wsum = 0.0;
+        if (bt->texel[i] != cur) {
+            if (cur >= 0) {
+                v4f mean = __builtin_convertvector(acc * (1.0 / wsum), v4f);
+                memcpy(out + (size_t)cur * 4, &mean, sizeof mean);
+            }
+            cur = bt->texel[i];
+            acc = (v4d){0, 0, 0, 0};
+            wsum = 0.0;
         }
         v4f val;
         double wt;
@@ -1022,9 +1028,12 @@ static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
             wt = sl->wt[j];
             j++;
         }
-        bt->acc += wt * __builtin_convertvector(val, v4d);
-        bt->wsum += wt;
+        acc += wt * __builtin_convertvector(val, v4d);
+        wsum += wt;
     }
+    bt->cur = cur;
+    bt->acc = acc;
+    bt->wsum = wsum;
     bt->n = 0;
 }
 
@@ -1178,6 +1187,7 @@ static void eq_row_task(void *arg, int index)
     bt.cur = -1;
     bt.slow = &slow;
     int ks[TEXEL_RUN];
+    const float fcell = (float)cell, ftc_mid = (float)(-1.0 + (ty + 0.5) * cell);
     for (int tx0 = 0; tx0 < N; tx0 += TEXEL_RUN) {
         int run = N - tx0 < TEXEL_RUN ? N - tx0 : TEXEL_RUN;
         if (job->fixed_k == 0) texel_ks(job, face, ty, tx0, run, ks);
@@ -1190,6 +1200,15 @@ static void eq_row_task(void *arg, int index)
             if (k >= POLAR_COLUMNS_K && job->fixed_k == 0 &&
                 polar_columns(job, face, tx, ty, &bt, out))
                 continue;
+            if (k == 1) {
+                if (bt.n == BATCH) batch_flush(job, face, &bt, out);
+                bt.texel[bt.n] = tx;
+                bt.fsc[bt.n] = (float)(-1.0 + (tx + 0.5) * cell);
+                bt.ftc[bt.n] = ftc_mid;
+                bt.fsub[bt.n] = fcell;
+                bt.n++;
+                continue;
+            }
             /* k x k samples, a row of them at a time (k <= 64 < BATCH) */
             const double sub = cell / k;
             const float fsub = (float)sub;
@@ -1233,8 +1252,9 @@ static void row_mean_task(void *arg, int index)
     }
 }
 
-ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const ibl__frame *frame,
-                                 int samples_per_axis, ibl_cubemap *out)
+static ibl_status equirect_to_cube(ibl_context *ctx, const ibl_image *image,
+                                   const ibl__frame *frame, int samples_per_axis, int simd,
+                                   ibl_cubemap *out)
 {
     int W = image->width, H = image->height;
     float *mean = ibl_alloc(ctx, (size_t)H * 4 * sizeof(float));
@@ -1286,12 +1306,35 @@ ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const
             ff->N = out->size;
             ff->pole_radius2 = (float)job.pole_radius2;
         }
+        (void)simd;
 #ifdef EQ_HAVE_AVX2
-        job.avx2 = __builtin_cpu_supports("avx2");
+        job.avx2 = simd && __builtin_cpu_supports("avx2");
 #endif
     }
     ibl_parallel_for(ctx, 6 * out->size, eq_row_task, &job);
     ibl_free(ctx, cs);
     ibl_free(ctx, mean);
     return IBL_OK;
+}
+
+ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const ibl__frame *frame,
+                                 int samples_per_axis, ibl_cubemap *out)
+{
+    return equirect_to_cube(ctx, image, frame, samples_per_axis, 1, out);
+}
+
+ibl_status ibl__equirect_to_cube_portable(ibl_context *ctx, const ibl_image *image,
+                                          const ibl__frame *frame, int samples_per_axis,
+                                          ibl_cubemap *out)
+{
+    return equirect_to_cube(ctx, image, frame, samples_per_axis, 0, out);
+}
+
+int ibl__equirect_has_avx2(void)
+{
+#ifdef EQ_HAVE_AVX2
+    return __builtin_cpu_supports("avx2") != 0;
+#else
+    return 0;
+#endif
 }
