@@ -327,16 +327,27 @@ static double wrap_angle(double a)
     return a;
 }
 
-/* Is the picture-frame direction p inside texel (tx, ty) of the face with axes m, a, b? */
-static inline int in_texel(const double *m, const double *a, const double *b, double half,
-                           int tx, int ty, double px, double py, double pz)
+/* Four doubles at a time (GCC / Clang vector extensions; two SSE2 halves on x86-64) */
+typedef double v4d __attribute__((vector_size(32)));
+typedef long long v4l __attribute__((vector_size(32)));
+
+/* Where the picture-frame direction p lies against texel (tx, ty): bits 1 / 2 left / right of
+ * it by more than margin (texels), 4 / 8 above / below; 0 if behind the face. *in: inside. */
+static inline int texel_outcode(const double *m, const double *a, const double *b, double half,
+                                int tx, int ty, double margin, double px, double py, double pz,
+                                int *in)
 {
     double pm = m[0] * px + m[1] * py + m[2] * pz;
-    if (!(pm > 0.0)) return 0;
+    if (!(pm > 0.0)) {
+        *in = 0;
+        return 0;
+    }
     double inv = half / pm;
     double fx = (a[0] * px + a[1] * py + a[2] * pz) * inv + half;
     double fy = (b[0] * px + b[1] * py + b[2] * pz) * inv + half;
-    return fx >= tx && fx < tx + 1 && fy >= ty && fy < ty + 1;
+    *in = fx >= tx && fx < tx + 1 && fy >= ty && fy < ty + 1;
+    return (fx < tx - margin) | (fx >= tx + 1 + margin) << 1 | (fy < ty - margin) << 2 |
+           (fy >= ty + 1 + margin) << 3;
 }
 
 /* Texels within a few cells of a pole. There theta and phi are far from linear across a
@@ -400,6 +411,12 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
     const double half = 0.5 * N;
     const double dphi = 2.0 * PI / W;
     const double cd = cos(dphi), sd = sin(dphi);
+    /* a parallel strays from the chord between two pixel corners by under dphi^2 / 8 radians,
+     * at most 3 times that on the face plane: in texels, under this */
+    const double margin = N * dphi * dphi / 4.0 + 1e-9;
+    /* the texel's edges on the face plane */
+    const double s_lo = -1.0 + tx * cell, s_hi = -1.0 + (tx + 1) * cell;
+    const double t_lo = -1.0 + ty * cell, t_hi = -1.0 + (ty + 1) * cell;
     const double phi_start = 2.0 * PI * ((double)c0 / W - 0.5);
     const double cos_start = cos(phi_start), sin_start = sin(phi_start);
     /* crossed pixels are cut into FINE rows of cells, each row into cells about as wide as
@@ -416,7 +433,7 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
         const double fine_d = dphi / nlon, fcd = cos(fine_d), fsd = sin(fine_d);
         const double hc = cos(0.5 * fine_d), hs = sin(0.5 * fine_d);
         /* the cells of a crossed pixel: their rows' sin, cos and solid angle */
-        double sub_st[FINE], sub_ct[FINE], sub_w[FINE];
+        double sub_st[FINE], sub_ct[FINE], sub_w[FINE]; /* (FINE: a multiple of 4) */
         for (int j = 0; j < FINE; j++) {
             double ta = th0 + (th1 - th0) * j / FINE, tb = th0 + (th1 - th0) * (j + 1) / FINE;
             double tm = 0.5 * (ta + tb);
@@ -424,34 +441,55 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
             sub_ct[j] = cos(tm);
             sub_w[j] = (cos(ta) - cos(tb)) * fine_d;
         }
-        /* pixel corners along this row's top and bottom edges */
+        /* pixel corners along this row's top and bottom edges: inside the texel, and where
+         * outside (a pixel whose four corners are all beyond one of the texel's edges, by more
+         * than its parallels bulge past their chords, misses the texel: its other edges are
+         * meridians, straight on the face plane) */
         double cp = cos_start, sp = sin_start;
-        int top = in_texel(m, a, b, half, tx, ty, st0 * sp, ct0, -st0 * cp);
-        int bottom = in_texel(m, a, b, half, tx, ty, st1 * sp, ct1, -st1 * cp);
+        int top, bottom;
+        int top_code = texel_outcode(m, a, b, half, tx, ty, margin, st0 * sp, ct0, -st0 * cp, &top);
+        int bottom_code =
+            texel_outcode(m, a, b, half, tx, ty, margin, st1 * sp, ct1, -st1 * cp, &bottom);
         long wc = c0 % W;
         if (wc < 0) wc += W;
         for (long col = c0; col < c1; col++) {
             double ncp = cp * cd - sp * sd, nsp = sp * cd + cp * sd;
-            int top2 = in_texel(m, a, b, half, tx, ty, st0 * nsp, ct0, -st0 * ncp);
-            int bottom2 = in_texel(m, a, b, half, tx, ty, st1 * nsp, ct1, -st1 * ncp);
+            int top2, bottom2;
+            int top2_code =
+                texel_outcode(m, a, b, half, tx, ty, margin, st0 * nsp, ct0, -st0 * ncp, &top2);
+            int bottom2_code =
+                texel_outcode(m, a, b, half, tx, ty, margin, st1 * nsp, ct1, -st1 * ncp, &bottom2);
             int inside = top + bottom + top2 + bottom2;
+            int missed = top_code & bottom_code & top2_code & bottom2_code;
             const float *p = row + wc * 4;
             if (inside == 4) {
                 for (int c = 0; c < 4; c++) acc[c] += w_pixel * p[c];
                 wsum += w_pixel;
-            } else if (inside > 0 || thin) {
-                /* the texel's edge crosses this pixel: count its cells by centre */
-                double share = 0.0;
-                for (int j = 0; j < FINE; j++) {
-                    double st = sub_st[j], ct = sub_ct[j], wcell = sub_w[j];
-                    double fc = cp * hc - sp * hs, fs = sp * hc + cp * hs;
-                    for (int i = 0; i < nlon; i++) {
-                        if (in_texel(m, a, b, half, tx, ty, st * fs, ct, -st * fc)) share += wcell;
-                        double t = fc * fcd - fs * fsd;
-                        fs = fs * fcd + fc * fsd;
-                        fc = t;
+            } else if (inside > 0 || (thin && !missed)) {
+                /* the texel's edge crosses this pixel: count its cells by centre, a column of
+                 * them at a time (four rows to a vector). Cell (st fs, ct, -st fc) is in the
+                 * texel when its face coordinates (a.p / m.p, b.p / m.p) are, with m.p > 0. */
+                v4d share4 = {0, 0, 0, 0};
+                double fc = cp * hc - sp * hs, fs = sp * hc + cp * hs;
+                for (int i = 0; i < nlon; i++) {
+                    double cm = m[0] * fs - m[2] * fc, ca = a[0] * fs - a[2] * fc;
+                    double cb = b[0] * fs - b[2] * fc;
+                    for (int j = 0; j < FINE; j += 4) {
+                        v4d st, ct, wc;
+                        memcpy(&st, sub_st + j, sizeof st);
+                        memcpy(&ct, sub_ct + j, sizeof ct);
+                        memcpy(&wc, sub_w + j, sizeof wc);
+                        v4d pm = st * cm + ct * m[1];
+                        v4d qa = st * ca + ct * a[1], qb = st * cb + ct * b[1];
+                        v4l in = (pm > 0.0) & (qa >= s_lo * pm) & (qa < s_hi * pm) &
+                                 (qb >= t_lo * pm) & (qb < t_hi * pm);
+                        share4 += (v4d)(in & (v4l)wc);
                     }
+                    double t = fc * fcd - fs * fsd;
+                    fs = fs * fcd + fc * fsd;
+                    fc = t;
                 }
+                double share = (share4[0] + share4[1]) + (share4[2] + share4[3]);
                 for (int c = 0; c < 4; c++) acc[c] += share * p[c];
                 wsum += share;
             }
@@ -459,6 +497,8 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
             sp = nsp;
             top = top2;
             bottom = bottom2;
+            top_code = top2_code;
+            bottom_code = bottom2_code;
             if (++wc == W) wc = 0;
         }
     }
@@ -524,7 +564,6 @@ static inline v4f vmoment(v4f t)
  * below: float vectors, 4 x 4 taps); the rest (windows given by polar_columns, polar bands,
  * wide or very narrow windows) go to a second batch handled in double (slow_values). */
 enum { BATCH = 128 };
-typedef double v4d __attribute__((vector_size(32)));
 typedef struct eq_slow {
     int n;
     double sc[BATCH], tc[BATCH], sub[BATCH];
