@@ -863,6 +863,12 @@ EQ_AI v8f f8load(const float *p)
 #define F8ABS(x) ((v8f)((v8i)(x) & 0x7fffffff))
 #define F8CLAMP1(t) ({ v8f c_ = (t); c_ = F8SEL(c_ < -1.0f, (v8f){} - 1.0f, c_); \
                        F8SEL(c_ > 1.0f, (v8f){} + 1.0f, c_); })
+/* two v4f side by side */
+#if defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12)
+#define F8JOIN(lo, hi) __builtin_shufflevector((lo), (hi), 0, 1, 2, 3, 4, 5, 6, 7)
+#else
+#define F8JOIN(lo, hi) ({ v4f h_[2] = {(lo), (hi)}; v8f j_; memcpy(&j_, h_, sizeof j_); j_; })
+#endif
 /* tent_cdf and tent_moment without branches (as vtent, vmoment) */
 #define F8TENT(t) ({ v8f u_ = F8CLAMP1(t); 0.5f + u_ - 0.5f * u_ * F8ABS(u_); })
 #define F8MOMENT(t) ({ v8f u_ = F8CLAMP1(t); \
@@ -1004,11 +1010,78 @@ __attribute__((target("avx2"))) static void fast_windows_avx2(const eq_fast_face
 }
 #endif
 
+/* The windows' values (the fast ones from their 4 x 4 taps, two columns to a vector) summed per
+ * texel in the samples' order, in double; a texel is written when the next one starts. */
+EQ_AI void batch_sum_impl(const eq_job *job, eq_batch *bt, float *out)
+{
+    const eq_slow *sl = bt->slow;
+    const float *pix = job->im->pixels;
+    const size_t stride = (size_t)job->im->width * 4;
+    int cur = bt->cur;
+    v4d acc = bt->acc;
+    double wsum = bt->wsum;
+    for (int i = 0, j = 0, n = bt->n; i < n; i++) {
+        if (bt->texel[i] != cur) {
+            if (cur >= 0) {
+                v4f mean = __builtin_convertvector(acc * (1.0 / wsum), v4f);
+                memcpy(out + (size_t)cur * 4, &mean, sizeof mean);
+            }
+            cur = bt->texel[i];
+            acc = (v4d){0, 0, 0, 0};
+            wsum = 0.0;
+        }
+        v4f val;
+        double wt;
+        if (bt->fast[i]) {
+            const float *rowp = pix + (size_t)bt->frow[i] * stride;
+            const float *c0 = rowp + bt->fcol[0][i], *c1 = rowp + bt->fcol[1][i];
+            const float *c2 = rowp + bt->fcol[2][i], *c3 = rowp + bt->fcol[3][i];
+            float w[4] = {bt->fwx[0][i], bt->fwx[1][i], bt->fwx[2][i], bt->fwx[3][i]};
+            v8f w01 = {w[0], w[0], w[0], w[0], w[1], w[1], w[1], w[1]};
+            v8f w23 = {w[2], w[2], w[2], w[2], w[3], w[3], w[3], w[3]};
+            v8f sum = {0};
+            for (int k = 0, rows = bt->frows[i]; k < rows; k++) {
+                size_t o = (size_t)k * stride;
+                v8f p01 = F8JOIN(vload(c0 + o), vload(c1 + o));
+                v8f p23 = F8JOIN(vload(c2 + o), vload(c3 + o));
+                sum += bt->fwy[k][i] * (w01 * p01 + w23 * p23);
+            }
+            memcpy(&val, &sum, sizeof val);
+            v4f hi;
+            memcpy(&hi, (const float *)&sum + 4, sizeof hi);
+            val += hi;
+            wt = bt->fwt[i];
+        } else {
+            val = vload(sl->val[j]);
+            wt = sl->wt[j];
+            j++;
+        }
+        acc += wt * __builtin_convertvector(val, v4d);
+        wsum += wt;
+    }
+    bt->cur = cur;
+    bt->acc = acc;
+    bt->wsum = wsum;
+}
+
+static void batch_sum(const eq_job *job, eq_batch *bt, float *out)
+{
+    batch_sum_impl(job, bt, out);
+}
+
+#ifdef EQ_HAVE_AVX2
+__attribute__((target("avx2"))) static void batch_sum_avx2(const eq_job *job, eq_batch *bt,
+                                                           float *out)
+{
+    batch_sum_impl(job, bt, out);
+}
+#endif
+
 /* The samples of a batch: the fast windows' values from their 4 x 4 taps, the others' from
  * slow_values, summed per texel in the samples' order. */
 static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
 {
-    int n = bt->n, W = job->im->width, n8 = (n + 7) & ~7;
+    int n = bt->n, n8 = (n + 7) & ~7;
     for (int i = n; i < n8; i++) {
         /* lanes past the batch: the face's centre (unused) */
         bt->fsc[i] = bt->ftc[i] = 0.0f;
@@ -1031,48 +1104,11 @@ static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
         if (sl->preset[j]) memcpy(sl->given[j], bt->given[i], sizeof sl->given[j]);
     }
     if (sl->n) slow_values(job, face, sl);
-    const float *pix = job->im->pixels;
-    const size_t stride = (size_t)W * 4;
-    int cur = bt->cur;
-    v4d acc = bt->acc;
-    double wsum = bt->wsum;
-    for (int i = 0, j = 0; i < n; i++) {
-        if (bt->texel[i] != cur) {
-            if (cur >= 0) {
-                v4f mean = __builtin_convertvector(acc * (1.0 / wsum), v4f);
-                memcpy(out + (size_t)cur * 4, &mean, sizeof mean);
-            }
-            cur = bt->texel[i];
-            acc = (v4d){0, 0, 0, 0};
-            wsum = 0.0;
-        }
-        v4f val;
-        double wt;
-        if (bt->fast[i]) {
-            const float *rowp = pix + (size_t)bt->frow[i] * stride;
-            const float *c0 = rowp + bt->fcol[0][i], *c1 = rowp + bt->fcol[1][i];
-            const float *c2 = rowp + bt->fcol[2][i], *c3 = rowp + bt->fcol[3][i];
-            v4f w0 = vsplat(bt->fwx[0][i]), w1 = vsplat(bt->fwx[1][i]);
-            v4f w2 = vsplat(bt->fwx[2][i]), w3 = vsplat(bt->fwx[3][i]);
-            val = vsplat(0.0f);
-            for (int k = 0, rows = bt->frows[i]; k < rows; k++) {
-                size_t o = (size_t)k * stride;
-                v4f v = w0 * vload(c0 + o) + w1 * vload(c1 + o) + w2 * vload(c2 + o) +
-                        w3 * vload(c3 + o);
-                val += vsplat(bt->fwy[k][i]) * v;
-            }
-            wt = bt->fwt[i];
-        } else {
-            val = vload(sl->val[j]);
-            wt = sl->wt[j];
-            j++;
-        }
-        acc += wt * __builtin_convertvector(val, v4d);
-        wsum += wt;
-    }
-    bt->cur = cur;
-    bt->acc = acc;
-    bt->wsum = wsum;
+#ifdef EQ_HAVE_AVX2
+    if (job->avx2) batch_sum_avx2(job, bt, out);
+    else
+#endif
+        batch_sum(job, bt, out);
     bt->n = 0;
 }
 
