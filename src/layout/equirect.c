@@ -585,10 +585,12 @@ typedef struct eq_slow {
 typedef struct eq_batch {
     int n;
     int texel[BATCH];
-    double given[BATCH][7]; /* a window given by polar_columns (as eq_slow's), where fsub is 0 */
+    /* a window given by polar_columns (as eq_slow's), where fsub is 0; in float below */
+    double given[BATCH][7];
     /* the face point and cell size; the fast path's windows: weight, first row, rows, columns,
      * tap weights */
     float fsc[BATCH], ftc[BATCH], fsub[BATCH];
+    float gwt[BATCH], gpx[BATCH], gpy[BATCH], gwpx[BATCH], ghpx[BATCH], gst[BATCH], gct[BATCH];
     int fast[BATCH], frow[BATCH], frows[BATCH], fcol[4][BATCH];
     float fwt[BATCH], fwx[4][BATCH], fwy[4][BATCH];
     eq_slow *slow;
@@ -906,6 +908,8 @@ EQ_AI void fast_windows_impl(const eq_fast_face *ff, eq_batch *bt, int n)
     const float k_rad = (float)(PI / ff->H), row_lo = (float)ff->R + 1.0f;
     const float row_hi = (float)(ff->H - ff->R - 1);
     const v8i narrow_ok = (v8i){} - (ff->narrow_ok != 0);
+    const v8i polar_ok = (v8i){} - (ff->narrow_ok && ff->H >= 64);
+    const float R = (float)ff->R;
     for (int i = 0; i < n; i += 8) {
         v8f sc = f8load(bt->fsc + i), tc = f8load(bt->ftc + i), sub = f8load(bt->fsub + i);
         v8f x = m[0] + tc * b[0] + sc * a[0];
@@ -928,6 +932,15 @@ EQ_AI void fast_windows_impl(const eq_fast_face *ff, eq_batch *bt, int n)
         v8f hpx = F8SEL(off_axis, (g1 + g2) * rho * inv_rho2 * inv_len2 * sub * px_per_rad_v,
                         2.0f * inv_len * sub * px_per_rad_v);
         v8f st = rho * inv_len, ct = y * inv_len;
+        /* windows given by polar_columns (where sub is 0) */
+        v8i pre = sub == 0.0f;
+        wt = F8SEL(pre, f8load(bt->gwt + i), wt);
+        px = F8SEL(pre, f8load(bt->gpx + i), px);
+        py = F8SEL(pre, f8load(bt->gpy + i), py);
+        wpx = F8SEL(pre, f8load(bt->gwpx + i), wpx);
+        hpx = F8SEL(pre, f8load(bt->ghpx + i), hpx);
+        st = F8SEL(pre, f8load(bt->gst + i), st);
+        ct = F8SEL(pre, f8load(bt->gct + i), ct);
         /* the window, cut at the poles */
         v8f hw = 0.5f * wpx, hh = 0.5f * hpx;
         v8f px0 = px - hw, w = wpx, c = py;
@@ -937,8 +950,15 @@ EQ_AI void fast_windows_impl(const eq_fast_face *ff, eq_batch *bt, int n)
         py1 = F8SEL(py1 < py0, py0, py1);
         v8f h = py1 - py0, s_d = k_rad * ct;
         v8f s_c = st + s_d * (0.5f * (py0 + py1) - c);
-        v8i fast = narrow_ok & (h >= 1.0f / 16) & (h <= 2.0f) & (w >= 1.0f / 16) & (w <= 2.0f) &
-                   (py0 - 0.5f >= row_lo) & (py1 + 0.5f <= row_hi);
+        /* tent rows, or constant bands next to a pole (as slow_values; windows under 1/16
+         * pixel wide, or tall in tent rows, are left to it) */
+        v8i ok = (h >= 1e-6f) & (h <= 2.0f) & (w >= 1.0f / 16) & (w <= 2.0f);
+        v8i fast = narrow_ok & ok & (h >= 1.0f / 16) & (py0 - 0.5f >= row_lo) &
+                   (py1 + 0.5f <= row_hi);
+        v8i polar = polar_ok & ok & ((py1 <= R) | (py0 >= H - R)) & (hpx <= 2.0f);
+        fast |= polar;
+        v8i no_polar = {0};
+        int any_polar = memcmp(&polar, &no_polar, sizeof polar) != 0;
         /* other lanes: any finite window (unused) */
         px0 = F8SEL(fast, px0, (v8f){});
         py0 = F8SEL(fast, py0, (v8f){} + row_lo);
@@ -959,8 +979,6 @@ EQ_AI void fast_windows_impl(const eq_fast_face *ff, eq_batch *bt, int n)
         v8i jt = __builtin_convertvector(py0 + 0.5f, v8i) - 1; /* floor(py0 - 1/2) */
         v8f dy = py0 - (__builtin_convertvector(jt, v8f) + 0.5f), ey = dy + h;
         v8i rows = 2 - (ey > 1.0f) - (ey > 2.0f);
-        I8STORE(bt->frow + i, jt);
-        I8STORE(bt->frows + i, rows);
         I8STORE(bt->fast + i, fast);
         F8STORE(bt->fwt + i, wt);
         /* the tent weights (as slow_values): longitude tap k weighs T(e - k) - T(da - k) (over
@@ -989,8 +1007,37 @@ EQ_AI void fast_windows_impl(const eq_fast_face *ff, eq_batch *bt, int n)
         sum = F8SEL(sum > 0.0f, sum, (v8f){} + 1.0f);
         wsum = F8SEL(wsum > 0.0f, wsum, (v8f){} + 1.0f);
         v8f inv = 1.0f / sum, inv_w = 1.0f / wsum;
+        for (int k = 0; k < 4; k++) share[k] *= inv;
+        if (any_polar) {
+            /* polar bands: row jp + k covers [jp + k, jp + k + 1]; the solid angle between
+             * two latitudes from the centre's by the angle-sum formula and Taylor series (as
+             * slow_values) */
+            v8i jp = __builtin_convertvector(py0, v8i);
+            v8f fjp = __builtin_convertvector(jp, v8f);
+            v8f cut[4] = {py0, F8SEL(py1 < fjp + 1.0f, py1, fjp + 1.0f),
+                          F8SEL(py1 < fjp + 2.0f, py1, fjp + 2.0f), py1};
+            v8f band[3], bsum = {0};
+            for (int k = 0; k < 3; k++) {
+                v8f mm = (0.5f * (cut[k] + cut[k + 1]) - c) * k_rad, m2 = mm * mm;
+                v8f hd = 0.5f * (cut[k + 1] - cut[k]) * k_rad, hd2 = hd * hd;
+                v8f cm = 1.0f - m2 * (0.5f - m2 * (1.0f / 24 - m2 * (1.0f / 720)));
+                v8f sm = mm * (1.0f - m2 * (1.0f / 6 - m2 * (1.0f / 120 - m2 * (1.0f / 5040))));
+                v8f shd = hd * (1.0f - hd2 * (1.0f / 6 - hd2 * (1.0f / 120 - hd2 * (1.0f / 5040))));
+                band[k] = 2.0f * (st * cm + ct * sm) * shd;
+                band[k] = F8SEL(band[k] > 0.0f, band[k], (v8f){});
+                bsum += band[k];
+            }
+            bsum = F8SEL(bsum > 0.0f, bsum, (v8f){} + 1.0f);
+            v8f binv = 1.0f / bsum;
+            for (int k = 0; k < 3; k++) share[k] = F8SEL(polar, band[k] * binv, share[k]);
+            share[3] = F8SEL(polar, (v8f){}, share[3]);
+            jt = (jp & polar) | (jt & ~polar);
+            rows = ((1 - (cut[1] < py1) - (cut[2] < py1)) & polar) | (rows & ~polar);
+        }
+        I8STORE(bt->frow + i, jt);
+        I8STORE(bt->frows + i, rows);
         for (int k = 0; k < 4; k++) {
-            F8STORE(bt->fwy[k] + i, share[k] * inv);
+            F8STORE(bt->fwy[k] + i, share[k]);
             F8STORE(bt->fwx[k] + i, wx[k] * inv_w);
         }
     }
@@ -1184,6 +1231,13 @@ static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *
         g[4] = fabs(py_out - py_in);
         g[5] = vx * vl;
         g[6] = vy * vl;
+        bt->gwt[n] = (float)g[0];
+        bt->gpx[n] = (float)g[1];
+        bt->gpy[n] = (float)g[2];
+        bt->gwpx[n] = (float)g[3];
+        bt->ghpx[n] = (float)g[4];
+        bt->gst[n] = (float)g[5];
+        bt->gct[n] = (float)g[6];
     }
     return 1;
 }
@@ -1261,6 +1315,14 @@ static void eq_row_task(void *arg, int index)
     bt.n = 0;
     bt.cur = -1;
     bt.slow = &slow;
+    /* (the given windows' lanes are read for every sample, and selected only where given) */
+    memset(bt.gwt, 0, sizeof bt.gwt);
+    memset(bt.gpx, 0, sizeof bt.gpx);
+    memset(bt.gpy, 0, sizeof bt.gpy);
+    memset(bt.gwpx, 0, sizeof bt.gwpx);
+    memset(bt.ghpx, 0, sizeof bt.ghpx);
+    memset(bt.gst, 0, sizeof bt.gst);
+    memset(bt.gct, 0, sizeof bt.gct);
     int ks[TEXEL_RUN];
     const float fcell = (float)cell, ftc_mid = (float)(-1.0 + (ty + 0.5) * cell);
     for (int tx0 = 0; tx0 < N; tx0 += TEXEL_RUN) {
