@@ -327,9 +327,10 @@ static double wrap_angle(double a)
     return a;
 }
 
-/* Four doubles at a time (GCC / Clang vector extensions; two SSE2 halves on x86-64) */
+/* Doubles two and four at a time (GCC / Clang vector extensions) */
+typedef double v2d __attribute__((vector_size(16)));
+typedef long long v2l __attribute__((vector_size(16)));
 typedef double v4d __attribute__((vector_size(32)));
-typedef long long v4l __attribute__((vector_size(32)));
 
 /* Where the picture-frame direction p lies against texel (tx, ty): bits 1 / 2 left / right of
  * it by more than margin (texels), 4 / 8 above / below; 0 if behind the face. *in: inside. */
@@ -433,7 +434,7 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
         const double fine_d = dphi / nlon, fcd = cos(fine_d), fsd = sin(fine_d);
         const double hc = cos(0.5 * fine_d), hs = sin(0.5 * fine_d);
         /* the cells of a crossed pixel: their rows' sin, cos and solid angle */
-        double sub_st[FINE], sub_ct[FINE], sub_w[FINE]; /* (FINE: a multiple of 4) */
+        double sub_st[FINE], sub_ct[FINE], sub_w[FINE]; /* (FINE: even) */
         for (int j = 0; j < FINE; j++) {
             double ta = th0 + (th1 - th0) * j / FINE, tb = th0 + (th1 - th0) * (j + 1) / FINE;
             double tm = 0.5 * (ta + tb);
@@ -467,29 +468,29 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
                 wsum += w_pixel;
             } else if (inside > 0 || (thin && !missed)) {
                 /* the texel's edge crosses this pixel: count its cells by centre, a column of
-                 * them at a time (four rows to a vector). Cell (st fs, ct, -st fc) is in the
+                 * them at a time (two rows to a vector). Cell (st fs, ct, -st fc) is in the
                  * texel when its face coordinates (a.p / m.p, b.p / m.p) are, with m.p > 0. */
-                v4d share4 = {0, 0, 0, 0};
+                v2d share2 = {0, 0};
                 double fc = cp * hc - sp * hs, fs = sp * hc + cp * hs;
                 for (int i = 0; i < nlon; i++) {
                     double cm = m[0] * fs - m[2] * fc, ca = a[0] * fs - a[2] * fc;
                     double cb = b[0] * fs - b[2] * fc;
-                    for (int j = 0; j < FINE; j += 4) {
-                        v4d st, ct, wc;
+                    for (int j = 0; j < FINE; j += 2) {
+                        v2d st, ct, wc;
                         memcpy(&st, sub_st + j, sizeof st);
                         memcpy(&ct, sub_ct + j, sizeof ct);
                         memcpy(&wc, sub_w + j, sizeof wc);
-                        v4d pm = st * cm + ct * m[1];
-                        v4d qa = st * ca + ct * a[1], qb = st * cb + ct * b[1];
-                        v4l in = (pm > 0.0) & (qa >= s_lo * pm) & (qa < s_hi * pm) &
+                        v2d pm = st * cm + ct * m[1];
+                        v2d qa = st * ca + ct * a[1], qb = st * cb + ct * b[1];
+                        v2l in = (pm > 0.0) & (qa >= s_lo * pm) & (qa < s_hi * pm) &
                                  (qb >= t_lo * pm) & (qb < t_hi * pm);
-                        share4 += (v4d)(in & (v4l)wc);
+                        share2 += (v2d)(in & (v2l)wc);
                     }
                     double t = fc * fcd - fs * fsd;
                     fs = fs * fcd + fc * fsd;
                     fc = t;
                 }
-                double share = (share4[0] + share4[1]) + (share4[2] + share4[3]);
+                double share = share2[0] + share2[1];
                 for (int c = 0; c < 4; c++) acc[c] += share * p[c];
                 wsum += share;
             }
@@ -838,291 +839,115 @@ static void slow_values(const eq_job *job, int face, eq_slow *bt)
     }
 }
 
-/* The fast path: the windows of samples whose window is at most two pixels wide and tall in
- * the interpolated rows, which is nearly all of them, in float vectors of eight lanes (plain
- * SSE as two halves, one AVX2 register where the CPU has it: the same operations in the same
- * order, no fused multiply-adds, so the same bits either way). Float is enough here: a
- * window's ends move by under 3e-4 pixel (float spacing at 2048 pixels, and the float
- * polynomial atan2), against windows 1/16 pixel and wider (narrower ones are slow windows). */
+/* The fast path: the windows of samples whose window is at most two pixels wide and tall,
+ * which is nearly all of them, in float vectors (src/layout/equirect_lanes.h, compiled for
+ * four lanes and, with AVX2 where the CPU has it, eight: the same bits either way). Float is
+ * enough here: a window's ends move by under 3e-4 pixel (float spacing at 2048 pixels, and the
+ * float polynomial atan2), against windows 1/16 pixel and wider (narrower ones, and the wide
+ * ones of window_value, are left to slow_values). */
 #if defined(__GNUC__) && !defined(__clang__)
-/* (f8load returns a vector; it is always inlined, so no call passes one in any ABI) */
+/* (no function takes or returns a 32-byte vector: the lane helpers below are macros) */
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
 typedef float v8f __attribute__((vector_size(32)));
 typedef int v8i __attribute__((vector_size(32)));
-#define EQ_AI static inline __attribute__((always_inline))
-EQ_AI v8f f8load(const float *p)
-{
-    v8f v;
-    memcpy(&v, p, sizeof v);
-    return v;
-}
-/* The rest are macros (statement expressions): GCC notes an ABI change for every function
- * taking a 32-byte vector, even an always inlined one. */
-#define F8STORE(p, v) do { v8f v_ = (v); memcpy((p), &v_, sizeof v_); } while (0)
-#define I8STORE(p, v) do { v8i v_ = (v); memcpy((p), &v_, sizeof v_); } while (0)
-#define F8SEL(m, a, b) ({ v8i m_ = (m); (v8f)((m_ & (v8i)(a)) | (~m_ & (v8i)(b))); })
-#define F8ABS(x) ((v8f)((v8i)(x) & 0x7fffffff))
-#define F8CLAMP1(t) ({ v8f c_ = (t); c_ = F8SEL(c_ < -1.0f, (v8f){} - 1.0f, c_); \
-                       F8SEL(c_ > 1.0f, (v8f){} + 1.0f, c_); })
-/* two v4f side by side */
-#if defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12)
-#define F8JOIN(lo, hi) __builtin_shufflevector((lo), (hi), 0, 1, 2, 3, 4, 5, 6, 7)
-#else
-#define F8JOIN(lo, hi) ({ v4f h_[2] = {(lo), (hi)}; v8f j_; memcpy(&j_, h_, sizeof j_); j_; })
-#endif
+/* Lane helpers for the vector type VF (mask type VI) of the including width. Macros
+ * (statement expressions): GCC notes an ABI change for every function taking a 32-byte
+ * vector, even an always inlined one. */
+#define LLOAD(p) ({ VF l_; memcpy(&l_, (p), sizeof l_); l_; })
+#define LSTORE(p, v) do { __typeof__(v) s_ = (v); memcpy((p), &s_, sizeof s_); } while (0)
+#define LSEL(m, a, b) ({ VI m_ = (m); (VF)((m_ & (VI)(a)) | (~m_ & (VI)(b))); })
+#define LABS(x) ((VF)((VI)(x) & 0x7fffffff))
+#define LCLAMP1(t) ({ VF c_ = (t); c_ = LSEL(c_ < -1.0f, (VF){} - 1.0f, c_); \
+                      LSEL(c_ > 1.0f, (VF){} + 1.0f, c_); })
 /* tent_cdf and tent_moment without branches (as vtent, vmoment) */
-#define F8TENT(t) ({ v8f u_ = F8CLAMP1(t); 0.5f + u_ - 0.5f * u_ * F8ABS(u_); })
-#define F8MOMENT(t) ({ v8f u_ = F8CLAMP1(t); \
-                       u_ * u_ * (0.5f - F8ABS(u_) * (1.0f / 3.0f)) - 1.0f / 6.0f; })
+#define LTENT(t) ({ VF u_ = LCLAMP1(t); 0.5f + u_ - 0.5f * u_ * LABS(u_); })
+#define LMOMENT(t) ({ VF u_ = LCLAMP1(t); \
+                      u_ * u_ * (0.5f - LABS(u_) * (1.0f / 3.0f)) - 1.0f / 6.0f; })
+/* atan2 from atan01 (the same polynomial, in float), without branches */
+#define LATAN2(y, x) ({ \
+    VF y_ = (y), x_ = (x), ax_ = LABS(x_), ay_ = LABS(y_); \
+    VI steep_ = ay_ > ax_; \
+    VF mn_ = LSEL(steep_, ax_, ay_), mx_ = LSEL(steep_, ay_, ax_); \
+    VF t_ = mn_ / LSEL(mx_ > 0.0f, mx_, (VF){} + 1.0f), t2_ = t_ * t_; \
+    VF r_ = t_ * (1.0f + t2_ * (-0.3333314528f + t2_ * (0.1999355085f + \
+            t2_ * (-0.1420889944f + t2_ * (0.1065626393f + t2_ * (-0.0752896400f + \
+            t2_ * (0.0429096138f + t2_ * (-0.0161657367f + t2_ * 0.0028662257f)))))))); \
+    r_ = LSEL(steep_, (float)(0.5 * PI) - r_, r_); \
+    r_ = LSEL(x_ < 0.0f, (float)PI - r_, r_); \
+    LSEL(y_ < 0.0f, -r_, r_); })
+
+/* four lanes: the portable code */
+#define LANES 4
+#define EQ_FN(name) name##_4
+#define EQ_TARGET
 #if defined(__SSE__)
 #include <xmmintrin.h>
-#define F8SQRT(x) ({ v8f s_ = (x); __m128 h_[2]; memcpy(h_, &s_, sizeof s_); \
-                     h_[0] = _mm_sqrt_ps(h_[0]); h_[1] = _mm_sqrt_ps(h_[1]); \
-                     memcpy(&s_, h_, sizeof s_); s_; })
+#define LSQRT(x) ({ __m128 q_; VF r_ = (x); memcpy(&q_, &r_, sizeof q_); q_ = _mm_sqrt_ps(q_); \
+                    memcpy(&r_, &q_, sizeof r_); r_; })
 #else
-#define F8SQRT(x) ({ v8f s_ = (x); for (int l_ = 0; l_ < 8; l_++) s_[l_] = sqrtf(s_[l_]); s_; })
+#define LSQRT(x) ({ VF r_ = (x); for (int l_ = 0; l_ < LANES; l_++) r_[l_] = sqrtf(r_[l_]); r_; })
 #endif
-/* atan2 from atan01 (the same polynomial, in float), without branches */
-#define F8ATAN2(y, x) ({ \
-    v8f y_ = (y), x_ = (x), ax_ = F8ABS(x_), ay_ = F8ABS(y_); \
-    v8i steep_ = ay_ > ax_; \
-    v8f mn_ = F8SEL(steep_, ax_, ay_), mx_ = F8SEL(steep_, ay_, ax_); \
-    v8f t_ = mn_ / F8SEL(mx_ > 0.0f, mx_, (v8f){} + 1.0f), t2_ = t_ * t_; \
-    v8f r_ = t_ * (1.0f + t2_ * (-0.3333314528f + t2_ * (0.1999355085f + \
-             t2_ * (-0.1420889944f + t2_ * (0.1065626393f + t2_ * (-0.0752896400f + \
-             t2_ * (0.0429096138f + t2_ * (-0.0161657367f + t2_ * 0.0028662257f)))))))); \
-    r_ = F8SEL(steep_, (float)(0.5 * PI) - r_, r_); \
-    r_ = F8SEL(x_ < 0.0f, (float)PI - r_, r_); \
-    F8SEL(y_ < 0.0f, -r_, r_); })
+#include "equirect_lanes.h"
+#undef LANES
+#undef EQ_FN
+#undef EQ_TARGET
+#undef LSQRT
 
-/* For lanes [0, n) of a batch (n a multiple of 8): each sample's direction, weight dA / |d|^3
- * and window (as slow_values computes them), then, for the tent windows, the first row and
- * column, the row count and the 4 x 4 tap weights; fast[i] says whether sample i took it. */
-EQ_AI void fast_windows_impl(const eq_fast_face *ff, eq_batch *bt, int n)
-{
-    const float *m = ff->m, *a = ff->a, *b = ff->b;
-    const int Wi = ff->W;
-    const float W = (float)ff->W, H = (float)ff->H;
-    const float px_per_rad_u = (float)(ff->W / (2.0 * PI)), px_per_rad_v = (float)(ff->H / PI);
-    const float k_rad = (float)(PI / ff->H), row_lo = (float)ff->R + 1.0f;
-    const float row_hi = (float)(ff->H - ff->R - 1);
-    const v8i narrow_ok = (v8i){} - (ff->narrow_ok != 0);
-    const v8i polar_ok = (v8i){} - (ff->narrow_ok && ff->H >= 64);
-    const float R = (float)ff->R;
-    for (int i = 0; i < n; i += 8) {
-        v8f sc = f8load(bt->fsc + i), tc = f8load(bt->ftc + i), sub = f8load(bt->fsub + i);
-        v8f x = m[0] + tc * b[0] + sc * a[0];
-        v8f y = m[1] + tc * b[1] + sc * a[1];
-        v8f z = m[2] + tc * b[2] + sc * a[2];
-        v8f rho2 = x * x + z * z, len2 = rho2 + y * y;
-        v8f rho = F8SQRT(rho2), len = F8SQRT(len2);
-        v8f inv_len = 1.0f / len, inv_len2 = inv_len * inv_len;
-        v8f wt = inv_len2 * inv_len;
-        v8f px = (F8ATAN2(x, -z) * (float)(0.5 / PI) + 0.5f) * W;
-        v8f py = F8ATAN2(rho, y) * (float)(ff->H / PI);
-        v8f g1 = F8ABS(y * (x * a[0] + z * a[2]) - rho2 * a[1]);
-        v8f g2 = F8ABS(y * (x * b[0] + z * b[2]) - rho2 * b[1]);
-        v8f ga = F8ABS(x * a[2] - z * a[0]), gb = F8ABS(x * b[2] - z * b[0]);
-        v8i off_axis = rho2 > 1e-30f;
-        v8f inv_rho2 = 1.0f / F8SEL(off_axis, rho2, (v8f){} + 1.0f);
-        v8f wpx = (ga + gb) * inv_rho2 * sub * px_per_rad_u;
-        wpx = F8SEL(wpx < W, wpx, (v8f){} + W);
-        wpx = F8SEL(off_axis, wpx, (v8f){} + W);
-        v8f hpx = F8SEL(off_axis, (g1 + g2) * rho * inv_rho2 * inv_len2 * sub * px_per_rad_v,
-                        2.0f * inv_len * sub * px_per_rad_v);
-        v8f st = rho * inv_len, ct = y * inv_len;
-        /* windows given by polar_columns (where sub is 0) */
-        v8i pre = sub == 0.0f;
-        wt = F8SEL(pre, f8load(bt->gwt + i), wt);
-        px = F8SEL(pre, f8load(bt->gpx + i), px);
-        py = F8SEL(pre, f8load(bt->gpy + i), py);
-        wpx = F8SEL(pre, f8load(bt->gwpx + i), wpx);
-        hpx = F8SEL(pre, f8load(bt->ghpx + i), hpx);
-        st = F8SEL(pre, f8load(bt->gst + i), st);
-        ct = F8SEL(pre, f8load(bt->gct + i), ct);
-        /* the window, cut at the poles */
-        v8f hw = 0.5f * wpx, hh = 0.5f * hpx;
-        v8f px0 = px - hw, w = wpx, c = py;
-        v8f py0 = c - hh, py1 = c + hh;
-        py0 = F8SEL(py0 < 0.0f, (v8f){}, py0);
-        py1 = F8SEL(py1 > H, (v8f){} + H, py1);
-        py1 = F8SEL(py1 < py0, py0, py1);
-        v8f h = py1 - py0, s_d = k_rad * ct;
-        v8f s_c = st + s_d * (0.5f * (py0 + py1) - c);
-        /* tent rows, or constant bands next to a pole (as slow_values; windows under 1/16
-         * pixel wide, or tall in tent rows, are left to it) */
-        v8i ok = (h >= 1e-6f) & (h <= 2.0f) & (w >= 1.0f / 16) & (w <= 2.0f);
-        v8i fast = narrow_ok & ok & (h >= 1.0f / 16) & (py0 - 0.5f >= row_lo) &
-                   (py1 + 0.5f <= row_hi);
-        v8i polar = polar_ok & ok & ((py1 <= R) | (py0 >= H - R)) & (hpx <= 2.0f);
-        fast |= polar;
-        v8i no_polar = {0};
-        int any_polar = memcmp(&polar, &no_polar, sizeof polar) != 0;
-        /* other lanes: any finite window (unused) */
-        px0 = F8SEL(fast, px0, (v8f){});
-        py0 = F8SEL(fast, py0, (v8f){} + row_lo);
-        w = F8SEL(fast, w, (v8f){} + 1.0f);
-        h = F8SEL(fast, h, (v8f){} + 1.0f);
-        /* longitude: the first column whose tent reaches the window, then four */
-        v8f wa = F8SEL(px0 < 0.0f, px0 + W, F8SEL(px0 >= W, px0 - W, px0));
-        v8i i0 = __builtin_convertvector(wa + 0.5f, v8i) - 1; /* floor(wa - 1/2) */
-        v8f da = wa - (__builtin_convertvector(i0, v8f) + 0.5f); /* in [0, 1) */
-        v8f e = da + w;
-        for (int k = 0; k < 4; k++) {
-            v8i col = i0 + k;
-            col += (col < 0) & Wi;
-            col -= (col >= Wi) & Wi;
-            I8STORE(bt->fcol[k] + i, col * 4);
-        }
-        /* latitude: row jt + k has centre py0 - dy + k */
-        v8i jt = __builtin_convertvector(py0 + 0.5f, v8i) - 1; /* floor(py0 - 1/2) */
-        v8f dy = py0 - (__builtin_convertvector(jt, v8f) + 0.5f), ey = dy + h;
-        v8i rows = 2 - (ey > 1.0f) - (ey > 2.0f);
-        I8STORE(bt->fast + i, fast);
-        F8STORE(bt->fwt + i, wt);
-        /* the tent weights (as slow_values): longitude tap k weighs T(e - k) - T(da - k) (over
-         * their sum), latitude row k (T(ey - k) - T(dy - k)) (s_c + s_d (k - dy - h / 2)) +
-         * s_d (M(ey - k) - M(dy - k)), with T(da - k) = T(da), da^2 / 2, 0, 0 for da in
-         * [0, 1) (the same for M) */
-        v8f lo_t[2] = {0.5f + da - 0.5f * da * da, 0.5f * da * da};
-        v8f dm = dy - 1.0f;
-        v8f ly_t[2] = {0.5f + dy - 0.5f * dy * dy, 0.5f * dy * dy};
-        v8f ly_m[2] = {dy * dy * (0.5f - dy * (1.0f / 3.0f)) - 1.0f / 6.0f,
-                       dm * dm * (0.5f + dm * (1.0f / 3.0f)) - 1.0f / 6.0f};
-        v8f share[4], wx[4], sum = {0}, wsum = {0};
-        for (int k = 0; k < 4; k++) {
-            float fk = (float)k;
-            wx[k] = F8TENT(e - fk);
-            if (k < 2) wx[k] -= lo_t[k];
-            wsum += wx[k];
-            v8f t = F8TENT(ey - fk), mom = F8MOMENT(ey - fk);
-            if (k < 2) {
-                t -= ly_t[k];
-                mom -= ly_m[k];
-            }
-            share[k] = t * (s_c + s_d * (fk - dy - 0.5f * h)) + s_d * mom;
-            sum += share[k];
-        }
-        sum = F8SEL(sum > 0.0f, sum, (v8f){} + 1.0f);
-        wsum = F8SEL(wsum > 0.0f, wsum, (v8f){} + 1.0f);
-        v8f inv = 1.0f / sum, inv_w = 1.0f / wsum;
-        for (int k = 0; k < 4; k++) share[k] *= inv;
-        if (any_polar) {
-            /* polar bands: row jp + k covers [jp + k, jp + k + 1]; the solid angle between
-             * two latitudes from the centre's by the angle-sum formula and Taylor series (as
-             * slow_values) */
-            v8i jp = __builtin_convertvector(py0, v8i);
-            v8f fjp = __builtin_convertvector(jp, v8f);
-            v8f cut[4] = {py0, F8SEL(py1 < fjp + 1.0f, py1, fjp + 1.0f),
-                          F8SEL(py1 < fjp + 2.0f, py1, fjp + 2.0f), py1};
-            v8f band[3], bsum = {0};
-            for (int k = 0; k < 3; k++) {
-                v8f mm = (0.5f * (cut[k] + cut[k + 1]) - c) * k_rad, m2 = mm * mm;
-                v8f hd = 0.5f * (cut[k + 1] - cut[k]) * k_rad, hd2 = hd * hd;
-                v8f cm = 1.0f - m2 * (0.5f - m2 * (1.0f / 24 - m2 * (1.0f / 720)));
-                v8f sm = mm * (1.0f - m2 * (1.0f / 6 - m2 * (1.0f / 120 - m2 * (1.0f / 5040))));
-                v8f shd = hd * (1.0f - hd2 * (1.0f / 6 - hd2 * (1.0f / 120 - hd2 * (1.0f / 5040))));
-                band[k] = 2.0f * (st * cm + ct * sm) * shd;
-                band[k] = F8SEL(band[k] > 0.0f, band[k], (v8f){});
-                bsum += band[k];
-            }
-            bsum = F8SEL(bsum > 0.0f, bsum, (v8f){} + 1.0f);
-            v8f binv = 1.0f / bsum;
-            for (int k = 0; k < 3; k++) share[k] = F8SEL(polar, band[k] * binv, share[k]);
-            share[3] = F8SEL(polar, (v8f){}, share[3]);
-            jt = (jp & polar) | (jt & ~polar);
-            rows = ((1 - (cut[1] < py1) - (cut[2] < py1)) & polar) | (rows & ~polar);
-        }
-        I8STORE(bt->frow + i, jt);
-        I8STORE(bt->frows + i, rows);
-        for (int k = 0; k < 4; k++) {
-            F8STORE(bt->fwy[k] + i, share[k]);
-            F8STORE(bt->fwx[k] + i, wx[k] * inv_w);
-        }
-    }
-}
-
-static void fast_windows(const eq_fast_face *ff, eq_batch *bt, int n)
-{
-    fast_windows_impl(ff, bt, n);
-}
-
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+/* eight lanes in AVX2 registers, where the compiler can target them (chosen at run time) */
+#if (defined(__x86_64__) || defined(__i386__)) && \
+    (defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12))
 #define EQ_HAVE_AVX2 1
-__attribute__((target("avx2"))) static void fast_windows_avx2(const eq_fast_face *ff,
-                                                              eq_batch *bt, int n)
-{
-    fast_windows_impl(ff, bt, n);
-}
+#include <immintrin.h>
+#define LANES 8
+#define EQ_FN(name) name##_8
+#define EQ_TARGET __attribute__((target("avx2")))
+#define LSQRT(x) ({ __m256 q_; VF r_ = (x); memcpy(&q_, &r_, sizeof q_); \
+                    q_ = _mm256_sqrt_ps(q_); memcpy(&r_, &q_, sizeof r_); r_; })
+/* two v4f side by side */
+#define LJOIN(lo, hi) __builtin_shufflevector((lo), (hi), 0, 1, 2, 3, 4, 5, 6, 7)
+#include "equirect_lanes.h"
+#undef LANES
+#undef EQ_FN
+#undef EQ_TARGET
+#undef LSQRT
 #endif
 
-/* The windows' values (the fast ones from their 4 x 4 taps, two columns to a vector) summed per
- * texel in the samples' order, in double; a texel is written when the next one starts. */
-EQ_AI void batch_sum_impl(const eq_job *job, eq_batch *bt, float *out)
+static void fast_windows(const eq_job *job, int face, eq_batch *bt, int n)
 {
-    const eq_slow *sl = bt->slow;
-    const float *pix = job->im->pixels;
-    const size_t stride = (size_t)job->im->width * 4;
-    int cur = bt->cur;
-    v4d acc = bt->acc;
-    double wsum = bt->wsum;
-    for (int i = 0, j = 0, n = bt->n; i < n; i++) {
-        if (bt->texel[i] != cur) {
-            if (cur >= 0) {
-                v4f mean = __builtin_convertvector(acc * (1.0 / wsum), v4f);
-                memcpy(out + (size_t)cur * 4, &mean, sizeof mean);
-            }
-            cur = bt->texel[i];
-            acc = (v4d){0, 0, 0, 0};
-            wsum = 0.0;
-        }
-        v4f val;
-        double wt;
-        if (bt->fast[i]) {
-            const float *rowp = pix + (size_t)bt->frow[i] * stride;
-            const float *c0 = rowp + bt->fcol[0][i], *c1 = rowp + bt->fcol[1][i];
-            const float *c2 = rowp + bt->fcol[2][i], *c3 = rowp + bt->fcol[3][i];
-            float w[4] = {bt->fwx[0][i], bt->fwx[1][i], bt->fwx[2][i], bt->fwx[3][i]};
-            v8f w01 = {w[0], w[0], w[0], w[0], w[1], w[1], w[1], w[1]};
-            v8f w23 = {w[2], w[2], w[2], w[2], w[3], w[3], w[3], w[3]};
-            v8f sum = {0};
-            for (int k = 0, rows = bt->frows[i]; k < rows; k++) {
-                size_t o = (size_t)k * stride;
-                v8f p01 = F8JOIN(vload(c0 + o), vload(c1 + o));
-                v8f p23 = F8JOIN(vload(c2 + o), vload(c3 + o));
-                sum += bt->fwy[k][i] * (w01 * p01 + w23 * p23);
-            }
-            memcpy(&val, &sum, sizeof val);
-            v4f hi;
-            memcpy(&hi, (const float *)&sum + 4, sizeof hi);
-            val += hi;
-            wt = bt->fwt[i];
-        } else {
-            val = vload(sl->val[j]);
-            wt = sl->wt[j];
-            j++;
-        }
-        acc += wt * __builtin_convertvector(val, v4d);
-        wsum += wt;
+#ifdef EQ_HAVE_AVX2
+    if (job->avx2) {
+        fast_windows_8(&job->fast[face], bt, n);
+        return;
     }
-    bt->cur = cur;
-    bt->acc = acc;
-    bt->wsum = wsum;
+#endif
+    fast_windows_4(&job->fast[face], bt, n);
 }
 
 static void batch_sum(const eq_job *job, eq_batch *bt, float *out)
 {
-    batch_sum_impl(job, bt, out);
+#ifdef EQ_HAVE_AVX2
+    if (job->avx2) {
+        batch_sum_8(job, bt, out);
+        return;
+    }
+#endif
+    batch_sum_4(job, bt, out);
 }
 
-#ifdef EQ_HAVE_AVX2
-__attribute__((target("avx2"))) static void batch_sum_avx2(const eq_job *job, eq_batch *bt,
-                                                           float *out)
+static void texel_ks(const eq_job *job, int face, int ty, int tx0, int n, int *ks)
 {
-    batch_sum_impl(job, bt, out);
-}
+    n = (n + 7) & ~7;
+#ifdef EQ_HAVE_AVX2
+    if (job->avx2) {
+        texel_ks_8(&job->fast[face], ty, tx0, n, ks);
+        return;
+    }
 #endif
+    texel_ks_4(&job->fast[face], ty, tx0, n, ks);
+}
+
+
 
 /* The samples of a batch: the fast windows' values from their 4 x 4 taps, the others' from
  * slow_values, summed per texel in the samples' order. */
@@ -1134,11 +959,7 @@ static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
         bt->fsc[i] = bt->ftc[i] = 0.0f;
         bt->fsub[i] = 1.0f;
     }
-#ifdef EQ_HAVE_AVX2
-    if (job->avx2) fast_windows_avx2(&job->fast[face], bt, n8);
-    else
-#endif
-        fast_windows(&job->fast[face], bt, n8);
+    fast_windows(job, face, bt, n8);
     eq_slow *sl = bt->slow;
     sl->n = 0;
     for (int i = 0; i < n; i++) {
@@ -1151,11 +972,7 @@ static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
         if (sl->preset[j]) memcpy(sl->given[j], bt->given[i], sizeof sl->given[j]);
     }
     if (sl->n) slow_values(job, face, sl);
-#ifdef EQ_HAVE_AVX2
-    if (job->avx2) batch_sum_avx2(job, bt, out);
-    else
-#endif
-        batch_sum(job, bt, out);
+    batch_sum(job, bt, out);
     bt->n = 0;
 }
 
@@ -1240,68 +1057,6 @@ static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *
         bt->gct[n] = (float)g[6];
     }
     return 1;
-}
-
-/* How many samples per axis each texel of a run takes (0: near a pole), from the texel's
- * extent in source rows and columns: SAMPLES_PER_ROW / _COLUMN per pixel it spans. Eight
- * texels at a time in float (n rounded up to 8; ks holds TEXEL_RUN). */
-EQ_AI void texel_ks_impl(const eq_fast_face *ff, int ty, int tx0, int n, int *ks)
-{
-    const float *m = ff->m, *a = ff->a, *b = ff->b;
-    const double cell = 2.0 / ff->N;
-    const float rows_per = (float)(SAMPLES_PER_ROW * cell * ff->H / PI);
-    const float cols_per = (float)(SAMPLES_PER_COLUMN * cell * ff->W / (2.0 * PI));
-    const float fcell = (float)cell, tc = (float)(-1.0 + (ty + 0.5) * cell);
-    for (int i = 0; i < n; i += 8) {
-        v8f sc;
-        for (int l = 0; l < 8; l++) sc[l] = (float)(-1.0 + (tx0 + i + l + 0.5) * cell);
-        v8f x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
-            z = m[2] + sc * a[2] + tc * b[2];
-        v8f rho2 = x * x + z * z, r2 = rho2 + y * y;
-        v8f rho = F8SQRT(rho2), len = F8SQRT(r2);
-        /* latitude extent of the texel in source rows, from the gradient of theta; at a pole
-         * theta is a cone: its change is bound by the full gradient 1/|d| */
-        v8f inv_rr = 1.0f / (F8SEL(rho > 0.0f, rho, (v8f){} + 1.0f) * r2);
-        v8f g0 = y * x * inv_rr, g1 = -rho2 * inv_rr, g2 = y * z * inv_rr;
-        v8f ext = F8ABS(g0 * a[0] + g1 * a[1] + g2 * a[2]) + F8ABS(g0 * b[0] + g1 * b[1] + g2 * b[2]);
-        ext = F8SEL(rho < 2.0f * fcell * len, 2.0f / len, ext);
-        v8f want = ext * rows_per;
-        /* and its longitude extent in source columns */
-        v8f want_c = (F8ABS(x * a[2] - z * a[0]) + F8ABS(x * b[2] - z * b[0])) /
-                     F8SEL(rho2 > 0.0f, rho2, (v8f){} + 1.0f) * cols_per;
-        want = F8SEL(want_c > want, want_c, want);
-        want = F8SEL(want < 64.0f, want, (v8f){} + 64.0f);
-        want = F8SEL(want > 1.0f, want, (v8f){} + 1.0f); /* (and no NaN) */
-        v8i k = __builtin_convertvector(want, v8i);
-        k -= __builtin_convertvector(k, v8f) < want; /* ceil */
-        k &= ~(rho2 < ff->pole_radius2 * r2);
-        I8STORE(ks + i, k);
-    }
-}
-
-static void texel_ks_plain(const eq_fast_face *ff, int ty, int tx0, int n, int *ks)
-{
-    texel_ks_impl(ff, ty, tx0, n, ks);
-}
-
-#ifdef EQ_HAVE_AVX2
-__attribute__((target("avx2"))) static void texel_ks_avx2(const eq_fast_face *ff, int ty,
-                                                          int tx0, int n, int *ks)
-{
-    texel_ks_impl(ff, ty, tx0, n, ks);
-}
-#endif
-
-static void texel_ks(const eq_job *job, int face, int ty, int tx0, int n, int *ks)
-{
-    n = (n + 7) & ~7;
-#ifdef EQ_HAVE_AVX2
-    if (job->avx2) {
-        texel_ks_avx2(&job->fast[face], ty, tx0, n, ks);
-        return;
-    }
-#endif
-    texel_ks_plain(&job->fast[face], ty, tx0, n, ks);
 }
 
 static void eq_row_task(void *arg, int index)
