@@ -3,6 +3,9 @@
 
 #include <stdio.h>
 #include <string.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 typedef struct command {
     const char *name;
@@ -43,6 +46,14 @@ int cli_cmd_version(int argc, char **argv)
 
 int main(int argc, char **argv)
 {
+#ifdef __GLIBC__
+    /* A command allocates a few large buffers, frees some and allocates others: keep freed
+     * memory in the heap for reuse instead of returning it to the kernel (every fresh page
+     * costs a fault; docs/PERFORMANCE.md "Specular prefilter"). */
+    mallopt(M_MMAP_THRESHOLD, 512 << 20);
+    mallopt(M_TRIM_THRESHOLD, 1 << 30);
+    mallopt(M_TOP_PAD, 64 << 20);
+#endif
     if (argc < 2) {
         print_help(stderr);
         return CLI_EXIT_USAGE;

@@ -147,6 +147,7 @@ struct core {
     double a1, a2, a3;
     int corr_cap, ncorr;
     float *corr_rec, *corr_block;
+    float *bound;          /* run: each texel's bound (block order)                                  */
     float *pad;            /* run: 6 faces x (r, g, b) x P P                                         */
 };
 
@@ -164,6 +165,7 @@ static void core_destroy(ibl_context *ctx, struct core *c)
     ibl_free(ctx, c->pad);
     ibl_free(ctx, c->corr_rec);
     ibl_free(ctx, c->corr_block);
+    ibl_free(ctx, c->bound);
     ibl_free(ctx, c);
 }
 
@@ -342,24 +344,22 @@ static void face_perm(const ibl_specular_plan *p, int f, int axis[3], double sig
 }
 
 /* Writes the geometric fields of texel (x, y) of every face from face-local moments. */
-static void store_geo(const ibl_specular_plan *p, srclev *s, int x, int y, const geo *g)
+static void store_geo(srclev *s, const int ax[6][3], const double sg[6][3], int x, int y, const geo *g)
 {
     /* local covariance as a matrix (c: xx yy zz xy xz yz) */
     const double Cl[3][3] = {{g->c[0], g->c[3], g->c[4]}, {g->c[3], g->c[1], g->c[5]},
                              {g->c[4], g->c[5], g->c[2]}};
+    static const int ci[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
     for (int f = 0; f < 6; f++) {
-        int ax[3];
-        double sg[3];
-        face_perm(p, f, ax, sg);
-        float *r = s->rec;
-        for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_MX + c)] = (float)(sg[c] * g->m[ax[c]]);
-        r[rec_index(s, f, x, y, F_E)] = (float)g->e;
-        static const int ci[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+        /* the fields of one texel are BT floats apart */
+        float *r = s->rec + rec_index(s, f, x, y, 0);
+        for (int c = 0; c < 3; c++) r[(F_MX + c) * BT] = (float)(sg[f][c] * g->m[ax[f][c]]);
+        r[F_E * BT] = (float)g->e;
         for (int c = 0; c < 6; c++) {
             int i = ci[c][0], j = ci[c][1];
-            r[rec_index(s, f, x, y, F_C + c)] = (float)(sg[i] * sg[j] * Cl[ax[i]][ax[j]]);
+            r[(F_C + c) * BT] = (float)(sg[f][i] * sg[f][j] * Cl[ax[f][i]][ax[f][j]]);
         }
-        r[rec_index(s, f, x, y, F_OM)] = (float)g->om;
+        r[F_OM * BT] = (float)g->om;
     }
 }
 
@@ -426,7 +426,11 @@ static void texel_combine_task(void *arg, int y)
 static void store_geo_task(void *arg, int y)
 {
     const geo_job *j = arg;
-    for (int x = 0; x < j->n; x++) store_geo(j->p, j->s, x, y, &j->g[(size_t)y * j->n + x]);
+    int ax[6][3];
+    double sg[6][3];
+    for (int f = 0; f < 6; f++) face_perm(j->p, f, ax[f], sg[f]);
+    for (int x = 0; x < j->n; x++)
+        store_geo(j->s, (const int(*)[3])ax, (const double(*)[3])sg, x, y, &j->g[(size_t)y * j->n + x]);
 }
 
 /* The bounding cones of block row `by` on every face: computed on face 0 and carried to the
@@ -538,7 +542,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
     const double beta_split = BETA_SPLIT * acc; /* the same without the bright texels */
     const double cull = lobe->kind == IBL__LOBE_PHONG ? 1e-9 : 0.0;
 
-    int core_src = source_level_for(p, lobe->half_angle / kappa, 32);
+    int core_src = source_level_for(p, lobe->half_angle / kappa, 16);
     double b0 = c0 * lobe->half_angle;
     double min_b0 = 2.0 * texel_angle(p->src[core_src].M);
     if (b0 < min_b0) b0 = min_b0;
@@ -700,7 +704,10 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         s->nbx = (s->M + BW - 1) / BW;
         s->nby = (s->M + BH - 1) / BH;
         s->nf = l == 0 ? NF0 : NFC;
-        s->rec = ibl_calloc(ctx, block_count(s) * s->nf * BT, sizeof(float));
+        /* every field of every texel is written before it is read; only the lanes beyond a
+         * face of fewer than one block's texels stay as they are (zero) */
+        s->rec = s->M % BW || s->M % BH ? ibl_calloc(ctx, block_count(s) * s->nf * BT, sizeof(float))
+                                        : ibl_alloc(ctx, block_count(s) * s->nf * BT * sizeof(float));
         s->block = ibl_alloc(ctx, block_count(s) * BINFO * sizeof(float));
         if (!s->rec || !s->block) {
             st = ibl_context_status(ctx);
@@ -768,7 +775,8 @@ static ibl_status plan_bright(ibl_specular_plan *p, int level)
         c->corr_cap = CORR_BLOCKS;
         c->corr_rec = ibl_alloc(p->ctx, (size_t)c->corr_cap * NFC * BT * sizeof(float));
         c->corr_block = ibl_alloc(p->ctx, (size_t)c->corr_cap * BINFO * sizeof(float));
-        if (!c->corr_rec || !c->corr_block) return ibl_context_status(p->ctx);
+        c->bound = ibl_alloc(p->ctx, block_count(&p->src[c->level]) * BT * sizeof(float));
+        if (!c->corr_rec || !c->corr_block || !c->bound) return ibl_context_status(p->ctx);
     }
     for (int k = 0; k < lv->npieces; k++) {
         const piece *pc = &lv->pieces[k];
@@ -887,7 +895,7 @@ static int gather_corrections(const struct core *c, const srclev *s, double thr,
     for (size_t b = 0; b < blocks; b++) {
         const float *rec = s->rec + b * s->nf * BT;
         for (int t = 0; t < BT; t++) {
-            if (!(corr_bound(c, s, b, t) > thr)) continue;
+            if (!(c->bound[b * BT + t] > thr)) continue;
             if (rec[pf * BT + t] == 0 && rec[(pf + 1) * BT + t] == 0 && rec[(pf + 2) * BT + t] == 0) continue;
             for (int pass = 0; pass < 2; pass++, k++) {
                 float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
@@ -909,6 +917,22 @@ static int gather_corrections(const struct core *c, const srclev *s, double thr,
 
 /* Picks the texels of the precomputed piece's level whose moment leaves differ most from
  * uniform texels (see struct core) and gathers them. */
+typedef struct bound_job {
+    const ibl_specular_plan *p;
+    struct core *c;
+} bound_job;
+
+enum { BOUND_CHUNK = 256 }; /* blocks per task */
+
+static void bound_task(void *arg, int index)
+{
+    const bound_job *j = arg;
+    const srclev *s = &j->p->src[j->c->level];
+    size_t b0 = (size_t)index * BOUND_CHUNK, b1 = b0 + BOUND_CHUNK, blocks = block_count(s);
+    for (size_t b = b0; b < b1 && b < blocks; b++)
+        for (int t = 0; t < BT; t++) j->c->bound[b * BT + t] = (float)corr_bound(j->c, s, b, t);
+}
+
 static void select_corrections(ibl_specular_plan *p, struct core *c)
 {
     const srclev *s = &p->src[c->level];
@@ -919,12 +943,13 @@ static void select_corrections(ibl_specular_plan *p, struct core *c)
         const float *P = s->rec + (b * s->nf + F_P) * BT;
         for (int t = 0; t < BT; t++) total += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
     }
+    bound_job bj = {p, c};
+    ibl_parallel_for(p->ctx, (int)((blocks + BOUND_CHUNK - 1) / BOUND_CHUNK), bound_task, &bj);
     double thr = CORR_TAU * total / (4.0 * PI);
     int cap = c->corr_cap * BT / 2;
     for (;;) {
         int count = 0;
-        for (size_t b = 0; b < blocks; b++)
-            for (int t = 0; t < BT; t++) count += corr_bound(c, s, b, t) > thr;
+        for (size_t i = 0; i < blocks * BT; i++) count += c->bound[i] > thr;
         if (count <= cap) break;
         thr *= 2.0;
     }
@@ -1321,6 +1346,28 @@ AVX2 static void avx2_cell_weights(const piece *pc, const float R[3], const floa
     }
 }
 
+/* First and last of n cells (geometry planes `plane` apart from g) within reach of R:
+ * m.R >= cos_reach |m| and a texel there; -1 if none. */
+AVX2 static void avx2_row_extent(const float *g, size_t plane, int n, const float R[3], float cr,
+                                 int *first, int *last)
+{
+    const __m256 r0 = _mm256_set1_ps(R[0]), r1 = _mm256_set1_ps(R[1]), r2 = _mm256_set1_ps(R[2]);
+    const __m256 c = _mm256_set1_ps(cr), zero = _mm256_setzero_ps();
+    *first = *last = -1;
+    for (int i = 0; i < n; i += 8) {
+        __m256 d = _mm256_fmadd_ps(r0, _mm256_loadu_ps(g + i),
+                                   _mm256_fmadd_ps(r1, _mm256_loadu_ps(g + plane + i),
+                                                   _mm256_mul_ps(r2, _mm256_loadu_ps(g + 2 * plane + i))));
+        __m256 in = _mm256_and_ps(_mm256_cmp_ps(d, _mm256_mul_ps(c, _mm256_loadu_ps(g + GEO_FIELDS * plane + i)), _CMP_GE_OQ),
+                                  _mm256_cmp_ps(_mm256_loadu_ps(g + F_OM * plane + i), zero, _CMP_GT_OQ));
+        unsigned mask = (unsigned)_mm256_movemask_ps(in);
+        if (i + 8 > n) mask &= (1u << (n - i)) - 1u;
+        if (!mask) continue;
+        if (*first < 0) *first = i + __builtin_ctz(mask);
+        *last = i + 31 - __builtin_clz(mask);
+    }
+}
+
 /* The core's product for one image of a base texel (see core_mac_generic). */
 AVX2 static void avx2_core_mac(const struct core *c, const float *w, const int32_t *rows, int nrows,
                                const float *planes, int fx, int fy, double out[3])
@@ -1362,6 +1409,7 @@ static int cpu_has_avx2(void)
 #else
 #define sum_blocks_avx2 sum_blocks_generic
 #define avx2_core_mac core_mac_generic
+#define avx2_row_extent row_extent_generic
 static void avx2_cell_weights(const piece *pc, const float R[3], const float RR[6], const float *g,
                               size_t plane, int len, float *out)
 {
@@ -1578,13 +1626,59 @@ typedef struct core_job {
     float *acc;             /* run: the direct grid */
 } core_job;
 
-static void core_map_task(void *arg, int f)
+/* Row Y of face 0's padded map. */
+static void core_map_task(void *arg, int row)
 {
     core_job *j = arg;
     struct core *c = j->c;
-    for (int Y = -c->W; Y < c->S + c->W; Y++)
-        for (int X = -c->W; X < c->S + c->W; X++)
-            c->map[((size_t)f * c->P + Y + c->O) * c->P + X + c->O] = core_cell_texel(j->p, c->S, f, X, Y);
+    int Y = row - c->O;
+    if (Y < -c->W || Y >= c->S + c->W) return;
+    for (int X = -c->W; X < c->S + c->W; X++)
+        c->map[(size_t)row * c->P + X + c->O] = core_cell_texel(j->p, c->S, 0, X, Y);
+}
+
+/* Where the signed permutation taking face 0 to face F carries the texels of face g: face
+ * out[0] and x' = out[1] + out[2] x + out[3] y, y' = out[4] + out[5] x + out[6] y. */
+static void carry_face(const ibl_specular_plan *p, int S, int F, int g, int out[7])
+{
+    const float(*B0)[3] = p->face_basis[0], (*BF)[3] = p->face_basis[F];
+    int xs[3], ys[3];
+    for (int k = 0; k < 3; k++) {
+        int x = k == 1, y = k == 2;
+        double d[3], w[3], s, t;
+        ibl_cube_direction_d(g, (x + 0.5) / S, (y + 0.5) / S, d);
+        double l[3] = {0, 0, 0};
+        for (int i = 0; i < 3; i++) l[0] += d[i] * B0[1][i], l[1] += d[i] * B0[2][i], l[2] += d[i] * B0[0][i];
+        for (int i = 0; i < 3; i++) w[i] = l[0] * BF[1][i] + l[1] * BF[2][i] + l[2] * BF[0][i];
+        out[0] = ibl_cube_face_st_d(w, &s, &t);
+        xs[k] = (int)floor(s * S), ys[k] = (int)floor(t * S);
+    }
+    out[1] = xs[0], out[2] = xs[1] - xs[0], out[3] = xs[2] - xs[0];
+    out[4] = ys[0], out[5] = ys[1] - ys[0], out[6] = ys[2] - ys[0];
+}
+
+/* Face f's padded map from face 0's: the permutation carries the border as well. */
+static void core_map_face_task(void *arg, int f)
+{
+    core_job *j = arg;
+    struct core *c = j->c;
+    if (f == 0) return;
+    int S = c->S, tf[6][7];
+    for (int g = 0; g < 6; g++) carry_face(j->p, S, f, g, tf[g]);
+    size_t plane = (size_t)c->P * c->P, S2 = (size_t)S * S;
+    const int32_t *m0 = c->map;
+    int32_t *mf = c->map + (size_t)f * plane;
+    for (size_t i = 0; i < plane; i++) {
+        int32_t t = m0[i];
+        if (t < 0) {
+            mf[i] = -1;
+            continue;
+        }
+        int g = (int)(t / (int32_t)S2), r = (int)(t % (int32_t)S2), y = r / S, x = r % S;
+        const int *m = tf[g];
+        int xx = m[1] + m[2] * x + m[3] * y, yy = m[4] + m[5] * x + m[6] * y;
+        mf[i] = (int32_t)(((size_t)m[0] * S + yy) * S + xx);
+    }
 }
 
 /* The direction of base texel (a, b) of face 0 of the core's grid. */
@@ -1600,81 +1694,62 @@ static void core_direction(const core_job *j, int a, int b, double R[3])
     for (int i = 0; i < 3; i++) R[i] /= len;
 }
 
-/* Whether padded cell i is within reach of R: 1 yes, 0 no, -1 no texel there. */
-static int core_in_reach(const core_job *j, const double R[3], size_t i)
+/* The portable avx2_row_extent. */
+static void row_extent_generic(const float *g, size_t plane, int n, const float R[3], float cr,
+                               int *first, int *last)
 {
-    size_t plane = (size_t)j->c->P * j->c->P;
-    const float *g = j->geo;
-    if (!(g[F_OM * plane + i] > 0)) return -1;
-    double d = R[0] * g[i] + R[1] * g[plane + i] + R[2] * g[2 * plane + i];
-    return d >= j->cos_reach * g[GEO_FIELDS * plane + i];
-}
-
-/* The cells of row Y within reach of R, scanning out from column `start` (the set is an
- * interval: a cap seen on the unfolded faces; empty corner cells are stepped over); the whole
- * row when `start` itself is out of reach. */
-static int core_scan_row(const core_job *j, const double R[3], int Y, int start, int lo, int hi,
-                         int *first, int *last)
-{
-    const struct core *c = j->c;
-    size_t row = (size_t)(Y + c->O) * c->P + c->O;
-    *first = INT32_MAX, *last = INT32_MIN;
-    if (core_in_reach(j, R, row + start) != 1) {
-        for (int X = lo; X <= hi; X++)
-            if (core_in_reach(j, R, row + X) == 1) {
-                if (X < *first) *first = X;
-                *last = X;
-            }
-        return *first <= *last;
+    *first = *last = -1;
+    for (int i = 0; i < n; i++) {
+        float d = R[0] * g[i] + R[1] * g[plane + i] + R[2] * g[2 * plane + i];
+        if (!(g[F_OM * plane + i] > 0) || !(d >= cr * g[GEO_FIELDS * plane + i])) continue;
+        if (*first < 0) *first = i;
+        *last = i;
     }
-    *first = *last = start;
-    for (int X = start - 1; X >= lo; X--) {
-        int r = core_in_reach(j, R, row + X);
-        if (r == 0) break;
-        if (r == 1) *first = X;
-    }
-    for (int X = start + 1; X <= hi; X++) {
-        int r = core_in_reach(j, R, row + X);
-        if (r == 0) break;
-        if (r == 1) *last = X;
-    }
-    return 1;
 }
 
 /* The rows of the window around base texel `index` that hold cells within reach. */
+/* The rows within reach of base texel `index`, scanning a window of half width w; 0 when a
+ * row reaches the window's edge (the window is too small). */
+static int core_rows_window(core_job *j, int index, const float R[3], int XC, int YC, int w)
+{
+    const struct core *c = j->c;
+    int S = c->S, W = c->W;
+    int lo = XC - w > -W ? XC - w : -W, hi = XC + w < S + W - 1 ? XC + w : S + W - 1;
+    int ylo = YC - w > -W ? YC - w : -W, yhi = YC + w < S + W - 1 ? YC + w : S + W - 1;
+    size_t plane = (size_t)c->P * c->P;
+    int32_t *out = j->tmp_rows + (size_t)index * (2 * W + 1) * 3;
+    int count = 0;
+    for (int Y = ylo; Y <= yhi; Y++) {
+        int first, last;
+        const float *g = j->geo + (size_t)(Y + c->O) * c->P + c->O + lo;
+        if (j->avx2) avx2_row_extent(g, plane, hi - lo + 1, R, (float)j->cos_reach, &first, &last);
+        else row_extent_generic(g, plane, hi - lo + 1, R, (float)j->cos_reach, &first, &last);
+        if (first < 0) continue;
+        first += lo, last += lo;
+        if (first == lo || last == hi || Y == ylo || Y == yhi) return 0;
+        int32_t *r = out + 3 * count++;
+        r[0] = Y, r[1] = first, r[2] = (last - first + 8) & ~7;
+    }
+    j->tmp_count[index] = count;
+    return 1;
+}
+
 static void core_rows_task(void *arg, int index)
 {
     core_job *j = arg;
     const struct core *c = j->c;
     int a = index % c->nb, b = index / c->nb, S = c->S, W = c->W;
-    double R[3];
-    core_direction(j, a, b, R);
+    double Rd[3];
+    core_direction(j, a, b, Rd);
+    float R[3] = {(float)Rd[0], (float)Rd[1], (float)Rd[2]};
     int XC = (int)floor((a + 0.5) * S / c->n), YC = (int)floor((b + 0.5) * S / c->n);
-    int lo = XC - W > -W ? XC - W : -W, hi = XC + W < S + W - 1 ? XC + W : S + W - 1;
-    int32_t *out = j->tmp_rows + (size_t)index * (2 * W + 1) * 3;
-    int first, last, count = 0;
-    /* rows from YC down, then from YC + 1 up, each scan started at the previous row's middle */
-    for (int dir = -1; dir <= 1; dir += 2) {
-        int start = XC;
-        for (int Y = dir < 0 ? YC : YC + 1; Y >= YC - W && Y <= YC + W; Y += dir) {
-            if (Y < -W || Y >= S + W || !core_scan_row(j, R, Y, start, lo, hi, &first, &last)) break;
-            if (first == lo || last == hi || Y == YC - W || Y == YC + W || Y == -W || Y == S + W - 1) {
-                j->tmp_count[index] = -1; /* within reach at the window's edge: W is too small */
-                return;
-            }
-            int32_t *r = out + 3 * count++;
-            r[0] = Y, r[1] = first, r[2] = (last - first + 8) & ~7;
-            start = (first + last) / 2;
-        }
-        if (dir < 0) /* ascending order: the runs read the rows in order */
-            for (int i = 0, k = count - 1; i < k; i++, k--)
-                for (int f = 0; f < 3; f++) {
-                    int32_t t = out[3 * i + f];
-                    out[3 * i + f] = out[3 * k + f];
-                    out[3 * k + f] = t;
-                }
-    }
-    j->tmp_count[index] = count;
+    /* first a window sized by the texels around the base texel (radial size (2 / S) / (1 +
+     * u^2 + v^2) on the face plane), then, if something lies on its edge, the whole border */
+    double u = (XC + 0.5) * 2.0 / S - 1.0, v = (YC + 0.5) * 2.0 / S - 1.0;
+    double cells = acos(j->cos_reach) * S * 0.5 * (1.0 + u * u + v * v);
+    int w = (int)ceil(1.3 * cells) + 2;
+    if (w < W && core_rows_window(j, index, R, XC, YC, w)) return;
+    if (!core_rows_window(j, index, R, XC, YC, W)) j->tmp_count[index] = -1; /* W too small */
 }
 
 /* The weights of base texel `index` (and their sum), from the padded geometry. */
@@ -1908,8 +1983,10 @@ static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
     tmp_count = ibl_alloc(ctx, nbase * sizeof(int));
     if (!c->map || !c->row0 || !c->w0 || !c->den || !c->pad || !tmp_rows || !tmp_count) goto fail;
     for (size_t i = 0; i < 6 * plane; i++) c->map[i] = -1;
-    core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), 0, NULL, NULL};
-    ibl_parallel_for(ctx, 6, core_map_task, &job);
+    core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), cpu_has_avx2() && !p->portable,
+                    NULL, NULL};
+    ibl_parallel_for(ctx, c->P, core_map_task, &job);
+    ibl_parallel_for(ctx, 6, core_map_face_task, &job);
     job.geo = geo = core_geometry(p, c);
     if (!geo) goto fail;
     ibl_parallel_for(ctx, (int)nbase, core_rows_task, &job);
