@@ -1104,6 +1104,8 @@ static void eq_row_task(void *arg, int index)
             /* k x k samples, a row of them at a time (k <= 64 < BATCH) */
             const double sub = cell / k;
             const float fsub = (float)sub;
+            float sci[64];
+            for (int i = 0; i < k; i++) sci[i] = (float)(-1.0 + tx * cell + (i + 0.5) * sub);
             for (int j = 0; j < k; j++) {
                 if (bt.n + k > BATCH) batch_flush(job, face, &bt, out);
                 float tcj = (float)(-1.0 + ty * cell + (j + 0.5) * sub);
@@ -1111,7 +1113,7 @@ static void eq_row_task(void *arg, int index)
                 float *fsc = bt.fsc + bt.n, *ftc = bt.ftc + bt.n, *fs = bt.fsub + bt.n;
                 for (int i = 0; i < k; i++) {
                     texel[i] = tx;
-                    fsc[i] = (float)(-1.0 + tx * cell + (i + 0.5) * sub);
+                    fsc[i] = sci[i];
                     ftc[i] = tcj;
                     fs[i] = fsub;
                 }

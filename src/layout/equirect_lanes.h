@@ -49,14 +49,16 @@ EQ_TARGET static void EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, 
                         2.0f * inv_len * sub * px_per_rad_v);
         VF st = rho * inv_len, ct = y * inv_len;
         /* windows given by polar_columns (where sub is 0) */
-        VI pre = sub == 0.0f;
-        wt = LSEL(pre, LLOAD(bt->gwt + i), wt);
-        px = LSEL(pre, LLOAD(bt->gpx + i), px);
-        py = LSEL(pre, LLOAD(bt->gpy + i), py);
-        wpx = LSEL(pre, LLOAD(bt->gwpx + i), wpx);
-        hpx = LSEL(pre, LLOAD(bt->ghpx + i), hpx);
-        st = LSEL(pre, LLOAD(bt->gst + i), st);
-        ct = LSEL(pre, LLOAD(bt->gct + i), ct);
+        VI pre = sub == 0.0f, none = {0};
+        if (memcmp(&pre, &none, sizeof pre) != 0) {
+            wt = LSEL(pre, LLOAD(bt->gwt + i), wt);
+            px = LSEL(pre, LLOAD(bt->gpx + i), px);
+            py = LSEL(pre, LLOAD(bt->gpy + i), py);
+            wpx = LSEL(pre, LLOAD(bt->gwpx + i), wpx);
+            hpx = LSEL(pre, LLOAD(bt->ghpx + i), hpx);
+            st = LSEL(pre, LLOAD(bt->gst + i), st);
+            ct = LSEL(pre, LLOAD(bt->gct + i), ct);
+        }
         /* the window, cut at the poles */
         VF hw = 0.5f * wpx, hh = 0.5f * hpx;
         VF px0 = px - hw, w = wpx, c = py;
@@ -73,8 +75,7 @@ EQ_TARGET static void EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, 
                    (py1 + 0.5f <= row_hi);
         VI polar = polar_ok & ok & ((py1 <= R) | (py0 >= H - R)) & (hpx <= 2.0f);
         fast |= polar;
-        VI no_polar = {0};
-        int any_polar = memcmp(&polar, &no_polar, sizeof polar) != 0;
+        int any_polar = memcmp(&polar, &none, sizeof polar) != 0;
         /* other lanes: any finite window (unused) */
         px0 = LSEL(fast, px0, (VF){});
         py0 = LSEL(fast, py0, (VF){} + row_lo);
