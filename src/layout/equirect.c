@@ -24,10 +24,11 @@
  * footprint integral: tests/test_layout.c and docs/CONVENTIONS.md.
  *
  * Speed (docs/PERFORMANCE.md, "Equirect to cube"): the samples of a texel row are handled in
- * batches: their directions, longitudes and latitudes in loops without branches, then the
- * weights of windows at most two pixels wide and tall, which is nearly all of them, as fixed
- * 4 x 4 taps (four samples at a time in float vectors), then the taps; wider windows take
- * window_value. */
+ * batches. Windows at most two pixels wide and tall, which is nearly all of them, take the
+ * fast path (equirect_lanes.h): directions, longitudes, latitudes and the weights of fixed
+ * 4 x 4 taps in float vectors without branches (4 lanes, or 8 with AVX2 where the CPU has it:
+ * the same bits), then the taps, two columns to a vector. The rest (windows under 1/16 pixel,
+ * or wider than two) are computed in double (slow_values; the widest by window_value). */
 #include "layout_internal.h"
 
 #include <math.h>
@@ -562,8 +563,9 @@ static inline v4f vmoment(v4f t)
 }
 
 /* Samples are gathered in batches over a texel row. Most take the fast path (fast_windows,
- * below: float vectors, 4 x 4 taps); the rest (windows given by polar_columns, polar bands,
- * wide or very narrow windows) go to a second batch handled in double (slow_values). */
+ * below: float vectors, 4 x 4 taps); the rest (windows under 1/16 pixel or over two pixels,
+ * windows across the border of the polar bands, pictures under 8 x 64) go to a second batch
+ * handled in double (slow_values). */
 enum { BATCH = 128 };
 typedef struct eq_slow {
     int n;
