@@ -1085,6 +1085,27 @@ static void eq_row_task(void *arg, int index)
     for (int tx0 = 0; tx0 < N; tx0 += TEXEL_RUN) {
         int run = N - tx0 < TEXEL_RUN ? N - tx0 : TEXEL_RUN;
         if (job->fixed_k == 0) texel_ks(job, face, ty, tx0, run, ks);
+        int all_one = job->fixed_k == 1;
+        if (job->fixed_k == 0) {
+            all_one = 1;
+            for (int r = 0; r < run; r++) all_one &= ks[r] == 1;
+        }
+        if (all_one) {
+            /* one sample at each texel's centre (most runs of the faces around the equator) */
+            for (int r = 0; r < run;) {
+                if (bt.n == BATCH) batch_flush(job, face, &bt, out);
+                int n0 = bt.n, m = run - r < BATCH - n0 ? run - r : BATCH - n0;
+                for (int q = 0; q < m; q++) {
+                    bt.texel[n0 + q] = tx0 + r + q;
+                    bt.fsc[n0 + q] = (float)(-1.0 + (tx0 + r + q + 0.5) * cell);
+                    bt.ftc[n0 + q] = ftc_mid;
+                    bt.fsub[n0 + q] = fcell;
+                }
+                bt.n += m;
+                r += m;
+            }
+            continue;
+        }
         for (int r = 0; r < run; r++) {
             int tx = tx0 + r, k = job->fixed_k ? job->fixed_k : ks[r];
             if (k == 0) {

@@ -192,11 +192,19 @@ EQ_TARGET static void EQ_FN(batch_sum)(const eq_job *job, eq_batch *bt, float *o
             VF w01 = {w[0], w[0], w[0], w[0], w[1], w[1], w[1], w[1]};
             VF w23 = {w[2], w[2], w[2], w[2], w[3], w[3], w[3], w[3]};
             VF sum = {0};
-            for (int k = 0, rows = bt->frows[i]; k < rows; k++) {
-                size_t o = (size_t)k * stride;
-                VF p01 = LJOIN(vload(c0 + o), vload(c1 + o));
-                VF p23 = LJOIN(vload(c2 + o), vload(c3 + o));
-                sum += bt->fwy[k][i] * (w01 * p01 + w23 * p23);
+            if (c1 == c0 + 4 && c3 == c2 + 4) {
+                /* (not across the seam: both pairs side by side in the row) */
+                for (int k = 0, rows = bt->frows[i]; k < rows; k++) {
+                    size_t o = (size_t)k * stride;
+                    sum += bt->fwy[k][i] * (w01 * LLOAD(c0 + o) + w23 * LLOAD(c2 + o));
+                }
+            } else {
+                for (int k = 0, rows = bt->frows[i]; k < rows; k++) {
+                    size_t o = (size_t)k * stride;
+                    VF p01 = LJOIN(vload(c0 + o), vload(c1 + o));
+                    VF p23 = LJOIN(vload(c2 + o), vload(c3 + o));
+                    sum += bt->fwy[k][i] * (w01 * p01 + w23 * p23);
+                }
             }
             v4f hi;
             memcpy(&val, &sum, sizeof val);
