@@ -915,15 +915,12 @@ typedef int v8i __attribute__((vector_size(32)));
 #undef LSQRT
 #endif
 
-static void fast_windows(const eq_job *job, int face, eq_batch *bt, int n)
+static int fast_windows(const eq_job *job, int face, eq_batch *bt, int n, int n_real)
 {
 #ifdef EQ_HAVE_AVX2
-    if (job->avx2) {
-        fast_windows_8(&job->fast[face], bt, n);
-        return;
-    }
+    if (job->avx2) return fast_windows_8(&job->fast[face], bt, n, n_real);
 #endif
-    fast_windows_4(&job->fast[face], bt, n);
+    return fast_windows_4(&job->fast[face], bt, n, n_real);
 }
 
 static void batch_sum(const eq_job *job, eq_batch *bt, float *out)
@@ -961,10 +958,10 @@ static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
         bt->fsc[i] = bt->ftc[i] = 0.0f;
         bt->fsub[i] = 1.0f;
     }
-    fast_windows(job, face, bt, n8);
+    int all_fast = fast_windows(job, face, bt, n8, n) == n;
     eq_slow *sl = bt->slow;
     sl->n = 0;
-    for (int i = 0; i < n; i++) {
+    for (int i = 0; i < n && !all_fast; i++) {
         if (bt->fast[i]) continue;
         int j = sl->n++;
         sl->sc[j] = bt->fsc[i];

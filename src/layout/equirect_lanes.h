@@ -14,9 +14,12 @@
 
 /* For lanes [0, n) of a batch (n a multiple of LANES): each sample's direction, weight dA / |d|^3
  * and window (as slow_values computes them), then, for the tent windows, the first row and
- * column, the row count and the 4 x 4 tap weights; fast[i] says whether sample i took it. */
-EQ_TARGET static void EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, int n)
+ * column, the row count and the 4 x 4 tap weights; fast[i] says whether sample i took it.
+ * Returns how many of the first n_real samples did. */
+EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, int n, int n_real)
 {
+    VI lane, fast_count = {0};
+    for (int l = 0; l < LANES; l++) lane[l] = l;
     const float *m = ff->m, *a = ff->a, *b = ff->b;
     const int Wi = ff->W;
     const float W = (float)ff->W, H = (float)ff->H;
@@ -97,6 +100,7 @@ EQ_TARGET static void EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, 
         VF dy = py0 - (__builtin_convertvector(jt, VF) + 0.5f), ey = dy + h;
         VI rows = 2 - (ey > 1.0f) - (ey > 2.0f);
         LSTORE(bt->fast + i, fast);
+        fast_count -= fast & (lane + i < n_real);
         LSTORE(bt->fwt + i, wt);
         /* the tent weights (as slow_values): longitude tap k weighs T(e - k) - T(da - k) (over
          * their sum), latitude row k (T(ey - k) - T(dy - k)) (s_c + s_d (k - dy - h / 2)) +
@@ -158,6 +162,9 @@ EQ_TARGET static void EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, 
             LSTORE(bt->fwx[k] + i, wx[k] * inv_w);
         }
     }
+    int count = 0;
+    for (int l = 0; l < LANES; l++) count += fast_count[l];
+    return count;
 }
 
 /* The windows' values (the fast ones from their 4 x 4 taps, two columns to a vector) summed per
