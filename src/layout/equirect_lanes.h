@@ -156,7 +156,8 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
             rows = ((1 - (cut[1] < py1) - (cut[2] < py1)) & polar) | (rows & ~polar);
         }
         LSTORE(bt->frow + i, jt);
-        LSTORE(bt->frows + i, rows);
+        /* (8: a window across the seam, whose columns are not side by side in the row) */
+        LSTORE(bt->frows + i, rows | (((i0 < 0) | (i0 + 3 >= Wi)) & 8));
         for (int k = 0; k < 4; k++) {
             LSTORE(bt->fwy[k] + i, share[k]);
             LSTORE(bt->fwx[k] + i, wx[k] * inv_w);
@@ -199,14 +200,15 @@ EQ_TARGET static void EQ_FN(batch_sum)(const eq_job *job, eq_batch *bt, float *o
             VF w01 = {w[0], w[0], w[0], w[0], w[1], w[1], w[1], w[1]};
             VF w23 = {w[2], w[2], w[2], w[2], w[3], w[3], w[3], w[3]};
             VF sum = {0};
-            if (c1 == c0 + 4 && c3 == c2 + 4) {
-                /* (not across the seam: both pairs side by side in the row) */
-                for (int k = 0, rows = bt->frows[i]; k < rows; k++) {
+            int rows = bt->frows[i];
+            if (!(rows & 8)) {
+                /* (not across the seam: the four columns side by side in the row) */
+                for (int k = 0; k < rows; k++) {
                     size_t o = (size_t)k * stride;
                     sum += bt->fwy[k][i] * (w01 * LLOAD(c0 + o) + w23 * LLOAD(c2 + o));
                 }
             } else {
-                for (int k = 0, rows = bt->frows[i]; k < rows; k++) {
+                for (int k = 0; k < (rows & 7); k++) {
                     size_t o = (size_t)k * stride;
                     VF p01 = LJOIN(vload(c0 + o), vload(c1 + o));
                     VF p23 = LJOIN(vload(c2 + o), vload(c3 + o));
@@ -221,7 +223,7 @@ EQ_TARGET static void EQ_FN(batch_sum)(const eq_job *job, eq_batch *bt, float *o
             /* the same sums as the eight-lane code, each half in its own vector */
             v4f w0 = vsplat(w[0]), w1 = vsplat(w[1]), w2 = vsplat(w[2]), w3 = vsplat(w[3]);
             v4f lo = vsplat(0.0f), hi = vsplat(0.0f);
-            for (int k = 0, rows = bt->frows[i]; k < rows; k++) {
+            for (int k = 0, rows = bt->frows[i] & 7; k < rows; k++) {
                 size_t o = (size_t)k * stride;
                 float wy = bt->fwy[k][i];
                 lo += wy * (w0 * vload(c0 + o) + w2 * vload(c2 + o));
