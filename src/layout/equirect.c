@@ -860,8 +860,7 @@ typedef int v8i __attribute__((vector_size(32)));
 #define LSTORE(p, v) do { __typeof__(v) s_ = (v); memcpy((p), &s_, sizeof s_); } while (0)
 #define LSEL(m, a, b) ({ VI m_ = (m); (VF)((m_ & (VI)(a)) | (~m_ & (VI)(b))); })
 #define LABS(x) ((VF)((VI)(x) & 0x7fffffff))
-#define LCLAMP1(t) ({ VF c_ = (t); c_ = LSEL(c_ < -1.0f, (VF){} - 1.0f, c_); \
-                      LSEL(c_ > 1.0f, (VF){} + 1.0f, c_); })
+#define LCLAMP1(t) LMIN(LMAX((t), (VF){} - 1.0f), (VF){} + 1.0f)
 /* tent_cdf and tent_moment without branches (as vtent, vmoment) */
 #define LTENT(t) ({ VF u_ = LCLAMP1(t); 0.5f + u_ - 0.5f * u_ * LABS(u_); })
 #define LMOMENT(t) ({ VF u_ = LCLAMP1(t); \
@@ -870,7 +869,7 @@ typedef int v8i __attribute__((vector_size(32)));
 #define LATAN2(y, x) ({ \
     VF y_ = (y), x_ = (x), ax_ = LABS(x_), ay_ = LABS(y_); \
     VI steep_ = ay_ > ax_; \
-    VF mn_ = LSEL(steep_, ax_, ay_), mx_ = LSEL(steep_, ay_, ax_); \
+    VF mn_ = LMIN(ax_, ay_), mx_ = LMAX(ax_, ay_); \
     VF t_ = mn_ / LSEL(mx_ > 0.0f, mx_, (VF){} + 1.0f), t2_ = t_ * t_; \
     VF r_ = t_ * (1.0f + t2_ * (-0.3333314528f + t2_ * (0.1999355085f + \
             t2_ * (-0.1420889944f + t2_ * (0.1065626393f + t2_ * (-0.0752896400f + \
@@ -885,16 +884,26 @@ typedef int v8i __attribute__((vector_size(32)));
 #define EQ_TARGET
 #if defined(__SSE__)
 #include <xmmintrin.h>
+/* the larger / smaller of finite a and b (as a select on a < b would give, in one instruction) */
+#define LMAX(a, b) LSSE2(_mm_max_ps, (a), (b))
+#define LMIN(a, b) LSSE2(_mm_min_ps, (a), (b))
+#define LSSE2(op, a, b) ({ __m128 p_, q_; VF a_ = (a), b_ = (b); memcpy(&p_, &a_, sizeof p_); \
+                           memcpy(&q_, &b_, sizeof q_); p_ = op(p_, q_); \
+                           memcpy(&a_, &p_, sizeof a_); a_; })
 #define LSQRT(x) ({ __m128 q_; VF r_ = (x); memcpy(&q_, &r_, sizeof q_); q_ = _mm_sqrt_ps(q_); \
                     memcpy(&r_, &q_, sizeof r_); r_; })
 #else
 #define LSQRT(x) ({ VF r_ = (x); for (int l_ = 0; l_ < LANES; l_++) r_[l_] = sqrtf(r_[l_]); r_; })
+#define LMAX(a, b) ({ VF a_ = (a), b_ = (b); LSEL(a_ < b_, b_, a_); })
+#define LMIN(a, b) ({ VF a_ = (a), b_ = (b); LSEL(b_ < a_, b_, a_); })
 #endif
 #include "equirect_lanes.h"
 #undef LANES
 #undef EQ_FN
 #undef EQ_TARGET
 #undef LSQRT
+#undef LMAX
+#undef LMIN
 
 /* eight lanes in AVX2 registers, where the compiler can target them (chosen at run time) */
 #if (defined(__x86_64__) || defined(__i386__)) && \
@@ -904,6 +913,11 @@ typedef int v8i __attribute__((vector_size(32)));
 #define LANES 8
 #define EQ_FN(name) name##_8
 #define EQ_TARGET __attribute__((target("avx2")))
+#define LMAX(a, b) LAVX(_mm256_max_ps, (a), (b))
+#define LMIN(a, b) LAVX(_mm256_min_ps, (a), (b))
+#define LAVX(op, a, b) ({ __m256 p_, q_; VF a_ = (a), b_ = (b); memcpy(&p_, &a_, sizeof p_); \
+                          memcpy(&q_, &b_, sizeof q_); p_ = op(p_, q_); \
+                          memcpy(&a_, &p_, sizeof a_); a_; })
 #define LSQRT(x) ({ __m256 q_; VF r_ = (x); memcpy(&q_, &r_, sizeof q_); \
                     q_ = _mm256_sqrt_ps(q_); memcpy(&r_, &q_, sizeof r_); r_; })
 /* two v4f side by side */
@@ -913,6 +927,8 @@ typedef int v8i __attribute__((vector_size(32)));
 #undef EQ_FN
 #undef EQ_TARGET
 #undef LSQRT
+#undef LMAX
+#undef LMIN
 #endif
 
 static int fast_windows(const eq_job *job, int face, eq_batch *bt, int n, int n_real)

@@ -46,7 +46,7 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
         VI off_axis = rho2 > 1e-30f;
         VF inv_rho2 = 1.0f / LSEL(off_axis, rho2, (VF){} + 1.0f);
         VF wpx = (ga + gb) * inv_rho2 * sub * px_per_rad_u;
-        wpx = LSEL(wpx < W, wpx, (VF){} + W);
+        wpx = LMIN(wpx, (VF){} + W);
         wpx = LSEL(off_axis, wpx, (VF){} + W);
         VF hpx = LSEL(off_axis, (g1 + g2) * rho * inv_rho2 * inv_len2 * sub * px_per_rad_v,
                         2.0f * inv_len * sub * px_per_rad_v);
@@ -66,9 +66,9 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
         VF hw = 0.5f * wpx, hh = 0.5f * hpx;
         VF px0 = px - hw, w = wpx, c = py;
         VF py0 = c - hh, py1 = c + hh;
-        py0 = LSEL(py0 < 0.0f, (VF){}, py0);
-        py1 = LSEL(py1 > H, (VF){} + H, py1);
-        py1 = LSEL(py1 < py0, py0, py1);
+        py0 = LMAX(py0, (VF){});
+        py1 = LMIN(py1, (VF){} + H);
+        py1 = LMAX(py1, py0);
         VF h = py1 - py0, s_d = k_rad * ct;
         VF s_c = st + s_d * (0.5f * (py0 + py1) - c);
         /* tent rows, or constant bands next to a pole (as slow_values; windows under 1/16
