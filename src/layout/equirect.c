@@ -594,7 +594,7 @@ typedef struct eq_batch {
      * tap weights */
     float fsc[BATCH], ftc[BATCH], fsub[BATCH];
     float gwt[BATCH], gpx[BATCH], gpy[BATCH], gwpx[BATCH], ghpx[BATCH], gst[BATCH], gct[BATCH];
-    int fast[BATCH], frow[BATCH], frows[BATCH], fcol[4][BATCH];
+    int fast[BATCH], frow[BATCH], frows[BATCH], fcol[BATCH];
     float fwt[BATCH], fwx[4][BATCH], fwy[4][BATCH];
     eq_slow *slow;
     /* the running sum of the texel being summed (its samples can span two batches) */

@@ -89,12 +89,7 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
         VI i0 = __builtin_convertvector(wa + 0.5f, VI) - 1; /* floor(wa - 1/2) */
         VF da = wa - (__builtin_convertvector(i0, VF) + 0.5f); /* in [0, 1) */
         VF e = da + w;
-        for (int k = 0; k < 4; k++) {
-            VI col = i0 + k;
-            col += (col < 0) & Wi;
-            col -= (col >= Wi) & Wi;
-            LSTORE(bt->fcol[k] + i, col * 4);
-        }
+        LSTORE(bt->fcol + i, i0); /* (columns i0 to i0 + 3, wrapped by batch_sum) */
         /* latitude: row jt + k has centre py0 - dy + k */
         VI jt = __builtin_convertvector(py0 + 0.5f, VI) - 1; /* floor(py0 - 1/2) */
         VF dy = py0 - (__builtin_convertvector(jt, VF) + 0.5f), ey = dy + h;
@@ -192,15 +187,27 @@ EQ_TARGET static void EQ_FN(batch_sum)(const eq_job *job, eq_batch *bt, float *o
         double wt;
         if (bt->fast[i]) {
             const float *rowp = pix + (size_t)bt->frow[i] * stride;
-            const float *c0 = rowp + bt->fcol[0][i], *c1 = rowp + bt->fcol[1][i];
-            const float *c2 = rowp + bt->fcol[2][i], *c3 = rowp + bt->fcol[3][i];
+            int i0 = bt->fcol[i], rows = bt->frows[i];
+            const float *c0 = rowp + (size_t)i0 * 4, *c1 = c0 + 4, *c2 = c0 + 8, *c3 = c0 + 12;
+            if (rows & 8) {
+                /* across the seam: the columns wrap */
+                int W = job->im->width, col[4];
+                for (int k = 0; k < 4; k++) {
+                    col[k] = i0 + k;
+                    col[k] += col[k] < 0 ? W : 0;
+                    col[k] -= col[k] >= W ? W : 0;
+                }
+                c0 = rowp + (size_t)col[0] * 4;
+                c1 = rowp + (size_t)col[1] * 4;
+                c2 = rowp + (size_t)col[2] * 4;
+                c3 = rowp + (size_t)col[3] * 4;
+            }
             float w[4] = {bt->fwx[0][i], bt->fwx[1][i], bt->fwx[2][i], bt->fwx[3][i]};
 #if LANES == 8
             /* columns 0 and 1 in one vector, 2 and 3 in another */
             VF w01 = {w[0], w[0], w[0], w[0], w[1], w[1], w[1], w[1]};
             VF w23 = {w[2], w[2], w[2], w[2], w[3], w[3], w[3], w[3]};
             VF sum = {0};
-            int rows = bt->frows[i];
             if (!(rows & 8)) {
                 /* (not across the seam: the four columns side by side in the row) */
                 for (int k = 0; k < rows; k++) {
@@ -223,7 +230,7 @@ EQ_TARGET static void EQ_FN(batch_sum)(const eq_job *job, eq_batch *bt, float *o
             /* the same sums as the eight-lane code, each half in its own vector */
             v4f w0 = vsplat(w[0]), w1 = vsplat(w[1]), w2 = vsplat(w[2]), w3 = vsplat(w[3]);
             v4f lo = vsplat(0.0f), hi = vsplat(0.0f);
-            for (int k = 0, rows = bt->frows[i] & 7; k < rows; k++) {
+            for (int k = 0; k < (rows & 7); k++) {
                 size_t o = (size_t)k * stride;
                 float wy = bt->fwy[k][i];
                 lo += wy * (w0 * vload(c0 + o) + w2 * vload(c2 + o));
