@@ -847,10 +847,6 @@ static void slow_values(const eq_job *job, int face, eq_slow *bt)
  * enough here: a window's ends move by under 3e-4 pixel (float spacing at 2048 pixels, and the
  * float polynomial atan2), against windows 1/16 pixel and wider (narrower ones, and the wide
  * ones of window_value, are left to slow_values). */
-#if defined(__GNUC__) && !defined(__clang__)
-/* (no function takes or returns a 32-byte vector: the lane helpers below are macros) */
-#pragma GCC diagnostic ignored "-Wpsabi"
-#endif
 typedef float v8f __attribute__((vector_size(32)));
 typedef int v8i __attribute__((vector_size(32)));
 /* Lane helpers for the vector type VF (mask type VI) of the including width. Macros
@@ -885,9 +881,9 @@ typedef int v8i __attribute__((vector_size(32)));
 #if defined(__SSE__)
 #include <xmmintrin.h>
 /* the larger / smaller of finite a and b (as a select on a < b would give, in one instruction) */
-#define LMAX(a, b) LSSE2(_mm_max_ps, (a), (b))
-#define LMIN(a, b) LSSE2(_mm_min_ps, (a), (b))
-#define LSSE2(op, a, b) ({ __m128 p_, q_; VF a_ = (a), b_ = (b); memcpy(&p_, &a_, sizeof p_); \
+#define LMAX(a, b) LSSE(_mm_max_ps, (a), (b))
+#define LMIN(a, b) LSSE(_mm_min_ps, (a), (b))
+#define LSSE(op, a, b) ({ __m128 p_, q_; VF a_ = (a), b_ = (b); memcpy(&p_, &a_, sizeof p_); \
                            memcpy(&q_, &b_, sizeof q_); p_ = op(p_, q_); \
                            memcpy(&a_, &p_, sizeof a_); a_; })
 #define LSQRT(x) ({ __m128 q_; VF r_ = (x); memcpy(&q_, &r_, sizeof q_); q_ = _mm_sqrt_ps(q_); \
@@ -961,8 +957,6 @@ static void texel_ks(const eq_job *job, int face, int ty, int tx0, int n, int *k
 #endif
     texel_ks_4(&job->fast[face], ty, tx0, n, ks);
 }
-
-
 
 /* The samples of a batch: the fast windows' values from their 4 x 4 taps, the others' from
  * slow_values, summed per texel in the samples' order. */
