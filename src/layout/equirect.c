@@ -416,9 +416,6 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
     /* a parallel strays from the chord between two pixel corners by under dphi^2 / 8 radians,
      * at most 3 times that on the face plane: in texels, under this */
     const double margin = N * dphi * dphi / 4.0 + 1e-9;
-    /* the texel's edges on the face plane */
-    const double s_lo = -1.0 + tx * cell, s_hi = -1.0 + (tx + 1) * cell;
-    const double t_lo = -1.0 + ty * cell, t_hi = -1.0 + (ty + 1) * cell;
     const double phi_start = 2.0 * PI * ((double)c0 / W - 0.5);
     const double cos_start = cos(phi_start), sin_start = sin(phi_start);
     /* crossed pixels are cut into FINE rows of cells, each row into cells about as wide as
@@ -470,21 +467,25 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
             } else if (inside > 0 || (thin && !missed)) {
                 /* the texel's edge crosses this pixel: count its cells by centre, a column of
                  * them at a time (two rows to a vector). Cell (st fs, ct, -st fc) is in the
-                 * texel when its face coordinates (a.p / m.p, b.p / m.p) are, with m.p > 0. */
+                 * texel when its texel coordinates are, with m.p > 0: the same operations as
+                 * texel_outcode, so that a cell on an edge goes to the same texel as there (a
+                 * yaw of a round number of degrees puts whole columns of cells on a face's
+                 * centre line, where the rounding of a.p decides). */
                 v2d share2 = {0, 0};
                 double fc = cp * hc - sp * hs, fs = sp * hc + cp * hs;
                 for (int i = 0; i < nlon; i++) {
-                    double cm = m[0] * fs - m[2] * fc, ca = a[0] * fs - a[2] * fc;
-                    double cb = b[0] * fs - b[2] * fc;
                     for (int j = 0; j < FINE; j += 2) {
                         v2d st, ct, wc;
                         memcpy(&st, sub_st + j, sizeof st);
                         memcpy(&ct, sub_ct + j, sizeof ct);
                         memcpy(&wc, sub_w + j, sizeof wc);
-                        v2d pm = st * cm + ct * m[1];
-                        v2d qa = st * ca + ct * a[1], qb = st * cb + ct * b[1];
-                        v2l in = (pm > 0.0) & (qa >= s_lo * pm) & (qa < s_hi * pm) &
-                                 (qb >= t_lo * pm) & (qb < t_hi * pm);
+                        v2d px = st * fs, pz = -st * fc;
+                        v2d pm = m[0] * px + m[1] * ct + m[2] * pz;
+                        v2d inv = half / pm;
+                        v2d fx = (a[0] * px + a[1] * ct + a[2] * pz) * inv + half;
+                        v2d fy = (b[0] * px + b[1] * ct + b[2] * pz) * inv + half;
+                        v2l in = (pm > 0.0) & (fx >= tx) & (fx < tx + 1) & (fy >= ty) &
+                                 (fy < ty + 1);
                         share2 += (v2d)(in & (v2l)wc);
                     }
                     double t = fc * fcd - fs * fsd;
