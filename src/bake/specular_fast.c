@@ -24,6 +24,15 @@
  * evaluates GGX and Phong in closed form; the portable path reads each piece (lobe times
  * partition) from a table in u with its second derivative. Phong texels whose spread reaches
  * the horizon, where x^n has a kink, take the closed-form mean of x^n over the spread.
+ *
+ * Most of the work is not leaf by leaf: a piece whose leaves use geometric moments only (the
+ * core over the source texels, or a piece over a coarse level read as uniform texels) has
+ * weights that depend on geometry alone; they are precomputed for one quadrant of face 0 and
+ * carried to the rest by the cube's symmetries ("struct core"), and a run is a product of
+ * weights and padded source rows. A coarse level read as uniform texels is then corrected
+ * leaf by leaf where a texel's light is far from uniform (centroid corrections), and a ring on
+ * a coarse grid leaves its bright texels to a direct sum at the output texels, where bilinear
+ * interpolation would smear them (bright texels).
  * Deterministic: every output value is a sum in a fixed order, independent of the threads.
  * Design and measurements: docs/SPECULAR.md "The fast method". */
 #include "specular_internal.h"
@@ -104,6 +113,14 @@ struct ibl_specular_plan {
     level_plan lv[IBL_MAX_LEVELS];
     float face_basis[6][3][3]; /* axis, s tangent, t tangent */
     ibl__dynamic *dyn; /* desc.dynamic: the precomputed operator instead of the pieces */
+    /* level 0's geometric moments once, face-local (GEO_FIELDS floats per texel of face 0):
+     * the other faces by the signed permutations. Level 0's records (src[0].rec) exist only
+     * when some piece sums level 0 leaf by leaf (rec0). */
+    float *geo0;
+    int rec0;
+    float *pad; /* run: the padded source of the precomputed piece being summed (6 x rgb x P P) */
+    int perm_ax[6][3]; /* face f's local (s, t, axis) -> world: world[i] = perm_sg[i] local[perm_ax[i]] */
+    float perm_sg[6][3];
     int portable;      /* tests: the portable sums even where AVX2 is available          */
     const ibl_cubemap *run_src;
     ibl_cubemap *run_dst;
@@ -111,6 +128,12 @@ struct ibl_specular_plan {
 };
 
 static int is_pow2(int n) { return n > 0 && (n & (n - 1)) == 0; }
+
+/* desc.accuracy relative to the default 0.35: scales every step and bar of the method */
+static double accuracy_scale(const ibl_specular_plan *p)
+{
+    return p->desc.accuracy > 0 ? p->desc.accuracy / 0.35 : 1.0;
+}
 
 static size_t rec_index(const srclev *s, int face, int x, int y, int field)
 {
@@ -120,11 +143,12 @@ static size_t rec_index(const srclev *s, int face, int x, int y, int field)
 
 static size_t block_count(const srclev *s) { return (size_t)6 * s->nby * s->nbx; }
 
-/* ---- the core as precomputed weights (a core summed from the source texels themselves) ---- */
+/* ---- pieces as precomputed weights ("core": first used for the cores over level 0) ---- */
 
-/* When a level's core is summed over level 0 (K = 1), its weights depend only on geometry, and
- * the cube's symmetries carry them over: the weights of the output texels of one quadrant of
- * face 0 serve the four quadrants of all six faces (the maps x -> n-1-x, y -> n-1-y and the
+/* When a piece's leaves use geometric moments only (the core over the source texels, K = 1, or
+ * any piece over a coarse level read as uniform texels, corrected below), its weights depend
+ * only on geometry, and the cube's symmetries carry them over: the weights of the points of one
+ * quadrant of face 0 of its grid serve the four quadrants of all six faces (the maps x -> n-1-x, y -> n-1-y and the
  * signed permutations taking face 0 to face F are symmetries of the cube and of its texels).
  * They are stored as rows over the *padded* face: the face with a border W deep taken from its
  * four neighbours unfolded about the shared edges (the corner squares of the border are empty),
@@ -134,7 +158,8 @@ struct core {
     int level;             /* the source level it sums (0: the source texels)                       */
     int direct, dim;       /* on the output texels (edge-fixup directions) / without bright texels   */
     int S, W, P, O, n, nb; /* source edge, border, padded edge, offset of cell 0, output edge, base edge */
-    int32_t *map;          /* 6 P P: source texel (f S S + y S + x) or -1                           */
+    int32_t *map;          /* P P: face 0's source texel (f S S + y S + x) or -1                     */
+    int carry[6][6][7];    /* face F: where face 0's map entries on face g go (see carry_face)       */
     uint32_t *row0;        /* nb nb + 1: each base texel's first row                                 */
     size_t *w0;            /* nb nb + 1: each base texel's first weight                              */
     int32_t *rows;         /* per row: y, x (padded coordinates), len (a multiple of 8)              */
@@ -142,13 +167,13 @@ struct core {
     double *den;           /* nb nb: sum of the weights                                              */
     /* centroid corrections (a coarse level's texels are summed as uniform): each texel whose
      * moment leaf may differ from its uniform one by more than CORR_TAU (bound a1 |dm| + a2 |de|
-     * + a3 |dC| per unit of luminance power) twice, at its luminance moments with +P and at its
-     * geometric ones with -P, summed at the grid points like leaves */
+     * + a3 |dC| per unit of luminance power) is left out of the padded source and summed at
+     * the grid points as a leaf at its luminance moments */
     double a1, a2, a3;
     int corr_cap, ncorr;
     float *corr_rec, *corr_block;
     float *bound;          /* run: each texel's bound (block order)                                  */
-    float *pad;            /* run: 6 faces x (r, g, b) x P P                                         */
+    float corr_thr;        /* run: the texels over it are summed as leaves, left out of the padded source */
 };
 
 enum { CORE_GEO = 12 }; /* geometry fields of a padded cell: GEO_FIELDS, then |m| */
@@ -162,7 +187,6 @@ static void core_destroy(ibl_context *ctx, struct core *c)
     ibl_free(ctx, c->rows);
     ibl_free(ctx, c->w);
     ibl_free(ctx, c->den);
-    ibl_free(ctx, c->pad);
     ibl_free(ctx, c->corr_rec);
     ibl_free(ctx, c->corr_block);
     ibl_free(ctx, c->bound);
@@ -459,6 +483,69 @@ static void block_cone_task(void *arg, int by)
     }
 }
 
+/* Row y of level 0's face-local moments (floats, as the records would hold them). */
+static void store_geo0_task(void *arg, int y)
+{
+    const geo_job *j = arg;
+    for (int x = 0; x < j->n; x++) {
+        const geo *g = &j->g[(size_t)y * j->n + x];
+        float *o = j->p->geo0 + ((size_t)y * j->n + x) * GEO_FIELDS;
+        for (int c = 0; c < 3; c++) o[F_MX + c] = (float)g->m[c];
+        o[F_E] = (float)g->e;
+        for (int c = 0; c < 6; c++) o[F_C + c] = (float)g->c[c];
+        o[F_OM] = (float)g->om;
+    }
+}
+
+/* The geometric fields of level-0 texel (f, x, y) in world coordinates (the same floats as
+ * its records would hold: the permutation only moves and negates them). */
+static void geo0_world(const ibl_specular_plan *p, int f, int x, int y, float out[GEO_FIELDS])
+{
+    static const int ci[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    const float *g = p->geo0 + ((size_t)y * p->src[0].M + x) * GEO_FIELDS;
+    const int *ax = p->perm_ax[f];
+    const float *sg = p->perm_sg[f];
+    /* local covariance (xx yy zz xy xz yz) as a matrix */
+    const float Cl[3][3] = {{g[F_C], g[F_C + 3], g[F_C + 4]}, {g[F_C + 3], g[F_C + 1], g[F_C + 5]},
+                            {g[F_C + 4], g[F_C + 5], g[F_C + 2]}};
+    for (int c = 0; c < 3; c++) out[F_MX + c] = sg[c] * g[F_MX + ax[c]];
+    out[F_E] = g[F_E];
+    for (int c = 0; c < 6; c++) {
+        int i = ci[c][0], k = ci[c][1];
+        out[F_C + c] = sg[i] * sg[k] * Cl[ax[i]][ax[k]];
+    }
+    out[F_OM] = g[F_OM];
+}
+
+static void store_rec0_task(void *arg, int y)
+{
+    const ibl_specular_plan *p = arg;
+    const srclev *s = &p->src[0];
+    for (int f = 0; f < 6; f++)
+        for (int x = 0; x < s->M; x++) {
+            float v[GEO_FIELDS];
+            geo0_world(p, f, x, y, v);
+            float *r = s->rec + rec_index(s, f, x, y, 0);
+            for (int k = 0; k < GEO_FIELDS; k++) r[k * BT] = v[k];
+        }
+}
+
+/* Level 0's records, for the pieces that sum it leaf by leaf. */
+static ibl_status level0_records(ibl_specular_plan *p)
+{
+    srclev *s = &p->src[0];
+    ibl_context *ctx = p->ctx;
+    s->rec = s->M % BW || s->M % BH ? ibl_calloc(ctx, block_count(s) * s->nf * BT, sizeof(float))
+                                    : ibl_alloc(ctx, block_count(s) * s->nf * BT * sizeof(float));
+    s->block = ibl_alloc(ctx, block_count(s) * BINFO * sizeof(float));
+    if (!s->rec || !s->block) return ibl_context_status(ctx);
+    ibl_parallel_for(ctx, s->M, store_rec0_task, p);
+    geo_job job = {p, s, NULL, s->M, NULL};
+    ibl_parallel_for(ctx, s->nby, block_cone_task, &job);
+    p->rec0 = 1;
+    return IBL_OK;
+}
+
 static ibl_status build_geometry(ibl_specular_plan *p)
 {
     ibl_context *ctx = p->ctx;
@@ -466,6 +553,12 @@ static ibl_status build_geometry(ibl_specular_plan *p)
     geo *cur = ibl_alloc(ctx, (size_t)S * S * sizeof(geo));
     geo *next = ibl_alloc(ctx, (size_t)(S > 1 ? S / 2 : 1) * (S > 1 ? S / 2 : 1) * sizeof(geo));
     if (!cur || !next) {
+        ibl_free(ctx, cur);
+        ibl_free(ctx, next);
+        return ibl_context_status(ctx);
+    }
+    p->geo0 = ibl_alloc(ctx, (size_t)S * S * GEO_FIELDS * sizeof(float));
+    if (!p->geo0) {
         ibl_free(ctx, cur);
         ibl_free(ctx, next);
         return ibl_context_status(ctx);
@@ -484,6 +577,10 @@ static ibl_status build_geometry(ibl_specular_plan *p)
             next = t;
         }
         geo_job job = {p, s, cur, M, NULL};
+        if (l == 0) {
+            ibl_parallel_for(ctx, M, store_geo0_task, &job);
+            continue;
+        }
         ibl_parallel_for(ctx, M, store_geo_task, &job);
         ibl_parallel_for(ctx, s->nby, block_cone_task, &job);
     }
@@ -531,7 +628,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
     level_plan *lv = &p->lv[level];
     const ibl__lobe *lobe = &lv->lobe;
     int n = ibl_level_size(p->N, level);
-    double acc = p->desc.accuracy > 0 ? p->desc.accuracy / 0.35 : 1.0;
+    double acc = accuracy_scale(p);
     /* measured on the six test HDRIs at 128 and 256 against the reference (docs/SPECULAR.md
      * "Accuracy"): these keep every level of ggx, phong and blinn within 0.44% RMS and 3.2%
      * max; accuracy 0.175 (half the default) brings the max to 2.0% at 2-5 times the cost */
@@ -571,7 +668,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
              * face) sums a finer level: its cells cost little, and centroid corrections are
              * rarer on finer texels */
             int mac = grid_symmetric_fixup(p) && acos(1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0)) < 1.1;
-            pc->src = source_level_for(p, (mac ? GAMMA_MAC : gamma) * b, 16);
+            pc->src = source_level_for(p, (mac ? GAMMA_MAC * acc : gamma) * b, 16);
             /* a ring summed from a coarse level leaves its bright texels to a direct sum, so
              * that its grid may be coarser (see "bright texels") */
             int split = pc->src > 0;
@@ -614,6 +711,8 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
     if (!p) return;
     ibl_context *ctx = p->ctx;
     ibl__dynamic_destroy(p->dyn);
+    ibl_free(ctx, p->geo0);
+    ibl_free(ctx, p->pad);
     for (int l = 0; l < IBL_MAX_LEVELS; l++) {
         ibl_free(ctx, p->src[l].rec);
         ibl_free(ctx, p->src[l].block);
@@ -682,6 +781,11 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
             p->face_basis[f][2][i] = (float)(ty[i] - c[i]);
         }
     }
+    for (int f = 0; f < 6; f++) {
+        double sg[3];
+        face_perm(p, f, p->perm_ax[f], sg);
+        for (int i = 0; i < 3; i++) p->perm_sg[f][i] = (float)sg[i];
+    }
     if (desc->dynamic) {
         st = ibl__dynamic_create(ctx, &p->desc, &p->info, S, &p->dyn);
         if (st != IBL_OK) goto fail;
@@ -704,6 +808,7 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         s->nbx = (s->M + BW - 1) / BW;
         s->nby = (s->M + BH - 1) / BH;
         s->nf = l == 0 ? NF0 : NFC;
+        if (l == 0) continue; /* level0_records, when some piece needs them */
         /* every field of every texel is written before it is read; only the lanes beyond a
          * face of fewer than one block's texels stay as they are (zero) */
         s->rec = s->M % BW || s->M % BH ? ibl_calloc(ctx, block_count(s) * s->nf * BT, sizeof(float))
@@ -722,6 +827,33 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         st = plan_level(p, l);
         if (st == IBL_OK) st = core_create(p, l);
         if (st != IBL_OK) goto fail;
+    }
+    /* one padded source for the precomputed pieces, which run one after the other */
+    size_t pad = 0;
+    for (int l = 0; l < p->L; l++)
+        for (int k = 0; k < p->lv[l].npieces; k++) {
+            const struct core *c = p->lv[l].pieces[k].core;
+            if (c && (size_t)18 * c->P * c->P > pad) pad = (size_t)18 * c->P * c->P;
+        }
+    if (pad) {
+        p->pad = ibl_alloc(ctx, pad * sizeof(float));
+        if (!p->pad) {
+            st = ibl_context_status(ctx);
+            goto fail;
+        }
+    }
+    /* level 0's records only for pieces that sum it leaf by leaf */
+    int need_rec0 = p->K > 1;
+    for (int l = 0; l < p->L; l++)
+        for (int k = 0; k < p->lv[l].npieces; k++)
+            if (p->lv[l].lobe.kind != IBL__LOBE_MIRROR && p->lv[l].pieces[k].src == 0 && !p->lv[l].pieces[k].core)
+                need_rec0 = 1;
+    if (need_rec0) {
+        st = level0_records(p);
+        if (st != IBL_OK) goto fail;
+    }
+    for (int l = 0; l < p->L; l++) {
+        if (p->lv[l].lobe.kind == IBL__LOBE_MIRROR) continue;
         plan_denominators(p, l);
         st = plan_bright(p, l);
         if (st != IBL_OK) goto fail;
@@ -804,7 +936,7 @@ static void select_bright(ibl_specular_plan *p, int l)
         const float *P = s->rec + (b * s->nf + F_P) * BT;
         for (int t = 0; t < BT; t++) total += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
     }
-    double thr = BRIGHT_TAU * total / (4.0 * PI) * s->bright_c;
+    double thr = BRIGHT_TAU * accuracy_scale(p) * total / (4.0 * PI) * s->bright_c;
     for (;;) { /* raise the bar until the brightest fit (a bounded direct sum) */
         int count = 0;
         for (size_t b = 0; b < blocks; b++) {
@@ -884,9 +1016,10 @@ static double corr_bound(const struct core *c, const srclev *s, size_t b, int t)
 }
 
 
-/* Gathers each texel over the threshold twice (luminance moments with +power, geometric
- * moments with -power, the power from field pf: F_P, or F_PD for split rings); the number
- * of blocks. */
+/* Gathers each texel over the threshold with its luminance moments and its power from field
+ * pf (F_P, or F_PD for split rings): summed as a leaf, while the padded source leaves it out
+ * (core_pad_task), it turns the texel's uniform share into its moment leaf; the number of
+ * blocks. */
 static int gather_corrections(const struct core *c, const srclev *s, double thr, int pf, float *recs,
                               float *cones)
 {
@@ -897,13 +1030,10 @@ static int gather_corrections(const struct core *c, const srclev *s, double thr,
         for (int t = 0; t < BT; t++) {
             if (!(c->bound[b * BT + t] > thr)) continue;
             if (rec[pf * BT + t] == 0 && rec[(pf + 1) * BT + t] == 0 && rec[(pf + 2) * BT + t] == 0) continue;
-            for (int pass = 0; pass < 2; pass++, k++) {
-                float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
-                for (int f = 0; f < NFC; f++) dst[f * BT] = rec[f * BT + t];
-                for (int ch = 0; ch < 3; ch++) dst[(F_P + ch) * BT] = (pass ? -1.0f : 1.0f) * rec[(pf + ch) * BT + t];
-                if (pass == 1) /* the uniform texel: its geometric moments */
-                    for (int f = 0; f < 10; f++) dst[(F_WM + f) * BT] = rec[(F_MX + f) * BT + t];
-            }
+            float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
+            for (int f = 0; f < NFC; f++) dst[f * BT] = rec[f * BT + t];
+            for (int ch = 0; ch < 3; ch++) dst[(F_P + ch) * BT] = rec[(pf + ch) * BT + t];
+            k++;
         }
     }
     for (int i = k; i < (k + BT - 1) / BT * BT; i++) { /* the rest of the last block: nothing */
@@ -945,15 +1075,16 @@ static void select_corrections(ibl_specular_plan *p, struct core *c)
     }
     bound_job bj = {p, c};
     ibl_parallel_for(p->ctx, (int)((blocks + BOUND_CHUNK - 1) / BOUND_CHUNK), bound_task, &bj);
-    double thr = CORR_TAU * total / (4.0 * PI);
-    int cap = c->corr_cap * BT / 2;
+    double thr = CORR_TAU * accuracy_scale(p) * total / (4.0 * PI);
+    int cap = c->corr_cap * BT;
     for (;;) {
         int count = 0;
         for (size_t i = 0; i < blocks * BT; i++) count += c->bound[i] > thr;
         if (count <= cap) break;
         thr *= 2.0;
     }
-    c->ncorr = gather_corrections(c, s, thr, pf, c->corr_rec, c->corr_block);
+    c->corr_thr = (float)thr; /* the pad and the gathering compare the same floats */
+    c->ncorr = gather_corrections(c, s, c->corr_thr, pf, c->corr_rec, c->corr_block);
 }
 
 /* ---- run: the radiance pyramid ---- */
@@ -991,7 +1122,16 @@ static void pyramid_task(void *arg, int index)
             int cx = 2 * x + (k & 1), cy = 2 * y + (k >> 1);
             geo *g = &parts[k];
             double pw[3];
-            if (job->level == 1) {
+            if (job->level == 1 && !job->p->rec0) {
+                /* the source texel (K = 1 here) and level 0's moments */
+                float v[GEO_FIELDS];
+                geo0_world(job->p, f, cx, cy, v);
+                const float *L = ibl_cubemap_face(job->src, 0, f) + ((size_t)cy * lo->M + cx) * 4;
+                for (int c = 0; c < 3; c++) pw[c] = (double)v[F_OM] * L[c];
+                for (int c = 0; c < 3; c++) g->m[c] = v[F_MX + c];
+                g->e = v[F_E];
+                for (int c = 0; c < 6; c++) g->c[c] = v[F_C + c];
+            } else if (job->level == 1) {
                 double om = r0[rec_index(lo, f, cx, cy, F_OM)];
                 for (int c = 0; c < 3; c++) pw[c] = om * r0[rec_index(lo, f, cx, cy, F_L + c)];
                 for (int c = 0; c < 3; c++) g->m[c] = r0[rec_index(lo, f, cx, cy, F_MX + c)];
@@ -1347,7 +1487,7 @@ AVX2 static void avx2_cell_weights(const piece *pc, const float R[3], const floa
 }
 
 /* First and last of n cells (geometry planes `plane` apart from g) within reach of R:
- * m.R >= cos_reach |m| and a texel there; -1 if none. */
+ * m.R >= cr (the piece's end, u = 1 - R.m < u_hi) and a texel there; -1 if none. */
 AVX2 static void avx2_row_extent(const float *g, size_t plane, int n, const float R[3], float cr,
                                  int *first, int *last)
 {
@@ -1358,7 +1498,7 @@ AVX2 static void avx2_row_extent(const float *g, size_t plane, int n, const floa
         __m256 d = _mm256_fmadd_ps(r0, _mm256_loadu_ps(g + i),
                                    _mm256_fmadd_ps(r1, _mm256_loadu_ps(g + plane + i),
                                                    _mm256_mul_ps(r2, _mm256_loadu_ps(g + 2 * plane + i))));
-        __m256 in = _mm256_and_ps(_mm256_cmp_ps(d, _mm256_mul_ps(c, _mm256_loadu_ps(g + GEO_FIELDS * plane + i)), _CMP_GE_OQ),
+        __m256 in = _mm256_and_ps(_mm256_cmp_ps(d, c, _CMP_GE_OQ),
                                   _mm256_cmp_ps(_mm256_loadu_ps(g + F_OM * plane + i), zero, _CMP_GT_OQ));
         unsigned mask = (unsigned)_mm256_movemask_ps(in);
         if (i + 8 > n) mask &= (1u << (n - i)) - 1u;
@@ -1620,7 +1760,8 @@ typedef struct core_job {
     const float *geo;    /* CORE_GEO x P P, face 0 */
     int32_t *tmp_rows;   /* nb nb x (2 W + 1) x 3 */
     int *tmp_count;      /* nb nb: rows found (-1: the border is too narrow) */
-    double cos_reach;
+    double cos_reach;       /* the window's reach (sizing)                          */
+    double dot_min;         /* a cell counts when R.m >= dot_min: u < the piece's end */
     int avx2;
     const ibl_cubemap *src; /* run */
     float *acc;             /* run: the direct grid */
@@ -1657,29 +1798,6 @@ static void carry_face(const ibl_specular_plan *p, int S, int F, int g, int out[
     out[4] = ys[0], out[5] = ys[1] - ys[0], out[6] = ys[2] - ys[0];
 }
 
-/* Face f's padded map from face 0's: the permutation carries the border as well. */
-static void core_map_face_task(void *arg, int f)
-{
-    core_job *j = arg;
-    struct core *c = j->c;
-    if (f == 0) return;
-    int S = c->S, tf[6][7];
-    for (int g = 0; g < 6; g++) carry_face(j->p, S, f, g, tf[g]);
-    size_t plane = (size_t)c->P * c->P, S2 = (size_t)S * S;
-    const int32_t *m0 = c->map;
-    int32_t *mf = c->map + (size_t)f * plane;
-    for (size_t i = 0; i < plane; i++) {
-        int32_t t = m0[i];
-        if (t < 0) {
-            mf[i] = -1;
-            continue;
-        }
-        int g = (int)(t / (int32_t)S2), r = (int)(t % (int32_t)S2), y = r / S, x = r % S;
-        const int *m = tf[g];
-        int xx = m[1] + m[2] * x + m[3] * y, yy = m[4] + m[5] * x + m[6] * y;
-        mf[i] = (int32_t)(((size_t)m[0] * S + yy) * S + xx);
-    }
-}
 
 /* The direction of base texel (a, b) of face 0 of the core's grid. */
 static void core_direction(const core_job *j, int a, int b, double R[3])
@@ -1701,7 +1819,7 @@ static void row_extent_generic(const float *g, size_t plane, int n, const float 
     *first = *last = -1;
     for (int i = 0; i < n; i++) {
         float d = R[0] * g[i] + R[1] * g[plane + i] + R[2] * g[2 * plane + i];
-        if (!(g[F_OM * plane + i] > 0) || !(d >= cr * g[GEO_FIELDS * plane + i])) continue;
+        if (!(g[F_OM * plane + i] > 0) || !(d >= cr)) continue;
         if (*first < 0) *first = i;
         *last = i;
     }
@@ -1722,8 +1840,8 @@ static int core_rows_window(core_job *j, int index, const float R[3], int XC, in
     for (int Y = ylo; Y <= yhi; Y++) {
         int first, last;
         const float *g = j->geo + (size_t)(Y + c->O) * c->P + c->O + lo;
-        if (j->avx2) avx2_row_extent(g, plane, hi - lo + 1, R, (float)j->cos_reach, &first, &last);
-        else row_extent_generic(g, plane, hi - lo + 1, R, (float)j->cos_reach, &first, &last);
+        if (j->avx2) avx2_row_extent(g, plane, hi - lo + 1, R, (float)j->dot_min, &first, &last);
+        else row_extent_generic(g, plane, hi - lo + 1, R, (float)j->dot_min, &first, &last);
         if (first < 0) continue;
         first += lo, last += lo;
         if (first == lo || last == hi || Y == ylo || Y == yhi) return 0;
@@ -1814,31 +1932,50 @@ static void core_pad_task(void *arg, int index)
 {
     core_job *j = arg;
     const struct core *c = j->c;
-    int f = index / c->P, row = index % c->P;
-    size_t plane = (size_t)c->P * c->P, S2 = (size_t)c->S * c->S;
-    const int32_t *map = c->map + (size_t)index * c->P;
-    float *out = c->pad + (size_t)f * 3 * plane + (size_t)row * c->P;
+    int f = index / c->P, row = index % c->P, S = c->S, sh = 0;
+    while ((1 << sh) < S) sh++;
+    size_t plane = (size_t)c->P * c->P;
+    const int32_t *map = c->map + (size_t)row * c->P;
+    float *out = j->p->pad + (size_t)f * 3 * plane + (size_t)row * c->P;
     const float *face[6];
     for (int g = 0; g < 6; g++) face[g] = ibl_cubemap_face(j->src, 0, g);
     const srclev *s = &j->p->src[c->level];
+    /* inside the face itself the padded source is the source face: copied by rows */
+    int Y = row - c->O, inside = c->level == 0 && Y >= 0 && Y < S;
+    if (inside) {
+        const float *v = face[f] + (size_t)Y * S * 4;
+        float *o = out + c->O;
+        for (int x = 0; x < S; x++) o[x] = v[4 * x], o[plane + x] = v[4 * x + 1], o[2 * plane + x] = v[4 * x + 2];
+    }
     for (int X = 0; X < c->P; X++) {
-        int32_t t = map[X];
-        if (t < 0) {
+        if (inside && X == c->O) X += S;
+        if (X >= c->P) break;
+        int32_t t0 = map[X];
+        if (t0 < 0) {
             out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
             continue;
         }
+        /* face 0's texel carried to face f by the permutation between the faces (S is a
+         * power of two: shifts) */
+        int g0 = t0 >> (2 * sh), y0 = (t0 >> sh) & (S - 1), x0 = t0 & (S - 1);
+        const int *m = c->carry[f][g0];
+        int g = m[0], x = m[1] + m[2] * x0 + m[3] * y0, y = m[4] + m[5] * x0 + m[6] * y0;
         if (c->level > 0) { /* a coarse texel as uniform: its power over its solid angle */
-            int g = (int)(t / S2), y = (int)(t % S2) / c->S, x = (int)(t % S2) % c->S;
-            const float *rec = s->rec + rec_index(s, g, x, y, 0);
+            size_t b = ((size_t)g * s->nby + y / BH) * s->nbx + x / BW;
+            int t = (y % BH) * BW + x % BW;
+            const float *rec = s->rec + b * s->nf * BT + t;
             float om = rec[F_OM * BT];
+            if (c->ncorr > 0 && c->bound[b * BT + t] > c->corr_thr) {
+                /* a corrected texel: its moment leaf is summed instead */
+                out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
+                continue;
+            }
             int pf = c->dim ? F_PD : F_P;
-            for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = om > 0 ? rec[(pf + ch) * BT] / om : 0.0f;
+            float inv = om > 0 ? 1.0f / om : 0.0f;
+            for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = rec[(pf + ch) * BT] * inv;
             continue;
         }
-        /* t = g S^2 + offset: the face by comparison (no division per texel) */
-        int g = 0;
-        while ((size_t)t >= (size_t)(g + 1) * S2) g++;
-        const float *v = face[g] + ((size_t)t - (size_t)g * S2) * 4;
+        const float *v = face[g] + ((size_t)y * S + x) * 4;
         out[X] = v[0], out[plane + X] = v[1], out[2 * plane + X] = v[2];
     }
 }
@@ -1880,7 +2017,7 @@ static void core_mac_task(void *arg, int b)
         int nrows = (int)(c->row0[index + 1] - c->row0[index]);
         CORE_IMAGES(c, a, b, {
             double s[3];
-            const float *planes = c->pad + (size_t)face_ * 3 * plane;
+            const float *planes = j->p->pad + (size_t)face_ * 3 * plane;
             if (j->avx2) avx2_core_mac(c, w, rows, nrows, planes, fx_, fy_, s);
             else core_mac_generic(c, w, rows, nrows, planes, fx_, fy_, s);
             float *o = j->acc + (((size_t)face_ * c->n + y_) * c->n + x_) * 4;
@@ -1912,8 +2049,14 @@ static void core_geometry_task(void *arg, int row)
             continue;
         }
         int f = (int)(t / S2), y = (int)(t % S2) / c->S, x = (int)(t % S2) % c->S;
-        const float *rec = s->rec + rec_index(s, f, x, y, 0);
-        for (int k = 0; k < GEO_FIELDS; k++) geo[k * plane + i] = rec[k * BT];
+        if (c->level == 0 && !j->p->rec0) {
+            float v[GEO_FIELDS];
+            geo0_world(j->p, f, x, y, v);
+            for (int k = 0; k < GEO_FIELDS; k++) geo[k * plane + i] = v[k];
+        } else {
+            const float *rec = s->rec + rec_index(s, f, x, y, 0);
+            for (int k = 0; k < GEO_FIELDS; k++) geo[k * plane + i] = rec[k * BT];
+        }
         double m0 = geo[i], m1 = geo[plane + i], m2 = geo[2 * plane + i];
         geo[GEO_FIELDS * plane + i] = (float)sqrt(m0 * m0 + m1 * m1 + m2 * m2);
     }
@@ -1937,7 +2080,7 @@ static ibl_status core_build_weights(ibl_specular_plan *p, int level)
         if (!c) continue;
         float *geo = core_geometry(p, c);
         if (!geo) return ibl_context_status(p->ctx);
-        core_job job = {p, c, &lv->pieces[k], &lv->lobe, geo, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
+        core_job job = {p, c, &lv->pieces[k], &lv->lobe, geo, NULL, NULL, 0, 0, cpu_has_avx2() && !p->portable,
                         NULL, NULL};
         ibl_parallel_for(p->ctx, c->nb * c->nb, core_weights_task, &job);
         ibl_free(p->ctx, geo);
@@ -1945,8 +2088,8 @@ static ibl_status core_build_weights(ibl_specular_plan *p, int level)
     return IBL_OK;
 }
 
-/* Sets up the precomputed core of a level when its core sums level 0 (not for lobes split into
- * sub-texels, nor for edge fixups that bend the directions); leaves the level as it is when
+/* Sets up piece k of a level as precomputed weights when it can be (a symmetric grid, level 0
+ * only without sub-texels, a reach the padded face holds); leaves it to the leaf sums when
  * the border would be too deep or the weights too many. */
 static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
 {
@@ -1974,19 +2117,21 @@ static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
     float *geo = NULL;
     int32_t *tmp_rows = NULL;
     int *tmp_count = NULL;
-    c->map = ibl_alloc(ctx, 6 * plane * sizeof(int32_t));
+    c->map = ibl_alloc(ctx, plane * sizeof(int32_t));
     c->row0 = ibl_alloc(ctx, (nbase + 1) * sizeof(uint32_t));
     c->w0 = ibl_alloc(ctx, (nbase + 1) * sizeof(size_t));
     c->den = ibl_alloc(ctx, nbase * sizeof(double));
-    c->pad = ibl_alloc(ctx, 6 * 3 * plane * sizeof(float));
     tmp_rows = ibl_alloc(ctx, nbase * (2 * W + 1) * 3 * sizeof(int32_t));
     tmp_count = ibl_alloc(ctx, nbase * sizeof(int));
-    if (!c->map || !c->row0 || !c->w0 || !c->den || !c->pad || !tmp_rows || !tmp_count) goto fail;
-    for (size_t i = 0; i < 6 * plane; i++) c->map[i] = -1;
-    core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), cpu_has_avx2() && !p->portable,
+    if (!c->map || !c->row0 || !c->w0 || !c->den || !tmp_rows || !tmp_count) goto fail;
+    for (size_t i = 0; i < plane; i++) c->map[i] = -1;
+    for (int f = 0; f < 6; f++)
+        for (int g = 0; g < 6; g++) carry_face(p, S, f, g, c->carry[f][g]);
+    /* u0 = 1 - R.m for a leaf at centroid m: the piece is zero from u_hi on, exactly */
+    double dot_min = 1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0) - 1e-6;
+    core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), dot_min, cpu_has_avx2() && !p->portable,
                     NULL, NULL};
     ibl_parallel_for(ctx, c->P, core_map_task, &job);
-    ibl_parallel_for(ctx, 6, core_map_face_task, &job);
     job.geo = geo = core_geometry(p, c);
     if (!geo) goto fail;
     ibl_parallel_for(ctx, (int)nbase, core_rows_task, &job);
@@ -2041,7 +2186,7 @@ static void core_run(ibl_specular_plan *p, int level, const ibl_cubemap *src)
     for (int k = 0; k < lv->npieces; k++) {
         struct core *c = lv->pieces[k].core;
         if (!c) continue;
-        core_job job = {p, c, &lv->pieces[k], &lv->lobe, NULL, NULL, NULL, 0, cpu_has_avx2() && !p->portable,
+        core_job job = {p, c, &lv->pieces[k], &lv->lobe, NULL, NULL, NULL, 0, 0, cpu_has_avx2() && !p->portable,
                         src, lv->grids[lv->pieces[k].grid].acc};
         ibl_parallel_for(p->ctx, 6 * c->P, core_pad_task, &job);
         ibl_parallel_for(p->ctx, c->nb, core_mac_task, &job);
@@ -2199,7 +2344,7 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
         return ibl_progress(ctx, "prefilter", 1.0);
     }
     pyr_job pj = {p, src, 0};
-    ibl_parallel_for(ctx, 6 * p->src[0].M, level0_task, &pj);
+    if (p->rec0) ibl_parallel_for(ctx, 6 * p->src[0].M, level0_task, &pj);
     for (int l = 1; l < p->SL; l++) {
         pyr_job job = {p, src, l};
         ibl_parallel_for(ctx, 6 * p->src[l].M, pyramid_task, &job);
@@ -2229,4 +2374,20 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
         if (st != IBL_OK) return st;
     }
     return IBL_OK;
+}
+
+void ibl__specular_plan_stats(const ibl_specular_plan *p, ibl__specular_stats *out)
+{
+    memset(out, 0, sizeof *out);
+    for (int l = 0; l < p->L; l++)
+        for (int k = 0; k < p->lv[l].npieces; k++) {
+            const piece *pc = &p->lv[l].pieces[k];
+            out->pieces++;
+            out->split += pc->split;
+            if (!pc->core) continue;
+            out->precomputed++;
+            out->precomputed_coarse += pc->core->level > 0;
+            out->correction_blocks += pc->core->ncorr;
+        }
+    for (int l = 0; l < p->SL; l++) out->bright_blocks += p->src[l].nbright;
 }

@@ -70,6 +70,17 @@ void ibl__output_direction(const ibl_specular_desc *desc, const ibl__lobe *lobe,
  * normalisers are re-summed the same way). */
 void ibl__specular_plan_set_portable(ibl_specular_plan *plan, int portable);
 
+/* What a static plan does (tests: which paths a configuration exercises); the block counts are
+ * those of the last run. */
+typedef struct ibl__specular_stats {
+    int pieces;             /* core and rings of every level                           */
+    int precomputed;        /* summed by precomputed weights                           */
+    int precomputed_coarse; /* ... over a coarse level (with centroid corrections)      */
+    int split;              /* rings on coarse grids whose bright texels go direct      */
+    int bright_blocks, correction_blocks;
+} ibl__specular_stats;
+void ibl__specular_plan_stats(const ibl_specular_plan *plan, ibl__specular_stats *out);
+
 /* The dynamic path (specular_dynamic.c): the chain as a sparse operator over box mips. */
 typedef struct ibl__dynamic ibl__dynamic;
 ibl_status ibl__dynamic_create(ibl_context *ctx, const ibl_specular_desc *desc,
