@@ -24,10 +24,11 @@
  * footprint integral: tests/test_layout.c and docs/CONVENTIONS.md.
  *
  * Speed (docs/PERFORMANCE.md, "Equirect to cube"): the samples of a texel row are handled in
- * batches: their directions, longitudes and latitudes in loops without branches, then the
- * weights of windows at most two pixels wide and tall, which is nearly all of them, as fixed
- * 4 x 4 taps (four samples at a time in float vectors), then the taps; wider windows take
- * window_value. */
+ * batches. Windows at most two pixels wide and tall, which is nearly all of them, take the
+ * fast path (equirect_lanes.h): directions, longitudes, latitudes and the weights of fixed
+ * 4 x 4 taps in float vectors without branches (4 lanes, or 8 with AVX2 where the CPU has it:
+ * the same bits), then the taps, two columns to a vector. The rest (windows under 1/16 pixel,
+ * or wider than two) are computed in double (slow_values; the widest by window_value). */
 #include "layout_internal.h"
 
 #include <math.h>
@@ -92,6 +93,13 @@ void ibl__equirect_uv(const double d[3], double *u, double *v)
     *v = atan2(rho, d[1]) / PI;
 }
 
+/* A face's axes and the picture's sizes, for the fast path (fast_windows) */
+typedef struct eq_fast_face {
+    float m[3], a[3], b[3];
+    int W, H, R, narrow_ok, N;
+    float pole_radius2;
+} eq_fast_face;
+
 typedef struct eq_job {
     const ibl_image *im;
     double basis[6][3][3]; /* per face: major, s axis, t axis, in the picture frame */
@@ -102,6 +110,8 @@ typedef struct eq_job {
     const float *row_mean; /* height x 4 */
     ibl_cubemap *out;
     int fixed_k;
+    eq_fast_face fast[6];
+    int avx2; /* the fast path may use AVX2 */
 } eq_job;
 
 /* Antiderivative of the unit tent max(0, 1 - |t|). */
@@ -318,16 +328,28 @@ static double wrap_angle(double a)
     return a;
 }
 
-/* Is the picture-frame direction p inside texel (tx, ty) of the face with axes m, a, b? */
-static inline int in_texel(const double *m, const double *a, const double *b, double half,
-                           int tx, int ty, double px, double py, double pz)
+/* Doubles two and four at a time (GCC / Clang vector extensions) */
+typedef double v2d __attribute__((vector_size(16)));
+typedef long long v2l __attribute__((vector_size(16)));
+typedef double v4d __attribute__((vector_size(32)));
+
+/* Where the picture-frame direction p lies against texel (tx, ty): bits 1 / 2 left / right of
+ * it by more than margin (texels), 4 / 8 above / below; 0 if behind the face. *in: inside. */
+static inline int texel_outcode(const double *m, const double *a, const double *b, double half,
+                                int tx, int ty, double margin, double px, double py, double pz,
+                                int *in)
 {
     double pm = m[0] * px + m[1] * py + m[2] * pz;
-    if (!(pm > 0.0)) return 0;
+    if (!(pm > 0.0)) {
+        *in = 0;
+        return 0;
+    }
     double inv = half / pm;
     double fx = (a[0] * px + a[1] * py + a[2] * pz) * inv + half;
     double fy = (b[0] * px + b[1] * py + b[2] * pz) * inv + half;
-    return fx >= tx && fx < tx + 1 && fy >= ty && fy < ty + 1;
+    *in = fx >= tx && fx < tx + 1 && fy >= ty && fy < ty + 1;
+    return (fx < tx - margin) | (fx >= tx + 1 + margin) << 1 | (fy < ty - margin) << 2 |
+           (fy >= ty + 1 + margin) << 3;
 }
 
 /* Texels within a few cells of a pole. There theta and phi are far from linear across a
@@ -391,6 +413,9 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
     const double half = 0.5 * N;
     const double dphi = 2.0 * PI / W;
     const double cd = cos(dphi), sd = sin(dphi);
+    /* a parallel strays from the chord between two pixel corners by under dphi^2 / 8 radians,
+     * at most 3 times that on the face plane: in texels, under this */
+    const double margin = N * dphi * dphi / 4.0 + 1e-9;
     const double phi_start = 2.0 * PI * ((double)c0 / W - 0.5);
     const double cos_start = cos(phi_start), sin_start = sin(phi_start);
     /* crossed pixels are cut into FINE rows of cells, each row into cells about as wide as
@@ -407,7 +432,7 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
         const double fine_d = dphi / nlon, fcd = cos(fine_d), fsd = sin(fine_d);
         const double hc = cos(0.5 * fine_d), hs = sin(0.5 * fine_d);
         /* the cells of a crossed pixel: their rows' sin, cos and solid angle */
-        double sub_st[FINE], sub_ct[FINE], sub_w[FINE];
+        double sub_st[FINE], sub_ct[FINE], sub_w[FINE]; /* (FINE: even) */
         for (int j = 0; j < FINE; j++) {
             double ta = th0 + (th1 - th0) * j / FINE, tb = th0 + (th1 - th0) * (j + 1) / FINE;
             double tm = 0.5 * (ta + tb);
@@ -415,34 +440,59 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
             sub_ct[j] = cos(tm);
             sub_w[j] = (cos(ta) - cos(tb)) * fine_d;
         }
-        /* pixel corners along this row's top and bottom edges */
+        /* pixel corners along this row's top and bottom edges: inside the texel, and where
+         * outside (a pixel whose four corners are all beyond one of the texel's edges, by more
+         * than its parallels bulge past their chords, misses the texel: its other edges are
+         * meridians, straight on the face plane) */
         double cp = cos_start, sp = sin_start;
-        int top = in_texel(m, a, b, half, tx, ty, st0 * sp, ct0, -st0 * cp);
-        int bottom = in_texel(m, a, b, half, tx, ty, st1 * sp, ct1, -st1 * cp);
+        int top, bottom;
+        int top_code = texel_outcode(m, a, b, half, tx, ty, margin, st0 * sp, ct0, -st0 * cp, &top);
+        int bottom_code =
+            texel_outcode(m, a, b, half, tx, ty, margin, st1 * sp, ct1, -st1 * cp, &bottom);
         long wc = c0 % W;
         if (wc < 0) wc += W;
         for (long col = c0; col < c1; col++) {
             double ncp = cp * cd - sp * sd, nsp = sp * cd + cp * sd;
-            int top2 = in_texel(m, a, b, half, tx, ty, st0 * nsp, ct0, -st0 * ncp);
-            int bottom2 = in_texel(m, a, b, half, tx, ty, st1 * nsp, ct1, -st1 * ncp);
+            int top2, bottom2;
+            int top2_code =
+                texel_outcode(m, a, b, half, tx, ty, margin, st0 * nsp, ct0, -st0 * ncp, &top2);
+            int bottom2_code =
+                texel_outcode(m, a, b, half, tx, ty, margin, st1 * nsp, ct1, -st1 * ncp, &bottom2);
             int inside = top + bottom + top2 + bottom2;
+            int missed = top_code & bottom_code & top2_code & bottom2_code;
             const float *p = row + wc * 4;
             if (inside == 4) {
                 for (int c = 0; c < 4; c++) acc[c] += w_pixel * p[c];
                 wsum += w_pixel;
-            } else if (inside > 0 || thin) {
-                /* the texel's edge crosses this pixel: count its cells by centre */
-                double share = 0.0;
-                for (int j = 0; j < FINE; j++) {
-                    double st = sub_st[j], ct = sub_ct[j], wcell = sub_w[j];
-                    double fc = cp * hc - sp * hs, fs = sp * hc + cp * hs;
-                    for (int i = 0; i < nlon; i++) {
-                        if (in_texel(m, a, b, half, tx, ty, st * fs, ct, -st * fc)) share += wcell;
-                        double t = fc * fcd - fs * fsd;
-                        fs = fs * fcd + fc * fsd;
-                        fc = t;
+            } else if (inside > 0 || (thin && !missed)) {
+                /* the texel's edge crosses this pixel: count its cells by centre, a column of
+                 * them at a time (two rows to a vector). Cell (st fs, ct, -st fc) is in the
+                 * texel when its texel coordinates are, with m.p > 0: the same operations as
+                 * texel_outcode, so that a cell on an edge goes to the same texel as there (a
+                 * yaw of a round number of degrees puts whole columns of cells on a face's
+                 * centre line, where the rounding of a.p decides). */
+                v2d share2 = {0, 0};
+                double fc = cp * hc - sp * hs, fs = sp * hc + cp * hs;
+                for (int i = 0; i < nlon; i++) {
+                    for (int j = 0; j < FINE; j += 2) {
+                        v2d st, ct, wc;
+                        memcpy(&st, sub_st + j, sizeof st);
+                        memcpy(&ct, sub_ct + j, sizeof ct);
+                        memcpy(&wc, sub_w + j, sizeof wc);
+                        v2d px = st * fs, pz = -st * fc;
+                        v2d pm = m[0] * px + m[1] * ct + m[2] * pz;
+                        v2d inv = half / pm;
+                        v2d fx = (a[0] * px + a[1] * ct + a[2] * pz) * inv + half;
+                        v2d fy = (b[0] * px + b[1] * ct + b[2] * pz) * inv + half;
+                        v2l in = (pm > 0.0) & (fx >= tx) & (fx < tx + 1) & (fy >= ty) &
+                                 (fy < ty + 1);
+                        share2 += (v2d)(in & (v2l)wc);
                     }
+                    double t = fc * fcd - fs * fsd;
+                    fs = fs * fcd + fc * fsd;
+                    fc = t;
                 }
+                double share = share2[0] + share2[1];
                 for (int c = 0; c < 4; c++) acc[c] += share * p[c];
                 wsum += share;
             }
@@ -450,6 +500,8 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
             sp = nsp;
             top = top2;
             bottom = bottom2;
+            top_code = top2_code;
+            bottom_code = bottom2_code;
             if (++wc == W) wc = 0;
         }
     }
@@ -511,12 +563,13 @@ static inline v4f vmoment(v4f t)
     return t * t * (vsplat(0.5f) - vabs(t) * vsplat(1.0f / 3.0f)) - vsplat(1.0f / 6.0f);
 }
 
-/* Samples are gathered in batches over a texel row: first every sample's window in loops
- * without branches, then the windows' values, summed per texel in order. */
+/* Samples are gathered in batches over a texel row. Most take the fast path (fast_windows,
+ * below: float vectors, 4 x 4 taps); the rest (windows under 1/16 pixel or over two pixels,
+ * windows across the border of the polar bands, pictures under 8 x 64) go to a second batch
+ * handled in double (slow_values). */
 enum { BATCH = 128 };
-typedef struct eq_batch {
+typedef struct eq_slow {
     int n;
-    int texel[BATCH];
     double sc[BATCH], tc[BATCH], sub[BATCH];
     int preset[BATCH]; /* the window is given (polar_columns), not the face point */
     double given[BATCH][7]; /* its weight, px, py, wpx, hpx, sin and cos theta */
@@ -525,26 +578,43 @@ typedef struct eq_batch {
     /* the windows: kind (0: general, window_value), first row, 4 x 4 taps */
     int kind[BATCH], row[BATCH], rows[BATCH], col[4][BATCH];
     float wx[4][BATCH], wyt[4][BATCH], wyp[3][BATCH];
-    /* the tent windows' parameters (see batch_flush) */
+    /* the tent windows' parameters (see slow_values) */
     float v_da[BATCH], v_e[BATCH], v_dy[BATCH], v_ey[BATCH], v_h[BATCH];
     float v_sc[BATCH], v_sd[BATCH];
     int fine[BATCH];       /* windows whose weights are redone in double */
     double fd[BATCH][6];   /* their da, w, dy, h, s_c, s_d */
+    float val[BATCH][4];   /* the result: each window's value */
+} eq_slow;
+
+typedef struct eq_batch {
+    int n;
+    int texel[BATCH];
+    /* a window given by polar_columns (as eq_slow's), where fsub is 0; in float below */
+    double given[BATCH][7];
+    /* the face point and cell size; the fast path's windows: weight, first row, rows, columns,
+     * tap weights */
+    float fsc[BATCH], ftc[BATCH], fsub[BATCH];
+    float gwt[BATCH], gpx[BATCH], gpy[BATCH], gwpx[BATCH], ghpx[BATCH], gst[BATCH], gct[BATCH];
+    int fast[BATCH], frow[BATCH], frows[BATCH], fcol[BATCH];
+    float fwt[BATCH], fwx[4][BATCH], fwy[4][BATCH];
+    eq_slow *slow;
     /* the running sum of the texel being summed (its samples can span two batches) */
     int cur;
-    double acc[4], wsum;
+    v4d acc;
+    double wsum;
 } eq_batch;
 
 static void batch_emit(eq_batch *bt, float *out)
 {
     if (bt->cur >= 0) {
-        double inv = 1.0 / bt->wsum;
-        for (int c = 0; c < 4; c++) out[(size_t)bt->cur * 4 + c] = (float)(bt->acc[c] * inv);
+        v4f mean = __builtin_convertvector(bt->acc * (1.0 / bt->wsum), v4f);
+        memcpy(out + (size_t)bt->cur * 4, &mean, sizeof mean);
     }
     bt->cur = -1;
 }
 
-static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
+/* The value of each window of a batch, in double (the samples the fast path leaves). */
+static void slow_values(const eq_job *job, int face, eq_slow *bt)
 {
     int W = job->im->width, H = job->im->height, n = bt->n;
     const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
@@ -751,12 +821,8 @@ static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
     }
     const float *pix = job->im->pixels;
     for (int i = 0; i < n; i++) {
-        if (bt->texel[i] != bt->cur) {
-            batch_emit(bt, out);
-            bt->cur = bt->texel[i];
-            bt->acc[0] = bt->acc[1] = bt->acc[2] = bt->acc[3] = bt->wsum = 0.0;
-        }
-        float val[4] = {0, 0, 0, 0};
+        float *val = bt->val[i];
+        val[0] = val[1] = val[2] = val[3] = 0.0f;
         if (bt->kind[i]) {
             for (int k = 0; k < bt->rows[i]; k++) {
                 long r = bt->row[i] + k < H ? bt->row[i] + k : H - 1; /* past the window: 0 */
@@ -773,10 +839,150 @@ static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
             double px = bt->px[i], py = bt->py[i], hw = 0.5 * bt->wpx[i], hh = 0.5 * bt->hpx[i];
             window_value(job, px - hw, px + hw, py - hh, py + hh, bt->st[i], bt->ct[i], val);
         }
-        double wt = bt->wt[i];
-        for (int c = 0; c < 4; c++) bt->acc[c] += wt * val[c];
-        bt->wsum += wt;
     }
+}
+
+/* The fast path: the windows of samples whose window is at most two pixels wide and tall,
+ * which is nearly all of them, in float vectors (src/layout/equirect_lanes.h, compiled for
+ * four lanes and, with AVX2 where the CPU has it, eight: the same bits either way). Float is
+ * enough here: a window's ends move by under 3e-4 pixel (float spacing at 2048 pixels, and the
+ * float polynomial atan2), against windows 1/16 pixel and wider (narrower ones, and the wide
+ * ones of window_value, are left to slow_values). */
+typedef float v8f __attribute__((vector_size(32)));
+typedef int v8i __attribute__((vector_size(32)));
+/* Lane helpers for the vector type VF (mask type VI) of the including width. Macros
+ * (statement expressions): GCC notes an ABI change for every function taking a 32-byte
+ * vector, even an always inlined one. */
+#define LLOAD(p) ({ VF l_; memcpy(&l_, (p), sizeof l_); l_; })
+#define LSTORE(p, v) do { __typeof__(v) s_ = (v); memcpy((p), &s_, sizeof s_); } while (0)
+#define LSEL(m, a, b) ({ VI m_ = (m); (VF)((m_ & (VI)(a)) | (~m_ & (VI)(b))); })
+#define LABS(x) ((VF)((VI)(x) & 0x7fffffff))
+#define LCLAMP1(t) LMIN(LMAX((t), (VF){} - 1.0f), (VF){} + 1.0f)
+/* tent_cdf and tent_moment without branches (as vtent, vmoment) */
+#define LTENT(t) ({ VF u_ = LCLAMP1(t); 0.5f + u_ - 0.5f * u_ * LABS(u_); })
+#define LMOMENT(t) ({ VF u_ = LCLAMP1(t); \
+                      u_ * u_ * (0.5f - LABS(u_) * (1.0f / 3.0f)) - 1.0f / 6.0f; })
+/* atan2 from atan01 (the same polynomial, in float), without branches */
+#define LATAN2(y, x) ({ \
+    VF y_ = (y), x_ = (x), ax_ = LABS(x_), ay_ = LABS(y_); \
+    VI steep_ = ay_ > ax_; \
+    VF mn_ = LMIN(ax_, ay_), mx_ = LMAX(ax_, ay_); \
+    VF t_ = mn_ / LSEL(mx_ > 0.0f, mx_, (VF){} + 1.0f), t2_ = t_ * t_; \
+    VF r_ = t_ * (1.0f + t2_ * (-0.3333314528f + t2_ * (0.1999355085f + \
+            t2_ * (-0.1420889944f + t2_ * (0.1065626393f + t2_ * (-0.0752896400f + \
+            t2_ * (0.0429096138f + t2_ * (-0.0161657367f + t2_ * 0.0028662257f)))))))); \
+    r_ = LSEL(steep_, (float)(0.5 * PI) - r_, r_); \
+    r_ = LSEL(x_ < 0.0f, (float)PI - r_, r_); \
+    LSEL(y_ < 0.0f, -r_, r_); })
+
+/* four lanes: the portable code */
+#define LANES 4
+#define EQ_FN(name) name##_4
+#define EQ_TARGET
+#if defined(__SSE__)
+#include <xmmintrin.h>
+/* the larger / smaller of finite a and b (as a select on a < b would give, in one instruction) */
+#define LMAX(a, b) LSSE(_mm_max_ps, (a), (b))
+#define LMIN(a, b) LSSE(_mm_min_ps, (a), (b))
+#define LSSE(op, a, b) ({ __m128 p_, q_; VF a_ = (a), b_ = (b); memcpy(&p_, &a_, sizeof p_); \
+                           memcpy(&q_, &b_, sizeof q_); p_ = op(p_, q_); \
+                           memcpy(&a_, &p_, sizeof a_); a_; })
+#define LSQRT(x) ({ __m128 q_; VF r_ = (x); memcpy(&q_, &r_, sizeof q_); q_ = _mm_sqrt_ps(q_); \
+                    memcpy(&r_, &q_, sizeof r_); r_; })
+#else
+#define LSQRT(x) ({ VF r_ = (x); for (int l_ = 0; l_ < LANES; l_++) r_[l_] = sqrtf(r_[l_]); r_; })
+#define LMAX(a, b) ({ VF a_ = (a), b_ = (b); LSEL(a_ < b_, b_, a_); })
+#define LMIN(a, b) ({ VF a_ = (a), b_ = (b); LSEL(b_ < a_, b_, a_); })
+#endif
+#include "equirect_lanes.h"
+#undef LANES
+#undef EQ_FN
+#undef EQ_TARGET
+#undef LSQRT
+#undef LMAX
+#undef LMIN
+
+/* eight lanes in AVX2 registers, where the compiler can target them (chosen at run time) */
+#if (defined(__x86_64__) || defined(__i386__)) && \
+    (defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12))
+#define EQ_HAVE_AVX2 1
+#include <immintrin.h>
+#define LANES 8
+#define EQ_FN(name) name##_8
+#define EQ_TARGET __attribute__((target("avx2")))
+#define LMAX(a, b) LAVX(_mm256_max_ps, (a), (b))
+#define LMIN(a, b) LAVX(_mm256_min_ps, (a), (b))
+#define LAVX(op, a, b) ({ __m256 p_, q_; VF a_ = (a), b_ = (b); memcpy(&p_, &a_, sizeof p_); \
+                          memcpy(&q_, &b_, sizeof q_); p_ = op(p_, q_); \
+                          memcpy(&a_, &p_, sizeof a_); a_; })
+#define LSQRT(x) ({ __m256 q_; VF r_ = (x); memcpy(&q_, &r_, sizeof q_); \
+                    q_ = _mm256_sqrt_ps(q_); memcpy(&r_, &q_, sizeof r_); r_; })
+/* two v4f side by side */
+#define LJOIN(lo, hi) __builtin_shufflevector((lo), (hi), 0, 1, 2, 3, 4, 5, 6, 7)
+#include "equirect_lanes.h"
+#undef LANES
+#undef EQ_FN
+#undef EQ_TARGET
+#undef LSQRT
+#undef LMAX
+#undef LMIN
+#endif
+
+static int fast_windows(const eq_job *job, int face, eq_batch *bt, int n, int n_real)
+{
+#ifdef EQ_HAVE_AVX2
+    if (job->avx2) return fast_windows_8(&job->fast[face], bt, n, n_real);
+#endif
+    return fast_windows_4(&job->fast[face], bt, n, n_real);
+}
+
+static void batch_sum(const eq_job *job, eq_batch *bt, float *out)
+{
+#ifdef EQ_HAVE_AVX2
+    if (job->avx2) {
+        batch_sum_8(job, bt, out);
+        return;
+    }
+#endif
+    batch_sum_4(job, bt, out);
+}
+
+static void texel_ks(const eq_job *job, int face, int ty, int tx0, int n, int *ks)
+{
+    n = (n + 7) & ~7;
+#ifdef EQ_HAVE_AVX2
+    if (job->avx2) {
+        texel_ks_8(&job->fast[face], ty, tx0, n, ks);
+        return;
+    }
+#endif
+    texel_ks_4(&job->fast[face], ty, tx0, n, ks);
+}
+
+/* The samples of a batch: the fast windows' values from their 4 x 4 taps, the others' from
+ * slow_values, summed per texel in the samples' order. */
+static void batch_flush(const eq_job *job, int face, eq_batch *bt, float *out)
+{
+    int n = bt->n, n8 = (n + 7) & ~7;
+    for (int i = n; i < n8; i++) {
+        /* lanes past the batch: the face's centre (unused) */
+        bt->fsc[i] = bt->ftc[i] = 0.0f;
+        bt->fsub[i] = 1.0f;
+    }
+    int all_fast = fast_windows(job, face, bt, n8, n) == n;
+    eq_slow *sl = bt->slow;
+    sl->n = 0;
+    for (int i = 0; i < n && !all_fast; i++) {
+        if (bt->fast[i]) continue;
+        int j = sl->n++;
+        sl->sc[j] = bt->fsc[i];
+        sl->tc[j] = bt->ftc[i];
+        sl->sub[j] = bt->fsub[i];
+        sl->preset[j] = bt->fsub[i] == 0.0f;
+        if (sl->preset[j]) memcpy(sl->given[j], bt->given[i], sizeof sl->given[j]);
+    }
+    if (sl->n) slow_values(job, face, sl);
+    batch_sum(job, bt, out);
     bt->n = 0;
 }
 
@@ -843,9 +1049,7 @@ static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *
         if (bt->n == BATCH) batch_flush(job, face, bt, out);
         int n = bt->n++;
         bt->texel[n] = tx;
-        bt->sc[n] = bt->tc[n] = 0.0;
-        bt->sub[n] = cell;
-        bt->preset[n] = 1;
+        bt->fsc[n] = bt->ftc[n] = bt->fsub[n] = 0.0f;
         double *g = bt->given[n];
         g[0] = wt;
         g[1] = jj + 0.5;
@@ -854,55 +1058,15 @@ static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *
         g[4] = fabs(py_out - py_in);
         g[5] = vx * vl;
         g[6] = vy * vl;
+        bt->gwt[n] = (float)g[0];
+        bt->gpx[n] = (float)g[1];
+        bt->gpy[n] = (float)g[2];
+        bt->gwpx[n] = (float)g[3];
+        bt->ghpx[n] = (float)g[4];
+        bt->gst[n] = (float)g[5];
+        bt->gct[n] = (float)g[6];
     }
     return 1;
-}
-
-/* How many samples per axis each texel of a run takes (0: near a pole), from the texel's
- * extent in source rows and columns: SAMPLES_PER_ROW / _COLUMN per pixel it spans. */
-static void texel_ks(const eq_job *job, int face, int ty, int tx0, int n, int *ks)
-{
-    int N = job->out->size, W = job->im->width, H = job->im->height;
-    const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
-    const double cell = 2.0 / N, px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
-    double rho[TEXEL_RUN], len[TEXEL_RUN], sq[2 * TEXEL_RUN];
-    const double tc = -1.0 + (ty + 0.5) * cell;
-    for (int i = 0; i < n; i++) {
-        double sc = -1.0 + (tx0 + i + 0.5) * cell;
-        double x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
-               z = m[2] + sc * a[2] + tc * b[2];
-        sq[i] = x * x + z * z;
-        sq[TEXEL_RUN + i] = sq[i] + y * y;
-    }
-    sqrt_run(sq, rho, n);
-    sqrt_run(sq + TEXEL_RUN, len, n);
-    for (int i = 0; i < n; i++) {
-        double sc = -1.0 + (tx0 + i + 0.5) * cell;
-        double x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
-               z = m[2] + sc * a[2] + tc * b[2];
-        double rho2 = sq[i], r2 = sq[TEXEL_RUN + i];
-        /* latitude extent of the texel in source rows, from the gradient of theta; at a pole
-         * theta is a cone: its change is bound by the full gradient 1/|d| */
-        double inv_rr = 1.0 / ((rho[i] > 0.0 ? rho[i] : 1.0) * r2);
-        double g0 = y * x * inv_rr, g1 = -rho2 * inv_rr, g2 = y * z * inv_rr;
-        double ext = fabs(g0 * a[0] + g1 * a[1] + g2 * a[2]) +
-                     fabs(g0 * b[0] + g1 * b[1] + g2 * b[2]);
-        double ext_cone = 2.0 / len[i];
-        ext = rho[i] < 2.0 * cell * len[i] ? ext_cone : ext;
-        double rows = ext * cell * px_per_rad_v;
-        /* and its longitude extent in source columns */
-        double cols = (fabs(x * a[2] - z * a[0]) + fabs(x * b[2] - z * b[0])) /
-                      (rho2 > 0.0 ? rho2 : 1.0) * cell * px_per_rad_u;
-        double want = SAMPLES_PER_ROW * rows, want_c = SAMPLES_PER_COLUMN * cols;
-        want = want_c > want ? want_c : want;
-        want = want < 64.0 ? want : 64.0;
-        want = want > 1.0 ? want : 1.0; /* (and no NaN) */
-        rho[i] = rho2 < job->pole_radius2 * r2 ? 0.0 : want; /* (rho is free again) */
-    }
-    for (int i = 0; i < n; i++) {
-        int k = (int)rho[i];
-        ks[i] = k + (k < rho[i]); /* ceil */
-    }
 }
 
 static void eq_row_task(void *arg, int index)
@@ -912,12 +1076,44 @@ static void eq_row_task(void *arg, int index)
     float *out = ibl_cubemap_face(job->out, 0, face) + (size_t)ty * N * 4;
     const double cell = 2.0 / N; /* texel edge on the face plane */
     eq_batch bt;
+    eq_slow slow;
     bt.n = 0;
     bt.cur = -1;
+    bt.slow = &slow;
+    /* (the given windows' lanes are read for every sample, and selected only where given) */
+    memset(bt.gwt, 0, sizeof bt.gwt);
+    memset(bt.gpx, 0, sizeof bt.gpx);
+    memset(bt.gpy, 0, sizeof bt.gpy);
+    memset(bt.gwpx, 0, sizeof bt.gwpx);
+    memset(bt.ghpx, 0, sizeof bt.ghpx);
+    memset(bt.gst, 0, sizeof bt.gst);
+    memset(bt.gct, 0, sizeof bt.gct);
     int ks[TEXEL_RUN];
+    const float fcell = (float)cell, ftc_mid = (float)(-1.0 + (ty + 0.5) * cell);
     for (int tx0 = 0; tx0 < N; tx0 += TEXEL_RUN) {
         int run = N - tx0 < TEXEL_RUN ? N - tx0 : TEXEL_RUN;
         if (job->fixed_k == 0) texel_ks(job, face, ty, tx0, run, ks);
+        int all_one = job->fixed_k == 1;
+        if (job->fixed_k == 0) {
+            all_one = 1;
+            for (int r = 0; r < run; r++) all_one &= ks[r] == 1;
+        }
+        if (all_one) {
+            /* one sample at each texel's centre (most runs of the faces around the equator) */
+            for (int r = 0; r < run;) {
+                if (bt.n == BATCH) batch_flush(job, face, &bt, out);
+                int n0 = bt.n, m = run - r < BATCH - n0 ? run - r : BATCH - n0;
+                for (int q = 0; q < m; q++) {
+                    bt.texel[n0 + q] = tx0 + r + q;
+                    bt.fsc[n0 + q] = (float)(-1.0 + (tx0 + r + q + 0.5) * cell);
+                    bt.ftc[n0 + q] = ftc_mid;
+                    bt.fsub[n0 + q] = fcell;
+                }
+                bt.n += m;
+                r += m;
+            }
+            continue;
+        }
         for (int r = 0; r < run; r++) {
             int tx = tx0 + r, k = job->fixed_k ? job->fixed_k : ks[r];
             if (k == 0) {
@@ -927,18 +1123,32 @@ static void eq_row_task(void *arg, int index)
             if (k >= POLAR_COLUMNS_K && job->fixed_k == 0 &&
                 polar_columns(job, face, tx, ty, &bt, out))
                 continue;
+            if (k == 1) {
+                if (bt.n == BATCH) batch_flush(job, face, &bt, out);
+                bt.texel[bt.n] = tx;
+                bt.fsc[bt.n] = (float)(-1.0 + (tx + 0.5) * cell);
+                bt.ftc[bt.n] = ftc_mid;
+                bt.fsub[bt.n] = fcell;
+                bt.n++;
+                continue;
+            }
+            /* k x k samples, a row of them at a time (k <= 64 < BATCH) */
             const double sub = cell / k;
+            const float fsub = (float)sub;
+            float sci[64];
+            for (int i = 0; i < k; i++) sci[i] = (float)(-1.0 + tx * cell + (i + 0.5) * sub);
             for (int j = 0; j < k; j++) {
-                double tcj = -1.0 + ty * cell + (j + 0.5) * sub;
+                if (bt.n + k > BATCH) batch_flush(job, face, &bt, out);
+                float tcj = (float)(-1.0 + ty * cell + (j + 0.5) * sub);
+                int *texel = bt.texel + bt.n;
+                float *fsc = bt.fsc + bt.n, *ftc = bt.ftc + bt.n, *fs = bt.fsub + bt.n;
                 for (int i = 0; i < k; i++) {
-                    if (bt.n == BATCH) batch_flush(job, face, &bt, out);
-                    bt.texel[bt.n] = tx;
-                    bt.sc[bt.n] = -1.0 + tx * cell + (i + 0.5) * sub;
-                    bt.tc[bt.n] = tcj;
-                    bt.sub[bt.n] = sub;
-                    bt.preset[bt.n] = 0;
-                    bt.n++;
+                    texel[i] = tx;
+                    fsc[i] = sci[i];
+                    ftc[i] = tcj;
+                    fs[i] = fsub;
                 }
+                bt.n += k;
             }
         }
     }
@@ -967,8 +1177,9 @@ static void row_mean_task(void *arg, int index)
     }
 }
 
-ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const ibl__frame *frame,
-                                 int samples_per_axis, ibl_cubemap *out)
+static ibl_status equirect_to_cube(ibl_context *ctx, const ibl_image *image,
+                                   const ibl__frame *frame, int samples_per_axis, int simd,
+                                   ibl_cubemap *out)
 {
     int W = image->width, H = image->height;
     float *mean = ibl_alloc(ctx, (size_t)H * 4 * sizeof(float));
@@ -1004,8 +1215,51 @@ ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const
         job.pole_cell_area = cell * cell / POLE_CELLS;
     }
     ibl__picture_basis(frame, job.basis);
+    {
+        int R = POLAR_BOX_ROWS < H / 4 ? POLAR_BOX_ROWS : H / 4;
+        for (int f = 0; f < 6; f++) {
+            eq_fast_face *ff = &job.fast[f];
+            for (int i = 0; i < 3; i++) {
+                ff->m[i] = (float)job.basis[f][0][i];
+                ff->a[i] = (float)job.basis[f][1][i];
+                ff->b[i] = (float)job.basis[f][2][i];
+            }
+            ff->W = W;
+            ff->H = H;
+            ff->R = R;
+            ff->narrow_ok = W >= 8;
+            ff->N = out->size;
+            ff->pole_radius2 = (float)job.pole_radius2;
+        }
+        (void)simd;
+#ifdef EQ_HAVE_AVX2
+        job.avx2 = simd && __builtin_cpu_supports("avx2");
+#endif
+    }
     ibl_parallel_for(ctx, 6 * out->size, eq_row_task, &job);
     ibl_free(ctx, cs);
     ibl_free(ctx, mean);
     return IBL_OK;
+}
+
+ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const ibl__frame *frame,
+                                 int samples_per_axis, ibl_cubemap *out)
+{
+    return equirect_to_cube(ctx, image, frame, samples_per_axis, 1, out);
+}
+
+ibl_status ibl__equirect_to_cube_portable(ibl_context *ctx, const ibl_image *image,
+                                          const ibl__frame *frame, int samples_per_axis,
+                                          ibl_cubemap *out)
+{
+    return equirect_to_cube(ctx, image, frame, samples_per_axis, 0, out);
+}
+
+int ibl__equirect_has_avx2(void)
+{
+#ifdef EQ_HAVE_AVX2
+    return __builtin_cpu_supports("avx2") != 0;
+#else
+    return 0;
+#endif
 }
