@@ -449,7 +449,7 @@ static void texel_combine_task(void *arg, int y)
     }
 }
 
-static void store_geo_task(void *arg, int y)
+static void store_geo_row(void *arg, int y)
 {
     const geo_job *j = arg;
     int ax[6][3];
@@ -519,7 +519,7 @@ static void geo0_world(const ibl_specular_plan *p, int f, int x, int y, float ou
     out[F_OM] = g[F_OM];
 }
 
-static void store_rec0_task(void *arg, int y)
+static void store_rec0_row(void *arg, int y)
 {
     const ibl_specular_plan *p = arg;
     const srclev *s = &p->src[0];
@@ -532,6 +532,20 @@ static void store_rec0_task(void *arg, int y)
         }
 }
 
+/* Records are stored in blocks of BH rows: a task takes a whole block row, so that two threads
+ * never write the same cache lines (rows y and y + 1 share blocks). */
+static void store_geo_task(void *arg, int yb)
+{
+    const geo_job *j = arg;
+    for (int y = yb * BH; y < (yb + 1) * BH && y < j->n; y++) store_geo_row(arg, y);
+}
+
+static void store_rec0_task(void *arg, int yb)
+{
+    const ibl_specular_plan *p = arg;
+    for (int y = yb * BH; y < (yb + 1) * BH && y < p->src[0].M; y++) store_rec0_row(arg, y);
+}
+
 /* Level 0's records, for the pieces that sum it leaf by leaf. */
 static ibl_status level0_records(ibl_specular_plan *p)
 {
@@ -541,7 +555,7 @@ static ibl_status level0_records(ibl_specular_plan *p)
                                     : ibl_alloc(ctx, block_count(s) * s->nf * BT * sizeof(float));
     s->block = ibl_alloc(ctx, block_count(s) * BINFO * sizeof(float));
     if (!s->rec || !s->block) return ibl_context_status(ctx);
-    ibl_parallel_for(ctx, s->M, store_rec0_task, p);
+    ibl_parallel_for(ctx, s->nby, store_rec0_task, p);
     geo_job job = {p, s, NULL, s->M, NULL};
     ibl_parallel_for(ctx, s->nby, block_cone_task, &job);
     p->rec0 = 1;
@@ -583,7 +597,7 @@ static ibl_status build_geometry(ibl_specular_plan *p)
             ibl_parallel_for(ctx, M, store_geo0_task, &job);
             continue;
         }
-        ibl_parallel_for(ctx, M, store_geo_task, &job);
+        ibl_parallel_for(ctx, s->nby, store_geo_task, &job);
         ibl_parallel_for(ctx, s->nby, block_cone_task, &job);
     }
     ibl_free(ctx, cur);
@@ -1098,7 +1112,7 @@ typedef struct pyr_job {
 } pyr_job;
 
 
-static void level0_task(void *arg, int index)
+static void level0_row(void *arg, int index)
 {
     const pyr_job *job = arg;
     srclev *s = &job->p->src[0];
@@ -1108,7 +1122,7 @@ static void level0_task(void *arg, int index)
         for (int c = 0; c < 3; c++) s->rec[rec_index(s, f, x, y, F_L + c)] = row[(x / K) * 4 + c];
 }
 
-static void pyramid_task(void *arg, int index)
+static void pyramid_row(void *arg, int index)
 {
     const pyr_job *job = arg;
     const srclev *lo = &job->p->src[job->level - 1];
@@ -1162,6 +1176,23 @@ static void pyramid_task(void *arg, int index)
         for (int c = 0; c < 6; c++) r[rec_index(s, f, x, y, F_WC + c)] = (float)out.c[c];
         for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_P + c)] = (float)P[c];
     }
+}
+
+/* Whole block rows per task (see store_geo_task): index = face nby + block row. */
+static void level0_task(void *arg, int index)
+{
+    const pyr_job *job = arg;
+    const srclev *s = &job->p->src[0];
+    int f = index / s->nby, yb = index % s->nby;
+    for (int y = yb * BH; y < (yb + 1) * BH && y < s->M; y++) level0_row(arg, f * s->M + y);
+}
+
+static void pyramid_task(void *arg, int index)
+{
+    const pyr_job *job = arg;
+    const srclev *s = &job->p->src[job->level];
+    int f = index / s->nby, yb = index % s->nby;
+    for (int y = yb * BH; y < (yb + 1) * BH && y < s->M; y++) pyramid_row(arg, f * s->M + y);
 }
 
 /* ---- run: summing pieces over blocks ---- */
@@ -2384,10 +2415,10 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
         return ibl_progress(ctx, "prefilter", 1.0);
     }
     pyr_job pj = {p, src, 0};
-    if (p->rec0) ibl_parallel_for(ctx, 6 * p->src[0].M, level0_task, &pj);
+    if (p->rec0) ibl_parallel_for(ctx, 6 * p->src[0].nby, level0_task, &pj);
     for (int l = 1; l < p->SL; l++) {
         pyr_job job = {p, src, l};
-        ibl_parallel_for(ctx, 6 * p->src[l].M, pyramid_task, &job);
+        ibl_parallel_for(ctx, 6 * p->src[l].nby, pyramid_task, &job);
         if (p->src[l].bright_c > 0) select_bright(p, l);
     }
     for (int l = 0; l < p->L; l++)
