@@ -95,6 +95,9 @@ typedef struct grid {
     int n, direct; /* direct: the output level's own texels (edge-fixup directions) */
     int tiles;     /* tiles per face edge */
     float *acc;    /* 6 n n x 4: sum g P (rgb), sum g Omega */
+    float *pad;    /* coarse grids: 6 (n + 2)^2 x 4, acc with a border of one texel taken across
+                    * the edges (corner: the mean of its three texels), as the seamless
+                    * bilinear sampler reads them */
 } grid;
 
 typedef struct level_plan {
@@ -712,6 +715,10 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
         lv->tasks += 6 * gr->tiles * gr->tiles;
         gr->acc = ibl_alloc(p->ctx, (size_t)6 * gr->n * gr->n * 4 * sizeof(float));
         if (!gr->acc) return ibl_context_status(p->ctx);
+        if (!gr->direct) {
+            gr->pad = ibl_alloc(p->ctx, (size_t)6 * (gr->n + 2) * (gr->n + 2) * 4 * sizeof(float));
+            if (!gr->pad) return ibl_context_status(p->ctx);
+        }
     }
     lv->task_begin[lv->ngrids] = lv->tasks;
     return IBL_OK;
@@ -738,7 +745,10 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
             ibl_free(ctx, p->lv[l].pieces[k].tab);
             core_destroy(ctx, p->lv[l].pieces[k].core);
         }
-        for (int g = 0; g < p->lv[l].ngrids; g++) ibl_free(ctx, p->lv[l].grids[g].acc);
+        for (int g = 0; g < p->lv[l].ngrids; g++) {
+            ibl_free(ctx, p->lv[l].grids[g].acc);
+            ibl_free(ctx, p->lv[l].grids[g].pad);
+        }
     }
     ibl_free(ctx, p);
 }
@@ -2298,6 +2308,38 @@ static void plan_denominators(ibl_specular_plan *p, int level)
 
 /* ---- run: combining the grids into the output level ---- */
 
+typedef struct grid_pad_job {
+    const ibl_specular_plan *p;
+    grid *gr;
+} grid_pad_job;
+
+/* Face f of a coarse grid's bordered copy (grid.pad). */
+static void grid_pad_task(void *arg, int f)
+{
+    const grid_pad_job *j = arg;
+    grid *gr = j->gr;
+    int n = gr->n, m = n + 2;
+    float *out = gr->pad + (size_t)f * m * m * 4;
+    for (int Y = -1; Y <= n; Y++)
+        for (int X = -1; X <= n; X++) {
+            float *o = out + ((size_t)(Y + 1) * m + X + 1) * 4;
+            int ox = X < 0 || X >= n, oy = Y < 0 || Y >= n;
+            if (ox && oy) { /* a cube corner: the mean of the three texels around it */
+                int cx = X < 0 ? 0 : n - 1, cy = Y < 0 ? 0 : n - 1;
+                int32_t t[3] = {core_cell_texel(j->p, n, f, cx, cy), core_cell_texel(j->p, n, f, X, cy),
+                                core_cell_texel(j->p, n, f, cx, Y)};
+                for (int c = 0; c < 4; c++) {
+                    float v = 0;
+                    for (int k = 0; k < 3; k++) v += gr->acc[(size_t)t[k] * 4 + c] * (1.0f / 3.0f);
+                    o[c] = v;
+                }
+                continue;
+            }
+            int32_t t = core_cell_texel(j->p, n, f, X, Y);
+            for (int c = 0; c < 4; c++) o[c] = gr->acc[(size_t)t * 4 + c];
+        }
+}
+
 static void combine_task(void *arg, int index)
 {
     ibl_specular_plan *p = arg;
@@ -2322,21 +2364,19 @@ static void combine_task(void *arg, int index)
             if (gr->direct) continue;
             int gn = gr->n;
             if (centred && n % gn == 0) {
-                /* the texel centre's bilinear footprint on the same face of the grid, when it
-                 * does not cross an edge (else the seamless sampler below) */
-                double gx = (x + 0.5) * gn / n - 0.5, gy = (y + 0.5) * gn / n - 0.5;
-                int ix = (int)floor(gx), iy = (int)floor(gy);
-                if (ix >= 0 && iy >= 0 && ix + 1 < gn && iy + 1 < gn) {
-                    float fx = (float)(gx - ix), fy = (float)(gy - iy);
-                    const float *a = gr->acc + (((size_t)face * gn + iy) * gn + ix) * 4;
-                    const float *b = a + (size_t)gn * 4;
-                    for (int c = 0; c < 4; c++) {
-                        float top = a[c] + fx * (a[4 + c] - a[c]);
-                        float bot = b[c] + fx * (b[4 + c] - b[c]);
-                        v[c] += top + fy * (bot - top);
-                    }
-                    continue;
+                /* the texel centre's bilinear footprint on the bordered grid: it never leaves
+                 * it (gx is in [-1/2, gn - 1/2]) */
+                float gx = (x + 0.5f) * gn / n - 0.5f, gy = (y + 0.5f) * gn / n - 0.5f;
+                int ix = (int)floorf(gx), iy = (int)floorf(gy);
+                float fx = gx - ix, fy = gy - iy;
+                const float *a = gr->pad + (((size_t)face * (gn + 2) + iy + 1) * (gn + 2) + ix + 1) * 4;
+                const float *b = a + (size_t)(gn + 2) * 4;
+                for (int c = 0; c < 4; c++) {
+                    float top = a[c] + fx * (a[4 + c] - a[c]);
+                    float bot = b[c] + fx * (b[4 + c] - b[c]);
+                    v[c] += top + fy * (bot - top);
                 }
+                continue;
             }
             if (!have_dir) {
                 double d[3];
@@ -2437,6 +2477,11 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
             grid_job job = {p, l, EVAL_NUM0};
             ibl_parallel_for(ctx, p->lv[l].tasks, grid_task, &job);
             core_run(p, l, src);
+            for (int g = 0; g < p->lv[l].ngrids; g++) {
+                if (!p->lv[l].grids[g].pad) continue;
+                grid_pad_job gj = {p, &p->lv[l].grids[g]};
+                ibl_parallel_for(ctx, 6, grid_pad_task, &gj);
+            }
             ibl_parallel_for(ctx, 6 * ibl_level_size(p->N, l), combine_task, p);
         }
         ibl_status st = ibl_edge_fixup_apply(ctx, p->desc.edge_fixup, dst, l);
