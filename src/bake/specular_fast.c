@@ -1157,34 +1157,39 @@ static void pyramid_row(void *arg, int index)
                 for (int c = 0; c < 3; c++) g->m[c] = v[F_MX + c];
                 g->e = v[F_E];
                 for (int c = 0; c < 6; c++) g->c[c] = v[F_C + c];
-            } else if (job->level == 1) {
-                double om = r0[rec_index(lo, f, cx, cy, F_OM)];
-                for (int c = 0; c < 3; c++) pw[c] = om * r0[rec_index(lo, f, cx, cy, F_L + c)];
-                for (int c = 0; c < 3; c++) g->m[c] = r0[rec_index(lo, f, cx, cy, F_MX + c)];
-                g->e = r0[rec_index(lo, f, cx, cy, F_E)];
-                for (int c = 0; c < 6; c++) g->c[c] = r0[rec_index(lo, f, cx, cy, F_C + c)];
             } else {
-                for (int c = 0; c < 3; c++) pw[c] = r0[rec_index(lo, f, cx, cy, F_P + c)];
-                for (int c = 0; c < 3; c++) g->m[c] = r0[rec_index(lo, f, cx, cy, F_WM + c)];
-                g->e = r0[rec_index(lo, f, cx, cy, F_WE)];
-                for (int c = 0; c < 6; c++) g->c[c] = r0[rec_index(lo, f, cx, cy, F_WC + c)];
+                /* the child's fields, BT floats apart */
+                const float *q = r0 + rec_index(lo, f, cx, cy, 0);
+                if (job->level == 1) {
+                    double om = q[F_OM * BT];
+                    for (int c = 0; c < 3; c++) pw[c] = om * q[(F_L + c) * BT];
+                    for (int c = 0; c < 3; c++) g->m[c] = q[(F_MX + c) * BT];
+                    g->e = q[F_E * BT];
+                    for (int c = 0; c < 6; c++) g->c[c] = q[(F_C + c) * BT];
+                } else {
+                    for (int c = 0; c < 3; c++) pw[c] = q[(F_P + c) * BT];
+                    for (int c = 0; c < 3; c++) g->m[c] = q[(F_WM + c) * BT];
+                    g->e = q[F_WE * BT];
+                    for (int c = 0; c < 6; c++) g->c[c] = q[(F_WC + c) * BT];
+                }
             }
             w[k] = LUM[0] * pw[0] + LUM[1] * pw[1] + LUM[2] * pw[2];
             if (!(w[k] > 0)) w[k] = 0;
             for (int c = 0; c < 3; c++) P[c] += pw[c];
             pp[k] = g;
         }
+        float *o = r + rec_index(s, f, x, y, 0);
         if (w[0] + w[1] + w[2] + w[3] > 0) {
             combine(pp, w, 4, &out);
         } else { /* no light: the geometric moments */
-            for (int c = 0; c < 3; c++) out.m[c] = r[rec_index(s, f, x, y, F_MX + c)];
-            out.e = r[rec_index(s, f, x, y, F_E)];
-            for (int c = 0; c < 6; c++) out.c[c] = r[rec_index(s, f, x, y, F_C + c)];
+            for (int c = 0; c < 3; c++) out.m[c] = o[(F_MX + c) * BT];
+            out.e = o[F_E * BT];
+            for (int c = 0; c < 6; c++) out.c[c] = o[(F_C + c) * BT];
         }
-        for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_WM + c)] = (float)out.m[c];
-        r[rec_index(s, f, x, y, F_WE)] = (float)out.e;
-        for (int c = 0; c < 6; c++) r[rec_index(s, f, x, y, F_WC + c)] = (float)out.c[c];
-        for (int c = 0; c < 3; c++) r[rec_index(s, f, x, y, F_P + c)] = (float)P[c];
+        for (int c = 0; c < 3; c++) o[(F_WM + c) * BT] = (float)out.m[c];
+        o[F_WE * BT] = (float)out.e;
+        for (int c = 0; c < 6; c++) o[(F_WC + c) * BT] = (float)out.c[c];
+        for (int c = 0; c < 3; c++) o[(F_P + c) * BT] = (float)P[c];
     }
 }
 
