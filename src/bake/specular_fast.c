@@ -637,7 +637,7 @@ static int grid_index(level_plan *lv, int n, int direct, int tile_edge)
 }
 
 /* Whether the output directions are the texel centres (no edge fixup bends them). */
-static int grid_symmetric_fixup(const ibl_specular_plan *p)
+static int centred_directions(const ibl_specular_plan *p)
 {
     return p->desc.edge_fixup != IBL_EDGE_FIXUP_BENT && p->desc.edge_fixup != IBL_EDGE_FIXUP_WARP;
 }
@@ -686,7 +686,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
             /* a ring that will be precomputed (symmetric grid, reach within the padded
              * face) sums a finer level: its cells cost little, and centroid corrections are
              * rarer on finer texels */
-            int mac = grid_symmetric_fixup(p) && acos(1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0)) < 1.1;
+            int mac = centred_directions(p) && acos(1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0)) < 1.1;
             pc->src = source_level_for(p, (mac ? GAMMA_MAC * acc : gamma) * b, 16);
             /* a ring summed from a coarse level leaves its bright texels to a direct sum, so
              * that its grid may be coarser (see "bright texels") */
@@ -1660,8 +1660,7 @@ typedef struct tile_pts {
  * (edge fixups that bend directions are not assumed to be). */
 static int grid_symmetric(const ibl_specular_plan *p, const grid *gr)
 {
-    return !gr->direct ||
-           (p->desc.edge_fixup != IBL_EDGE_FIXUP_BENT && p->desc.edge_fixup != IBL_EDGE_FIXUP_WARP);
+    return !gr->direct || centred_directions(p);
 }
 
 typedef struct grid_job {
@@ -2355,7 +2354,7 @@ static void combine_task(void *arg, int index)
     for (int g = 0; g < lv->ngrids; g++)
         if (lv->grids[g].direct) direct = &lv->grids[g];
     /* output directions at the texel centres (no edge fixup bends them) */
-    int centred = p->desc.edge_fixup != IBL_EDGE_FIXUP_BENT && p->desc.edge_fixup != IBL_EDGE_FIXUP_WARP;
+    int centred = centred_directions(p);
     for (int x = 0; x < n; x++) {
         double v[4] = {0, 0, 0, 0};
         if (direct) {
