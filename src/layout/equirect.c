@@ -894,13 +894,7 @@ typedef int v8i __attribute__((vector_size(32)));
 #define LMAX(a, b) ({ VF a_ = (a), b_ = (b); LSEL(a_ < b_, b_, a_); })
 #define LMIN(a, b) ({ VF a_ = (a), b_ = (b); LSEL(b_ < a_, b_, a_); })
 #endif
-#include "equirect_lanes.h"
-#undef LANES
-#undef EQ_FN
-#undef EQ_TARGET
-#undef LSQRT
-#undef LMAX
-#undef LMIN
+#include "equirect_lanes.h" /* (it undefines LANES, EQ_FN, EQ_TARGET, LSQRT, LMAX, LMIN) */
 
 /* eight lanes in AVX2 registers, where the compiler can target them (chosen at run time) */
 #if (defined(__x86_64__) || defined(__i386__)) && \
@@ -919,13 +913,7 @@ typedef int v8i __attribute__((vector_size(32)));
                     q_ = _mm256_sqrt_ps(q_); memcpy(&r_, &q_, sizeof r_); r_; })
 /* two v4f side by side */
 #define LJOIN(lo, hi) __builtin_shufflevector((lo), (hi), 0, 1, 2, 3, 4, 5, 6, 7)
-#include "equirect_lanes.h"
-#undef LANES
-#undef EQ_FN
-#undef EQ_TARGET
-#undef LSQRT
-#undef LMAX
-#undef LMIN
+#include "equirect_lanes.h" /* (it undefines LANES, EQ_FN, EQ_TARGET, LSQRT, LMAX, LMIN) */
 #endif
 
 static int fast_windows(const eq_job *job, int face, eq_batch *bt, int n, int n_real)

@@ -3,7 +3,7 @@
  * 8 (one AVX2 register). Every lane goes through the same float operations in the same order
  * at either width, and nothing is fused into multiply-adds, so both give the same bits.
  * Expects: LANES, EQ_FN(name) (the name of this width's copy), EQ_TARGET (its attributes), and
- * the types and L* macros of equirect.c. */
+ * the types and L* macros of equirect.c; undefines its parameters at the end. */
 #if LANES == 8
 #define VF v8f
 #define VI v8i
@@ -291,3 +291,10 @@ EQ_TARGET static void EQ_FN(texel_ks)(const eq_fast_face *ff, int ty, int tx0, i
 
 #undef VF
 #undef VI
+/* the includer's parameters, so that it can include this file again with others */
+#undef LANES
+#undef EQ_FN
+#undef EQ_TARGET
+#undef LSQRT
+#undef LMAX
+#undef LMIN
