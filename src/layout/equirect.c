@@ -532,7 +532,6 @@ static inline double atan2_nb(double y, double x)
 /* Four floats at a time (GCC / Clang vector extensions; plain SSE on x86-64). */
 typedef float v4f __attribute__((vector_size(16)));
 typedef int v4i __attribute__((vector_size(16)));
-static inline v4f vsplat(float x) { return (v4f){x, x, x, x}; }
 static inline v4f vload(const float *p)
 {
     v4f v;
@@ -540,29 +539,6 @@ static inline v4f vload(const float *p)
     return v;
 }
 static inline void vstore(float *p, v4f v) { memcpy(p, &v, sizeof v); }
-static inline v4f vsel(v4i m, v4f a, v4f b) { return (v4f)((m & (v4i)a) | (~m & (v4i)b)); }
-static inline v4f vabs(v4f x)
-{
-    return (v4f)((v4i)x & (v4i){0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff});
-}
-static inline v4f vclamp1(v4f t)
-{
-    t = vsel(t < vsplat(-1.0f), vsplat(-1.0f), t);
-    return vsel(t > vsplat(1.0f), vsplat(1.0f), t);
-}
-/* tent_cdf and tent_moment without branches, for t clamped to [-1, 1]:
- * T(t) = 1/2 + t - t |t| / 2, M(t) = t^2 (1/2 - |t| / 3) - 1/6 */
-static inline v4f vtent(v4f t)
-{
-    t = vclamp1(t);
-    return vsplat(0.5f) + t - vsplat(0.5f) * t * vabs(t);
-}
-static inline v4f vmoment(v4f t)
-{
-    t = vclamp1(t);
-    return t * t * (vsplat(0.5f) - vabs(t) * vsplat(1.0f / 3.0f)) - vsplat(1.0f / 6.0f);
-}
-
 /* Samples are gathered in batches over a texel row. Most take the fast path (fast_windows,
  * below: float vectors, 4 x 4 taps); the rest (windows under 1/16 pixel or over two pixels,
  * windows across the border of the polar bands, pictures under 8 x 64) go to a second batch
@@ -614,6 +590,9 @@ static void batch_emit(eq_batch *bt, float *out)
 }
 
 /* The value of each window of a batch, in double (the samples the fast path leaves). */
+/* equirect_lanes.h's four-lane copy (included below) */
+static void tent_weights_4(v4f da, v4f e, v4f dy, v4f ey, v4f h, v4f s_c, v4f s_d, v4f wy[4], v4f wx[4]);
+
 static void slow_values(const eq_job *job, int face, eq_slow *bt)
 {
     int W = job->im->width, H = job->im->height, n = bt->n;
@@ -762,41 +741,17 @@ static void slow_values(const eq_job *job, int face, eq_slow *bt)
             bt->v_dy[i] = bt->v_ey[i] = bt->v_h[i] = bt->v_sc[i] = bt->v_sd[i] = 0.0f;
         }
     }
-    /* Then the tent weights of four samples at a time, in float (the taps are float):
-     * longitude tap k weighs T(e - k) - T(da - k) (over their sum, w), latitude row k
-     * (T(ey - k) - T(dy - k)) (s_c + s_d (k - dy - h / 2)) + s_d (M(ey - k) - M(dy - k)),
-     * with T(da - k) = T(da), da^2 / 2, 0, 0 for da in [0, 1) (the same for M). */
+    /* Then the tent weights of four samples at a time, in float (the taps are float), by the
+     * fast path's own function (equirect_lanes.h, tent_weights) */
     for (int i = 0; i < n4; i += 4) {
         v4f da = vload(bt->v_da + i), e = vload(bt->v_e + i);
         v4f dy = vload(bt->v_dy + i), ey = vload(bt->v_ey + i), h = vload(bt->v_h + i);
         v4f sc = vload(bt->v_sc + i), sd = vload(bt->v_sd + i);
-        v4f half = vsplat(0.5f), third = vsplat(1.0f / 3.0f), sixth = vsplat(1.0f / 6.0f);
-        v4f lo_t[2] = {half + da - half * da * da, half * da * da};
-        v4f dm = dy - vsplat(1.0f);
-        v4f ly_t[2] = {half + dy - half * dy * dy, half * dy * dy};
-        v4f ly_m[2] = {dy * dy * (half - dy * third) - sixth,
-                       dm * dm * (half + dm * third) - sixth};
-        v4f share[4], wx[4], sum = vsplat(0.0f), wsum = vsplat(0.0f);
+        v4f wy[4], wx[4];
+        tent_weights_4(da, e, dy, ey, h, sc, sd, wy, wx);
         for (int k = 0; k < 4; k++) {
-            v4f fk = vsplat((float)k);
-            wx[k] = vtent(e - fk);
-            if (k < 2) wx[k] -= lo_t[k];
-            wsum += wx[k];
-            v4f t = vtent(ey - fk), mom = vmoment(ey - fk);
-            if (k < 2) {
-                t -= ly_t[k];
-                mom -= ly_m[k];
-            }
-            share[k] = t * (sc + sd * (fk - dy - half * h)) + sd * mom;
-            sum += share[k];
-        }
-        /* lanes of other kinds: any finite value (unused) */
-        sum = vsel(sum > vsplat(0.0f), sum, vsplat(1.0f));
-        wsum = vsel(wsum > vsplat(0.0f), wsum, vsplat(1.0f));
-        v4f inv = vsplat(1.0f) / sum, inv_w = vsplat(1.0f) / wsum;
-        for (int k = 0; k < 4; k++) {
-            vstore(bt->wyt[k] + i, share[k] * inv);
-            vstore(bt->wx[k] + i, wx[k] * inv_w);
+            vstore(bt->wyt[k] + i, wy[k]);
+            vstore(bt->wx[k] + i, wx[k]);
         }
     }
     for (int i = 0; i < n; i++) {
@@ -858,7 +813,8 @@ typedef int v8i __attribute__((vector_size(32)));
 #define LSEL(m, a, b) ({ VI m_ = (m); (VF)((m_ & (VI)(a)) | (~m_ & (VI)(b))); })
 #define LABS(x) ((VF)((VI)(x) & 0x7fffffff))
 #define LCLAMP1(t) LMIN(LMAX((t), (VF){} - 1.0f), (VF){} + 1.0f)
-/* tent_cdf and tent_moment without branches (as vtent, vmoment) */
+/* tent_cdf and tent_moment without branches, for t clamped to [-1, 1]:
+ * T(t) = 1/2 + t - t |t| / 2, M(t) = t^2 (1/2 - |t| / 3) - 1/6 */
 #define LTENT(t) ({ VF u_ = LCLAMP1(t); 0.5f + u_ - 0.5f * u_ * LABS(u_); })
 #define LMOMENT(t) ({ VF u_ = LCLAMP1(t); \
                       u_ * u_ * (0.5f - LABS(u_) * (1.0f / 3.0f)) - 1.0f / 6.0f; })

@@ -12,6 +12,39 @@
 #define VI v4i
 #endif
 
+/* The 4 x 4 tap weights of LANES tent windows, normalised: longitude tap k weighs
+ * T(e - k) - T(da - k) (over their sum), latitude row k (T(ey - k) - T(dy - k)) (s_c + s_d (k -
+ * dy - h / 2)) + s_d (M(ey - k) - M(dy - k)) (over their sum), with T(da - k) = T(da), da^2 / 2,
+ * 0, 0 for da in [0, 1) (the same for M). slow_values uses the four-lane copy. */
+EQ_TARGET static void EQ_FN(tent_weights)(VF da, VF e, VF dy, VF ey, VF h, VF s_c, VF s_d, VF wy[4],
+                                          VF wx[4])
+{
+    VF lo_t[2] = {0.5f + da - 0.5f * da * da, 0.5f * da * da};
+    VF dm = dy - 1.0f;
+    VF ly_t[2] = {0.5f + dy - 0.5f * dy * dy, 0.5f * dy * dy};
+    VF ly_m[2] = {dy * dy * (0.5f - dy * (1.0f / 3.0f)) - 1.0f / 6.0f,
+                  dm * dm * (0.5f + dm * (1.0f / 3.0f)) - 1.0f / 6.0f};
+    VF sum = {0}, wsum = {0};
+    for (int k = 0; k < 4; k++) {
+        float fk = (float)k;
+        wx[k] = LTENT(e - fk);
+        if (k < 2) wx[k] -= lo_t[k];
+        wsum += wx[k];
+        VF t = LTENT(ey - fk), mom = LMOMENT(ey - fk);
+        if (k < 2) {
+            t -= ly_t[k];
+            mom -= ly_m[k];
+        }
+        wy[k] = t * (s_c + s_d * (fk - dy - 0.5f * h)) + s_d * mom;
+        sum += wy[k];
+    }
+    /* lanes of other kinds: any finite value (unused) */
+    sum = LSEL(sum > 0.0f, sum, (VF){} + 1.0f);
+    wsum = LSEL(wsum > 0.0f, wsum, (VF){} + 1.0f);
+    VF inv = 1.0f / sum, inv_w = 1.0f / wsum;
+    for (int k = 0; k < 4; k++) wy[k] *= inv, wx[k] *= inv_w;
+}
+
 /* For lanes [0, n) of a batch (n a multiple of LANES): each sample's direction, weight dA / |d|^3
  * and window (as slow_values computes them), then, for the tent windows, the first row and
  * column, the row count and the 4 x 4 tap weights; fast[i] says whether sample i took it.
@@ -97,33 +130,8 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
         LSTORE(bt->fast + i, fast);
         fast_count -= fast & (lane + i < n_real);
         LSTORE(bt->fwt + i, wt);
-        /* the tent weights (as slow_values): longitude tap k weighs T(e - k) - T(da - k) (over
-         * their sum), latitude row k (T(ey - k) - T(dy - k)) (s_c + s_d (k - dy - h / 2)) +
-         * s_d (M(ey - k) - M(dy - k)), with T(da - k) = T(da), da^2 / 2, 0, 0 for da in
-         * [0, 1) (the same for M) */
-        VF lo_t[2] = {0.5f + da - 0.5f * da * da, 0.5f * da * da};
-        VF dm = dy - 1.0f;
-        VF ly_t[2] = {0.5f + dy - 0.5f * dy * dy, 0.5f * dy * dy};
-        VF ly_m[2] = {dy * dy * (0.5f - dy * (1.0f / 3.0f)) - 1.0f / 6.0f,
-                       dm * dm * (0.5f + dm * (1.0f / 3.0f)) - 1.0f / 6.0f};
-        VF share[4], wx[4], sum = {0}, wsum = {0};
-        for (int k = 0; k < 4; k++) {
-            float fk = (float)k;
-            wx[k] = LTENT(e - fk);
-            if (k < 2) wx[k] -= lo_t[k];
-            wsum += wx[k];
-            VF t = LTENT(ey - fk), mom = LMOMENT(ey - fk);
-            if (k < 2) {
-                t -= ly_t[k];
-                mom -= ly_m[k];
-            }
-            share[k] = t * (s_c + s_d * (fk - dy - 0.5f * h)) + s_d * mom;
-            sum += share[k];
-        }
-        sum = LSEL(sum > 0.0f, sum, (VF){} + 1.0f);
-        wsum = LSEL(wsum > 0.0f, wsum, (VF){} + 1.0f);
-        VF inv = 1.0f / sum, inv_w = 1.0f / wsum;
-        for (int k = 0; k < 4; k++) share[k] *= inv;
+        VF share[4], wx[4];
+        EQ_FN(tent_weights)(da, e, dy, ey, h, s_c, s_d, share, wx);
         if (any_polar) {
             /* polar bands: row jp + k covers [jp + k, jp + k + 1]; the solid angle between
              * two latitudes from the centre's by the angle-sum formula and Taylor series (as
@@ -155,7 +163,7 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
         LSTORE(bt->frows + i, rows | (((i0 < 0) | (i0 + 3 >= Wi)) & 8));
         for (int k = 0; k < 4; k++) {
             LSTORE(bt->fwy[k] + i, share[k]);
-            LSTORE(bt->fwx[k] + i, wx[k] * inv_w);
+            LSTORE(bt->fwx[k] + i, wx[k]);
         }
     }
     int count = 0;
