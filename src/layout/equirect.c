@@ -532,6 +532,7 @@ static inline double atan2_nb(double y, double x)
 /* Four floats at a time (GCC / Clang vector extensions; plain SSE on x86-64). */
 typedef float v4f __attribute__((vector_size(16)));
 typedef int v4i __attribute__((vector_size(16)));
+static inline v4f vsplat(float x) { return (v4f){x, x, x, x}; }
 static inline v4f vload(const float *p)
 {
     v4f v;
