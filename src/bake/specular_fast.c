@@ -2083,25 +2083,34 @@ static void core_mac_generic(const struct core *c, const uint16_t *w, const int3
     }
 }
 
+/* One row of base texels into its images. Image by image, so that the source rows under the
+ * row's windows stay in L1 while the row's weights (~0.1 MB at level 1 of 256) stream from L2:
+ * base by base, every base re-read 24 windows from L2 (measured 1.6x slower). */
 static void core_mac_task(void *arg, int b)
 {
     core_job *j = arg;
     const struct core *c = j->c;
     size_t plane = (size_t)c->P * c->P;
-    for (int a = 0; a < c->nb; a++) {
-        int index = b * c->nb + a;
-        const uint16_t *w = c->w + c->w0[index];
-        const int32_t *rows = c->rows + 3 * (size_t)c->row0[index];
-        int nrows = (int)(c->row0[index + 1] - c->row0[index]);
-        CORE_IMAGES(c, a, b, {
-            double s[3];
-            const float *planes = j->p->pad + (size_t)face_ * 3 * plane;
-            if (j->avx2) avx2_core_mac(c, w, rows, nrows, planes, fx_, fy_, s);
-            else core_mac_generic(c, w, rows, nrows, planes, fx_, fy_, s);
-            float *o = j->acc + (((size_t)face_ * c->n + y_) * c->n + x_) * 4;
-            for (int ch = 0; ch < 3; ch++) o[ch] = (float)(o[ch] + s[ch]);
-        })
-    }
+    for (int face = 0; face < 6; face++)
+        for (int fy = 0; fy < 2; fy++) {
+            int y = fy ? c->n - 1 - b : b;
+            if (fy && y == b) continue;
+            for (int fx = 0; fx < 2; fx++)
+                for (int a = 0; a < c->nb; a++) {
+                    int x = fx ? c->n - 1 - a : a;
+                    if (fx && x == a) continue;
+                    int index = b * c->nb + a;
+                    const uint16_t *w = c->w + c->w0[index];
+                    const int32_t *rows = c->rows + 3 * (size_t)c->row0[index];
+                    int nrows = (int)(c->row0[index + 1] - c->row0[index]);
+                    double s[3];
+                    const float *planes = j->p->pad + (size_t)face * 3 * plane;
+                    if (j->avx2) avx2_core_mac(c, w, rows, nrows, planes, fx, fy, s);
+                    else core_mac_generic(c, w, rows, nrows, planes, fx, fy, s);
+                    float *o = j->acc + (((size_t)face * c->n + y) * c->n + x) * 4;
+                    for (int ch = 0; ch < 3; ch++) o[ch] = (float)(o[ch] + s[ch]);
+                }
+        }
 }
 
 
