@@ -665,7 +665,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
     double U = 1.0 - cos(b0 < PI ? b0 : PI);
     lv->ngrids = 0;
     lv->npieces = 0;
-    double prevU = 0.0;
+    double prevU = 0.0, inner[MAX_PIECES]; /* each piece's inner step scale (0: none) */
     for (int j = 0; j < MAX_PIECES; j++) {
         piece *pc = &lv->pieces[lv->npieces];
         memset(pc, 0, sizeof *pc);
@@ -701,9 +701,23 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
                 pc->split = split;
             }
         }
-        ibl_status st = make_table(p->ctx, lobe, j == 0 ? 0.0 : prevU, last ? 0.0 : outerU, pc);
-        if (st != IBL_OK) return st;
-        lv->npieces++;
+        /* a ring over the same source level and grid as the ring before it (the far rings,
+         * once both reach the coarsest level) joins it: their sum is one piece, the lobe
+         * between the first one's inner step and this one's outer step, summed once */
+        piece *prev = lv->npieces > 1 ? pc - 1 : NULL;
+        if (prev && prev->src == pc->src && prev->grid == pc->grid && prev->split == pc->split) {
+            prev->u_hi = pc->u_hi;
+            prev->th_out = pc->th_out;
+            ibl_free(p->ctx, prev->tab);
+            prev->tab = NULL;
+            ibl_status st = make_table(p->ctx, lobe, inner[lv->npieces - 1], last ? 0.0 : outerU, prev);
+            if (st != IBL_OK) return st;
+        } else {
+            inner[lv->npieces] = j == 0 ? 0.0 : prevU;
+            ibl_status st = make_table(p->ctx, lobe, inner[lv->npieces], last ? 0.0 : outerU, pc);
+            if (st != IBL_OK) return st;
+            lv->npieces++;
+        }
         if (last) break;
         prevU = U;
         U *= 4.0;
