@@ -1,9 +1,5 @@
-/* madvise and MADV_HUGEPAGE are BSD/Linux extensions beyond POSIX */
-#define _DEFAULT_SOURCE
 #include "cli.h"
-
-#include <stdint.h>
-#include <sys/mman.h>
+#include "arena.h"
 
 #include <math.h>
 #include <signal.h>
@@ -202,53 +198,6 @@ static int on_progress(void *user, const char *stage, double fraction)
 }
 
 
-/* The library's large buffers (cubes, records, weights: megabytes each, touched once) are
- * mapped on their own, 2 MiB-aligned and advised as transparent huge pages: one page fault per
- * 2 MiB instead of 512 (on this kind of VM a fault costs microseconds; docs/PERFORMANCE.md
- * "Specular prefilter"). Small blocks come from malloc. A header before each block says which
- * kind it is. */
-enum { CLI_HEADER = 64 };
-static const size_t CLI_HUGE = (size_t)2 << 20;
-
-static void *cli_alloc(size_t bytes, void *user)
-{
-    (void)user;
-    void *p = NULL;
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    if (bytes >= CLI_HUGE) {
-        size_t size = (bytes + CLI_HEADER + CLI_HUGE - 1) & ~(CLI_HUGE - 1);
-        size_t span = size + CLI_HUGE; /* room to align the start */
-        char *map = mmap(NULL, span, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-        if (map == MAP_FAILED) return NULL;
-        char *base = (char *)(((uintptr_t)map + CLI_HUGE - 1) & ~(uintptr_t)(CLI_HUGE - 1));
-        if (base > map) munmap(map, (size_t)(base - map));
-        if (base + size < map + span) munmap(base + size, (size_t)(map + span - (base + size)));
-        madvise(base, size, MADV_HUGEPAGE); /* advice only: failure changes nothing */
-        ((size_t *)base)[0] = size;
-        ((size_t *)base)[1] = 1;
-        return base + CLI_HEADER;
-    }
-#endif
-    if (posix_memalign(&p, 64, bytes + CLI_HEADER) != 0) return NULL;
-    ((size_t *)p)[0] = bytes;
-    ((size_t *)p)[1] = 0;
-    return (char *)p + CLI_HEADER;
-}
-
-static void cli_free(void *ptr, void *user)
-{
-    (void)user;
-    if (!ptr) return;
-    size_t *h = (size_t *)((char *)ptr - CLI_HEADER);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    if (h[1]) {
-        munmap(h, h[0]);
-        return;
-    }
-#endif
-    free(h);
-}
-
 ibl_context *cli_context(const cli_common *c)
 {
     ibl_context_desc d;
@@ -257,8 +206,8 @@ ibl_context *cli_context(const cli_common *c)
     if (c->max_memory_mib > 0) d.max_bytes = (uint64_t)(c->max_memory_mib * 1048576.0);
     progress.tty = !c->quiet && isatty(STDERR_FILENO);
     d.progress = on_progress;
-    d.allocator.alloc = cli_alloc;
-    d.allocator.free = cli_free;
+    d.allocator.alloc = cli_arena_alloc;
+    d.allocator.free = cli_arena_free;
     ibl_context *ctx = NULL;
     if (ibl_context_create(&d, &ctx) != IBL_OK) {
         cli_error("cannot create the library context (out of memory?)");
