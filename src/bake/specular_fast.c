@@ -40,6 +40,7 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 enum { BW = 4, BH = 2, BT = BW * BH }; /* a block: one 8-wide vector */
@@ -75,6 +76,7 @@ typedef struct srclev {
     double bright_c;     /* threshold on a texel's luminance power / mean radiance (0: unused) */
     int bright_cap, nbright; /* capacity and count of bright blocks                     */
     float *bright_rec, *bright_block;
+    uint64_t *bright_order;  /* bright_cap BT: scratch of gather_texels                  */
 } srclev;
 
 typedef struct piece {
@@ -177,6 +179,7 @@ struct core {
     double a1, a2, a3;
     int corr_cap, ncorr;
     float *corr_rec, *corr_block;
+    uint64_t *corr_order;  /* corr_cap BT: scratch of gather_texels                         */
     float *bound;          /* run: each texel's bound (block order)                                  */
     float corr_thr;        /* run: the texels over it are summed as leaves, left out of the padded source */
 };
@@ -193,6 +196,7 @@ static void core_destroy(ibl_context *ctx, struct core *c)
     ibl_free(ctx, c->w);
     ibl_free(ctx, c->den);
     ibl_free(ctx, c->corr_rec);
+    ibl_free(ctx, c->corr_order);
     ibl_free(ctx, c->corr_block);
     ibl_free(ctx, c->bound);
     ibl_free(ctx, c);
@@ -754,6 +758,7 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
         ibl_free(ctx, p->src[l].rec);
         ibl_free(ctx, p->src[l].block);
         ibl_free(ctx, p->src[l].bright_rec);
+        ibl_free(ctx, p->src[l].bright_order);
         ibl_free(ctx, p->src[l].bright_block);
         for (int k = 0; k < p->lv[l].npieces; k++) {
             ibl_free(ctx, p->lv[l].pieces[k].tab);
@@ -904,7 +909,8 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         s->bright_cap = BRIGHT_BLOCKS;
         s->bright_rec = ibl_alloc(ctx, (size_t)s->bright_cap * NFC * BT * sizeof(float));
         s->bright_block = ibl_alloc(ctx, (size_t)s->bright_cap * BINFO * sizeof(float));
-        if (!s->bright_rec || !s->bright_block) {
+        s->bright_order = ibl_alloc(ctx, (size_t)s->bright_cap * BT * sizeof(uint64_t));
+        if (!s->bright_rec || !s->bright_block || !s->bright_order) {
             st = ibl_context_status(ctx);
             goto fail;
         }
@@ -947,8 +953,9 @@ static ibl_status plan_bright(ibl_specular_plan *p, int level)
         c->corr_cap = CORR_BLOCKS;
         c->corr_rec = ibl_alloc(p->ctx, (size_t)c->corr_cap * NFC * BT * sizeof(float));
         c->corr_block = ibl_alloc(p->ctx, (size_t)c->corr_cap * BINFO * sizeof(float));
+        c->corr_order = ibl_alloc(p->ctx, (size_t)c->corr_cap * BT * sizeof(uint64_t));
         c->bound = ibl_alloc(p->ctx, block_count(&p->src[c->level]) * BT * sizeof(float));
-        if (!c->corr_rec || !c->corr_block || !c->bound) return ibl_context_status(p->ctx);
+        if (!c->corr_rec || !c->corr_block || !c->corr_order || !c->bound) return ibl_context_status(p->ctx);
     }
     for (int k = 0; k < lv->npieces; k++) {
         const piece *pc = &lv->pieces[k];
@@ -966,6 +973,8 @@ static ibl_status plan_bright(ibl_specular_plan *p, int level)
 /* Picks the bright texels of source level l (largest luminance power first), gathers their
  * records into blocks and writes every texel's power without them (F_PD). */
 static void gathered_cones(const float *recs, float *blocks, int count, double tr);
+static uint64_t texel_key(const srclev *s, size_t b, int t);
+static int gather_texels(const srclev *s, uint64_t *keys, int count, int pf, float *recs, float *cones);
 
 static void select_bright(ibl_specular_plan *p, int l)
 {
@@ -987,7 +996,6 @@ static void select_bright(ibl_specular_plan *p, int l)
         if (count <= s->bright_cap * BT) break;
         thr *= 2.0;
     }
-    memset(s->bright_rec, 0, (size_t)s->bright_cap * NFC * BT * sizeof(float));
     int k = 0;
     for (size_t b = 0; b < blocks; b++) {
         float *rec = s->rec + b * s->nf * BT;
@@ -995,14 +1003,55 @@ static void select_bright(ibl_specular_plan *p, int l)
             const float *P = rec + F_P * BT;
             int is_bright = LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t] > thr;
             for (int c = 0; c < 3; c++) rec[(F_PD + c) * BT + t] = is_bright ? 0.0f : P[c * BT + t];
-            if (!is_bright) continue;
-            float *dst = s->bright_rec + (size_t)(k / BT) * NFC * BT;
-            for (int f = 0; f < NFC; f++) dst[f * BT + k % BT] = rec[f * BT + t];
-            k++;
+            if (is_bright) s->bright_order[k++] = texel_key(s, b, t);
         }
     }
-    s->nbright = (k + BT - 1) / BT;
-    gathered_cones(s->bright_rec, s->bright_block, k, 1.5 / s->M);
+    s->nbright = gather_texels(s, s->bright_order, k, F_P, s->bright_rec, s->bright_block);
+}
+
+/* A texel's place in the order texels are gathered in: its face, then the Morton order of its
+ * (x, y), so that the eight texels of a gathered block are neighbours and its cone is small.
+ * (In block order a gathered block could span a face row, and every tile's reach test would
+ * take it: at 512, level 1's corrections cost 3x more that way.) */
+static uint64_t texel_key(const srclev *s, size_t b, int t)
+{
+    int f = (int)(b / ((size_t)s->nby * s->nbx)), r = (int)(b % ((size_t)s->nby * s->nbx));
+    uint32_t x = (uint32_t)((r % s->nbx) * BW + t % BW), y = (uint32_t)((r / s->nbx) * BH + t / BW);
+    uint64_t key = 0;
+    for (int i = 0; i < 16; i++) key |= (uint64_t)((x >> i) & 1) << (2 * i) | (uint64_t)((y >> i) & 1) << (2 * i + 1);
+    return (uint64_t)f << 32 | key;
+}
+
+static int key_order(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Gathers the `count` texels of `keys` (texel_key) in key order, eight to a block of recs with
+ * their power from field pf, and their cones; the number of blocks. */
+static int gather_texels(const srclev *s, uint64_t *keys, int count, int pf, float *recs, float *cones)
+{
+    qsort(keys, (size_t)count, sizeof *keys, key_order);
+    for (int k = 0; k < count; k++) {
+        uint64_t key = keys[k];
+        int f = (int)(key >> 32);
+        uint32_t x = 0, y = 0;
+        for (int i = 0; i < 16; i++) x |= (uint32_t)((key >> (2 * i)) & 1) << i, y |= (uint32_t)((key >> (2 * i + 1)) & 1) << i;
+        size_t b = ((size_t)f * s->nby + y / BH) * s->nbx + x / BW;
+        int t = (int)(y % BH) * BW + (int)(x % BW);
+        const float *rec = s->rec + b * s->nf * BT;
+        float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
+        for (int fl = 0; fl < NFC; fl++) dst[fl * BT] = rec[fl * BT + t];
+        for (int ch = 0; ch < 3; ch++) dst[(F_P + ch) * BT] = rec[(pf + ch) * BT + t];
+    }
+    for (int i = count; i < (count + BT - 1) / BT * BT; i++) { /* the rest of the last block: nothing */
+        float *dst = recs + (size_t)(i / BT) * NFC * BT + i % BT;
+        for (int fl = 0; fl < NFC; fl++) dst[fl * BT] = 0.0f;
+        dst[F_WE * BT] = 0.5f;
+    }
+    gathered_cones(recs, cones, count, 1.5 / s->M);
+    return (count + BT - 1) / BT;
 }
 
 /* The cones of `count` texels gathered in blocks (recs): around the mean of each block's
@@ -1070,19 +1119,10 @@ static int gather_corrections(const struct core *c, const srclev *s, double thr,
         for (int t = 0; t < BT; t++) {
             if (!(c->bound[b * BT + t] > thr)) continue;
             if (rec[pf * BT + t] == 0 && rec[(pf + 1) * BT + t] == 0 && rec[(pf + 2) * BT + t] == 0) continue;
-            float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
-            for (int f = 0; f < NFC; f++) dst[f * BT] = rec[f * BT + t];
-            for (int ch = 0; ch < 3; ch++) dst[(F_P + ch) * BT] = rec[(pf + ch) * BT + t];
-            k++;
+            c->corr_order[k++] = texel_key(s, b, t);
         }
     }
-    for (int i = k; i < (k + BT - 1) / BT * BT; i++) { /* the rest of the last block: nothing */
-        float *dst = recs + (size_t)(i / BT) * NFC * BT + i % BT;
-        for (int f = 0; f < NFC; f++) dst[f * BT] = 0.0f;
-        dst[F_WE * BT] = 0.5f;
-    }
-    gathered_cones(recs, cones, k, 1.5 / s->M);
-    return (k + BT - 1) / BT;
+    return gather_texels(s, c->corr_order, k, pf, recs, cones);
 }
 
 /* Picks the texels of the precomputed piece's level whose moment leaves differ most from
