@@ -1615,32 +1615,55 @@ AVX2 static void avx2_core_mac(const struct core *c, const uint16_t *w, const in
                                const float *planes, int fx, int fy, double out[3])
 {
     size_t plane = (size_t)c->P * c->P;
-    __m256 ar = _mm256_setzero_ps(), ag = ar, ab = ar;
+    /* two sets of accumulators, for even and odd vectors of a row: one set is a chain of
+     * dependent FMAs whose latency (4 cycles), not the loads, would bound the loop */
+    __m256 ar = _mm256_setzero_ps(), ag = ar, ab = ar, br = ar, bg = ar, bb = ar;
     const __m256i rev = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
     for (int r = 0; r < nrows; r++) {
         const int32_t *row = rows + 3 * r;
-        int Y = fy ? c->S - 1 - row[0] : row[0];
+        int Y = fy ? c->S - 1 - row[0] : row[0], len = row[2], i = 0;
         const float *base = planes + (size_t)(Y + c->O) * c->P + c->O;
         if (!fx) {
             const float *q = base + row[1];
-            for (int i = 0; i < row[2]; i += 8) {
-                __m256 wv = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i)));
-                ar = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + i), ar);
-                ag = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + plane + i), ag);
-                ab = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + 2 * plane + i), ab);
+            for (; i + 16 <= len; i += 16) {
+                __m256 wa = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i)));
+                __m256 wb = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i + 8)));
+                ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + i), ar);
+                ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + plane + i), ag);
+                ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + 2 * plane + i), ab);
+                br = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q + i + 8), br);
+                bg = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q + plane + i + 8), bg);
+                bb = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q + 2 * plane + i + 8), bb);
+            }
+            if (i < len) {
+                __m256 wa = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i)));
+                ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + i), ar);
+                ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + plane + i), ag);
+                ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + 2 * plane + i), ab);
             }
         } else {
             /* cells X.. of the base row are columns S-1-X.. of the flipped face: reversed */
             const float *q = base + (c->S - 1 - row[1]) - 7;
-            for (int i = 0; i < row[2]; i += 8) {
-                __m256 wv = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i))), rev);
-                ar = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q - i), ar);
-                ag = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + plane - i), ag);
-                ab = _mm256_fmadd_ps(wv, _mm256_loadu_ps(q + 2 * plane - i), ab);
+            for (; i + 16 <= len; i += 16) {
+                __m256 wa = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i))), rev);
+                __m256 wb = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i + 8))), rev);
+                ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q - i), ar);
+                ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + plane - i), ag);
+                ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + 2 * plane - i), ab);
+                br = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q - i - 8), br);
+                bg = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q + plane - i - 8), bg);
+                bb = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q + 2 * plane - i - 8), bb);
+            }
+            if (i < len) {
+                __m256 wa = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i))), rev);
+                ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q - i), ar);
+                ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + plane - i), ag);
+                ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + 2 * plane - i), ab);
             }
         }
-        w += row[2];
+        w += len;
     }
+    ar = _mm256_add_ps(ar, br), ag = _mm256_add_ps(ag, bg), ab = _mm256_add_ps(ab, bb);
     out[0] = avx2_hsum(ar) * c->wscale, out[1] = avx2_hsum(ag) * c->wscale, out[2] = avx2_hsum(ab) * c->wscale;
 }
 
