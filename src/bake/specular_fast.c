@@ -42,6 +42,9 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 enum { BW = 4, BH = 2, BT = BW * BH }; /* a block: one 8-wide vector */
 /* fields of a source block, BT floats each: the geometric moments, then level 0's radiance
@@ -2437,52 +2440,77 @@ static void combine_task(void *arg, int index)
     int n = ibl_level_size(p->N, p->run_level), face = index / n, y = index % n;
     float *row = ibl_cubemap_face(p->run_dst, p->run_level, face) + (size_t)y * n * 4;
     const grid *direct = NULL;
-    for (int g = 0; g < lv->ngrids; g++)
-        if (lv->grids[g].direct) direct = &lv->grids[g];
-    /* output directions at the texel centres (no edge fixup bends them) */
+    /* the coarse grids this row reads: by the texel centre's bilinear footprint on the
+     * bordered grid (it never leaves it: gx is in [-1/2, gn - 1/2]) when the output directions
+     * are the texel centres and the grid divides the level; otherwise by direction */
+    const float *rows[MAX_GRIDS][2];
+    float fy[MAX_GRIDS], scale[MAX_GRIDS];
+    int sampled[MAX_GRIDS], nrows = 0, nsampled = 0;
     int centred = centred_directions(p);
+    for (int g = 0; g < lv->ngrids; g++) {
+        const grid *gr = &lv->grids[g];
+        int gn = gr->n;
+        if (gr->direct) {
+            direct = gr;
+        } else if (centred && n % gn == 0) {
+            float gy = (y + 0.5f) * gn / n - 0.5f;
+            int iy = (int)floorf(gy);
+            rows[nrows][0] = gr->pad + (((size_t)face * (gn + 2) + iy + 1) * (gn + 2) + 1) * 4;
+            rows[nrows][1] = rows[nrows][0] + (size_t)(gn + 2) * 4;
+            fy[nrows] = gy - iy;
+            scale[nrows++] = (float)gn / n;
+        } else {
+            sampled[nsampled++] = g;
+        }
+    }
     for (int x = 0; x < n; x++) {
-        double v[4] = {0, 0, 0, 0};
+        float v[4] = {0, 0, 0, 0};
         if (direct) {
             const float *a = direct->acc + (((size_t)face * n + y) * n + x) * 4;
             for (int c = 0; c < 4; c++) v[c] = a[c];
         }
-        int have_dir = 0;
-        ibl_vec3 dv = {0, 0, 0};
-        for (int g = 0; g < lv->ngrids; g++) {
-            const grid *gr = &lv->grids[g];
-            if (gr->direct) continue;
-            int gn = gr->n;
-            if (centred && n % gn == 0) {
-                /* the texel centre's bilinear footprint on the bordered grid: it never leaves
-                 * it (gx is in [-1/2, gn - 1/2]) */
-                float gx = (x + 0.5f) * gn / n - 0.5f, gy = (y + 0.5f) * gn / n - 0.5f;
-                int ix = (int)floorf(gx), iy = (int)floorf(gy);
-                float fx = gx - ix, fy = gy - iy;
-                const float *a = gr->pad + (((size_t)face * (gn + 2) + iy + 1) * (gn + 2) + ix + 1) * 4;
-                const float *b = a + (size_t)(gn + 2) * 4;
-                for (int c = 0; c < 4; c++) {
-                    float top = a[c] + fx * (a[4 + c] - a[c]);
-                    float bot = b[c] + fx * (b[4 + c] - b[c]);
-                    v[c] += top + fy * (bot - top);
-                }
-                continue;
+#if defined(__SSE2__)
+        __m128 acc = _mm_loadu_ps(v);
+        for (int k = 0; k < nrows; k++) {
+            float gx = (x + 0.5f) * scale[k] - 0.5f;
+            int ix = (int)floorf(gx);
+            const float *a = rows[k][0] + (ptrdiff_t)ix * 4, *b = rows[k][1] + (ptrdiff_t)ix * 4;
+            __m128 fx = _mm_set1_ps(gx - ix), a0 = _mm_loadu_ps(a), b0 = _mm_loadu_ps(b);
+            __m128 top = _mm_add_ps(a0, _mm_mul_ps(fx, _mm_sub_ps(_mm_loadu_ps(a + 4), a0)));
+            __m128 bot = _mm_add_ps(b0, _mm_mul_ps(fx, _mm_sub_ps(_mm_loadu_ps(b + 4), b0)));
+            acc = _mm_add_ps(acc, _mm_add_ps(top, _mm_mul_ps(_mm_set1_ps(fy[k]), _mm_sub_ps(bot, top))));
+        }
+        _mm_storeu_ps(v, acc);
+#else
+        for (int k = 0; k < nrows; k++) {
+            float gx = (x + 0.5f) * scale[k] - 0.5f;
+            int ix = (int)floorf(gx);
+            float fx = gx - ix;
+            const float *a = rows[k][0] + (ptrdiff_t)ix * 4, *b = rows[k][1] + (ptrdiff_t)ix * 4;
+            for (int c = 0; c < 4; c++) {
+                float top = a[c] + fx * (a[4 + c] - a[c]);
+                float bot = b[c] + fx * (b[4 + c] - b[c]);
+                v[c] += top + fy[k] * (bot - top);
             }
-            if (!have_dir) {
-                double d[3];
-                ibl__output_direction(&p->desc, &lv->lobe, face, n, x, y, d);
-                dv.x = (float)d[0], dv.y = (float)d[1], dv.z = (float)d[2];
-                have_dir = 1;
+        }
+#endif
+        if (nsampled) {
+            double d[3];
+            ibl__output_direction(&p->desc, &lv->lobe, face, n, x, y, d);
+            ibl_vec3 dv = {(float)d[0], (float)d[1], (float)d[2]};
+            for (int k = 0; k < nsampled; k++) {
+                const grid *gr = &lv->grids[sampled[k]];
+                ibl_cubemap cube = {gr->n, 1, gr->acc, 0};
+                float s4[4];
+                ibl_cubemap_sample_bilinear(&cube, 0, dv, s4);
+                for (int c = 0; c < 4; c++) v[c] += s4[c];
             }
-            ibl_cubemap cube = {gr->n, 1, gr->acc, 0};
-            float s[4];
-            ibl_cubemap_sample_bilinear(&cube, 0, dv, s);
-            for (int c = 0; c < 4; c++) v[c] += s[c];
         }
         float *o = row + x * 4;
+        float inv = v[3] > 0 ? 1.0f / v[3] : 0.0f;
         for (int c = 0; c < 3; c++) {
-            double r = v[3] > 0 ? v[c] / v[3] : 0.0;
-            o[c] = r > 0 ? (float)r : 0.0f;
+            float r = v[c] * inv;
+            o[c] = r > 0 ? r : 0.0f;
         }
         o[3] = 1.0f;
     }
