@@ -75,6 +75,9 @@ typedef struct srclev {
     int M, nbx, nby, nf;
     float *rec;    /* 6 nby nbx blocks x nf fields x BT                     */
     float *block;  /* per block: centre direction (unit), angular radius r, cos r, sin r */
+    /* run, coarse levels: the luminance power of each task's block row (6 nby), and their
+     * sum in order (the bright and correction bars are relative to the mean radiance) */
+    double *row_power, power;
     /* bright texels (levels read by split rings): their records gathered in blocks */
     double bright_c;     /* threshold on a texel's luminance power / mean radiance (0: unused) */
     int bright_cap, nbright; /* capacity and count of bright blocks                     */
@@ -760,6 +763,7 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
     for (int l = 0; l < IBL_MAX_LEVELS; l++) {
         ibl_free(ctx, p->src[l].rec);
         ibl_free(ctx, p->src[l].block);
+        ibl_free(ctx, p->src[l].row_power);
         ibl_free(ctx, p->src[l].bright_rec);
         ibl_free(ctx, p->src[l].bright_order);
         ibl_free(ctx, p->src[l].bright_block);
@@ -862,7 +866,8 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         s->rec = s->M % BW || s->M % BH ? ibl_calloc(ctx, block_count(s) * s->nf * BT, sizeof(float))
                                         : ibl_alloc(ctx, block_count(s) * s->nf * BT * sizeof(float));
         s->block = ibl_alloc(ctx, block_count(s) * BINFO * sizeof(float));
-        if (!s->rec || !s->block) {
+        s->row_power = ibl_alloc(ctx, (size_t)6 * s->nby * sizeof(double));
+        if (!s->rec || !s->block || !s->row_power) {
             st = ibl_context_status(ctx);
             goto fail;
         }
@@ -983,12 +988,7 @@ static void select_bright(ibl_specular_plan *p, int l)
 {
     srclev *s = &p->src[l];
     size_t blocks = block_count(s);
-    double total = 0;
-    for (size_t b = 0; b < blocks; b++) {
-        const float *P = s->rec + (b * s->nf + F_P) * BT;
-        for (int t = 0; t < BT; t++) total += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
-    }
-    double thr = BRIGHT_TAU * accuracy_scale(p) * total / (4.0 * PI) * s->bright_c;
+    double thr = BRIGHT_TAU * accuracy_scale(p) * s->power / (4.0 * PI) * s->bright_c;
     for (;;) { /* raise the bar until the brightest fit (a bounded direct sum) */
         int count = 0;
         for (size_t b = 0; b < blocks; b++) {
@@ -1087,27 +1087,6 @@ static void gathered_cones(const float *recs, float *blocks, int count, double t
 }
 
 
-/* How far texel t of block b's moment leaf can be from its uniform leaf, per unit of the
- * normaliser (see plan_bright). */
-static double corr_bound(const struct core *c, const srclev *s, size_t b, int t)
-{
-    const float *rec = s->rec + b * s->nf * BT;
-    double P = LUM[0] * rec[F_P * BT + t] + LUM[1] * rec[(F_P + 1) * BT + t] + LUM[2] * rec[(F_P + 2) * BT + t];
-    if (!(P > 0)) return 0;
-    double dm = 0, dc = 0;
-    for (int c = 0; c < 3; c++) {
-        double d = rec[(F_WM + c) * BT + t] - rec[(F_MX + c) * BT + t];
-        dm += d * d;
-    }
-    for (int c = 0; c < 6; c++) {
-        double d = fabs(rec[(F_WC + c) * BT + t] - rec[(F_C + c) * BT + t]);
-        dc = d > dc ? d : dc;
-    }
-    double de = fabs(rec[F_WE * BT + t] - rec[F_E * BT + t]);
-    return P * (c->a1 * sqrt(dm) + c->a2 * de + c->a3 * dc);
-}
-
-
 /* Gathers each texel over the threshold with its luminance moments and its power from field
  * pf (F_P, or F_PD for split rings): summed as a leaf, while the padded source leaves it out
  * (core_pad_task), it turns the texel's uniform share into its moment leaf; the number of
@@ -1137,13 +1116,34 @@ typedef struct bound_job {
 
 enum { BOUND_CHUNK = 256 }; /* blocks per task */
 
+/* How far each texel's moment leaf can be from its uniform leaf, per unit of the normaliser
+ * (see struct core): in float, lane by lane. */
 static void bound_task(void *arg, int index)
 {
     const bound_job *j = arg;
-    const srclev *s = &j->p->src[j->c->level];
+    const struct core *c = j->c;
+    const srclev *s = &j->p->src[c->level];
     size_t b0 = (size_t)index * BOUND_CHUNK, b1 = b0 + BOUND_CHUNK, blocks = block_count(s);
-    for (size_t b = b0; b < b1 && b < blocks; b++)
-        for (int t = 0; t < BT; t++) j->c->bound[b * BT + t] = (float)corr_bound(j->c, s, b, t);
+    const float a1 = (float)c->a1, a2 = (float)c->a2, a3 = (float)c->a3;
+    const float l0 = (float)LUM[0], l1 = (float)LUM[1], l2 = (float)LUM[2];
+    for (size_t b = b0; b < b1 && b < blocks; b++) {
+        const float *rec = s->rec + b * s->nf * BT;
+        float *out = c->bound + b * BT;
+        for (int t = 0; t < BT; t++) {
+            float P = l0 * rec[F_P * BT + t] + l1 * rec[(F_P + 1) * BT + t] + l2 * rec[(F_P + 2) * BT + t];
+            float dm = 0, dc = 0;
+            for (int k = 0; k < 3; k++) {
+                float d = rec[(F_WM + k) * BT + t] - rec[(F_MX + k) * BT + t];
+                dm += d * d;
+            }
+            for (int k = 0; k < 6; k++) {
+                float d = fabsf(rec[(F_WC + k) * BT + t] - rec[(F_C + k) * BT + t]);
+                dc = d > dc ? d : dc;
+            }
+            float de = fabsf(rec[F_WE * BT + t] - rec[F_E * BT + t]);
+            out[t] = P > 0 ? P * (a1 * sqrtf(dm) + a2 * de + a3 * dc) : 0.0f;
+        }
+    }
 }
 
 static void select_corrections(ibl_specular_plan *p, struct core *c)
@@ -1151,14 +1151,9 @@ static void select_corrections(ibl_specular_plan *p, struct core *c)
     const srclev *s = &p->src[c->level];
     size_t blocks = block_count(s);
     int pf = c->dim ? F_PD : F_P;
-    double total = 0;
-    for (size_t b = 0; b < blocks; b++) {
-        const float *P = s->rec + (b * s->nf + F_P) * BT;
-        for (int t = 0; t < BT; t++) total += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
-    }
     bound_job bj = {p, c};
     ibl_parallel_for(p->ctx, (int)((blocks + BOUND_CHUNK - 1) / BOUND_CHUNK), bound_task, &bj);
-    double thr = CORR_TAU * accuracy_scale(p) * total / (4.0 * PI);
+    double thr = CORR_TAU * accuracy_scale(p) * s->power / (4.0 * PI);
     int cap = c->corr_cap * BT;
     for (;;) {
         int count = 0;
@@ -1265,6 +1260,12 @@ static void pyramid_task(void *arg, int index)
     const srclev *s = &job->p->src[job->level];
     int f = index / s->nby, yb = index % s->nby;
     for (int y = yb * BH; y < (yb + 1) * BH && y < s->M; y++) pyramid_row(arg, f * s->M + y);
+    double power = 0;
+    for (int bx = 0; bx < s->nbx; bx++) {
+        const float *P = s->rec + (((size_t)f * s->nby + yb) * s->nbx + bx) * s->nf * BT + F_P * BT;
+        for (int t = 0; t < BT; t++) power += LUM[0] * P[t] + LUM[1] * P[BT + t] + LUM[2] * P[2 * BT + t];
+    }
+    s->row_power[index] = power;
 }
 
 /* ---- run: summing pieces over blocks ---- */
@@ -2577,6 +2578,8 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
     for (int l = 1; l < p->SL; l++) {
         pyr_job job = {p, src, l};
         ibl_parallel_for(ctx, 6 * p->src[l].nby, pyramid_task, &job);
+        p->src[l].power = 0;
+        for (int i = 0; i < 6 * p->src[l].nby; i++) p->src[l].power += p->src[l].row_power[i];
         if (p->src[l].bright_c > 0) select_bright(p, l);
     }
     for (int l = 0; l < p->L; l++)
