@@ -175,6 +175,9 @@ struct core {
     int direct, dim;       /* on the output texels (edge-fixup directions) / without bright texels   */
     int S, W, P, O, n, nb; /* source edge, border, padded edge, offset of cell 0, output edge, base edge */
     int32_t *map;          /* P P: face 0's source texel (f S S + y S + x) or -1                     */
+    /* bases below the diagonal (a > b) have no weights of their own: base (a, b)'s weights
+     * are (b, a)'s transposed (the cube's reflection x <-> y), applied to the transposed
+     * padded source; so the plan computes and keeps half of them */
     int carry[6][6][7];    /* face F: where face 0's map entries on face g go (see carry_face)       */
     uint32_t *row0;        /* nb nb + 1: each base texel's first row                                 */
     size_t *w0;            /* nb nb + 1: each base texel's first weight                              */
@@ -885,12 +888,13 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         if (st == IBL_OK) st = core_create(p, l);
         if (st != IBL_OK) goto fail;
     }
-    /* one padded source for the precomputed pieces, which run one after the other */
+    /* one padded face and its transpose for the precomputed pieces, which run one after the
+     * other, face by face */
     size_t pad = 0;
     for (int l = 0; l < p->L; l++)
         for (int k = 0; k < p->lv[l].npieces; k++) {
             const struct core *c = p->lv[l].pieces[k].core;
-            if (c && (size_t)18 * c->P * c->P > pad) pad = (size_t)18 * c->P * c->P;
+            if (c && (size_t)6 * c->P * c->P > pad) pad = (size_t)6 * c->P * c->P;
         }
     if (pad) {
         p->pad = ibl_alloc(ctx, pad * sizeof(float));
@@ -1950,6 +1954,7 @@ typedef struct core_job {
     int avx2;
     const ibl_cubemap *src; /* run */
     float *acc;             /* run: the direct grid */
+    int face;               /* run: the face being summed (its padded source in p->pad) */
 } core_job;
 
 /* Row Y of face 0's padded map. */
@@ -2042,6 +2047,10 @@ static void core_rows_task(void *arg, int index)
     core_job *j = arg;
     const struct core *c = j->c;
     int a = index % c->nb, b = index / c->nb, S = c->S, W = c->W;
+    if (a > b) { /* (b, a)'s, transposed */
+        j->tmp_count[index] = 0;
+        return;
+    }
     double Rd[3];
     core_direction(j, a, b, Rd);
     float R[3] = {(float)Rd[0], (float)Rd[1], (float)Rd[2]};
@@ -2061,6 +2070,7 @@ static void core_weights_task(void *arg, int index)
     core_job *j = arg;
     struct core *c = j->c;
     int a = index % c->nb, b = index / c->nb, P = c->P, O = c->O;
+    if (a > b) return; /* (b, a)'s, transposed */
     double Rd[3];
     core_direction(j, a, b, Rd);
     float R[3] = {(float)Rd[0], (float)Rd[1], (float)Rd[2]};
@@ -2105,6 +2115,13 @@ static void core_weights_task(void *arg, int index)
     c->den[index] = den;
 }
 
+/* The normalisers of the bases below the diagonal: their mirrors' (the same weights). */
+static void core_mirror_den(struct core *c)
+{
+    for (int b = 0; b < c->nb; b++)
+        for (int a = b + 1; a < c->nb; a++) c->den[b * c->nb + a] = c->den[a * c->nb + b];
+}
+
 /* Visits the distinct output texels that base texel (a, b) stands for: face, flips, (x, y). */
 #define CORE_IMAGES(c, a, b, BODY)                                                            \
     for (int face_ = 0; face_ < 6; face_++)                                                   \
@@ -2131,11 +2148,11 @@ static void core_pad_task(void *arg, int index)
 {
     core_job *j = arg;
     const struct core *c = j->c;
-    int f = index / c->P, row = index % c->P, S = c->S, sh = 0;
+    int f = j->face, row = index, S = c->S, sh = 0;
     while ((1 << sh) < S) sh++;
     size_t plane = (size_t)c->P * c->P;
     const int32_t *map = c->map + (size_t)row * c->P;
-    float *out = j->p->pad + (size_t)f * 3 * plane + (size_t)row * c->P;
+    float *out = j->p->pad + (size_t)row * c->P;
     const float *face[6];
     for (int g = 0; g < 6; g++) face[g] = ibl_cubemap_face(j->src, 0, g);
     const srclev *s = &j->p->src[c->level];
@@ -2205,34 +2222,53 @@ static void core_mac_generic(const struct core *c, const uint16_t *w, const int3
     }
 }
 
-/* One row of base texels into its images. Image by image, so that the source rows under the
- * row's windows stay in L1 while the row's weights (~0.1 MB at level 1 of 256) stream from L2:
- * base by base, every base re-read 24 windows from L2 (measured 1.6x slower). */
+/* Rows TRANSPOSE_ROWS at a time of the transposed padded source (after the padded source in
+ * p->pad): padT[Y][X] = pad[X][Y], plane by plane. */
+enum { TRANSPOSE_ROWS = 16 };
+
+static void core_transpose_task(void *arg, int index)
+{
+    core_job *j = arg;
+    int P = j->c->P, y0 = index * TRANSPOSE_ROWS, y1 = y0 + TRANSPOSE_ROWS < P ? y0 + TRANSPOSE_ROWS : P;
+    size_t plane = (size_t)P * P;
+    for (int ch = 0; ch < 3; ch++) {
+        const float *in = j->p->pad + ch * plane;
+        float *out = j->p->pad + (3 + ch) * plane;
+        for (int X = 0; X < P; X++)
+            for (int Y = y0; Y < y1; Y++) out[(size_t)Y * P + X] = in[(size_t)X * P + Y];
+    }
+}
+
+/* One row of base texels into the images of face j->face. Image by image, so that the source
+ * rows under the row's windows stay in L1 while the row's weights stream from L2 (base by
+ * base, every base re-read its windows from L2: measured 1.6x slower). A base below the
+ * diagonal takes its mirror's weights on the transposed source, its flips swapped. */
 static void core_mac_task(void *arg, int b)
 {
     core_job *j = arg;
     const struct core *c = j->c;
     size_t plane = (size_t)c->P * c->P;
-    for (int face = 0; face < 6; face++)
-        for (int fy = 0; fy < 2; fy++) {
-            int y = fy ? c->n - 1 - b : b;
-            if (fy && y == b) continue;
-            for (int fx = 0; fx < 2; fx++)
-                for (int a = 0; a < c->nb; a++) {
-                    int x = fx ? c->n - 1 - a : a;
-                    if (fx && x == a) continue;
-                    int index = b * c->nb + a;
-                    const uint16_t *w = c->w + c->w0[index];
-                    const int32_t *rows = c->rows + 3 * (size_t)c->row0[index];
-                    int nrows = (int)(c->row0[index + 1] - c->row0[index]);
-                    double s[3];
-                    const float *planes = j->p->pad + (size_t)face * 3 * plane;
-                    if (j->avx2) avx2_core_mac(c, w, rows, nrows, planes, fx, fy, s);
-                    else core_mac_generic(c, w, rows, nrows, planes, fx, fy, s);
-                    float *o = j->acc + (((size_t)face * c->n + y) * c->n + x) * 4;
-                    for (int ch = 0; ch < 3; ch++) o[ch] = (float)(o[ch] + s[ch]);
-                }
-        }
+    int face = j->face;
+    for (int fy = 0; fy < 2; fy++) {
+        int y = fy ? c->n - 1 - b : b;
+        if (fy && y == b) continue;
+        for (int fx = 0; fx < 2; fx++)
+            for (int a = 0; a < c->nb; a++) {
+                int x = fx ? c->n - 1 - a : a;
+                if (fx && x == a) continue;
+                int mirror = a > b, index = mirror ? a * c->nb + b : b * c->nb + a;
+                const uint16_t *w = c->w + c->w0[index];
+                const int32_t *rows = c->rows + 3 * (size_t)c->row0[index];
+                int nrows = (int)(c->row0[index + 1] - c->row0[index]);
+                double s[3];
+                const float *planes = j->p->pad + (mirror ? 3 * plane : 0);
+                int gx = mirror ? fy : fx, gy = mirror ? fx : fy;
+                if (j->avx2) avx2_core_mac(c, w, rows, nrows, planes, gx, gy, s);
+                else core_mac_generic(c, w, rows, nrows, planes, gx, gy, s);
+                float *o = j->acc + (((size_t)face * c->n + y) * c->n + x) * 4;
+                for (int ch = 0; ch < 3; ch++) o[ch] = (float)(o[ch] + s[ch]);
+            }
+    }
 }
 
 
@@ -2290,8 +2326,9 @@ static ibl_status core_build_weights(ibl_specular_plan *p, int level)
         float *geo = core_geometry(p, c);
         if (!geo) return ibl_context_status(p->ctx);
         core_job job = {p, c, &lv->pieces[k], &lv->lobe, geo, NULL, NULL, 0, 0, cpu_has_avx2() && !p->portable,
-                        NULL, NULL};
+                        NULL, NULL, 0};
         ibl_parallel_for(p->ctx, c->nb * c->nb, core_weights_task, &job);
+        core_mirror_den(c);
         ibl_free(p->ctx, geo);
     }
     return IBL_OK;
@@ -2339,7 +2376,7 @@ static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
     /* u0 = 1 - R.m for a leaf at centroid m: the piece is zero from u_hi on, exactly */
     double dot_min = 1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0) - 1e-6;
     core_job job = {p, c, pc, &lv->lobe, NULL, tmp_rows, tmp_count, cos(reach), dot_min, cpu_has_avx2() && !p->portable,
-                    NULL, NULL};
+                    NULL, NULL, 0};
     ibl_parallel_for(ctx, c->P, core_map_task, &job);
     job.geo = geo = core_geometry(p, c);
     if (!geo) goto fail;
@@ -2372,6 +2409,7 @@ static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
     ibl_free(ctx, tmp_count);
     job.avx2 = cpu_has_avx2() && !p->portable;
     ibl_parallel_for(ctx, (int)nbase, core_weights_task, &job);
+    core_mirror_den(c);
     ibl_free(ctx, geo);
     pc->core = c;
     return IBL_OK;
@@ -2403,9 +2441,13 @@ static void core_run(ibl_specular_plan *p, int level, const ibl_cubemap *src)
         struct core *c = lv->pieces[k].core;
         if (!c) continue;
         core_job job = {p, c, &lv->pieces[k], &lv->lobe, NULL, NULL, NULL, 0, 0, cpu_has_avx2() && !p->portable,
-                        src, lv->grids[lv->pieces[k].grid].acc};
-        ibl_parallel_for(p->ctx, 6 * c->P, core_pad_task, &job);
-        ibl_parallel_for(p->ctx, c->nb, core_mac_task, &job);
+                        src, lv->grids[lv->pieces[k].grid].acc, 0};
+        /* face by face: the padded source and its transpose (2 x 3 planes of P^2) stay in cache */
+        for (job.face = 0; job.face < 6; job.face++) {
+            ibl_parallel_for(p->ctx, c->P, core_pad_task, &job);
+            ibl_parallel_for(p->ctx, (c->P + TRANSPOSE_ROWS - 1) / TRANSPOSE_ROWS, core_transpose_task, &job);
+            ibl_parallel_for(p->ctx, c->nb, core_mac_task, &job);
+        }
     }
 }
 
