@@ -1219,12 +1219,69 @@ static void level0_row(void *arg, int index)
         for (int c = 0; c < 3; c++) s->rec[rec_index(s, f, x, y, F_L + c)] = row[(x / K) * 4 + c];
 }
 
+/* Level 1 straight from the source texels (no sub-texels, no level-0 records): the four
+ * children are uniform texels whose geometric moments are face 0's face-local ones (geo0, the
+ * same on every face), so they are combined in face-local coordinates and the result is
+ * turned to face f's world coordinates once (the generic path below turns every child). */
+static void pyramid_row_level1(const pyr_job *job, int f, int y)
+{
+    static const int ci[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    const ibl_specular_plan *p = job->p;
+    srclev *s = &job->p->src[1];
+    int M = s->M, S = p->src[0].M;
+    const float *face = ibl_cubemap_face(job->src, 0, f);
+    const int *ax = p->perm_ax[f];
+    const float *sg = p->perm_sg[f];
+    for (int x = 0; x < M; x++) {
+        const float *g[4];
+        double w[4], W = 0, m[3] = {0, 0, 0}, P[3] = {0, 0, 0};
+        for (int k = 0; k < 4; k++) {
+            int cx = 2 * x + (k & 1), cy = 2 * y + (k >> 1);
+            g[k] = p->geo0 + ((size_t)cy * S + cx) * GEO_FIELDS;
+            const float *L = face + ((size_t)cy * S + cx) * 4;
+            double om = g[k][F_OM], pw[3] = {om * L[0], om * L[1], om * L[2]};
+            for (int c = 0; c < 3; c++) P[c] += pw[c];
+            double lum = LUM[0] * pw[0] + LUM[1] * pw[1] + LUM[2] * pw[2];
+            w[k] = lum > 0 ? lum : 0;
+            W += w[k];
+            for (int c = 0; c < 3; c++) m[c] += w[k] * g[k][F_MX + c];
+        }
+        float *o = s->rec + rec_index(s, f, x, y, 0);
+        if (W > 0) {
+            double C[6] = {0, 0, 0, 0, 0, 0}, e = 0;
+            for (int c = 0; c < 3; c++) m[c] /= W;
+            for (int k = 0; k < 4; k++) {
+                const float *q = g[k];
+                double a = w[k] / W, d[3] = {q[F_MX] - m[0], q[F_MX + 1] - m[1], q[F_MX + 2] - m[2]};
+                for (int c = 0; c < 6; c++) C[c] += a * (q[F_C + c] + d[ci[c][0]] * d[ci[c][1]]);
+                e += a * (q[F_E] + 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+            }
+            const double Cl[3][3] = {{C[0], C[3], C[4]}, {C[3], C[1], C[5]}, {C[4], C[5], C[2]}};
+            for (int c = 0; c < 3; c++) o[(F_WM + c) * BT] = (float)(sg[c] * m[ax[c]]);
+            o[F_WE * BT] = (float)e;
+            for (int c = 0; c < 6; c++) {
+                int i = ci[c][0], k = ci[c][1];
+                o[(F_WC + c) * BT] = (float)(sg[i] * sg[k] * Cl[ax[i]][ax[k]]);
+            }
+        } else { /* no light: the geometric moments */
+            for (int c = 0; c < 3; c++) o[(F_WM + c) * BT] = o[(F_MX + c) * BT];
+            o[F_WE * BT] = o[F_E * BT];
+            for (int c = 0; c < 6; c++) o[(F_WC + c) * BT] = o[(F_C + c) * BT];
+        }
+        for (int c = 0; c < 3; c++) o[(F_P + c) * BT] = (float)P[c];
+    }
+}
+
 static void pyramid_row(void *arg, int index)
 {
     const pyr_job *job = arg;
     const srclev *lo = &job->p->src[job->level - 1];
     srclev *s = &job->p->src[job->level];
     int M = s->M, f = index / M, y = index % M;
+    if (job->level == 1 && !job->p->rec0) {
+        pyramid_row_level1(job, f, y);
+        return;
+    }
     const float *r0 = lo->rec;
     float *r = s->rec;
     for (int x = 0; x < M; x++) {
