@@ -15,7 +15,7 @@
 #include <stdatomic.h>
 #include <stdio.h>
 #include <string.h>
-#include <zlib.h>
+#include <libdeflate.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -300,9 +300,10 @@ static void band_task(void *arg, int index)
 }
 
 /* ---- fast path: scanline files without compression or with ZIP / ZIPS ----------------- *
- * These are decoded here, chunk by chunk, as OpenEXR does (zlib's uncompress, then the
- * predictor and the byte interleaving of OpenEXR's Zip codec, then each channel's samples
- * into its slot), for lack of per-chunk parallelism and speed in OpenEXR's own path. Any
+ * These are decoded here, chunk by chunk, as OpenEXR does (a zlib stream, inflated by
+ * libdeflate: 2-3x faster than zlib on whole buffers, and the 512 chain's input is 22 MB of
+ * it; then the predictor and the byte interleaving of OpenEXR's Zip codec, then each
+ * channel's samples into its slot), for lack of per-chunk parallelism and speed in OpenEXR's own path. Any
  * chunk this path does not find exactly as expected (sizes, y coordinates, zlib errors)
  * sends the whole file back to OpenEXR, whose result and messages are then the answer. The
  * samples are copied (float) or converted exactly (half), so both paths give the same bits
@@ -416,7 +417,19 @@ static void zip_unpredict(uint8_t *t, size_t n, uint8_t *out)
 }
 
 /* Decodes the chunks of one band; returns 0 on success, 1 when OpenEXR must do the file. */
+static int fast_band_with(exr_fast *f, int band, uint8_t *buf, uint8_t *raw, struct libdeflate_decompressor *inflater);
+
 static int fast_band(exr_fast *f, int band, uint8_t *buf, uint8_t *raw)
+{
+    /* libdeflate's state (~32 KB) for this band: it allocates with malloc, as zlib did */
+    struct libdeflate_decompressor *inflater = libdeflate_alloc_decompressor();
+    if (!inflater) return 1;
+    int rc = fast_band_with(f, band, buf, raw, inflater);
+    libdeflate_free_decompressor(inflater);
+    return rc;
+}
+
+static int fast_band_with(exr_fast *f, int band, uint8_t *buf, uint8_t *raw, struct libdeflate_decompressor *inflater)
 {
     const exr_shape *sh = f->sh;
     int first = band * f->chunks_per_band, chunks = (f->h + f->lines - 1) / f->lines;
@@ -436,8 +449,10 @@ static int fast_band(exr_fast *f, int band, uint8_t *buf, uint8_t *raw)
         } else if (sh->compression == EXR_NONE || (size_t)packed > expect) {
             return 1;
         } else {
-            uLongf got = (uLongf)expect;
-            if (uncompress(buf, &got, data, (uLong)packed) != Z_OK || got != expect) return 1;
+            size_t got = 0;
+            if (libdeflate_zlib_decompress(inflater, data, (size_t)packed, buf, expect, &got) != LIBDEFLATE_SUCCESS ||
+                got != expect)
+                return 1;
             zip_unpredict(buf, expect, raw);
             lines = raw;
         }
