@@ -182,6 +182,10 @@ struct core {
     uint32_t *row0;        /* nb nb + 1: each base texel's first row                                 */
     size_t *w0;            /* nb nb + 1: each base texel's first weight                              */
     int32_t *rows;         /* per row: y, x (padded coordinates), len (a multiple of 8)              */
+    /* per 8 weights: the padded cell (x + O, y + O) of the first; base i's are from w0[i] / 8.
+     * One loop over a base's vectors has a steady trip count, where the rows' short loops
+     * (3-5 vectors) mispredicted their exits */
+    uint16_t *vec;
     uint16_t *w;           /* half floats, times wscale: the weights (half the memory of floats)     */
     float wscale;          /* an upper bound of the weights: stored values are at most ~1            */
     double *den;           /* nb nb: sum of the weights (as stored)                                  */
@@ -206,6 +210,7 @@ static void core_destroy(ibl_context *ctx, struct core *c)
     ibl_free(ctx, c->row0);
     ibl_free(ctx, c->w0);
     ibl_free(ctx, c->rows);
+    ibl_free(ctx, c->vec);
     ibl_free(ctx, c->w);
     ibl_free(ctx, c->den);
     ibl_free(ctx, c->corr_rec);
@@ -1707,57 +1712,53 @@ AVX2 static void avx2_row_extent(const float *g, size_t plane, int n, const floa
 }
 
 /* The core's product for one image of a base texel (see core_mac_generic). */
-AVX2 static void avx2_core_mac(const struct core *c, const uint16_t *w, const int32_t *rows, int nrows,
+AVX2 static void avx2_core_mac(const struct core *c, const uint16_t *w, const uint16_t *vec, int nvec,
                                const float *planes, int fx, int fy, double out[3])
 {
     size_t plane = (size_t)c->P * c->P;
-    /* two sets of accumulators, for even and odd vectors of a row: one set is a chain of
-     * dependent FMAs whose latency (4 cycles), not the loads, would bound the loop */
+    /* the first cell of vector k in the flipped image: y' = fy ? S - 1 + 2 O - y : y, and
+     * x' = fx ? S - 1 + 2 O - x - 7 (read reversed) : x, in padded coordinates */
+    ptrdiff_t P = c->P, E = c->S - 1 + 2 * c->O;
+    ptrdiff_t c0 = (fy ? E * P : 0) + (fx ? E - 7 : 0), cy = fy ? -P : P, cx = fx ? -1 : 1;
+    /* two sets of accumulators, for even and odd vectors: one set is a chain of dependent
+     * FMAs whose latency (4 cycles), not the loads, would bound the loop */
     __m256 ar = _mm256_setzero_ps(), ag = ar, ab = ar, br = ar, bg = ar, bb = ar;
     const __m256i rev = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
-    for (int r = 0; r < nrows; r++) {
-        const int32_t *row = rows + 3 * r;
-        int Y = fy ? c->S - 1 - row[0] : row[0], len = row[2], i = 0;
-        const float *base = planes + (size_t)(Y + c->O) * c->P + c->O;
-        if (!fx) {
-            const float *q = base + row[1];
-            for (; i + 16 <= len; i += 16) {
-                __m256 wa = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i)));
-                __m256 wb = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i + 8)));
-                ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + i), ar);
-                ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + plane + i), ag);
-                ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + 2 * plane + i), ab);
-                br = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q + i + 8), br);
-                bg = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q + plane + i + 8), bg);
-                bb = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q + 2 * plane + i + 8), bb);
-            }
-            if (i < len) {
-                __m256 wa = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i)));
-                ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + i), ar);
-                ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + plane + i), ag);
-                ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + 2 * plane + i), ab);
-            }
-        } else {
-            /* cells X.. of the base row are columns S-1-X.. of the flipped face: reversed */
-            const float *q = base + (c->S - 1 - row[1]) - 7;
-            for (; i + 16 <= len; i += 16) {
-                __m256 wa = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i))), rev);
-                __m256 wb = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i + 8))), rev);
-                ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q - i), ar);
-                ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + plane - i), ag);
-                ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + 2 * plane - i), ab);
-                br = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q - i - 8), br);
-                bg = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q + plane - i - 8), bg);
-                bb = _mm256_fmadd_ps(wb, _mm256_loadu_ps(q + 2 * plane - i - 8), bb);
-            }
-            if (i < len) {
-                __m256 wa = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + i))), rev);
-                ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q - i), ar);
-                ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + plane - i), ag);
-                ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(q + 2 * plane - i), ab);
-            }
+    int k = 0;
+    if (!fx) {
+        for (; k + 2 <= nvec; k += 2) {
+            const float *qa = planes + c0 + cy * vec[2 * k + 1] + vec[2 * k];
+            const float *qb = planes + c0 + cy * vec[2 * k + 3] + vec[2 * k + 2];
+            __m256 wa = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + 8 * k)));
+            __m256 wb = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + 8 * k + 8)));
+            ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa), ar);
+            ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + plane), ag);
+            ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + 2 * plane), ab);
+            br = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb), br);
+            bg = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb + plane), bg);
+            bb = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb + 2 * plane), bb);
         }
-        w += len;
+    } else {
+        for (; k + 2 <= nvec; k += 2) {
+            const float *qa = planes + c0 + cy * vec[2 * k + 1] - vec[2 * k];
+            const float *qb = planes + c0 + cy * vec[2 * k + 3] - vec[2 * k + 2];
+            __m256 wa = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + 8 * k))), rev);
+            __m256 wb = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + 8 * k + 8))), rev);
+            ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa), ar);
+            ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + plane), ag);
+            ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + 2 * plane), ab);
+            br = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb), br);
+            bg = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb + plane), bg);
+            bb = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb + 2 * plane), bb);
+        }
+    }
+    if (k < nvec) {
+        const float *qa = planes + c0 + cy * vec[2 * k + 1] + cx * vec[2 * k];
+        __m256 wa = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + 8 * k)));
+        if (fx) wa = _mm256_permutevar8x32_ps(wa, rev);
+        ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa), ar);
+        ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + plane), ag);
+        ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + 2 * plane), ab);
     }
     ar = _mm256_add_ps(ar, br), ag = _mm256_add_ps(ag, bg), ab = _mm256_add_ps(ab, bb);
     out[0] = avx2_hsum(ar) * c->wscale, out[1] = avx2_hsum(ag) * c->wscale, out[2] = avx2_hsum(ab) * c->wscale;
@@ -1781,8 +1782,12 @@ static int cpu_has_avx2(void)
 }
 #else
 #define sum_blocks_avx2 sum_blocks_generic
-#define avx2_core_mac core_mac_generic
 #define avx2_row_extent row_extent_generic
+static void avx2_core_mac(const struct core *c, const uint16_t *w, const uint16_t *vec, int nvec,
+                          const float *planes, int fx, int fy, double out[3])
+{
+    (void)c, (void)w, (void)vec, (void)nvec, (void)planes, (void)fx, (void)fy, (void)out;
+}
 static void avx2_to_half(const float *in, int n, uint16_t *out, float lanes[8])
 {
     (void)in, (void)n, (void)out, (void)lanes;
@@ -2320,7 +2325,9 @@ static void core_mac_task(void *arg, int b)
                 double s[3];
                 const float *planes = j->p->pad + (mirror ? 3 * plane : 0);
                 int gx = mirror ? fy : fx, gy = mirror ? fx : fy;
-                if (j->avx2) avx2_core_mac(c, w, rows, nrows, planes, gx, gy, s);
+                if (j->avx2)
+                    avx2_core_mac(c, w, c->vec + 2 * (c->w0[index] / 8), (int)((c->w0[index + 1] - c->w0[index]) / 8),
+                                  planes, gx, gy, s);
                 else core_mac_generic(c, w, rows, nrows, planes, gx, gy, s);
                 float *o = j->acc + (((size_t)face * c->n + y) * c->n + x) * 4;
                 for (int ch = 0; ch < 3; ch++) o[ch] = (float)(o[ch] + s[ch]);
@@ -2451,6 +2458,7 @@ static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
     if (weights > ((size_t)1 << 25)) goto give_up; /* 128 MiB of weights: sum by leaves instead */
     c->rows = ibl_alloc(ctx, (rows ? rows : 1) * 3 * sizeof(int32_t));
     c->w = ibl_alloc(ctx, (weights ? weights : 1) * sizeof(uint16_t));
+    c->vec = ibl_alloc(ctx, (weights / 8 + 1) * 2 * sizeof(uint16_t));
     /* the weights' bound: the largest texel (a face centre) times twice the piece's peak
      * (the second-order term can add a little); stored weights are then at most ~1, where
      * half floats keep 11 bits */
@@ -2458,10 +2466,15 @@ static ibl_status core_create_piece(ibl_specular_plan *p, int level, int k)
     for (int i = 0; i <= TAB; i++) gmax = fabs(pc->tab[2 * i]) > gmax ? fabs(pc->tab[2 * i]) : gmax;
     c->wscale = (float)(2.0 * gmax * ibl_cube_texel_solid_angle(S, S / 2, S / 2));
     if (!(c->wscale > 0)) c->wscale = 1.0f;
-    if (!c->rows || !c->w) goto fail;
+    if (!c->rows || !c->w || !c->vec) goto fail;
     for (size_t i = 0; i < nbase; i++)
         memcpy(c->rows + 3 * (size_t)c->row0[i], tmp_rows + i * (2 * W + 1) * 3,
                (size_t)tmp_count[i] * 3 * sizeof(int32_t));
+    for (size_t r = 0, v = 0; r < rows; r++) /* padded cells are below 3 S + 16 <= 49168 */
+        for (int i = 0; i < c->rows[3 * r + 2]; i += 8, v++) {
+            c->vec[2 * v] = (uint16_t)(c->rows[3 * r + 1] + i + c->O);
+            c->vec[2 * v + 1] = (uint16_t)(c->rows[3 * r] + c->O);
+        }
     ibl_free(ctx, tmp_rows);
     ibl_free(ctx, tmp_count);
     job.avx2 = cpu_has_avx2() && !p->portable;
