@@ -82,6 +82,10 @@ typedef struct srclev {
     /* run, coarse levels: the luminance power of each task's block row (6 nby), and their
      * sum in order (the bright and correction bars are relative to the mean radiance) */
     double *row_power, power;
+    /* run, levels read by precomputed pieces: each texel as uniform light, its power over its
+     * solid angle (rgb and a pad float, a cube face's layout), without its bright texels'
+     * power for split rings (uni_dim); the padded sources gather from these */
+    float *uni, *uni_dim;
     /* bright texels (levels read by split rings): their records gathered in blocks */
     double bright_c;     /* threshold on a texel's luminance power / mean radiance (0: unused) */
     int bright_cap, nbright; /* capacity and count of bright blocks                     */
@@ -776,6 +780,8 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
         ibl_free(ctx, p->src[l].rec);
         ibl_free(ctx, p->src[l].block);
         ibl_free(ctx, p->src[l].row_power);
+        ibl_free(ctx, p->src[l].uni);
+        ibl_free(ctx, p->src[l].uni_dim);
         ibl_free(ctx, p->src[l].bright_rec);
         ibl_free(ctx, p->src[l].bright_order);
         ibl_free(ctx, p->src[l].bright_block);
@@ -900,6 +906,17 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         for (int k = 0; k < p->lv[l].npieces; k++) {
             const struct core *c = p->lv[l].pieces[k].core;
             if (c && (size_t)6 * c->P * c->P > pad) pad = (size_t)6 * c->P * c->P;
+        }
+    for (int l = 0; l < p->L; l++)
+        for (int k = 0; k < p->lv[l].npieces; k++) {
+            const struct core *c = p->lv[l].pieces[k].core;
+            if (!c || c->level == 0) continue;
+            srclev *s = &p->src[c->level];
+            float **u = c->dim ? &s->uni_dim : &s->uni;
+            if (!*u && !(*u = ibl_alloc(ctx, (size_t)6 * s->M * s->M * 4 * sizeof(float)))) {
+                st = ibl_context_status(ctx);
+                goto fail;
+            }
         }
     if (pad) {
         p->pad = ibl_alloc(ctx, pad * sizeof(float));
@@ -1339,6 +1356,27 @@ static void pyramid_row(void *arg, int index)
         o[F_WE * BT] = (float)out.e;
         for (int c = 0; c < 6; c++) o[(F_WC + c) * BT] = (float)out.c[c];
         for (int c = 0; c < 3; c++) o[(F_P + c) * BT] = (float)P[c];
+    }
+}
+
+/* Row `index` (face M + y) of the level's uniform texels (srclev.uni, uni_dim). */
+static void uniform_task(void *arg, int index)
+{
+    const pyr_job *job = arg;
+    const srclev *s = &job->p->src[job->level];
+    int M = s->M, f = index / M, y = index % M;
+    for (int x = 0; x < M; x++) {
+        const float *rec = s->rec + rec_index(s, f, x, y, 0);
+        float om = rec[F_OM * BT], inv = om > 0 ? 1.0f / om : 0.0f;
+        size_t o = (((size_t)f * M + y) * M + x) * 4;
+        if (s->uni) {
+            for (int c = 0; c < 3; c++) s->uni[o + c] = rec[(F_P + c) * BT] * inv;
+            s->uni[o + 3] = 0.0f;
+        }
+        if (s->uni_dim) {
+            for (int c = 0; c < 3; c++) s->uni_dim[o + c] = rec[(F_PD + c) * BT] * inv;
+            s->uni_dim[o + 3] = 0.0f;
+        }
     }
 }
 
@@ -2215,15 +2253,23 @@ static void core_pad_task(void *arg, int index)
     size_t plane = (size_t)c->P * c->P;
     const int32_t *map = c->map + (size_t)row * c->P;
     float *out = j->p->pad + (size_t)row * c->P;
-    const float *face[6];
-    for (int g = 0; g < 6; g++) face[g] = ibl_cubemap_face(j->src, 0, g);
     const srclev *s = &j->p->src[c->level];
-    /* inside the face itself the padded source is the source face: copied by rows */
-    int Y = row - c->O, inside = c->level == 0 && Y >= 0 && Y < S;
+    /* level 0: the source texels; a coarse level: its texels as uniform light, those with a
+     * centroid correction left out (their moment leaves are summed instead) */
+    const float *face[6];
+    const float *uni = c->dim ? s->uni_dim : s->uni;
+    for (int g = 0; g < 6; g++)
+        face[g] = c->level == 0 ? ibl_cubemap_face(j->src, 0, g) : uni + (size_t)g * S * S * 4;
+    int corr = c->level > 0 && c->ncorr > 0;
+    /* inside the face itself the padded source is the face: copied by rows */
+    int Y = row - c->O, inside = Y >= 0 && Y < S;
     if (inside) {
         const float *v = face[f] + (size_t)Y * S * 4;
         float *o = out + c->O;
         for (int x = 0; x < S; x++) o[x] = v[4 * x], o[plane + x] = v[4 * x + 1], o[2 * plane + x] = v[4 * x + 2];
+        for (int x = 0; corr && x < S; x++)
+            if (c->bound[(((size_t)f * s->nby + Y / BH) * s->nbx + x / BW) * BT + (Y % BH) * BW + x % BW] > c->corr_thr)
+                o[x] = o[plane + x] = o[2 * plane + x] = 0.0f;
     }
     for (int X = 0; X < c->P; X++) {
         if (inside && X == c->O) X += S;
@@ -2238,19 +2284,8 @@ static void core_pad_task(void *arg, int index)
         int g0 = t0 >> (2 * sh), y0 = (t0 >> sh) & (S - 1), x0 = t0 & (S - 1);
         const int *m = c->carry[f][g0];
         int g = m[0], x = m[1] + m[2] * x0 + m[3] * y0, y = m[4] + m[5] * x0 + m[6] * y0;
-        if (c->level > 0) { /* a coarse texel as uniform: its power over its solid angle */
-            size_t b = ((size_t)g * s->nby + y / BH) * s->nbx + x / BW;
-            int t = (y % BH) * BW + x % BW;
-            const float *rec = s->rec + b * s->nf * BT + t;
-            float om = rec[F_OM * BT];
-            if (c->ncorr > 0 && c->bound[b * BT + t] > c->corr_thr) {
-                /* a corrected texel: its moment leaf is summed instead */
-                out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
-                continue;
-            }
-            int pf = c->dim ? F_PD : F_P;
-            float inv = om > 0 ? 1.0f / om : 0.0f;
-            for (int ch = 0; ch < 3; ch++) out[ch * plane + X] = rec[(pf + ch) * BT] * inv;
+        if (corr && c->bound[(((size_t)g * s->nby + y / BH) * s->nbx + x / BW) * BT + (y % BH) * BW + x % BW] > c->corr_thr) {
+            out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
             continue;
         }
         const float *v = face[g] + ((size_t)y * S + x) * 4;
@@ -2734,6 +2769,7 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
         p->src[l].power = 0;
         for (int i = 0; i < 6 * p->src[l].nby; i++) p->src[l].power += p->src[l].row_power[i];
         if (p->src[l].bright_c > 0) select_bright(p, l);
+        if (p->src[l].uni || p->src[l].uni_dim) ibl_parallel_for(ctx, 6 * p->src[l].M, uniform_task, &job);
     }
     for (int l = 0; l < p->L; l++)
         for (int k = 0; k < p->lv[l].npieces; k++) {
