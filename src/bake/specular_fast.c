@@ -60,6 +60,9 @@ enum { F_WM = GEO_FIELDS, F_WE = F_WM + 3, F_WC = F_WM + 4, F_P = F_WM + 10, F_P
 /* a ring summed by precomputed weights reads texels at most GAMMA_MAC of its inner radius */
 #define GAMMA_MAC 0.3
 #define BRIGHT_TAU 0.02
+/* ... at the output texels, or on a grid spaced at most BETA_BRIGHT of the ring's inner radius
+ * when that is coarser (bilinear error ~(0.08 / 0.6)^2 of the 20-35% above) */
+#define BETA_BRIGHT 0.08
 enum { BRIGHT_BLOCKS = 256 };
 /* A precomputed core over a coarse level treats its texels as uniform; a texel whose moment
  * leaf could differ from that by more than CORR_TAU times the mean radiance (relative to the
@@ -104,6 +107,7 @@ typedef struct piece {
     float n;  /* Phong exponent */
     int ggx;
     int split; /* a ring on a coarse grid without the bright texels, which go direct */
+    int bright_grid; /* split: the grid its bright texels are summed on                */
     struct core *core; /* the core summed by precomputed weights (NULL: by leaves) */
 } piece;
 
@@ -725,6 +729,9 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
             } else {
                 pc->grid = grid_index(lv, gn, 0, TILE);
                 pc->split = split;
+                int bn = 8;
+                while (bn < n && texel_angle(bn) > BETA_BRIGHT * acc * b) bn *= 2;
+                pc->bright_grid = bn >= n ? grid_index(lv, n, 1, TILE) : grid_index(lv, bn, 0, TILE);
             }
         }
         /* a ring over the same source level and grid as the ring before it (the far rings,
@@ -1979,7 +1986,7 @@ static void grid_task(void *arg, int index)
         int main_sum = pc->grid == g && !pc->core;
         /* a split ring's bright texels are summed at the output texels (the direct grid), and
          * so are the corrections of a precomputed core over a coarse level */
-        int bright = pc->split && gr->direct && job->mode != EVAL_DEN && s->nbright > 0;
+        int bright = pc->split && g == pc->bright_grid && job->mode != EVAL_DEN && s->nbright > 0;
         int corr = pc->core && pc->grid == g && job->mode != EVAL_DEN && pc->core->ncorr > 0;
         if (!main_sum && !bright && !corr) continue;
         sum_args sa = {job->mode == EVAL_DEN ? EVAL_DEN : pc->src == 0 ? EVAL_NUM0 : EVAL_NUMC,
