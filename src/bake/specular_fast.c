@@ -1712,26 +1712,40 @@ AVX2 static void sum_blocks_avx2(const sum_args *sa, const float R[3], const flo
 }
 
 
-/* The weights of `len` consecutive padded cells (geometry planes `plane` apart) for R. */
-AVX2 static void avx2_cell_weights(const piece *pc, const float R[3], const float RR[6], const float *g,
-                                   size_t plane, int len, float *out)
+/* A base texel's weights over its rows (cells in padded face 0's geometry `geo`, rows in
+ * padded coordinates minus O), times `inv`, stored as halves; the stored halves summed per
+ * lane into `lanes` (the normaliser sums exactly what the products will use). One setup for
+ * the whole base: per row it cost as much as a row's weights. */
+AVX2 static void avx2_base_weights(const piece *pc, const float R[3], const float RR[6], const float *geo,
+                                   size_t plane, int P, int O, const int32_t *rows, int nrows, float inv,
+                                   uint16_t *w, float lanes[8])
 {
     avx2_consts k;
     avx2_setup(pc, &k);
     const __m256 r0 = _mm256_set1_ps(R[0]), r1 = _mm256_set1_ps(R[1]), r2 = _mm256_set1_ps(R[2]);
+    const __m256 vinv = _mm256_set1_ps(inv);
     __m256 qk[6];
     for (int i = 0; i < 6; i++) qk[i] = _mm256_set1_ps(RR[i]);
-    for (int i = 0; i < len; i += 8) {
-        __m256 dx = _mm256_sub_ps(r0, _mm256_loadu_ps(g + i));
-        __m256 dy = _mm256_sub_ps(r1, _mm256_loadu_ps(g + plane + i));
-        __m256 dz = _mm256_sub_ps(r2, _mm256_loadu_ps(g + 2 * plane + i));
-        __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
-        __m256 u = _mm256_fmadd_ps(k.half, d2, _mm256_loadu_ps(g + F_E * plane + i));
-        __m256 q = _mm256_mul_ps(qk[0], _mm256_loadu_ps(g + F_C * plane + i));
-        for (int c = 1; c < 6; c++) q = _mm256_fmadd_ps(qk[c], _mm256_loadu_ps(g + (F_C + c) * plane + i), q);
-        __m256 w = avx2_lobe(&k, pc->ggx, u, q);
-        _mm256_storeu_ps(out + i, _mm256_mul_ps(w, _mm256_loadu_ps(g + F_OM * plane + i)));
+    __m256 acc = _mm256_loadu_ps(lanes);
+    for (int r = 0; r < nrows; r++) {
+        const int32_t *row = rows + 3 * r;
+        const float *g = geo + (size_t)(row[0] + O) * P + row[1] + O;
+        for (int i = 0; i < row[2]; i += 8) {
+            __m256 dx = _mm256_sub_ps(r0, _mm256_loadu_ps(g + i));
+            __m256 dy = _mm256_sub_ps(r1, _mm256_loadu_ps(g + plane + i));
+            __m256 dz = _mm256_sub_ps(r2, _mm256_loadu_ps(g + 2 * plane + i));
+            __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
+            __m256 u = _mm256_fmadd_ps(k.half, d2, _mm256_loadu_ps(g + F_E * plane + i));
+            __m256 q = _mm256_mul_ps(qk[0], _mm256_loadu_ps(g + F_C * plane + i));
+            for (int c = 1; c < 6; c++) q = _mm256_fmadd_ps(qk[c], _mm256_loadu_ps(g + (F_C + c) * plane + i), q);
+            __m256 v = _mm256_mul_ps(avx2_lobe(&k, pc->ggx, u, q), _mm256_loadu_ps(g + F_OM * plane + i));
+            __m128i h = _mm256_cvtps_ph(_mm256_mul_ps(v, vinv), _MM_FROUND_TO_NEAREST_INT);
+            _mm_storeu_si128((__m128i *)(w + i), h);
+            acc = _mm256_add_ps(acc, _mm256_cvtph_ps(h));
+        }
+        w += row[2];
     }
+    _mm256_storeu_ps(lanes, acc);
 }
 
 /* First and last of n cells (geometry planes `plane` apart from g) within reach of R:
@@ -1809,18 +1823,6 @@ AVX2 static void avx2_core_mac(const struct core *c, const uint16_t *w, const ui
     out[0] = avx2_hsum(ar) * c->wscale, out[1] = avx2_hsum(ag) * c->wscale, out[2] = avx2_hsum(ab) * c->wscale;
 }
 
-/* n floats (a multiple of 8) to half floats (round to nearest even), and their sum as halves */
-AVX2 static void avx2_to_half(const float *in, int n, uint16_t *out, float lanes[8])
-{
-    __m256 acc = _mm256_loadu_ps(lanes);
-    for (int i = 0; i < n; i += 8) {
-        __m128i h = _mm256_cvtps_ph(_mm256_loadu_ps(in + i), _MM_FROUND_TO_NEAREST_INT);
-        _mm_storeu_si128((__m128i *)(out + i), h);
-        acc = _mm256_add_ps(acc, _mm256_cvtph_ps(h));
-    }
-    _mm256_storeu_ps(lanes, acc);
-}
-
 static int cpu_has_avx2(void)
 {
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("f16c");
@@ -1833,14 +1835,12 @@ static void avx2_core_mac(const struct core *c, const uint16_t *w, const uint16_
 {
     (void)c, (void)w, (void)vec, (void)nvec, (void)planes, (void)fx, (void)fy, (void)out;
 }
-static void avx2_to_half(const float *in, int n, uint16_t *out, float lanes[8])
+static void avx2_base_weights(const piece *pc, const float R[3], const float RR[6], const float *geo,
+                              size_t plane, int P, int O, const int32_t *rows, int nrows, float inv,
+                              uint16_t *w, float lanes[8])
 {
-    (void)in, (void)n, (void)out, (void)lanes;
-}
-static void avx2_cell_weights(const piece *pc, const float R[3], const float RR[6], const float *g,
-                              size_t plane, int len, float *out)
-{
-    (void)pc, (void)R, (void)RR, (void)g, (void)plane, (void)len, (void)out;
+    (void)pc, (void)R, (void)RR, (void)geo, (void)plane, (void)P, (void)O, (void)rows, (void)nrows,
+        (void)inv, (void)w, (void)lanes;
 }
 static int cpu_has_avx2(void) { return 0; }
 #endif
@@ -2185,35 +2185,28 @@ static void core_weights_task(void *arg, int index)
     size_t plane = (size_t)P * P;
     uint16_t *w = c->w + c->w0[index];
     double den = 0;
-    float lanes[8] = {0, 0, 0, 0, 0, 0, 0, 0}, buf[64];
+    float lanes[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     float inv = 1.0f / c->wscale;
+    if (j->avx2) {
+        avx2_base_weights(j->pc, R, RR, j->geo, plane, P, O, c->rows + 3 * (size_t)c->row0[index],
+                          (int)(c->row0[index + 1] - c->row0[index]), inv, w, lanes);
+        for (int l = 0; l < 8; l++) den += lanes[l];
+        c->den[index] = den * c->wscale;
+        return;
+    }
     for (uint32_t r = c->row0[index]; r < c->row0[index + 1]; r++) {
         const int32_t *row = c->rows + 3 * (size_t)r;
         const float *g0 = j->geo + (size_t)(row[0] + O) * P + row[1] + O;
-        /* in chunks of 64 (rows are multiples of 8): weights, scaled, stored as halves */
-        for (int i0 = 0; i0 < row[2]; i0 += 64) {
-            int len = row[2] - i0 < 64 ? row[2] - i0 : 64;
-            const float *g = g0 + i0;
-            if (j->avx2) {
-                avx2_cell_weights(j->pc, R, RR, g, plane, len, buf);
-            } else {
-                for (int i = 0; i < len; i++) {
-                    float dx = R[0] - g[i], dy = R[1] - g[plane + i], dz = R[2] - g[2 * plane + i];
-                    float u = 0.5f * (dx * dx + dy * dy + dz * dz) + g[F_E * plane + i];
-                    float q = 0;
-                    for (int k = 0; k < 6; k++) q += RR[k] * g[(F_C + k) * plane + i];
-                    buf[i] = table_weight(j->pc, u, q) * g[F_OM * plane + i];
-                }
-            }
-            for (int i = 0; i < len; i++) buf[i] *= inv;
-            if (j->avx2) {
-                avx2_to_half(buf, len, w + i0, lanes);
-            } else {
-                for (int i = 0; i < len; i++) {
-                    w[i0 + i] = ibl_float_to_half(buf[i]);
-                    lanes[i % 8] += ibl_half_to_float(w[i0 + i]);
-                }
-            }
+        /* weights, scaled, stored as halves (the portable avx2_base_weights) */
+        for (int i = 0; i < row[2]; i++) {
+            const float *g = g0 + i;
+            float dx = R[0] - g[0], dy = R[1] - g[plane], dz = R[2] - g[2 * plane];
+            float u = 0.5f * (dx * dx + dy * dy + dz * dz) + g[F_E * plane];
+            float q = 0;
+            for (int k = 0; k < 6; k++) q += RR[k] * g[(F_C + k) * plane];
+            float v = table_weight(j->pc, u, q) * g[F_OM * plane] * inv;
+            w[i] = ibl_float_to_half(v);
+            lanes[i % 8] += ibl_half_to_float(w[i]);
         }
         w += row[2];
     }
