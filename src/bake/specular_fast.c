@@ -1064,6 +1064,19 @@ static uint64_t texel_key(const srclev *s, size_t b, int t)
     return (uint64_t)f << 32 | key;
 }
 
+/* The block and lane of a texel_key. */
+static void texel_of_key(const srclev *s, uint64_t key, size_t *b, int *t)
+{
+    int f = (int)(key >> 32);
+    uint32_t x = 0, y = 0;
+    for (int i = 0; i < 16; i++) {
+        x |= (uint32_t)((key >> (2 * i)) & 1) << i;
+        y |= (uint32_t)((key >> (2 * i + 1)) & 1) << i;
+    }
+    *b = ((size_t)f * s->nby + y / BH) * s->nbx + x / BW;
+    *t = (int)(y % BH) * BW + (int)(x % BW);
+}
+
 static int key_order(const void *a, const void *b)
 {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
@@ -1076,12 +1089,9 @@ static int gather_texels(const srclev *s, uint64_t *keys, int count, int pf, flo
 {
     qsort(keys, (size_t)count, sizeof *keys, key_order);
     for (int k = 0; k < count; k++) {
-        uint64_t key = keys[k];
-        int f = (int)(key >> 32);
-        uint32_t x = 0, y = 0;
-        for (int i = 0; i < 16; i++) x |= (uint32_t)((key >> (2 * i)) & 1) << i, y |= (uint32_t)((key >> (2 * i + 1)) & 1) << i;
-        size_t b = ((size_t)f * s->nby + y / BH) * s->nbx + x / BW;
-        int t = (int)(y % BH) * BW + (int)(x % BW);
+        size_t b;
+        int t;
+        texel_of_key(s, keys[k], &b, &t);
         const float *rec = s->rec + b * s->nf * BT;
         float *dst = recs + (size_t)(k / BT) * NFC * BT + k % BT;
         for (int fl = 0; fl < NFC; fl++) dst[fl * BT] = rec[fl * BT + t];
@@ -1770,6 +1780,22 @@ AVX2 static void avx2_row_extent(const float *g, size_t plane, int n, const floa
     }
 }
 
+/* Eight half-float weights as floats, reversed for a flipped image (cells X.. of the base's
+ * row are columns S-1-X.. of the flipped face). */
+AVX2_INLINE static inline __m256 avx2_weights8(const uint16_t *w, int reversed)
+{
+    __m256 v = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)w));
+    return reversed ? _mm256_permutevar8x32_ps(v, _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0)) : v;
+}
+
+/* r, g, b += w times the 8 cells at q of the three planes */
+AVX2_INLINE static inline void avx2_mac3(__m256 w, const float *q, size_t plane, __m256 *r, __m256 *g, __m256 *b)
+{
+    *r = _mm256_fmadd_ps(w, _mm256_loadu_ps(q), *r);
+    *g = _mm256_fmadd_ps(w, _mm256_loadu_ps(q + plane), *g);
+    *b = _mm256_fmadd_ps(w, _mm256_loadu_ps(q + 2 * plane), *b);
+}
+
 /* The core's product for one image of a base texel (see core_mac_generic). */
 AVX2 static void avx2_core_mac(const struct core *c, const uint16_t *w, const uint16_t *vec, int nvec,
                                const float *planes, int fx, int fy, double out[3])
@@ -1782,43 +1808,26 @@ AVX2 static void avx2_core_mac(const struct core *c, const uint16_t *w, const ui
     /* two sets of accumulators, for even and odd vectors: one set is a chain of dependent
      * FMAs whose latency (4 cycles), not the loads, would bound the loop */
     __m256 ar = _mm256_setzero_ps(), ag = ar, ab = ar, br = ar, bg = ar, bb = ar;
-    const __m256i rev = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
     int k = 0;
+    /* two loops, so that neither the reversal nor x's sign is decided per vector */
     if (!fx) {
         for (; k + 2 <= nvec; k += 2) {
             const float *qa = planes + c0 + cy * vec[2 * k + 1] + vec[2 * k];
+            avx2_mac3(avx2_weights8(w + 8 * k, 0), qa, plane, &ar, &ag, &ab);
             const float *qb = planes + c0 + cy * vec[2 * k + 3] + vec[2 * k + 2];
-            __m256 wa = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + 8 * k)));
-            __m256 wb = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + 8 * k + 8)));
-            ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa), ar);
-            ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + plane), ag);
-            ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + 2 * plane), ab);
-            br = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb), br);
-            bg = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb + plane), bg);
-            bb = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb + 2 * plane), bb);
+            avx2_mac3(avx2_weights8(w + 8 * k + 8, 0), qb, plane, &br, &bg, &bb);
         }
     } else {
         for (; k + 2 <= nvec; k += 2) {
             const float *qa = planes + c0 + cy * vec[2 * k + 1] - vec[2 * k];
+            avx2_mac3(avx2_weights8(w + 8 * k, 1), qa, plane, &ar, &ag, &ab);
             const float *qb = planes + c0 + cy * vec[2 * k + 3] - vec[2 * k + 2];
-            __m256 wa = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + 8 * k))), rev);
-            __m256 wb = _mm256_permutevar8x32_ps(_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + 8 * k + 8))), rev);
-            ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa), ar);
-            ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + plane), ag);
-            ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + 2 * plane), ab);
-            br = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb), br);
-            bg = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb + plane), bg);
-            bb = _mm256_fmadd_ps(wb, _mm256_loadu_ps(qb + 2 * plane), bb);
+            avx2_mac3(avx2_weights8(w + 8 * k + 8, 1), qb, plane, &br, &bg, &bb);
         }
     }
-    if (k < nvec) {
-        const float *qa = planes + c0 + cy * vec[2 * k + 1] + cx * vec[2 * k];
-        __m256 wa = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(w + 8 * k)));
-        if (fx) wa = _mm256_permutevar8x32_ps(wa, rev);
-        ar = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa), ar);
-        ag = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + plane), ag);
-        ab = _mm256_fmadd_ps(wa, _mm256_loadu_ps(qa + 2 * plane), ab);
-    }
+    if (k < nvec)
+        avx2_mac3(avx2_weights8(w + 8 * k, fx), planes + c0 + cy * vec[2 * k + 1] + cx * vec[2 * k], plane, &ar,
+                  &ag, &ab);
     ar = _mm256_add_ps(ar, br), ag = _mm256_add_ps(ag, bg), ab = _mm256_add_ps(ab, bb);
     out[0] = avx2_hsum(ar) * c->wscale, out[1] = avx2_hsum(ag) * c->wscale, out[2] = avx2_hsum(ab) * c->wscale;
 }
@@ -2244,6 +2253,13 @@ static void core_add_normalisers(const struct core *c, float *acc)
         }
 }
 
+/* Whether texel (x, y) of face f of the core's level gets a centroid correction. */
+static int texel_corrected(const struct core *c, const srclev *s, int f, int x, int y)
+{
+    size_t b = ((size_t)f * s->nby + y / BH) * s->nbx + x / BW;
+    return c->bound[b * BT + (y % BH) * BW + x % BW] > c->corr_thr;
+}
+
 static void core_pad_task(void *arg, int index)
 {
     core_job *j = arg;
@@ -2268,8 +2284,7 @@ static void core_pad_task(void *arg, int index)
         float *o = out + c->O;
         for (int x = 0; x < S; x++) o[x] = v[4 * x], o[plane + x] = v[4 * x + 1], o[2 * plane + x] = v[4 * x + 2];
         for (int x = 0; corr && x < S; x++)
-            if (c->bound[(((size_t)f * s->nby + Y / BH) * s->nbx + x / BW) * BT + (Y % BH) * BW + x % BW] > c->corr_thr)
-                o[x] = o[plane + x] = o[2 * plane + x] = 0.0f;
+            if (texel_corrected(c, s, f, x, Y)) o[x] = o[plane + x] = o[2 * plane + x] = 0.0f;
     }
     for (int X = 0; X < c->P; X++) {
         if (inside && X == c->O) X += S;
@@ -2284,7 +2299,7 @@ static void core_pad_task(void *arg, int index)
         int g0 = t0 >> (2 * sh), y0 = (t0 >> sh) & (S - 1), x0 = t0 & (S - 1);
         const int *m = c->carry[f][g0];
         int g = m[0], x = m[1] + m[2] * x0 + m[3] * y0, y = m[4] + m[5] * x0 + m[6] * y0;
-        if (corr && c->bound[(((size_t)g * s->nby + y / BH) * s->nbx + x / BW) * BT + (y % BH) * BW + x % BW] > c->corr_thr) {
+        if (corr && texel_corrected(c, s, g, x, y)) {
             out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
             continue;
         }
