@@ -57,6 +57,10 @@ enum { F_WM = GEO_FIELDS, F_WE = F_WM + 3, F_WC = F_WM + 4, F_P = F_WM + 10, F_P
  * texel whose largest contribution to an output exceeds BRIGHT_TAU times the mean radiance is
  * summed at the output texels instead (at most BRIGHT_BLOCKS blocks of them per level). */
 #define BETA_SPLIT 0.6
+/* A ring summed by precomputed weights reads texels at most GAMMA_MAC of its inner radius (a
+ * finer level than other rings: fewer centroid corrections; 0.3 and 0.6 were each slower at
+ * one of 256 and 512, docs/SPECULAR.md) */
+#define GAMMA_MAC 0.45
 #define BRIGHT_TAU 0.02
 /* ... at the output texels, or on a grid spaced at most BETA_BRIGHT of the ring's inner radius
  * when that is coarser (bilinear error ~(0.08 / 0.6)^2 of the 20-35% above) */
@@ -711,10 +715,8 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
             pc->grid = grid_index(lv, n, 1, TILE);
         } else {
             double b = pc->th_in;
-            /* (precomputed rings once read 0.3 b, for fewer centroid corrections: with the
-             * corrections gathered by place the coarser level is 1.2x faster at 512, with the
-             * same accuracy table) */
-            pc->src = source_level_for(p, gamma * b, 16);
+            int mac = centred_directions(p) && acos(1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0)) < 1.1;
+            pc->src = source_level_for(p, (mac ? GAMMA_MAC * acc : gamma) * b, 16);
             /* a ring summed from a coarse level leaves its bright texels to a direct sum, so
              * that its grid may be coarser (see "bright texels") */
             int split = pc->src > 0;
