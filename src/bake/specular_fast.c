@@ -145,6 +145,10 @@ struct ibl_specular_plan {
     float *geo0;
     int rec0;
     float *pad; /* run: the padded source of the precomputed piece being summed (6 x rgb x P P) */
+    /* the gathered corrections of every core, one after the other: only the part a run uses
+     * is touched (one buffer per core touched a fresh huge page each) */
+    float *corr_pool;
+    size_t corr_pool_blocks;
     int perm_ax[6][3]; /* face f's local (s, t, axis) -> world: world[i] = perm_sg[i] local[perm_ax[i]] */
     float perm_sg[6][3];
     int portable;      /* tests: the portable sums even where AVX2 is available          */
@@ -205,7 +209,8 @@ struct core {
      * the grid points as a leaf at its luminance moments */
     double a1, a2, a3;
     int corr_cap, ncorr;
-    float *corr_rec, *corr_block;
+    float *corr_rec;       /* run: in p->corr_pool, after the cores gathered before this one       */
+    float *corr_block;
     uint64_t *corr_order;  /* corr_cap BT: scratch of gather_texels                         */
     float *bound;          /* run: each texel's bound (block order)                                  */
     float corr_thr;        /* run: the texels over it are summed as leaves, left out of the padded source */
@@ -223,7 +228,6 @@ static void core_destroy(ibl_context *ctx, struct core *c)
     ibl_free(ctx, c->vec);
     ibl_free(ctx, c->w);
     ibl_free(ctx, c->den);
-    ibl_free(ctx, c->corr_rec);
     ibl_free(ctx, c->corr_order);
     ibl_free(ctx, c->corr_block);
     ibl_free(ctx, c->bound);
@@ -782,6 +786,7 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
     ibl__dynamic_destroy(p->dyn);
     ibl_free(ctx, p->geo0);
     ibl_free(ctx, p->pad);
+    ibl_free(ctx, p->corr_pool);
     for (int l = 0; l < IBL_MAX_LEVELS; l++) {
         ibl_free(ctx, p->src[l].rec);
         ibl_free(ctx, p->src[l].block);
@@ -947,6 +952,11 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
         st = plan_bright(p, l);
         if (st != IBL_OK) goto fail;
     }
+    if (p->corr_pool_blocks &&
+        !(p->corr_pool = ibl_alloc(ctx, p->corr_pool_blocks * NFC * BT * sizeof(float)))) {
+        st = ibl_context_status(ctx);
+        goto fail;
+    }
     for (int l = 0; l < p->SL; l++) {
         srclev *s = &p->src[l];
         if (s->bright_c == 0) continue;
@@ -995,11 +1005,11 @@ static ibl_status plan_bright(ibl_specular_plan *p, int level)
         struct core *c = core->core;
         c->a1 = d1 / den, c->a2 = d1e / den, c->a3 = d2 / den;
         c->corr_cap = CORR_BLOCKS;
-        c->corr_rec = ibl_alloc(p->ctx, (size_t)c->corr_cap * NFC * BT * sizeof(float));
+        p->corr_pool_blocks += (size_t)c->corr_cap;
         c->corr_block = ibl_alloc(p->ctx, CONES(c->corr_cap) * BINFO * sizeof(float));
         c->corr_order = ibl_alloc(p->ctx, (size_t)c->corr_cap * BT * sizeof(uint64_t));
         c->bound = ibl_alloc(p->ctx, block_count(&p->src[c->level]) * BT * sizeof(float));
-        if (!c->corr_rec || !c->corr_block || !c->corr_order || !c->bound) return ibl_context_status(p->ctx);
+        if (!c->corr_block || !c->corr_order || !c->bound) return ibl_context_status(p->ctx);
     }
     for (int k = 0; k < lv->npieces; k++) {
         const piece *pc = &lv->pieces[k];
@@ -2785,10 +2795,15 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
         if (p->src[l].bright_c > 0) select_bright(p, l);
         if (p->src[l].uni || p->src[l].uni_dim) ibl_parallel_for(ctx, 6 * p->src[l].M, uniform_task, &job);
     }
+    size_t pool_used = 0; /* blocks of p->corr_pool taken */
     for (int l = 0; l < p->L; l++)
         for (int k = 0; k < p->lv[l].npieces; k++) {
             struct core *c = p->lv[l].pieces[k].core;
-            if (c && c->corr_cap > 0) select_corrections(p, c);
+            if (c && c->corr_cap > 0) {
+                c->corr_rec = p->corr_pool + pool_used * NFC * BT;
+                select_corrections(p, c);
+                pool_used += (size_t)c->ncorr;
+            }
         }
     p->run_src = src;
     p->run_dst = dst;
