@@ -1,0 +1,122 @@
+/* The CLI's allocator (cli/arena.c): blocks are usable, aligned and disjoint; freed arena
+ * blocks are reused best-fit, split and merged; it is safe from several threads. */
+#include "test_support.h"
+
+#include "arena.h"
+
+#include <pthread.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* a byte every 4093 and the last one (when it is not one of those) */
+static void fill(unsigned char *p, size_t n, unsigned seed)
+{
+    for (size_t i = 0; i < n; i += 4093) p[i] = (unsigned char)(seed + i / 4093);
+    if ((n - 1) % 4093) p[n - 1] = (unsigned char)(seed ^ 0x5a);
+}
+
+static int intact(const unsigned char *p, size_t n, unsigned seed)
+{
+    for (size_t i = 0; i < n; i += 4093)
+        if (p[i] != (unsigned char)(seed + i / 4093)) return 0;
+    return (n - 1) % 4093 == 0 || p[n - 1] == (unsigned char)(seed ^ 0x5a);
+}
+
+/* Sizes across the small (malloc) and large (arena) paths keep their contents while others
+ * come and go, and are 64-byte aligned. */
+static void blocks_are_disjoint(void **state)
+{
+    (void)state;
+    enum { N = 40 };
+    static const size_t sizes[] = {1, 100, 4096, 65472, 65536, 70000, 1 << 20, 3u << 20, 9u << 20};
+    unsigned char *p[N];
+    size_t n[N];
+    for (int i = 0; i < N; i++) {
+        n[i] = sizes[i % 9];
+        p[i] = cli_arena_alloc(n[i], NULL);
+        assert_non_null(p[i]);
+        assert_int_equal((uintptr_t)p[i] % 64, 0);
+        fill(p[i], n[i], (unsigned)i);
+    }
+    for (int i = 0; i < N; i += 3) { /* free a third, allocate again, check everyone */
+        cli_arena_free(p[i], NULL);
+        p[i] = cli_arena_alloc(n[i], NULL);
+        assert_non_null(p[i]);
+        fill(p[i], n[i], (unsigned)i);
+    }
+    for (int i = 0; i < N; i++) assert_true(intact(p[i], n[i], (unsigned)i));
+    for (int i = 0; i < N; i++) cli_arena_free(p[i], NULL);
+    cli_arena_free(NULL, NULL);
+}
+
+/* Best fit, split and merge (AddressSanitizer builds keep every block in malloc, where
+ * addresses say nothing). */
+static void freed_blocks_are_reused(void **state)
+{
+    (void)state;
+#if defined(__SANITIZE_ADDRESS__)
+    skip();
+#else
+    const size_t MB = (size_t)1 << 20;
+    unsigned char *a = cli_arena_alloc(8 * MB, NULL), *b = cli_arena_alloc(8 * MB, NULL);
+    assert_non_null(a);
+    assert_non_null(b);
+    cli_arena_free(a, NULL);
+    unsigned char *c = cli_arena_alloc(3 * MB, NULL); /* the freed block, split */
+    unsigned char *d = cli_arena_alloc(3 * MB, NULL); /* its rest */
+    assert_ptr_equal(c, a);
+    assert_true(d > c && d < a + 8 * MB);
+    cli_arena_free(c, NULL);
+    cli_arena_free(d, NULL);
+    unsigned char *e = cli_arena_alloc(8 * MB, NULL); /* the pieces merged again */
+    assert_ptr_equal(e, a);
+    fill(e, 8 * MB, 7);
+    fill(b, 8 * MB, 9);
+    assert_true(intact(e, 8 * MB, 7));
+    cli_arena_free(e, NULL);
+    cli_arena_free(b, NULL);
+#endif
+}
+
+static void *churn(void *arg)
+{
+    unsigned seed = (unsigned)(uintptr_t)arg;
+    unsigned char *held[8] = {0};
+    size_t size[8] = {0};
+    for (int i = 0; i < 400; i++) {
+        int k = i % 8;
+        if (held[k]) {
+            if (!intact(held[k], size[k], seed + (unsigned)k)) return (void *)1;
+            cli_arena_free(held[k], NULL);
+        }
+        size[k] = (size_t)(64 + (seed * 7919u + (unsigned)i * 104729u) % (3u << 20));
+        held[k] = cli_arena_alloc(size[k], NULL);
+        if (!held[k]) return (void *)1;
+        fill(held[k], size[k], seed + (unsigned)k);
+    }
+    for (int k = 0; k < 8; k++) cli_arena_free(held[k], NULL);
+    return NULL;
+}
+
+static void threads_share_it(void **state)
+{
+    (void)state;
+    pthread_t t[4];
+    for (int i = 0; i < 4; i++) assert_int_equal(pthread_create(&t[i], NULL, churn, (void *)(uintptr_t)(i + 1)), 0);
+    for (int i = 0; i < 4; i++) {
+        void *r = NULL;
+        pthread_join(t[i], &r);
+        assert_null(r);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(freed_blocks_are_reused), /* first: on a fresh arena, addresses are known */
+        cmocka_unit_test(blocks_are_disjoint),
+        cmocka_unit_test(threads_share_it),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
