@@ -120,7 +120,7 @@ static void study(void)
             }
         }
         printf("\n%s: albedo > 1 at %d of %d grid points (s log 1..2000, n.v 0.025..1); max %.4f at n.v %.3f s %.1f\n",
-               n ? "exact" : "seed", over, total, worst, wm, ws);
+               n ? "exact" : "triace", over, total, worst, wm, ws);
     }
     /* diffuse: exact factor (1 - F0) vs the shortcut 1 - AmbientBRDF */
     const double f0s[] = {0.02, 0.04, 0.1, 0.5, 0.9};
@@ -131,7 +131,7 @@ static void study(void)
             double s = exp(log(2000.0) * k / 20.0);
             for (int i = 1; i <= 20; i++) {
                 double mu = i / 20.0;
-                double diff = (1 - ibl_ambient_brdf(mu, s, f0s[f], IBL_BLINN_SEED, 0)) - (1 - f0s[f]);
+                double diff = (1 - ibl_ambient_brdf(mu, s, f0s[f], IBL_BLINN_TRIACE_FIT, 0)) - (1 - f0s[f]);
                 if (diff < lo) lo = diff, lm = mu, ls = s;
                 if (diff > hi) hi = diff, hm = mu, hs = s;
             }

@@ -45,8 +45,8 @@ static void fill(float *p, size_t texels)
 static double sh_irradiance_error(const ibl_sh *a, const ibl_sh *b)
 {
     ibl_sh ea, eb;
-    ibl_sh_irradiance(a, &ea);
-    ibl_sh_irradiance(b, &eb);
+    ibl_sh_radiance_to_irradiance(a, &ea);
+    ibl_sh_radiance_to_irradiance(b, &eb);
     double worst = 0, mean = (eb.c[0][0] + eb.c[0][1] + eb.c[0][2]) / 3 * 0.28209479177387814;
     for (int i = 0; i < 4096; i++) {
         double z = 1.0 - (2.0 * i + 1.0) / 4096, r = sqrt(1 - z * z), ph = i * 2.39996322972865332;
@@ -157,13 +157,14 @@ int main(int argc, char **argv)
     fill(cube.data, 6 * 256 * 256);
     for (int bands = 3; bands <= 5; bands += 2) {
         ibl_sh_plan *plan;
-        if (ibl_sh_plan_create(ctx, 256, bands, &plan) != IBL_OK) return 1;
+        ibl_sh_plan_desc pd = {.face_size = 256, .bands = bands};
+        if (ibl_sh_plan_create(ctx, &pd, &plan) != IBL_OK) return 1;
         enum { RUNS = 101 };
         double t[RUNS], t2[RUNS];
         ibl_sh sh;
         for (int r = 0; r < RUNS; r++) {
             double t0 = now();
-            ibl_sh_plan_run(plan, cube.data, &sh);
+            ibl_sh_plan_run(plan, &cube, &sh);
             t[r] = now() - t0;
             sink += sh.c[0][0];
         }
@@ -198,24 +199,28 @@ int main(int argc, char **argv)
 
     /* dynamic IEM 8x8x6 -> 16x16x6 */
     {
-        ibl_iem_plan *plan;
+        ibl_irradiance_plan *plan;
         double t0 = now();
-        if (ibl_iem_plan_create(ctx, 8, 16, IBL_IRRADIANCE_OVER_PI, &plan) != IBL_OK) return 1;
+        ibl_irradiance_plan_desc pd = {.source_size = 8, .size = 16};
+        if (ibl_irradiance_plan_create(ctx, &pd, &plan) != IBL_OK) return 1;
         double create = now() - t0;
         float src[6 * 8 * 8 * 4], dst[6 * 16 * 16 * 4];
         fill(src, 6 * 8 * 8);
+        ibl_cubemap src_cube, dst_cube;
+        ibl_cubemap_wrap(8, 1, src, &src_cube);
+        ibl_cubemap_wrap(16, 1, dst, &dst_cube);
         enum { RUNS = 2001 };
         static double t[RUNS];
         for (int r = 0; r < RUNS; r++) {
             double a = now();
-            ibl_iem_plan_run(plan, src, dst);
+            ibl_irradiance_plan_run(plan, &src_cube, &dst_cube);
             t[r] = now() - a;
             sink += dst[0];
         }
         printf("dynamic IEM 8x8x6 -> 16x16x6, 1 thread: run median %.4f ms (%zu taps), "
                "plan creation %.3f ms\n",
-               median(t, RUNS) * 1e3, ibl_iem_plan_taps(plan), create * 1e3);
-        ibl_iem_plan_destroy(plan);
+               median(t, RUNS) * 1e3, ibl_irradiance_plan_taps(plan), create * 1e3);
+        ibl_irradiance_plan_destroy(plan);
     }
 
     /* whole irradiance cubemaps from the 256 cube */

@@ -106,7 +106,7 @@ static void dynamic_bench(void)
     double times[51];
     for (int i = 0; i < 51; i++) {
         double a = now();
-        ibl_specular_run(plan, &src, &dst);
+        ibl_specular_plan_run(plan, &src, &dst);
         times[i] = now() - a;
     }
     qsort(times, 51, sizeof(double), cmp_double);

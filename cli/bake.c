@@ -309,7 +309,7 @@ int cli_cmd_bake(int argc, char **argv)
         size_t len = 0;
         FILE *mem = open_memstream(&text, &len);
         if (!mem) {
-            st = ibl_fail(ctx, IBL_ERR_OUT_OF_MEMORY, "out of memory");
+            st = IBL_ERR_OUT_OF_MEMORY;
             goto fail;
         }
         cli_sh_write_json(mem, input ? input : "built-in sky", "cube", sh_bands, window, &rep, &radiance);
@@ -397,7 +397,7 @@ int cli_cmd_bake(int argc, char **argv)
         FILE *m = open_memstream(&text, &len);
         if (!m) {
             ibl_free(ctx, spec_json);
-            st = ibl_fail(ctx, IBL_ERR_OUT_OF_MEMORY, "out of memory");
+            st = IBL_ERR_OUT_OF_MEMORY;
             goto fail;
         }
         fprintf(m, "{\n  \"generator\": \"ibl %s\",\n  \"input\": ", IBL_VERSION_STRING);

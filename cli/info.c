@@ -1,5 +1,6 @@
 /* ibl info: what a file holds and what its pixels look like. */
 #include "input.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -15,7 +16,6 @@ static const char usage[] =
     "  --layout L   layout of a flat image (default: from the aspect ratio)\n"
     "  --json       one JSON object on stdout\n";
 
-static const double PI = 3.14159265358979323846;
 
 /* Solid-angle-weighted mean of an equirect image: each row's pixels subtend
  * (2 pi / W) (cos theta0 - cos theta1). */
@@ -23,8 +23,8 @@ static void equirect_mean(const ibl_image *im, double out[3])
 {
     double acc[3] = {0, 0, 0}, wsum = 0;
     for (int y = 0; y < im->height; y++) {
-        double t0 = PI * y / im->height, t1 = PI * (y + 1) / im->height;
-        double w = 2.0 * PI / im->width * (cos(t0) - cos(t1));
+        double t0 = IBL_PI * y / im->height, t1 = IBL_PI * (y + 1) / im->height;
+        double w = 2.0 * IBL_PI / im->width * (cos(t0) - cos(t1));
         const float *p = ibl_image_texel(im, 0, y);
         double row[3] = {0, 0, 0};
         for (int x = 0; x < im->width; x++, p += 4)

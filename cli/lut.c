@@ -28,7 +28,7 @@ static const char usage[] =
     "  --shininess-spacing S    log (default) or linear\n"
     "  --f0-steps K             ambient-brdf F0 slices (default 16)\n"
     "  --compact                ambient-brdf: the 2D form RG = (X, Y), AmbientBRDF = F0*X + Y\n"
-    "  --normalization N        ambient-brdf: seed (0.0397436 s + 0.0856832, default) or exact\n"
+    "  --normalization N        ambient-brdf: triace (the linear fit 0.0397436 s + 0.0856832, default) or exact\n"
     "  --format F               rg16f (default for 2 channels in .ktx2/.ktx/.dds), rg32f,\n"
     "                           rgba16f, rgba32f; PNG: rgba16 (default); EXR: rgb32f (default),\n"
     "                           rgb16f, rgba16f, rgba32f\n"
@@ -87,7 +87,7 @@ int cli_cmd_lut(int argc, char **argv)
     int size = 0, f0_steps = 0, compact = 0, order = 0;
     double smin = 0, smax = 0;
     ibl_shininess_spacing spacing = IBL_SHININESS_LOG;
-    ibl_blinn_normalization norm = IBL_BLINN_SEED;
+    ibl_blinn_normalization norm = IBL_BLINN_TRIACE_FIT;
     int saw_ambient_option = 0;
     const char *arg;
     while ((arg = cli_next(&a)) != NULL) {
@@ -127,7 +127,7 @@ int cli_cmd_lut(int argc, char **argv)
             saw_ambient_option = 1;
         } else if (cli_is(&a, arg, "--normalization", NULL)) {
             const char *v = cli_value(&a, arg);
-            if (strcmp(v, "seed") == 0) norm = IBL_BLINN_SEED;
+            if (strcmp(v, "triace") == 0) norm = IBL_BLINN_TRIACE_FIT;
             else if (strcmp(v, "exact") == 0) norm = IBL_BLINN_EXACT;
             else cli_usage_error(&a, "--normalization wants seed or exact, not '%s'", v);
             saw_ambient_option = 1;
@@ -189,7 +189,7 @@ int cli_cmd_lut(int argc, char **argv)
         snprintf(comment, sizeof comment,
                  "tri-Ace AmbientBRDF (seed 000), %s normalisation, shininess %g..%g %s spacing.\n"
                  "%s",
-                 norm == IBL_BLINN_EXACT ? "exact" : "seed", smin > 0 ? smin : 1.0,
+                 norm == IBL_BLINN_EXACT ? "exact" : "triace", smin > 0 ? smin : 1.0,
                  smax > 0 ? smax : 2000.0, spacing == IBL_SHININESS_LINEAR ? "linear" : "log",
                  compact ? "x = n.v, y = shininess row; channels X, Y: AmbientBRDF = F0 * X + Y"
                          : "x = n.v, y = shininess row, z = F0 slice; channels: specular, "

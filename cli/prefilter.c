@@ -20,10 +20,10 @@ static const char usage[] =
     "  --filter K           ggx (default), phong, blinn, box, gauss\n"
     "  --size N             output face edge (default: the source cube's)\n"
     "  --levels L           number of levels (default: down to 1x1)\n"
-    "  --mapping M          level <-> roughness/shininess: seed, linear, filament, unreal,\n"
+    "  --mapping M          level <-> roughness/shininess: triace, linear, filament, unreal,\n"
     "                       unity, babylon, table (default: linear for ggx, seed otherwise)\n"
     "  --table V,V,...      the values of --mapping table, one per level\n"
-    "  --shininess-min S --shininess-max S   the seed mapping's range (default 1-1000)\n"
+    "  --shininess-min S --shininess-max S   the triace mapping's range (default 1-1000)\n"
     "  --blinn-factor F     Blinn-to-Phong fit factor (default 4.2; cmft uses 4)\n"
     "  --preset P           dynamic-box16, dynamic-gauss32, dynamic-phong16, dynamic-phong32,\n"
     "                       static-phong32, static-phong64, gltf, filament, unreal, unity\n"
@@ -135,7 +135,7 @@ int cli_cmd_prefilter(int argc, char **argv)
         } else if (cli_is(&a, arg, "--mapping", NULL)) {
             const char *v = cli_value(&a, arg);
             if (!ibl_specular_mapping_from_name(v, &set.mapping) || set.mapping == IBL_MAPPING_DEFAULT)
-                cli_usage_error(&a, "--mapping wants seed, linear, filament, unreal, unity, babylon "
+                cli_usage_error(&a, "--mapping wants triace, linear, filament, unreal, unity, babylon "
                                     "or table, not '%s'", v);
             has_mapping = 1;
         } else if (cli_is(&a, arg, "--table", NULL)) {

@@ -50,7 +50,7 @@ static const char usage[] =
     "  --report              also render the reference and print the error per sphere\n"
     "                        (the runtime image then uses at least 4 x 4 rays per pixel)\n"
     "  --compare A B         two variants side by side, labelled; each is a comma-separated\n"
-    "                        list of so=, mix=, energy=, bp-diffuse=seed|f0, samples=,\n"
+    "                        list of so=, mix=, energy=, bp-diffuse=ambient-brdf|f0, samples=,\n"
     "                        sphere-ao=, horizon, mirror-direction, nearest-level,\n"
     "                        reference, applied over the other options, e.g.\n"
     "                        --compare so=none so=triace-fast,sphere-ao=0.2\n"
@@ -86,8 +86,8 @@ static int apply_setting(ibl_render_desc *d, const char *key, const char *value)
     if (strcmp(key, "reference") == 0) return d->reference = 1;
     if (strcmp(key, "bp-diffuse") == 0) {
         if (!value) return 0;
-        if (strcmp(value, "seed") == 0)
-            d->shade.bp_diffuse = IBL_BP_DIFFUSE_SEED;
+        if (strcmp(value, "ambient-brdf") == 0)
+            d->shade.bp_diffuse = IBL_BP_DIFFUSE_AMBIENT_BRDF;
         else if (strcmp(value, "f0") == 0)
             d->shade.bp_diffuse = IBL_BP_DIFFUSE_F0;
         else
@@ -333,7 +333,7 @@ int cli_cmd_render(int argc, char **argv)
     if (report && st == IBL_OK) {
         int w = width ? width : 1024, h = height ? height : (width ? (w + 1) / 2 : 512);
         ids = malloc(sizeof(int) * (size_t)w * h);
-        if (!ids) st = ibl_fail(ctx, IBL_ERR_OUT_OF_MEMORY, "render: out of memory");
+        if (!ids) st = IBL_ERR_OUT_OF_MEMORY;
     }
     for (int i = 0; i < count && st == IBL_OK; i++) {
         double s0 = cli_seconds();

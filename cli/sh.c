@@ -86,7 +86,7 @@ void cli_sh_write_json(FILE *f, const char *in, const char *method, int bands,
                        const ibl_sh *radiance)
 {
     ibl_sh irr, over_pi;
-    ibl_sh_irradiance(radiance, &irr);
+    ibl_sh_radiance_to_irradiance(radiance, &irr);
     over_pi = irr;
     ibl_sh_scale(&over_pi, 1.0 / 3.14159265358979323846);
     double m[3][4][4];
@@ -207,7 +207,7 @@ int cli_cmd_sh(int argc, char **argv)
         return CLI_EXIT_BAD_INPUT;
     }
     ibl_sh irr, over_pi;
-    ibl_sh_irradiance(&radiance, &irr);
+    ibl_sh_radiance_to_irradiance(&radiance, &irr);
     over_pi = irr;
     ibl_sh_scale(&over_pi, 1.0 / 3.14159265358979323846);
     double m[3][4][4];

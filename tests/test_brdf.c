@@ -208,8 +208,8 @@ static void convergence_by_doubling(void **state)
             }
             worst = fmax(worst, fabs(ibl_brdf_sheen_albedo(mu, r, 24) - ibl_brdf_sheen_albedo(mu, r, 48)));
             double s = exp(log(2000.0) * r);
-            worst = fmax(worst, fabs(ibl_ambient_brdf(mu, s, 0.04, IBL_BLINN_SEED, 24) -
-                                     ibl_ambient_brdf(mu, s, 0.04, IBL_BLINN_SEED, 48)));
+            worst = fmax(worst, fabs(ibl_ambient_brdf(mu, s, 0.04, IBL_BLINN_TRIACE_FIT, 24) -
+                                     ibl_ambient_brdf(mu, s, 0.04, IBL_BLINN_TRIACE_FIT, 48)));
         }
     }
     assert_true(worst < 1e-4);
@@ -308,18 +308,18 @@ static void ambient_albedo(void **state)
     const double pts[][2] = {{0.9, 4}, {0.4, 20}, {0.12, 10}};
     for (int k = 0; k < 3; k++) {
         double s = pts[k][1];
-        blinn_p p = {s, ibl_blinn_normalization_factor(IBL_BLINN_SEED, s), 1.0, 0};
+        blinn_p p = {s, ibl_blinn_normalization_factor(IBL_BLINN_TRIACE_FIT, s), 1.0, 0};
         double ref = brute_albedo(blinn_brdf, &p, pts[k][0], 1200);
-        assert_near(ibl_ambient_brdf(pts[k][0], s, 1.0, IBL_BLINN_SEED, 0), ref, 1e-4);
+        assert_near(ibl_ambient_brdf(pts[k][0], s, 1.0, IBL_BLINN_TRIACE_FIT, 0), ref, 1e-4);
         p.f0 = 0.04;
         ref = brute_albedo(blinn_brdf, &p, pts[k][0], 1200);
-        assert_near(ibl_ambient_brdf(pts[k][0], s, 0.04, IBL_BLINN_SEED, 0), ref, 1e-4);
+        assert_near(ibl_ambient_brdf(pts[k][0], s, 0.04, IBL_BLINN_TRIACE_FIT, 0), ref, 1e-4);
     }
     const double ss[] = {0.5, 1, 10, 100, 2000};
     for (int k = 0; k < 5; k++)
         assert_near(ibl_ambient_brdf(1.0, ss[k], 1.0, IBL_BLINN_EXACT, 0), 1.0, 1e-4);
     /* the seed's fit is Gotanda's exact factor's asymptote 1/(8 pi): within 0.2% at s = 2000 */
-    assert_near(ibl_blinn_normalization_factor(IBL_BLINN_SEED, 2000) /
+    assert_near(ibl_blinn_normalization_factor(IBL_BLINN_TRIACE_FIT, 2000) /
                     ibl_blinn_normalization_factor(IBL_BLINN_EXACT, 2000), 1.0, 4e-3);
 }
 
@@ -352,7 +352,7 @@ static void ambient_volume_vs_table(void **state)
     double s = ibl_ambient_brdf_row_shininess(&d, 7);
     assert_near(s, exp(log(2000.0) * 7.5 / 10), 1e-9 * s);
     const float *v = vol.data + (((size_t)2 * 10 + 7) * 12 + 3) * 4;
-    assert_near(v[0], ibl_ambient_brdf(3.5 / 12, s, 2.5 / 6, IBL_BLINN_SEED, 0), 1e-5);
+    assert_near(v[0], ibl_ambient_brdf(3.5 / 12, s, 2.5 / 6, IBL_BLINN_TRIACE_FIT, 0), 1e-5);
     ibl_texture_free(ctx, &vol);
     ibl_image_free(ctx, &tab);
     ibl_ambient_brdf_desc bad = {.shininess_min = 10, .shininess_max = 5};
@@ -377,7 +377,7 @@ static void ambient_constant_environment(void **state)
     for (int c = 0; c < 2; c++) {
         int i = cells[c][0], j = cells[c][1], k = cells[c][2];
         double mu = (i + 0.5) / 8, s = ibl_ambient_brdf_row_shininess(&d, j), f0 = (k + 0.5) / 4;
-        blinn_p p = {s, ibl_blinn_normalization_factor(IBL_BLINN_SEED, s), f0, 0};
+        blinn_p p = {s, ibl_blinn_normalization_factor(IBL_BLINN_TRIACE_FIT, s), f0, 0};
         double full = L * brute_albedo(blinn_brdf, &p, mu, 1200);
         /* normalised prefilter of a constant environment: sum w L / sum w */
         double wsum = brute_albedo(blinn_lobe, &p, mu, 600);
@@ -389,7 +389,7 @@ static void ambient_constant_environment(void **state)
         double literal = brute_albedo(blinn_brdf, &p, mu, 600) * (L * wsum);
         assert_true(fabs(literal - full) > 0.05 * full);
     }
-    blinn_p big = {1000, ibl_blinn_normalization_factor(IBL_BLINN_SEED, 1000), 1.0, 1};
+    blinn_p big = {1000, ibl_blinn_normalization_factor(IBL_BLINN_TRIACE_FIT, 1000), 1.0, 1};
     assert_true(brute_albedo(blinn_brdf, &big, 0.5, 200) > 20.0);
     ibl_texture_free(ctx, &vol);
     ibl_context_destroy(ctx);

@@ -245,24 +245,32 @@ static void plan_runs_without_allocation(void **state)
     cd.threads = 1;
     ibl_context *ctx;
     assert_int_equal(ibl_context_create(&cd, &ctx), IBL_OK);
-    ibl_iem_plan *plan;
-    assert_int_equal(ibl_iem_plan_create(ctx, 8, 16, IBL_IRRADIANCE_OVER_PI, &plan), IBL_OK);
+    ibl_irradiance_plan *plan;
+    ibl_irradiance_plan_desc pd = {.source_size = 8, .size = 16};
+    assert_int_equal(ibl_irradiance_plan_create(ctx, &pd, &plan), IBL_OK);
     /* about half the source texels face each output texel */
-    size_t taps = ibl_iem_plan_taps(plan);
+    size_t taps = ibl_irradiance_plan_taps(plan);
     assert_true(taps > 6 * 256 * 384 * 0.45 && taps < 6 * 256 * 384 * 0.55);
     ibl_sh_plan *shp;
-    assert_int_equal(ibl_sh_plan_create(ctx, 8, 3, &shp), IBL_OK);
+    assert_int_equal(ibl_sh_plan_create(ctx, &(ibl_sh_plan_desc){.face_size = 8, .bands = 3}, &shp),
+                     IBL_OK);
     float src[6 * 8 * 8 * 4], dst[6 * 16 * 16 * 4];
     for (int i = 0; i < 6 * 8 * 8 * 4; i++) src[i] = (float)(i % 17);
+    ibl_cubemap src_cube, dst_cube;
+    assert_int_equal(ibl_cubemap_wrap(8, 1, src, &src_cube), IBL_OK);
+    assert_int_equal(ibl_cubemap_wrap(16, 1, dst, &dst_cube), IBL_OK);
     size_t before = alloc_count;
     ibl_sh sh;
     for (int r = 0; r < 3; r++) {
-        ibl_iem_plan_run(plan, src, dst);
-        assert_int_equal(ibl_sh_plan_run(shp, src, &sh), IBL_OK);
+        assert_int_equal(ibl_irradiance_plan_run(plan, &src_cube, &dst_cube), IBL_OK);
+        assert_int_equal(ibl_sh_plan_run(shp, &src_cube, &sh), IBL_OK);
     }
     assert_int_equal(alloc_count, before);
+    /* a cube of another size is refused, not read out of bounds */
+    assert_int_equal(ibl_irradiance_plan_run(plan, &dst_cube, &dst_cube), IBL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(ibl_sh_plan_run(shp, &dst_cube, &sh), IBL_ERR_INVALID_ARGUMENT);
     ibl_sh_plan_destroy(shp);
-    ibl_iem_plan_destroy(plan);
+    ibl_irradiance_plan_destroy(plan);
     ibl_context_destroy(ctx);
 }
 
@@ -333,8 +341,8 @@ static void bad_arguments(void **state)
     d.sh_bands = 6;
     d.method = IBL_IRRADIANCE_SH;
     assert_int_equal(ibl_irradiance_cubemap(ctx, &src, &d, &out), IBL_ERR_INVALID_ARGUMENT);
-    ibl_iem_plan *plan;
-    assert_int_equal(ibl_iem_plan_create(ctx, 0, 16, IBL_IRRADIANCE_OVER_PI, &plan),
+    ibl_irradiance_plan *plan;
+    assert_int_equal(ibl_irradiance_plan_create(ctx, &(ibl_irradiance_plan_desc){.size = 16}, &plan),
                      IBL_ERR_INVALID_ARGUMENT);
     ibl_cubemap_free(ctx, &src);
     ibl_context_destroy(ctx);

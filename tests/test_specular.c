@@ -149,7 +149,7 @@ static void precomputed_paths_vs_reference(void **state)
         const ibl_specular_info *info = ibl_specular_plan_info(plan);
         ibl_cubemap out;
         assert_int_equal(ibl_cubemap_alloc(ctx, 64, info->levels, &out), IBL_OK);
-        assert_int_equal(ibl_specular_run(plan, &src, &out), IBL_OK);
+        assert_int_equal(ibl_specular_plan_run(plan, &src, &out), IBL_OK);
         ibl__specular_stats st;
         ibl__specular_plan_stats(plan, &st);
         if (verbose)
@@ -411,12 +411,12 @@ static void dynamic_plan(void **state)
         ibl_cubemap dst, again, ref;
         ibl_specular_plan *plan = plan_32_to_16(ctx, filters[i], 1, &dst, &again);
         int levels = dst.levels;
-        assert_int_equal(ibl_specular_run(plan, &flat, &dst), IBL_OK);
+        assert_int_equal(ibl_specular_plan_run(plan, &flat, &dst), IBL_OK);
         const float expect[3] = {1.5f, 0.25f, 3.0f};
         for (size_t k = 0; k < ibl_cubemap_floats(16, levels) / 4; k++)
             for (int c = 0; c < 3; c++) assert_true(fabsf(dst.data[4 * k + c] - expect[c]) <= 1e-5f * expect[c]);
-        assert_int_equal(ibl_specular_run(plan, &sun, &dst), IBL_OK);
-        assert_int_equal(ibl_specular_run(plan, &sun, &again), IBL_OK);
+        assert_int_equal(ibl_specular_plan_run(plan, &sun, &dst), IBL_OK);
+        assert_int_equal(ibl_specular_plan_run(plan, &sun, &again), IBL_OK);
         assert_memory_equal(dst.data, again.data, ibl_cubemap_floats(16, levels) * sizeof(float));
         ibl_specular_desc d = {0};
         d.filter = filters[i];
@@ -457,9 +457,9 @@ static void portable_path(void **state)
         ibl_cubemap simd, portable, ref;
         ibl_specular_plan *plan = plan_32_to_16(ctx, filters[i], 0, &simd, &portable);
         int levels = simd.levels;
-        assert_int_equal(ibl_specular_run(plan, &src, &simd), IBL_OK);
+        assert_int_equal(ibl_specular_plan_run(plan, &src, &simd), IBL_OK);
         ibl__specular_plan_set_portable(plan, 1);
-        assert_int_equal(ibl_specular_run(plan, &src, &portable), IBL_OK);
+        assert_int_equal(ibl_specular_plan_run(plan, &src, &portable), IBL_OK);
         ibl_specular_desc d = {0};
         d.filter = filters[i];
         d.size = 16;
@@ -524,7 +524,7 @@ static void threads_and_plan(void **state)
         assert_int_equal(ibl_cubemap_wrap(16, out[0].levels, mem, &dst), IBL_OK);
         for (int rep = 0; rep < 2; rep++) {
             memset(mem, 0, bytes);
-            assert_int_equal(ibl_specular_run(plan, &src, &dst), IBL_OK);
+            assert_int_equal(ibl_specular_plan_run(plan, &src, &dst), IBL_OK);
             assert_memory_equal(mem, out[0].data, bytes);
         }
         free(mem);
@@ -589,13 +589,13 @@ static void mappings_and_manifest(void **state)
     for (int l = 0; l < info.levels; l++) {
         double s = info.shininess[l];
         if (s <= 1.0) continue;
-        assert_near(info.seed_a - 0.5 * log2(s), l, 1e-5);
+        assert_near(info.lod_offset - 0.5 * log2(s), l, 1e-5);
     }
     assert_near(info.shininess[0], 2000, 0);
     char *json = NULL;
     assert_int_equal(ibl_specular_manifest_json(ctx, &info, &json), IBL_OK);
     assert_non_null(strstr(json, "\"filter\": \"phong\""));
-    assert_non_null(strstr(json, "\"mapping\": \"seed\""));
+    assert_non_null(strstr(json, "\"mapping\": \"triace\""));
     assert_non_null(strstr(json, "{\"level\": 6, \"size\": 1, \"shininess\": 1}"));
     ibl_free(ctx, json);
     ibl_context_destroy(ctx);

@@ -87,7 +87,7 @@ typedef enum ibl_shininess_spacing {
 } ibl_shininess_spacing;
 
 typedef enum ibl_blinn_normalization {
-    IBL_BLINN_SEED = 0, /* the seed's linear fit 0.0397436 s + 0.0856832                       */
+    IBL_BLINN_TRIACE_FIT = 0, /* the seed's linear fit 0.0397436 s + 0.0856832                       */
     IBL_BLINN_EXACT     /* (s + 2)(s + 4) / (8 pi (2^(-s/2) + s)): albedo 1 at n.v = 1, F = 1 */
 } ibl_blinn_normalization;
 

@@ -61,6 +61,12 @@ typedef void (*ibl_parallel_for_fn)(void *host, int count, ibl_task_fn task, voi
 /* Called now and then during long work with fraction in [0, 1]; return non-zero to cancel. */
 typedef int (*ibl_progress_fn)(void *user, const char *stage, double fraction);
 
+/* Which kernels run where a vector version exists (AVX2, FMA, F16C on x86-64). */
+typedef enum ibl_kernels {
+    IBL_KERNELS_AUTO = 0,    /* the fastest the CPU supports                                   */
+    IBL_KERNELS_PORTABLE     /* plain C only: results that do not depend on the CPU's extensions */
+} ibl_kernels;
+
 typedef struct ibl_context_desc {
     ibl_allocator allocator;         /* zero: malloc/free                                       */
     ibl_parallel_for_fn parallel_for; /* zero: the built-in thread pool                          */
@@ -69,6 +75,7 @@ typedef struct ibl_context_desc {
     uint64_t max_bytes;              /* largest single image/texture allocation; 0: 4 GiB       */
     ibl_progress_fn progress;        /* optional                                                */
     void *progress_user;
+    ibl_kernels kernels;             /* zero: IBL_KERNELS_AUTO                                  */
 } ibl_context_desc;
 
 typedef struct ibl_context ibl_context;
@@ -78,7 +85,7 @@ ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out);
 void ibl_context_destroy(ibl_context *ctx);
 /* The message of the last failure in this context ("" if none). Valid until the next call. */
 const char *ibl_context_message(const ibl_context *ctx);
-/* The status of the last recorded failure (what ibl_fail was given). */
+/* The status of the last recorded failure. */
 ibl_status ibl_context_status(const ibl_context *ctx);
 /* Number of threads the context runs work on (1 when a host parallel_for is used: unknown). */
 int ibl_context_threads(const ibl_context *ctx);
@@ -87,16 +94,8 @@ int ibl_context_threads(const ibl_context *ctx);
 void *ibl_alloc(ibl_context *ctx, size_t bytes);
 void *ibl_calloc(ibl_context *ctx, size_t count, size_t size);
 void ibl_free(ibl_context *ctx, void *ptr);
-/* Records a printf-style failure message in the context and returns status. */
-ibl_status ibl_fail(ibl_context *ctx, ibl_status status, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
 /* Runs task over [0, count) with the context's parallel-for. */
 void ibl_parallel_for(ibl_context *ctx, int count, ibl_task_fn task, void *task_arg);
-/* Reports progress; returns IBL_ERR_CANCELLED (with a message) if the host asked to stop. */
-ibl_status ibl_progress(ibl_context *ctx, const char *stage, double fraction);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Pixel formats (how texels are stored in a file; in memory they are always float RGBA).   */

@@ -59,14 +59,21 @@ ibl_status ibl_irradiance_reduce(ibl_context *ctx, const ibl_cubemap *src, int s
 /* The dynamic path: plan once for (source edge, output edge, scale), then convolve a small
  * radiance cube every frame with no allocation and no threads (it is a few hundred
  * microseconds; run several plans on your own threads if needed). */
-typedef struct ibl_iem_plan ibl_iem_plan;
-ibl_status ibl_iem_plan_create(ibl_context *ctx, int source_size, int size,
-                               ibl_irradiance_scale scale, ibl_iem_plan **out);
-void ibl_iem_plan_destroy(ibl_iem_plan *plan);
-/* src: six faces of source_size (RGBA float, +X -X +Y -Y +Z -Z); dst: six faces of size. */
-void ibl_iem_plan_run(const ibl_iem_plan *plan, const float *src, float *dst);
+typedef struct ibl_irradiance_plan_desc {
+    int source_size;            /* edge of the radiance cubes run gets; 1..64 (required)  */
+    int size;                   /* output face edge; 1..64 (required)                     */
+    ibl_irradiance_scale scale;
+} ibl_irradiance_plan_desc;
+
+typedef struct ibl_irradiance_plan ibl_irradiance_plan;
+ibl_status ibl_irradiance_plan_create(ibl_context *ctx, const ibl_irradiance_plan_desc *desc,
+                                      ibl_irradiance_plan **out);
+/* Level 0 of src (edge source_size) into level 0 of dst (edge size); allocates nothing. */
+ibl_status ibl_irradiance_plan_run(const ibl_irradiance_plan *plan, const ibl_cubemap *src,
+                                   ibl_cubemap *dst);
 /* Number of non-zero weights the plan holds (taps per frame = this many). */
-size_t ibl_iem_plan_taps(const ibl_iem_plan *plan);
+size_t ibl_irradiance_plan_taps(const ibl_irradiance_plan *plan);
+void ibl_irradiance_plan_destroy(ibl_irradiance_plan *plan);
 
 #ifdef __cplusplus
 }

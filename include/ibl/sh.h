@@ -74,12 +74,17 @@ ibl_status ibl_sh_project_face_means(const ibl_cubemap *cube, int level, int ban
 
 /* A reusable projection of cubes of one face size: tables made once, then every run
  * allocates nothing (the per-frame path). */
+typedef struct ibl_sh_plan_desc {
+    int face_size; /* edge of the cubes run gets (required)  */
+    int bands;     /* 1..5; 0: 3                              */
+} ibl_sh_plan_desc;
+
 typedef struct ibl_sh_plan ibl_sh_plan;
-ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh_plan **out);
+ibl_status ibl_sh_plan_create(ibl_context *ctx, const ibl_sh_plan_desc *desc, ibl_sh_plan **out);
+/* Projects level 0 of cube (edge face_size). One run at a time per plan (the plan holds the
+ * per-chunk partial sums); make one plan per thread. */
+ibl_status ibl_sh_plan_run(ibl_sh_plan *plan, const ibl_cubemap *cube, ibl_sh *out);
 void ibl_sh_plan_destroy(ibl_sh_plan *plan);
-/* faces: six level-0 faces of plan's face size, RGBA float, +X -X +Y -Y +Z -Z. One run at a
- * time per plan (the plan holds the per-chunk partial sums); make one plan per thread. */
-ibl_status ibl_sh_plan_run(ibl_sh_plan *plan, const float *faces, ibl_sh *out);
 
 /* ---- convolution and forms ---------------------------------------------------------------- */
 
@@ -87,7 +92,7 @@ ibl_status ibl_sh_plan_run(ibl_sh_plan *plan, const float *faces, ibl_sh *out);
  * factor turning radiance into irradiance: pi, 2pi/3, pi/4, 0, -pi/24 for l = 0..4. */
 double ibl_sh_cosine_factor(int l);
 /* E_lm = A_l L_lm. */
-void ibl_sh_irradiance(const ibl_sh *radiance, ibl_sh *irradiance);
+void ibl_sh_radiance_to_irradiance(const ibl_sh *radiance, ibl_sh *irradiance);
 /* Multiplies every coefficient by s (e.g. 1/pi for irradiance / pi). */
 void ibl_sh_scale(ibl_sh *sh, double s);
 
@@ -99,7 +104,7 @@ void ibl_sh_scale(ibl_sh *sh, double s);
 #define IBL_SH_RH_C5 0.247708
 /* Irradiance of the first 9 radiance coefficients as E(n) = (n,1)^T M (n,1) with n = (x,y,z),
  * one symmetric 4x4 matrix per channel (R&H 2001, eq. 12). Uses the published 6-digit
- * constants; ibl_sh_irradiance uses the exact A_l. */
+ * constants; ibl_sh_radiance_to_irradiance uses the exact A_l. */
 void ibl_sh_polynomial(const ibl_sh *radiance, double m[3][4][4]);
 
 /* ---- windowing against ringing -------------------------------------------------------------- */

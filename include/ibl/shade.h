@@ -163,7 +163,7 @@ void ibl_probe_sample_specular(const ibl_probe *probe, float lod, ibl_vec3 dir, 
 /* The seed's IEM: E(n)/pi, the radiance a white Lambertian surface reflects. RGB. */
 void ibl_probe_irradiance(const ibl_probe *probe, ibl_vec3 n, float out[3]);
 /* Irradiance E(n) from 9 SH coefficients of a kind (RGB). */
-void ibl_sh9_irradiance(const float sh[9][3], ibl_sh_kind kind, ibl_vec3 n, float out[3]);
+void ibl_sh9_eval_irradiance(const float sh[9][3], ibl_sh_kind kind, ibl_vec3 n, float out[3]);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Materials and occlusion                                                                    */
@@ -219,7 +219,7 @@ typedef enum ibl_energy_compensation {
 } ibl_energy_compensation;
 
 typedef enum ibl_bp_diffuse {
-    IBL_BP_DIFFUSE_SEED = 0, /* Rd (1 - AmbientBRDF): the seed's optimisation                 */
+    IBL_BP_DIFFUSE_AMBIENT_BRDF = 0, /* Rd (1 - AmbientBRDF): the seed's optimisation                 */
     IBL_BP_DIFFUSE_F0        /* Rd (1 - F0): the BRDF's own diffuse weight                    */
 } ibl_bp_diffuse;
 

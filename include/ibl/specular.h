@@ -51,7 +51,7 @@ typedef enum ibl_specular_method {
 /* How a level is tied to a roughness (GGX) or a shininess (Phong family). */
 typedef enum ibl_specular_mapping {
     IBL_MAPPING_DEFAULT = 0, /* GGX: linear; phong/blinn/box/gauss: seed                      */
-    IBL_MAPPING_SEED,        /* seeds 000/001: lod = a - 0.5 log2(shininess), a = 0.5 log2(max) */
+    IBL_MAPPING_TRIACE,        /* seeds 000/001: lod = a - 0.5 log2(shininess), a = 0.5 log2(max) */
     IBL_MAPPING_LINEAR,      /* glTF IBL-Sampler: roughness = lod / (levels - 1)             */
     IBL_MAPPING_FILAMENT,    /* Filament: lod/(levels-1) = r (2 - r)                          */
     IBL_MAPPING_UNREAL,      /* UE4: mip = levels - 1 - (1 - 1.2 log2 r)                      */
@@ -75,7 +75,7 @@ typedef struct ibl_specular_desc {
     int mirror;                  /* level 0 is the unfiltered source (see docs/SPECULAR.md)      */
     ibl_edge_fixup edge_fixup;   /* 0: none                                                      */
     ibl_bent_desc bent;          /* parameters of IBL_EDGE_FIXUP_BENT                            */
-    int source_size;             /* plans only: face edge of the cubes ibl_specular_run gets     */
+    int source_size;             /* plans only: face edge of the cubes ibl_specular_plan_run gets     */
     float accuracy;              /* fast method: quadrature step scale; 0: 0.35 (smaller: more
                                     exact, slower)                                               */
     int dynamic;                 /* plans only: the per-frame path, one precomputed sparse
@@ -90,7 +90,7 @@ typedef struct ibl_specular_info {
     int size, levels, mirror;
     float blinn_factor;
     float shininess_min, shininess_max;
-    float seed_a;                     /* IBL_MAPPING_SEED: the fitted a                        */
+    float lod_offset;                     /* IBL_MAPPING_TRIACE: the fitted a                        */
     float roughness[IBL_MAX_LEVELS];  /* GGX: perceptual roughness per level (alpha = r^2)     */
     float shininess[IBL_MAX_LEVELS];  /* Phong family: shininess per level (Blinn: Blinn's s)  */
 } ibl_specular_info;
@@ -144,13 +144,13 @@ typedef struct ibl_specular_plan ibl_specular_plan;
 
 /* Plans for source cubes of face edge desc->source_size (0: desc->size) and output desc->size
  * (required). All tables and scratch memory are allocated here. The context is kept and used
- * by ibl_specular_run (its parallel-for). */
+ * by ibl_specular_plan_run (its parallel-for). */
 ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *desc,
                                     ibl_specular_plan **out);
 /* Refilters: src must have level 0 of edge source_size; dst must have edge size and the
  * planned number of levels (e.g. caller-owned memory through ibl_cubemap_wrap). Allocates
  * nothing; time depends only on the sizes. */
-ibl_status ibl_specular_run(ibl_specular_plan *plan, const ibl_cubemap *src, ibl_cubemap *dst);
+ibl_status ibl_specular_plan_run(ibl_specular_plan *plan, const ibl_cubemap *src, ibl_cubemap *dst);
 const ibl_specular_info *ibl_specular_plan_info(const ibl_specular_plan *plan);
 void ibl_specular_plan_destroy(ibl_specular_plan *plan);
 

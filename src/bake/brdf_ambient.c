@@ -4,19 +4,20 @@
  * the albedo of the whole term, (n.h)^s included; the prefiltered map it multiplies is
  * normalised by its lobe weights (docs/BRDF.md explains why the literal reading fails). */
 #include "ibl/brdf.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <string.h>
 
 #include "bake/brdf_common.h"
 
-static const double PI = 3.14159265358979323846;
 
 double ibl_blinn_normalization_factor(ibl_blinn_normalization normalization, double s)
 {
     if (normalization == IBL_BLINN_EXACT)
         /* Gotanda 2010: makes the F = 1 albedo exactly 1 at n.v = 1 (derived in docs/BRDF.md). */
-        return (s + 2.0) * (s + 4.0) / (8.0 * PI * (exp2(-0.5 * s) + s));
+        return (s + 2.0) * (s + 4.0) / (8.0 * IBL_PI * (exp2(-0.5 * s) + s));
     /* Seed 000 "Equations": the linear fit. */
     return 0.0397436 * s + 0.0856832;
 }
@@ -79,22 +80,22 @@ static ibl_status check_desc(ibl_context *ctx, const ibl_ambient_brdf_desc *in,
     if (d->shininess_max == 0) d->shininess_max = 2000.0;
     if (d->size_nv < 1 || d->size_nv > 4096 || d->size_shininess < 1 ||
         d->size_shininess > 4096 || d->size_f0 < 1 || d->size_f0 > 1024)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "ambient brdf: sizes %d x %d x %d out of range (1..4096, F0 1..1024)",
                         d->size_nv, d->size_shininess, d->size_f0);
     if (!(d->shininess_min > 0) || !(d->shininess_max > d->shininess_min) ||
         !(d->shininess_max <= 1e6))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "ambient brdf: shininess range %g:%g must have 0 < min < max <= 1e6",
                         d->shininess_min, d->shininess_max);
     if (d->spacing != IBL_SHININESS_LOG && d->spacing != IBL_SHININESS_LINEAR)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: unknown spacing %d",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: unknown spacing %d",
                         (int)d->spacing);
-    if (d->normalization != IBL_BLINN_SEED && d->normalization != IBL_BLINN_EXACT)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: unknown normalization %d",
+    if (d->normalization != IBL_BLINN_TRIACE_FIT && d->normalization != IBL_BLINN_EXACT)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: unknown normalization %d",
                         (int)d->normalization);
     if (d->order < 0 || d->order > IBL__GL_MAX)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: order %d is not in 0..%d",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: order %d is not in 0..%d",
                         d->order, (int)IBL__GL_MAX);
     return IBL_OK;
 }
@@ -151,13 +152,13 @@ static ibl_status job_init(ibl_context *ctx, const ibl_ambient_brdf_desc *desc, 
     ibl_status st = check_desc(ctx, desc, &job->plan.d);
     if (st != IBL_OK) return st;
     ibl__quadrature_init(&job->plan.q, job->plan.d.order);
-    return ibl_progress(ctx, "ambient brdf", 0.0);
+    return ibl__progress(ctx, "ambient brdf", 0.0);
 }
 
 ibl_status ibl_ambient_brdf_volume(ibl_context *ctx, const ibl_ambient_brdf_desc *desc,
                                    ibl_texture *out)
 {
-    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: no output texture");
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: no output texture");
     memset(out, 0, sizeof *out);
     volume_job job;
     ibl_status st = job_init(ctx, desc, &job);
@@ -167,7 +168,7 @@ ibl_status ibl_ambient_brdf_volume(ibl_context *ctx, const ibl_ambient_brdf_desc
     if (st != IBL_OK) return st;
     job.tex = out;
     ibl_parallel_for(ctx, job.plan.d.size_shininess, volume_row, &job);
-    st = ibl_progress(ctx, "ambient brdf", 1.0);
+    st = ibl__progress(ctx, "ambient brdf", 1.0);
     if (st != IBL_OK) ibl_texture_free(ctx, out);
     return st;
 }
@@ -175,7 +176,7 @@ ibl_status ibl_ambient_brdf_volume(ibl_context *ctx, const ibl_ambient_brdf_desc
 ibl_status ibl_ambient_brdf_table(ibl_context *ctx, const ibl_ambient_brdf_desc *desc,
                                   ibl_image *out)
 {
-    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: no output image");
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ambient brdf: no output image");
     memset(out, 0, sizeof *out);
     volume_job job;
     ibl_status st = job_init(ctx, desc, &job);
@@ -184,7 +185,7 @@ ibl_status ibl_ambient_brdf_table(ibl_context *ctx, const ibl_ambient_brdf_desc 
     if (st != IBL_OK) return st;
     job.img = out;
     ibl_parallel_for(ctx, job.plan.d.size_shininess, table_row, &job);
-    st = ibl_progress(ctx, "ambient brdf", 1.0);
+    st = ibl__progress(ctx, "ambient brdf", 1.0);
     if (st != IBL_OK) ibl_image_free(ctx, out);
     return st;
 }

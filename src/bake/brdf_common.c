@@ -1,9 +1,9 @@
 /* Half-vector quadrature for BRDF directional albedos; see brdf_common.h and docs/BRDF.md. */
 #include "bake/brdf_common.h"
+#include "core/numeric.h"
 
 #include <math.h>
 
-static const double PI = 3.14159265358979323846;
 
 void ibl__gauss_legendre(int n, ibl__rule *rule)
 {
@@ -12,7 +12,7 @@ void ibl__gauss_legendre(int n, ibl__rule *rule)
     rule->n = n;
     /* Roots of P_n by Newton from the Tricomi initial guess; symmetric pairs. */
     for (int i = 0; i < (n + 1) / 2; i++) {
-        double z = cos(PI * (i + 0.75) / (n + 0.5)), dp = 1;
+        double z = cos(IBL_PI * (i + 0.75) / (n + 0.5)), dp = 1;
         for (int it = 0; it < 100; it++) {
             double p0 = 1, p1 = 0;
             for (int k = 1; k <= n; k++) {
@@ -81,7 +81,7 @@ static void lobe_angle(const ibl__lobe_params *p, double z, double *c2, double *
 static double lobe_zeta(const ibl__lobe_params *p, double theta)
 {
     if (theta <= 0) return 1;
-    if (theta >= 0.5 * PI) return 0;
+    if (theta >= 0.5 * IBL_PI) return 0;
     double s = sin(theta), c = cos(theta);
     switch (p->lobe) {
     case IBL__LOBE_GGX_CORRELATED:
@@ -99,7 +99,7 @@ static double lobe_zeta(const ibl__lobe_params *p, double theta)
 /* Total mass of the weight measure (the integral the importance map normalises away). */
 static double lobe_mass(const ibl__lobe_params *p)
 {
-    if (p->lobe == IBL__LOBE_BLINN) return 2.0 * PI / (p->shininess + 1.0);
+    if (p->lobe == IBL__LOBE_BLINN) return 2.0 * IBL_PI / (p->shininess + 1.0);
     return 1.0;
 }
 
@@ -114,7 +114,7 @@ typedef struct sink {
  * platform, which keeps tables bit-identical across C libraries. */
 static inline double cos_0_pi(double phi)
 {
-    double t = 0.5 * PI - phi, t2 = t * t;
+    double t = 0.5 * IBL_PI - phi, t2 = t * t;
     double q = -1.0 / 355687428096000.0;                /* -1/17! */
     q = q * t2 + 1.0 / 1307674368000.0;                 /* 1/15!  */
     q = q * t2 - 1.0 / 6227020800.0;                    /* -1/13! */
@@ -199,9 +199,9 @@ static void integrate(const ibl__lobe_params *p, double mu, const ibl__quadratur
     double th[5];
     int nth = 0;
     th[nth++] = 0;
-    double th1 = 0.5 * (0.5 * PI - tv);
+    double th1 = 0.5 * (0.5 * IBL_PI - tv);
     th[nth++] = th1;
-    double th2 = 0.5 * (0.5 * PI + tv);
+    double th2 = 0.5 * (0.5 * IBL_PI + tv);
     th[nth++] = th2;
     if (p->lobe == IBL__LOBE_BLINN && tv < th2) th[nth++] = tv;
     sort_small(th, nth);
@@ -232,29 +232,29 @@ static void integrate(const ibl__lobe_params *p, double mu, const ibl__quadratur
             double num = -mu * (c2 - s2), den = sv * 2.0 * sh * ch;
             double cmax = den > 0 ? num / den : (num > 0 ? 2.0 : -2.0);
             if (cmax >= 1.0) continue;
-            double phimax = cmax <= -1.0 ? PI : acos(cmax);
+            double phimax = cmax <= -1.0 ? IBL_PI : acos(cmax);
             double cuts[3] = {0, phimax, phimax};
             int ncut = 2;
             if (p->lobe == IBL__LOBE_BLINN) {
                 /* n.l = mu  <=>  cos phi = cot(tv) tan(th) */
                 double ceq = den > 0 ? mu * s2 / (sv * sh * ch) : 2.0;
                 if (ceq < 1.0) {
-                    double pe = ceq <= -1.0 ? PI : acos(ceq);
+                    double pe = ceq <= -1.0 ? IBL_PI : acos(ceq);
                     if (pe > 0 && pe < phimax) {
                         cuts[1] = pe;
                         ncut = 3;
                     }
                 }
             }
-            double wu = 2.0 * z * dz * wx * mass / PI; /* (1/2pi) * 2 sides of phi */
+            double wu = 2.0 * z * dz * wx * mass / IBL_PI; /* (1/2pi) * 2 sides of phi */
             int n = 0;
-            if (ncut == 2 && phimax >= PI) {
+            if (ncut == 2 && phimax >= IBL_PI) {
                 /* The whole circle: the integrand is smooth, even and 2 pi periodic, where
                  * the midpoint rule converges geometrically (exact for cos(k phi), k < 2m). */
                 int m = q->circle;
                 for (int j = 0; j < m; j++) {
-                    cphi[n] = cos_0_pi((j + 0.5) * PI / m);
-                    wgt[n++] = wu * PI / m;
+                    cphi[n] = cos_0_pi((j + 0.5) * IBL_PI / m);
+                    wgt[n++] = wu * IBL_PI / m;
                 }
                 ncut = 0;
             }

@@ -3,6 +3,7 @@
  * (Estevez & Kulla 2017 distribution, Neubelt & Pettineo 2013 visibility), by the
  * deterministic quadrature of brdf_common.c. */
 #include "ibl/brdf.h"
+#include "core/context_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -182,19 +183,19 @@ static void lut_row(void *arg, int j)
 
 ibl_status ibl_brdf_lut(ibl_context *ctx, const ibl_brdf_lut_desc *desc, ibl_image *out)
 {
-    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "brdf lut: no output image");
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "brdf lut: no output image");
     memset(out, 0, sizeof *out);
     ibl_brdf_lut_desc d;
     memset(&d, 0, sizeof d);
     if (desc) d = *desc;
     if (d.size == 0) d.size = DEFAULT_SIZE;
     if (d.size < 1 || d.size > 16384)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "brdf lut: size %d is not in 1..16384", d.size);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "brdf lut: size %d is not in 1..16384", d.size);
     if (d.visibility != IBL_VISIBILITY_HEIGHT_CORRELATED && d.visibility != IBL_VISIBILITY_SEPARABLE)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "brdf lut: unknown visibility %d",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "brdf lut: unknown visibility %d",
                         (int)d.visibility);
     if (d.order < 0 || d.order > IBL__GL_MAX)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "brdf lut: order %d is not in 0..%d",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "brdf lut: order %d is not in 0..%d",
                         d.order, (int)IBL__GL_MAX);
     lut_job job;
     memset(&job, 0, sizeof job);
@@ -213,22 +214,22 @@ ibl_status ibl_brdf_lut(ibl_context *ctx, const ibl_brdf_lut_desc *desc, ibl_ima
         case IBL_BRDF_ZERO:
         case IBL_BRDF_ONE: break;
         default:
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "brdf lut: unknown channel %d",
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "brdf lut: unknown channel %d",
                             (int)job.channels[c]);
         }
     }
     for (int c = job.nchannels; c < 4; c++)
         if (d.channels[c] != IBL_BRDF_NONE && d.channels[0] != IBL_BRDF_NONE)
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "brdf lut: channel %d follows an empty channel", c);
     make_rules(d.order, &job.R);
-    ibl_status st = ibl_progress(ctx, "brdf lut", 0.0);
+    ibl_status st = ibl__progress(ctx, "brdf lut", 0.0);
     if (st != IBL_OK) return st;
     st = ibl_image_alloc(ctx, d.size, d.size, out);
     if (st != IBL_OK) return st;
     job.out = out;
     ibl_parallel_for(ctx, d.size, lut_row, &job);
-    st = ibl_progress(ctx, "brdf lut", 1.0);
+    st = ibl__progress(ctx, "brdf lut", 1.0);
     if (st != IBL_OK) {
         ibl_image_free(ctx, out);
         return st;

@@ -1,6 +1,7 @@
 /* C header and plain-text outputs of lookup tables (ibl_write_table in ibl/brdf.h). The
  * whole file is built in memory and written atomically through ibl_write_file_atomic. */
 #include "ibl/brdf.h"
+#include "core/context_internal.h"
 #include "ibl/io.h"
 
 #include <ctype.h>
@@ -81,17 +82,17 @@ ibl_status ibl_write_table(ibl_context *ctx, const char *path, const ibl_texture
                            int channels, const char *symbol, const char *comment)
 {
     if (!path || !table || !table->data)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "write table: no path or table");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "write table: no path or table");
     if (channels < 1 || channels > 4)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: %d channels (1..4 allowed)", path,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: %d channels (1..4 allowed)", path,
                         channels);
     if (table->kind == IBL_TEXTURE_CUBE)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: cubemaps cannot be written as tables",
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: cubemaps cannot be written as tables",
                         path);
     if (!symbol || !*symbol) symbol = "ibl_brdf_table";
     for (const char *s = symbol; *s; s++)
         if (!(isalnum((unsigned char)*s) || *s == '_') || isdigit((unsigned char)symbol[0]))
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: '%s' is not a C identifier",
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: '%s' is not a C identifier",
                             path, symbol);
     int w = table->width, h = table->height;
     int d = table->kind == IBL_TEXTURE_3D ? table->depth : 1;

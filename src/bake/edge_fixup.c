@@ -4,6 +4,8 @@
  * used by cmft (texel centre coordinate u -> u + a*u^3, a = n^2/(n-1)^3) with its lookup
  * re-derived here as the exact inverse. docs/EDGE_FIXUP.md defines every method precisely
  * and gives the shader code each one needs. */
+#include "core/numeric.h"
+#include "core/context_internal.h"
 #include "ibl/edge_fixup.h"
 
 #include <ctype.h>
@@ -33,26 +35,7 @@ int ibl_edge_fixup_from_name(const char *name, ibl_edge_fixup *out)
     return 0;
 }
 
-/* ---- small double vector helpers ---- */
-
-typedef struct dvec {
-    double x, y, z;
-} dvec;
-
-static dvec dv(double x, double y, double z)
-{
-    dvec r = {x, y, z};
-    return r;
-}
-static dvec dadd(dvec a, dvec b) { return dv(a.x + b.x, a.y + b.y, a.z + b.z); }
-static dvec dscale(dvec a, double s) { return dv(a.x * s, a.y * s, a.z * s); }
-static double ddot(dvec a, dvec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-static dvec dnorm(dvec a)
-{
-    double l = sqrt(ddot(a, a));
-    return l > 0 ? dscale(a, 1.0 / l) : a;
-}
-static ibl_vec3 to_vec3(dvec a)
+static ibl_vec3 to_vec3(ibl__dvec3 a)
 {
     ibl_vec3 v = {(float)a.x, (float)a.y, (float)a.z};
     return v;
@@ -60,7 +43,7 @@ static ibl_vec3 to_vec3(dvec a)
 
 /* The face frame: direction = M + sc*S + tc*T for face-plane coordinates sc, tc in [-1, 1]. */
 typedef struct face_frame {
-    dvec m, s, t;
+    ibl__dvec3 m, s, t;
 } face_frame;
 
 static face_frame frame_of(int face)
@@ -70,15 +53,15 @@ static face_frame frame_of(int face)
     ibl_cube_direction_d(face, 1.0, 0.5, sx);
     ibl_cube_direction_d(face, 0.5, 1.0, ty);
     face_frame f;
-    f.m = dv(c[0], c[1], c[2]);
-    f.s = dv(sx[0] - c[0], sx[1] - c[1], sx[2] - c[2]);
-    f.t = dv(ty[0] - c[0], ty[1] - c[1], ty[2] - c[2]);
+    f.m = ibl__dv(c[0], c[1], c[2]);
+    f.s = ibl__dv(sx[0] - c[0], sx[1] - c[1], sx[2] - c[2]);
+    f.t = ibl__dv(ty[0] - c[0], ty[1] - c[1], ty[2] - c[2]);
     return f;
 }
 
-static dvec frame_point(const face_frame *f, double m, double sc, double tc)
+static ibl__dvec3 frame_point(const face_frame *f, double m, double sc, double tc)
 {
-    return dadd(dadd(dscale(f->m, m), dscale(f->s, sc)), dscale(f->t, tc));
+    return ibl__dadd(ibl__dadd(ibl__dscale(f->m, m), ibl__dscale(f->s, sc)), ibl__dscale(f->t, tc));
 }
 
 /* Texel centre in face-plane coordinates: (2x + 1)/n - 1. */
@@ -113,7 +96,7 @@ static double bent_fraction(const ibl_bent_desc *desc, float blur_radius)
  * at the edge texel), and beta likewise: alpha' = k alpha, k = 1 + fraction * target /
  * alpha_e. At fraction 1/2 every edge texel lands on the face edge at the same point as its
  * partner (corner texels on the cube corner), at 1 on its partner's original direction. */
-static dvec bent_direction(const ibl_bent_desc *desc, int face, int n, int x, int y,
+static ibl__dvec3 bent_direction(const ibl_bent_desc *desc, int face, int n, int x, int y,
                            float blur_radius)
 {
     face_frame f = frame_of(face);
@@ -126,7 +109,7 @@ static dvec bent_direction(const ibl_bent_desc *desc, int face, int n, int x, in
         u = tan(k * atan(u));
         v = tan(k * atan(v));
     }
-    return dnorm(frame_point(&f, 1.0, u, v));
+    return ibl__dnorm(frame_point(&f, 1.0, u, v));
 }
 
 /* ---- warp: NVTT / cmft ---- */
@@ -145,7 +128,7 @@ static double warp_inverse(double w, double a)
 ibl_vec3 ibl_edge_fixup_texel_direction(ibl_edge_fixup fixup, const ibl_bent_desc *bent, int face,
                                         int n, int x, int y, float blur_radius)
 {
-    if (face < 0 || face >= 6 || n < 1 || x < 0 || y < 0 || x >= n || y >= n) return to_vec3(dv(0, 0, 0));
+    if (face < 0 || face >= 6 || n < 1 || x < 0 || y < 0 || x >= n || y >= n) return to_vec3(ibl__dv(0, 0, 0));
     if (fixup == IBL_EDGE_FIXUP_BENT) return to_vec3(bent_direction(bent, face, n, x, y, blur_radius));
     if (fixup == IBL_EDGE_FIXUP_WARP && n >= 2) {
         double a = warp_factor(n);
@@ -153,7 +136,7 @@ ibl_vec3 ibl_edge_fixup_texel_direction(ibl_edge_fixup fixup, const ibl_bent_des
         u += a * u * u * u;
         v += a * v * v * v;
         face_frame f = frame_of(face);
-        return to_vec3(dnorm(frame_point(&f, 1.0, u, v)));
+        return to_vec3(ibl__dnorm(frame_point(&f, 1.0, u, v)));
     }
     return ibl_cube_texel_direction(face, n, x, y);
 }
@@ -161,12 +144,12 @@ ibl_vec3 ibl_edge_fixup_texel_direction(ibl_edge_fixup fixup, const ibl_bent_des
 ibl_vec3 ibl_edge_fixup_warp_lookup(ibl_vec3 dir, int n)
 {
     double d[3] = {dir.x, dir.y, dir.z}, s, t;
-    if (n < 2) return to_vec3(dnorm(dv(d[0], d[1], d[2])));
+    if (n < 2) return to_vec3(ibl__dnorm(ibl__dv(d[0], d[1], d[2])));
     int face = ibl_cube_face_st_d(d, &s, &t);
     double a = warp_factor(n);
     double u = warp_inverse(2.0 * s - 1.0, a), v = warp_inverse(2.0 * t - 1.0, a);
     face_frame f = frame_of(face);
-    return to_vec3(dnorm(frame_point(&f, 1.0, u, v)));
+    return to_vec3(ibl__dnorm(frame_point(&f, 1.0, u, v)));
 }
 
 /* ---- overlap, overlap2: post-processes of a level ---- */
@@ -184,7 +167,7 @@ static texel_ref partner_across(int face, int n, int x, int y, int edge, int dep
     face_frame f = frame_of(face);
     double sign = (edge & 1) ? 1.0 : -1.0;
     double m = 1.0 - (2.0 * depth + 1.0) / n;
-    dvec p = edge < 2 ? frame_point(&f, m, sign, centre_coord(y, n))
+    ibl__dvec3 p = edge < 2 ? frame_point(&f, m, sign, centre_coord(y, n))
                       : frame_point(&f, m, centre_coord(x, n), sign);
     double d[3] = {p.x, p.y, p.z}, s, t;
     texel_ref r;
@@ -311,9 +294,9 @@ ibl_status ibl_edge_fixup_apply(ibl_context *ctx, ibl_edge_fixup fixup, ibl_cube
                                 int level)
 {
     if (!cube || !cube->data)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "edge fixup: no cubemap");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "edge fixup: no cubemap");
     if (level < 0 || level >= cube->levels)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "edge fixup: level %d out of range 0..%d",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "edge fixup: level %d out of range 0..%d",
                         level, cube->levels - 1);
     switch (fixup) {
     case IBL_EDGE_FIXUP_NONE:
@@ -328,5 +311,5 @@ ibl_status ibl_edge_fixup_apply(ibl_context *ctx, ibl_edge_fixup fixup, ibl_cube
         if (ibl_level_size(cube->size, level) == 1) average_all_faces(cube, level);
         return IBL_OK;
     }
-    return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "edge fixup: unknown method %d", (int)fixup);
+    return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "edge fixup: unknown method %d", (int)fixup);
 }

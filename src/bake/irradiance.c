@@ -2,13 +2,14 @@
  * angles (seed 000, "Generate IEM (2)"), the full-resolution double reference and the SH
  * method. Normalisation and measured errors: docs/DIFFUSE.md. */
 #include "ibl/irradiance.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 
 #include "ibl/cubemap.h"
 
 #include <math.h>
 #include <string.h>
 
-static const double PI = 3.14159265358979323846;
 
 enum { MAX_IEM_SIZE = 64 };
 
@@ -34,7 +35,7 @@ static void texel_tables(int n, double *dirs, double *omega)
 
 /* ---- the plan ------------------------------------------------------------------------------- */
 
-struct ibl_iem_plan {
+struct ibl_irradiance_plan {
     ibl_context *ctx;
     int src_n, dst_n;
     uint32_t *offset; /* 6 dst_n^2 + 1 */
@@ -43,16 +44,18 @@ struct ibl_iem_plan {
     size_t taps;
 };
 
-ibl_status ibl_iem_plan_create(ibl_context *ctx, int source_size, int size,
-                               ibl_irradiance_scale scale, ibl_iem_plan **out)
+ibl_status ibl_irradiance_plan_create(ibl_context *ctx, const ibl_irradiance_plan_desc *desc,
+                                      ibl_irradiance_plan **out)
 {
-    if (!out) return IBL_ERR_INVALID_ARGUMENT;
+    if (!out || !desc) return IBL_ERR_INVALID_ARGUMENT;
     *out = NULL;
+    int source_size = desc->source_size, size = desc->size;
+    ibl_irradiance_scale scale = desc->scale;
     if (source_size < 1 || source_size > MAX_IEM_SIZE || size < 1 || size > MAX_IEM_SIZE)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "irradiance: sizes %d -> %d out of range 1..%d", source_size, size,
                         MAX_IEM_SIZE);
-    ibl_iem_plan *p = ibl_calloc(ctx, 1, sizeof *p);
+    ibl_irradiance_plan *p = ibl_calloc(ctx, 1, sizeof *p);
     if (!p) return ibl_context_status(ctx);
     p->ctx = ctx;
     p->src_n = source_size;
@@ -81,7 +84,7 @@ ibl_status ibl_iem_plan_create(ibl_context *ctx, int source_size, int size,
             if (n[0] * w[0] + n[1] * w[1] + n[2] * w[2] > 0) taps++;
         }
         if (taps > UINT32_MAX) {
-            st = ibl_fail(ctx, IBL_ERR_TOO_LARGE, "irradiance: plan too large");
+            st = ibl__fail(ctx, IBL_ERR_TOO_LARGE, "irradiance: plan too large");
             goto done;
         }
     }
@@ -97,7 +100,7 @@ ibl_status ibl_iem_plan_create(ibl_context *ctx, int source_size, int size,
      * (the seed stores this normalising coefficient in its texture): a constant environment
      * stays exactly constant, and the discretisation error of the cosine lobe's integral,
      * which should be pi, does not show up as a brightness error */
-    double target = scale == IBL_IRRADIANCE_FULL ? PI : 1.0;
+    double target = scale == IBL_IRRADIANCE_FULL ? IBL_PI : 1.0;
     for (size_t i = 0; i < nd; i++) {
         const double *n = ddir + 3 * i;
         double sum = 0;
@@ -122,14 +125,14 @@ done:
     ibl_free(ctx, domega);
     ibl_free(ctx, row);
     if (st != IBL_OK) {
-        ibl_iem_plan_destroy(p);
+        ibl_irradiance_plan_destroy(p);
         return st;
     }
     *out = p;
     return IBL_OK;
 }
 
-void ibl_iem_plan_destroy(ibl_iem_plan *p)
+void ibl_irradiance_plan_destroy(ibl_irradiance_plan *p)
 {
     if (!p) return;
     ibl_free(p->ctx, p->offset);
@@ -138,7 +141,7 @@ void ibl_iem_plan_destroy(ibl_iem_plan *p)
     ibl_free(p->ctx, p);
 }
 
-size_t ibl_iem_plan_taps(const ibl_iem_plan *p) { return p ? p->taps : 0; }
+size_t ibl_irradiance_plan_taps(const ibl_irradiance_plan *p) { return p ? p->taps : 0; }
 
 /* Four partial sums per output texel (taps e = 4k, 4k+1, 4k+2, 4k+3), added as
  * (s0 + s1) + (s2 + s3): four independent dependency chains instead of one, and the same
@@ -146,7 +149,7 @@ size_t ibl_iem_plan_taps(const ibl_iem_plan *p) { return p ? p->taps : 0; }
  * one, four channels at a time). */
 #if defined(__SSE2__)
 #include <emmintrin.h>
-void ibl_iem_plan_run(const ibl_iem_plan *p, const float *src, float *dst)
+static void convolve(const ibl_irradiance_plan *p, const float *src, float *dst)
 {
     size_t nd = 6 * (size_t)p->dst_n * p->dst_n;
     for (size_t i = 0; i < nd; i++) {
@@ -167,7 +170,7 @@ void ibl_iem_plan_run(const ibl_iem_plan *p, const float *src, float *dst)
     }
 }
 #else
-void ibl_iem_plan_run(const ibl_iem_plan *p, const float *src, float *dst)
+static void convolve(const ibl_irradiance_plan *p, const float *src, float *dst)
 {
     size_t nd = 6 * (size_t)p->dst_n * p->dst_n;
     for (size_t i = 0; i < nd; i++) {
@@ -186,13 +189,25 @@ void ibl_iem_plan_run(const ibl_iem_plan *p, const float *src, float *dst)
 }
 #endif
 
+ibl_status ibl_irradiance_plan_run(const ibl_irradiance_plan *p, const ibl_cubemap *src,
+                                   ibl_cubemap *dst)
+{
+    if (!p || !src || !dst || !src->data || !dst->data) return IBL_ERR_INVALID_ARGUMENT;
+    if (src->size != p->src_n || dst->size != p->dst_n)
+        return ibl__fail(p->ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "irradiance: the plan is for %d -> %d texels, not %d -> %d", p->src_n,
+                         p->dst_n, src->size, dst->size);
+    convolve(p, src->data, dst->data);
+    return IBL_OK;
+}
+
 /* ---- reduction -------------------------------------------------------------------------------- */
 
 ibl_status ibl_irradiance_reduce(ibl_context *ctx, const ibl_cubemap *src, int size,
                                  ibl_cubemap *out)
 {
     if (!src || !src->data || !out || size < 1)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "irradiance: bad source or size %d", size);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "irradiance: bad source or size %d", size);
     ibl_status st = ibl_cubemap_alloc(ctx, size, 1, out);
     if (st != IBL_OK) return st;
     int k = 0;
@@ -307,7 +322,7 @@ static ibl_status reference_iem(ibl_context *ctx, const ibl_cubemap *src, int si
     for (int f = 0; f < 6 && st == IBL_OK; f++) {
         job.face = f;
         ibl_parallel_for(ctx, size, reference_task, &job);
-        st = ibl_progress(ctx, "irradiance reference", (f + 1) / 6.0);
+        st = ibl__progress(ctx, "irradiance reference", (f + 1) / 6.0);
     }
     if (st != IBL_OK) ibl_cubemap_free(ctx, out);
 done:
@@ -327,11 +342,11 @@ static ibl_status sh_iem(ibl_context *ctx, const ibl_cubemap *src, const ibl_irr
     if (st != IBL_OK) return st;
     if (d->sh_window != IBL_SH_WINDOW_NONE) {
         st = ibl_sh_apply_window(&sh, d->sh_window, d->sh_window_width, NULL);
-        if (st != IBL_OK) return ibl_fail(ctx, st, "irradiance: bad SH window");
+        if (st != IBL_OK) return ibl__fail(ctx, st, "irradiance: bad SH window");
     }
     ibl_sh e;
-    ibl_sh_irradiance(&sh, &e);
-    ibl_sh_scale(&e, target / PI);
+    ibl_sh_radiance_to_irradiance(&sh, &e);
+    ibl_sh_scale(&e, target / IBL_PI);
     int m = d->size;
     st = ibl_cubemap_alloc(ctx, m, 1, out);
     if (st != IBL_OK) return st;
@@ -358,7 +373,7 @@ ibl_status ibl_irradiance_cubemap(ibl_context *ctx, const ibl_cubemap *src,
                                   const ibl_irradiance_desc *desc, ibl_cubemap *out)
 {
     if (!src || !src->data || !out)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "irradiance: no source cubemap");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "irradiance: no source cubemap");
     memset(out, 0, sizeof *out);
     ibl_irradiance_desc d;
     if (desc) d = *desc;
@@ -367,28 +382,29 @@ ibl_status ibl_irradiance_cubemap(ibl_context *ctx, const ibl_cubemap *src,
     if (d.source_size == 0) d.source_size = 8;
     if (d.sh_bands == 0) d.sh_bands = 3;
     if (d.size < 1 || d.size > MAX_IEM_SIZE || d.source_size < 1 || d.source_size > MAX_IEM_SIZE)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "irradiance: size %d / source size %d out of range 1..%d", d.size,
                         d.source_size, MAX_IEM_SIZE);
     if (d.sh_bands < 1 || d.sh_bands > IBL_SH_MAX_BANDS)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "irradiance: SH bands %d out of range 1..5",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "irradiance: SH bands %d out of range 1..5",
                         d.sh_bands);
-    double target = d.scale == IBL_IRRADIANCE_FULL ? PI : 1.0;
+    double target = d.scale == IBL_IRRADIANCE_FULL ? IBL_PI : 1.0;
     switch (d.method) {
     case IBL_IRRADIANCE_REFERENCE: return reference_iem(ctx, src, d.size, target, out);
     case IBL_IRRADIANCE_SH: return sh_iem(ctx, src, &d, target, out);
     case IBL_IRRADIANCE_CONVOLVE: break;
-    default: return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "irradiance: unknown method");
+    default: return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "irradiance: unknown method");
     }
     ibl_cubemap small;
     ibl_status st = ibl_irradiance_reduce(ctx, src, d.source_size, &small);
     if (st != IBL_OK) return st;
-    ibl_iem_plan *plan;
-    st = ibl_iem_plan_create(ctx, d.source_size, d.size, d.scale, &plan);
+    ibl_irradiance_plan *plan;
+    ibl_irradiance_plan_desc pd = {.source_size = d.source_size, .size = d.size, .scale = d.scale};
+    st = ibl_irradiance_plan_create(ctx, &pd, &plan);
     if (st == IBL_OK) {
         st = ibl_cubemap_alloc(ctx, d.size, 1, out);
-        if (st == IBL_OK) ibl_iem_plan_run(plan, small.data, out->data);
-        ibl_iem_plan_destroy(plan);
+        if (st == IBL_OK) st = ibl_irradiance_plan_run(plan, &small, out);
+        ibl_irradiance_plan_destroy(plan);
     }
     ibl_cubemap_free(ctx, &small);
     return st;

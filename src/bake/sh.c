@@ -4,14 +4,15 @@
  * environment maps"; Sloan 2008, "Stupid spherical harmonics (SH) tricks". Design notes and
  * measured errors: docs/DIFFUSE.md. */
 #include "ibl/sh.h"
+#include "core/context_internal.h"
+#include "core/cpu.h"
+#include "core/numeric.h"
 
 #include "ibl/cubemap.h"
-#include "sh_internal.h"
 
 #include <math.h>
 #include <string.h>
 
-static const double PI = 3.14159265358979323846;
 
 /* ---- the basis as homogeneous polynomials -------------------------------------------------
  * Every Y_lm is a homogeneous harmonic polynomial of degree l in (x, y, z) (using
@@ -238,13 +239,6 @@ ROW_SUMS_AVX2(1)
 ROW_SUMS_AVX2(3)
 ROW_SUMS_AVX2(5)
 ROW_SUMS_AVX2(6)
-
-static int cpu_has_avx2(void)
-{
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-}
-#else
-static int cpu_has_avx2(void) { return 0; }
 #endif
 
 static void row_sums(int simd, const double *w, const float *px, int count, int nw, double (*s)[3])
@@ -399,13 +393,13 @@ static void omega_table(int n, double *grid /* (n+1)^2 */, double *omega)
                                        grid[(size_t)y * g + x + 1] + grid[(size_t)y * g + x];
 }
 
-ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh_plan **out)
+ibl_status ibl_sh_plan_create(ibl_context *ctx, const ibl_sh_plan_desc *desc, ibl_sh_plan **out)
 {
-    if (!out) return IBL_ERR_INVALID_ARGUMENT;
+    if (!out || !desc) return IBL_ERR_INVALID_ARGUMENT;
     *out = NULL;
-    bands = clamp_bands(bands);
+    int face_size = desc->face_size, bands = clamp_bands(desc->bands);
     if (!ctx || face_size < 1 || face_size > 65536 || !valid_bands(bands))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sh: face size %d / bands %d out of range",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sh: face size %d / bands %d out of range",
                         face_size, bands);
     ibl_sh_plan *p = ibl_calloc(ctx, 1, sizeof *p);
     if (!p) return ibl_context_status(ctx);
@@ -414,7 +408,7 @@ ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh
     p->bands = bands;
     p->deg = bands - 1;
     p->nw = bands * (bands + 1) / 2;
-    p->simd = cpu_has_avx2();
+    p->simd = ibl__cpu_has(ctx, IBL__CPU_AVX2_FMA);
     /* chunking depends on the size only, never on the thread count */
     int half = (face_size + 1) / 2;
     p->tasks = half < 32 ? half : 32;
@@ -435,12 +429,6 @@ ibl_status ibl_sh_plan_create(ibl_context *ctx, int face_size, int bands, ibl_sh
     return IBL_OK;
 }
 
-int ibl__sh_plan_use_simd(ibl_sh_plan *p, int simd)
-{
-    p->simd = simd && cpu_has_avx2();
-    return p->simd;
-}
-
 void ibl_sh_plan_destroy(ibl_sh_plan *p)
 {
     if (!p) return;
@@ -449,15 +437,24 @@ void ibl_sh_plan_destroy(ibl_sh_plan *p)
     ibl_free(p->ctx, p);
 }
 
-ibl_status ibl_sh_plan_run(ibl_sh_plan *p, const float *faces, ibl_sh *out)
+/* Projects the six faces of edge p->n stored one after another (a cube's level). */
+static void project_faces(ibl_sh_plan *p, const float *faces, ibl_sh *out)
 {
-    if (!p || !faces || !out) return IBL_ERR_INVALID_ARGUMENT;
     p->faces = faces;
     ibl_parallel_for(p->ctx, p->tasks, cube_task, p);
     p->faces = NULL;
     double mom[MOM_SIZE * 4];
     reduce_partials(p->partial, p->tasks, mom);
     moments_to_sh(mom, p->bands, out);
+}
+
+ibl_status ibl_sh_plan_run(ibl_sh_plan *p, const ibl_cubemap *cube, ibl_sh *out)
+{
+    if (!p || !cube || !cube->data || !out) return IBL_ERR_INVALID_ARGUMENT;
+    if (cube->size != p->n)
+        return ibl__fail(p->ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "sh: the plan is for faces of %d texels, not %d", p->n, cube->size);
+    project_faces(p, cube->data, out);
     return IBL_OK;
 }
 
@@ -465,13 +462,14 @@ ibl_status ibl_sh_project_cubemap(ibl_context *ctx, const ibl_cubemap *cube, int
                                   ibl_sh *out)
 {
     if (!cube || !cube->data || !out || level < 0 || level >= cube->levels)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sh: no cubemap or level %d absent", level);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sh: no cubemap or level %d absent", level);
     ibl_sh_plan *p;
-    ibl_status st = ibl_sh_plan_create(ctx, ibl_level_size(cube->size, level), bands, &p);
+    ibl_sh_plan_desc pd = {.face_size = ibl_level_size(cube->size, level), .bands = bands};
+    ibl_status st = ibl_sh_plan_create(ctx, &pd, &p);
     if (st != IBL_OK) return st;
-    st = ibl_sh_plan_run(p, ibl_cubemap_face(cube, level, 0), out);
+    project_faces(p, ibl_cubemap_face(cube, level, 0), out);
     ibl_sh_plan_destroy(p);
-    return st;
+    return IBL_OK;
 }
 
 /* ---- equirect ------------------------------------------------------------------------------ */
@@ -494,8 +492,8 @@ static void equirect_task(void *arg, int task)
     double s[MAX_WEIGHTS][3];
     for (int y = y0; y < y1; y++) {
         /* exact solid angle of a pixel of this row: (2 pi / W) (cos theta0 - cos theta1) */
-        double omega = 2.0 * PI / w * (cos(PI * y / h) - cos(PI * (y + 1) / h));
-        double theta = PI * (y + 0.5) / h, st = sin(theta), ct = cos(theta);
+        double omega = 2.0 * IBL_PI / w * (cos(IBL_PI * y / h) - cos(IBL_PI * (y + 1) / h));
+        double theta = IBL_PI * (y + 0.5) / h, st = sin(theta), ct = cos(theta);
         const float *px = ibl_image_texel(job->image, 0, y);
         row_sums(job->simd, job->colw, px, w, nw, s);
         /* x^p y^q z^r = (st sin a)^p ct^q (-st cos a)^r */
@@ -521,12 +519,12 @@ ibl_status ibl_sh_project_equirect(ibl_context *ctx, const ibl_image *image, int
     bands = clamp_bands(bands);
     if (!image || !image->pixels || image->width < 1 || image->height < 1 || !out ||
         !valid_bands(bands))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sh: bad equirect image or bands %d", bands);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sh: bad equirect image or bands %d", bands);
     equirect_job job;
     job.image = image;
     job.deg = bands - 1;
     job.nw = bands * (bands + 1) / 2;
-    job.simd = cpu_has_avx2();
+    job.simd = ibl__cpu_has(ctx, IBL__CPU_AVX2_FMA);
     int h = image->height, w = image->width;
     int tasks = h < 32 ? h : 32;
     job.rows_per_task = (h + tasks - 1) / tasks;
@@ -540,7 +538,7 @@ ibl_status ibl_sh_project_equirect(ibl_context *ctx, const ibl_image *image, int
     }
     for (int x = 0; x < w; x++) {
         /* library layout: u = 0.5 looks toward -Z, u = 0.75 toward +X */
-        double a = 2.0 * PI * ((x + 0.5) / w - 0.5), sa = sin(a), nca = -cos(a);
+        double a = 2.0 * IBL_PI * ((x + 0.5) / w - 0.5), sa = sin(a), nca = -cos(a);
         double *cw = colw + (size_t)x * job.nw;
         int k = 0;
         for (int d = 0; d <= job.deg; d++)
@@ -597,7 +595,7 @@ static ibl_status six_value_sh(const float *values, int means, int bands, ibl_sh
     double weights[6];
     for (int f = 0; f < 6; f++) {
         dirs[3 * f + face_axis[f][2]] = face_sign[f][2];
-        weights[f] = 4.0 * PI / 6.0;
+        weights[f] = 4.0 * IBL_PI / 6.0;
     }
     ibl_status st = ibl_sh_project_samples(bands < 3 ? bands : 3, 6, dirs, weights, values, 4, out);
     if (st != IBL_OK) return st;
@@ -665,17 +663,17 @@ double ibl_sh_cosine_factor(int l)
     /* R&H 2001 eq. 8: A_1 = 2pi/3, odd l > 1 vanish, even l:
      * 2pi (-1)^(l/2 - 1) / ((l + 2)(l - 1)) * l! / (2^l ((l/2)!)^2) */
     if (l < 0) return 0;
-    if (l == 0) return PI;
-    if (l == 1) return 2.0 * PI / 3.0;
+    if (l == 0) return IBL_PI;
+    if (l == 1) return 2.0 * IBL_PI / 3.0;
     if (l & 1) return 0;
     double fact_l = 1, fact_h = 1;
     for (int i = 2; i <= l; i++) fact_l *= i;
     for (int i = 2; i <= l / 2; i++) fact_h *= i;
     double sign = ((l / 2 - 1) & 1) ? -1.0 : 1.0;
-    return 2.0 * PI * sign / ((l + 2.0) * (l - 1.0)) * fact_l / (ldexp(1.0, l) * fact_h * fact_h);
+    return 2.0 * IBL_PI * sign / ((l + 2.0) * (l - 1.0)) * fact_l / (ldexp(1.0, l) * fact_h * fact_h);
 }
 
-void ibl_sh_irradiance(const ibl_sh *radiance, ibl_sh *irradiance)
+void ibl_sh_radiance_to_irradiance(const ibl_sh *radiance, ibl_sh *irradiance)
 {
     ibl_sh r = *radiance;
     for (int l = 0; l < r.bands; l++) {
@@ -715,7 +713,7 @@ enum { WINDOW_DIRECTIONS = 4096 };
 /* Deterministic, nearly uniform direction set (Fibonacci sphere). */
 static void fibonacci_direction(int i, int n, double d[3])
 {
-    const double golden = PI * (3.0 - sqrt(5.0));
+    const double golden = IBL_PI * (3.0 - sqrt(5.0));
     double z = 1.0 - (2.0 * i + 1.0) / n, r = sqrt(1.0 - z * z), phi = golden * i;
     d[0] = r * cos(phi);
     d[1] = r * sin(phi);
@@ -725,7 +723,7 @@ static void fibonacci_direction(int i, int n, double d[3])
 double ibl_sh_min_irradiance(const ibl_sh *radiance)
 {
     ibl_sh e;
-    ibl_sh_irradiance(radiance, &e);
+    ibl_sh_radiance_to_irradiance(radiance, &e);
     double lo = INFINITY;
     for (int i = 0; i < WINDOW_DIRECTIONS; i++) {
         double d[3], v[3];
@@ -741,7 +739,7 @@ static double hanning(int l, double width)
 {
     if (l == 0) return 1.0;
     if (!(l < width)) return 0.0;
-    return 0.5 * (1.0 + cos(PI * l / width));
+    return 0.5 * (1.0 + cos(IBL_PI * l / width));
 }
 
 static void windowed(const ibl_sh *in, double width, ibl_sh *out)

@@ -2,11 +2,12 @@
  * Daylight" (SIGGRAPH 99), with a sun disk and a Lambertian ground. Units and directions: see
  * include/ibl/sky.h and docs/CONVENTIONS.md. */
 #include "ibl/sky.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <string.h>
 
-static const double PI = 3.14159265358979323846;
 
 /* The sun: mean angular diameter 0.53 degrees; the extraterrestrial solar illuminance 127.5 klux
  * (the IESNA value used in daylighting; 133 klux in some later work). */
@@ -29,7 +30,7 @@ static void fill_defaults(const ibl_sky_desc *in, ibl_sky_desc *d)
 
 static ibl_vec3 sun_dir(const ibl_sky_desc *d)
 {
-    double e = d->sun_elevation_deg * PI / 180.0, a = d->sun_azimuth_deg * PI / 180.0;
+    double e = d->sun_elevation_deg * IBL_PI / 180.0, a = d->sun_azimuth_deg * IBL_PI / 180.0;
     ibl_vec3 v = {(float)(cos(e) * sin(a)), (float)sin(e), (float)(-cos(e) * cos(a))};
     return v;
 }
@@ -92,29 +93,29 @@ void ibl_sky_model_radiance(const ibl_sky_model *m, ibl_vec3 dir, float rgb[3])
 
 ibl_status ibl_sky_model_init(ibl_context *ctx, const ibl_sky_desc *desc, ibl_sky_model *out)
 {
-    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sky: no output model");
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sky: no output model");
     memset(out, 0, sizeof *out);
     ibl_sky_desc d;
     fill_defaults(desc, &d);
     if (!(d.sun_elevation_deg > 0.0f && d.sun_elevation_deg <= 90.0f))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "sky: sun elevation %g is outside (0, 90] degrees (the model needs the "
                         "sun above the horizon)", d.sun_elevation_deg);
     if (!(d.turbidity >= 1.7f && d.turbidity <= 10.0f))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "sky: turbidity %g is outside [1.7, 10], the range of the model's fit",
                         d.turbidity);
     if (!isfinite(d.sun_azimuth_deg))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sky: sun azimuth is not finite");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sky: sun azimuth is not finite");
     if (d.width < 8 || d.width % 2 || d.width > 65536)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "sky: width %d must be even and in [8, 65536]", d.width);
     if (!(d.ground_albedo <= 1.0f))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sky: ground albedo %g is above 1",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sky: ground albedo %g is above 1",
                         d.ground_albedo);
     out->desc = d;
 
-    double T = d.turbidity, ts = (90.0 - d.sun_elevation_deg) * PI / 180.0;
+    double T = d.turbidity, ts = (90.0 - d.sun_elevation_deg) * IBL_PI / 180.0;
     /* Preetham 1999, Appendix A.2: Perez coefficients as linear functions of turbidity */
     static const double coef[3][5][2] = {
         {{0.1787, -1.4630}, {-0.3554, 0.4275}, {-0.0227, 5.3251}, {0.1206, -2.5771}, {-0.0670, 0.3703}},
@@ -124,7 +125,7 @@ ibl_status ibl_sky_model_init(ibl_context *ctx, const ibl_sky_desc *desc, ibl_sk
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 5; j++) out->perez[i][j] = coef[i][j][0] * T + coef[i][j][1];
     /* Appendix A.2: zenith luminance (kcd/m^2) and chromaticity */
-    double chi = (4.0 / 9.0 - T / 120.0) * (PI - 2.0 * ts);
+    double chi = (4.0 / 9.0 - T / 120.0) * (IBL_PI - 2.0 * ts);
     out->zenith[0] = (4.0453 * T - 4.9710) * tan(chi) - 0.2155 * T + 2.4192;
     static const double zx[3][4] = {{0.00166, -0.00375, 0.00209, 0.0},
                                     {-0.02903, 0.06377, -0.03202, 0.00394},
@@ -146,8 +147,8 @@ ibl_status ibl_sky_model_init(ibl_context *ctx, const ibl_sky_desc *desc, ibl_sk
      * and mixed gases are left out (a few percent in the visible). */
     ibl_sky_sun *sun = &out->sun;
     sun->direction = sun_dir(&d);
-    sun->angular_radius = SUN_RADIUS_DEG * PI / 180.0;
-    sun->solid_angle = 2.0 * PI * (1.0 - cos(sun->angular_radius));
+    sun->angular_radius = SUN_RADIUS_DEG * IBL_PI / 180.0;
+    sun->solid_angle = 2.0 * IBL_PI * (1.0 - cos(sun->angular_radius));
     double ts_deg = 90.0 - d.sun_elevation_deg;
     sun->air_mass = 1.0 / (cos(ts) + 0.15 * pow(93.885 - ts_deg, -1.253));
     double beta = 0.04608 * T - 0.04586;
@@ -163,21 +164,21 @@ ibl_status ibl_sky_model_init(ibl_context *ctx, const ibl_sky_desc *desc, ibl_sk
     double acc[3] = {0, 0, 0};
     const int nt = 180, np = 360;
     for (int i = 0; i < nt; i++) {
-        double th = (i + 0.5) * (PI / 2) / nt, st = sin(th), ct = cos(th);
-        double w = st * ct * (PI / 2 / nt) * (2 * PI / np);
+        double th = (i + 0.5) * (IBL_PI / 2) / nt, st = sin(th), ct = cos(th);
+        double w = st * ct * (IBL_PI / 2 / nt) * (2 * IBL_PI / np);
         for (int j = 0; j < np; j++) {
-            double ph = (j + 0.5) * 2 * PI / np;
+            double ph = (j + 0.5) * 2 * IBL_PI / np;
             double dd[3] = {st * sin(ph), ct, -st * cos(ph)};
             float rgb[3];
             sky_rgb(out, dd, rgb);
             for (int c = 0; c < 3; c++) acc[c] += w * rgb[c];
         }
     }
-    double sin_e = sin(d.sun_elevation_deg * PI / 180.0);
+    double sin_e = sin(d.sun_elevation_deg * IBL_PI / 180.0);
     for (int c = 0; c < 3; c++) {
         out->sky_illuminance[c] = (float)acc[c];
         out->sun_illuminance[c] = (float)(sun->radiance[c] * sun->solid_angle * sin_e);
-        out->ground[c] = (float)(d.ground_albedo / PI * (acc[c] + out->sun_illuminance[c]));
+        out->ground[c] = (float)(d.ground_albedo / IBL_PI * (acc[c] + out->sun_illuminance[c]));
     }
     return IBL_OK;
 }
@@ -191,24 +192,24 @@ static void sky_row(void *arg, int j)
 {
     const sky_job *job = arg;
     int W = job->im->width, H = job->im->height;
-    double th0 = PI * j / H, th1 = PI * (j + 1) / H, th = 0.5 * (th0 + th1);
+    double th0 = IBL_PI * j / H, th1 = IBL_PI * (j + 1) / H, th = 0.5 * (th0 + th1);
     double ground_w = 0.0, sky_w = 1.0;
-    if (th0 >= PI / 2) {
+    if (th0 >= IBL_PI / 2) {
         ground_w = 1.0;
         sky_w = 0.0;
-    } else if (th1 > PI / 2) {
+    } else if (th1 > IBL_PI / 2) {
         /* the horizon crosses this row: blend by solid angle above and below */
         double above = cos(th0), below = -cos(th1);
         sky_w = above / (above + below);
         ground_w = 1.0 - sky_w;
-        th = 0.5 * (th0 + PI / 2);
+        th = 0.5 * (th0 + IBL_PI / 2);
     }
     float *row = job->im->pixels + (size_t)j * W * 4;
     double st = sin(th), ct = cos(th);
     for (int i = 0; i < W; i++) {
         float sky[3] = {0, 0, 0};
         if (sky_w > 0.0) {
-            double ph = 2.0 * PI * ((i + 0.5) / W - 0.5);
+            double ph = 2.0 * IBL_PI * ((i + 0.5) / W - 0.5);
             double d[3] = {st * sin(ph), ct, -st * cos(ph)};
             sky_rgb(job->m, d, sky);
         }
@@ -244,8 +245,8 @@ static void splat_sun(const ibl_sky_model *m, ibl_image *im)
     t2[2] = s[0] * t1[1] - s[1] * t1[0];
     /* pieces: about 8 per pixel across the disk's diameter, more where pixels are narrow */
     double r = sun->angular_radius, theta_s = acos(s[1]);
-    double sin_lo = fmax(sin(fmax(theta_s - r, 0.0)), sin(PI / (2.0 * H)));
-    double px_per_rad = fmax(W / (2.0 * PI * sin_lo), H / PI);
+    double sin_lo = fmax(sin(fmax(theta_s - r, 0.0)), sin(IBL_PI / (2.0 * H)));
+    double px_per_rad = fmax(W / (2.0 * IBL_PI * sin_lo), H / IBL_PI);
     int rings = (int)ceil(8.0 * 2.0 * r * px_per_rad);
     if (rings < 32) rings = 32;
     if (rings > 512) rings = 512;
@@ -254,18 +255,18 @@ static void splat_sun(const ibl_sky_model *m, ibl_image *im)
     for (int a = 0; a < rings; a++) {
         double ca = 1.0 - (1.0 - cos_r) * (a + 0.5) / rings, sa = sqrt(1.0 - ca * ca);
         for (int b = 0; b < sectors; b++) {
-            double beta = 2.0 * PI * (b + 0.5) / sectors, cb = cos(beta), sb = sin(beta);
+            double beta = 2.0 * IBL_PI * (b + 0.5) / sectors, cb = cos(beta), sb = sin(beta);
             double d[3];
             for (int i = 0; i < 3; i++) d[i] = ca * s[i] + sa * (cb * t1[i] + sb * t2[i]);
             if (d[1] < 0.0) continue; /* below the horizon: hidden by the ground */
             double rho = sqrt(d[0] * d[0] + d[2] * d[2]);
-            double u = atan2(d[0], -d[2]) / (2.0 * PI) + 0.5, v = atan2(rho, d[1]) / PI;
+            double u = atan2(d[0], -d[2]) / (2.0 * IBL_PI) + 0.5, v = atan2(rho, d[1]) / IBL_PI;
             int x = (int)(u * W), y = (int)(v * H);
             if (x >= W) x -= W;
             if (x < 0) x += W;
             if (y >= H) y = H - 1;
             if (y < 0) y = 0;
-            double omega = 2.0 * PI / W * (cos(PI * y / H) - cos(PI * (y + 1) / H));
+            double omega = 2.0 * IBL_PI / W * (cos(IBL_PI * y / H) - cos(IBL_PI * (y + 1) / H));
             float *p = im->pixels + ((size_t)y * W + x) * 4;
             for (int c = 0; c < 3; c++) p[c] += (float)(sun->radiance[c] * piece / omega);
         }
@@ -274,7 +275,7 @@ static void splat_sun(const ibl_sky_model *m, ibl_image *im)
 
 ibl_status ibl_sky_render(ibl_context *ctx, const ibl_sky_desc *desc, ibl_image *out)
 {
-    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sky: no output image");
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sky: no output image");
     memset(out, 0, sizeof *out);
     ibl_sky_model m;
     ibl_status st = ibl_sky_model_init(ctx, desc, &m);

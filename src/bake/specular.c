@@ -2,6 +2,7 @@
  * kernels, mirror level, edge fixups) and what is written beside the result (KTX2 metadata,
  * manifest.json). Design: docs/SPECULAR.md. */
 #include "specular_internal.h"
+#include "core/context_internal.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -9,7 +10,7 @@
 
 static const char *const filter_names[IBL_FILTER_COUNT] = {"ggx", "phong", "blinn", "box", "gauss"};
 static const char *const mapping_names[IBL_MAPPING_COUNT] = {
-    "default", "seed", "linear", "filament", "unreal", "unity", "babylon", "table"};
+    "default", "triace", "linear", "filament", "unreal", "unity", "babylon", "table"};
 
 const char *ibl_specular_filter_name(ibl_specular_filter f)
 {
@@ -57,12 +58,12 @@ int ibl_specular_preset(const char *name, ibl_specular_desc *d)
         ibl_edge_fixup fixup;
         ibl_specular_mapping mapping;
     } table[] = {
-        {IBL_FILTER_BOX, 16, 500, IBL_EDGE_FIXUP_OVERLAP, IBL_MAPPING_SEED},
-        {IBL_FILTER_GAUSS, 32, 1000, IBL_EDGE_FIXUP_OVERLAP, IBL_MAPPING_SEED},
-        {IBL_FILTER_PHONG, 16, 250, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_SEED},
-        {IBL_FILTER_PHONG, 32, 1000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_SEED},
-        {IBL_FILTER_PHONG, 32, 1000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_SEED},
-        {IBL_FILTER_PHONG, 64, 2000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_SEED},
+        {IBL_FILTER_BOX, 16, 500, IBL_EDGE_FIXUP_OVERLAP, IBL_MAPPING_TRIACE},
+        {IBL_FILTER_GAUSS, 32, 1000, IBL_EDGE_FIXUP_OVERLAP, IBL_MAPPING_TRIACE},
+        {IBL_FILTER_PHONG, 16, 250, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
+        {IBL_FILTER_PHONG, 32, 1000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
+        {IBL_FILTER_PHONG, 32, 1000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
+        {IBL_FILTER_PHONG, 64, 2000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
         {IBL_FILTER_GGX, 256, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_LINEAR},
         {IBL_FILTER_GGX, 256, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_FILAMENT},
         {IBL_FILTER_GGX, 128, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_UNREAL},
@@ -114,7 +115,7 @@ ibl_status ibl_specular_levels(ibl_context *ctx, const ibl_specular_desc *desc, 
 {
     if (!ctx || !desc || !info) return IBL_ERR_INVALID_ARGUMENT;
     int size = desc->size > 0 ? desc->size : source_size;
-    if (size < 1) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: no size");
+    if (size < 1) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: no size");
     return ibl__specular_mapping(ctx, desc, size, chain_levels(desc, size), info);
 }
 
@@ -170,7 +171,7 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
     ibl_specular_desc desc = *desc_in;
     int N = desc.size > 0 ? desc.size : src->size;
     if (N < 1 || N > 16384)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: size %d out of range", N);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: size %d out of range", N);
     desc.size = N;
     int L = chain_levels(&desc, N);
     desc.levels = L;
@@ -216,7 +217,7 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
         ibl_specular_plan *plan = NULL;
         desc.source_size = s->size;
         st = ibl_specular_plan_create(ctx, &desc, &plan);
-        if (st == IBL_OK) st = ibl_specular_run(plan, s, out);
+        if (st == IBL_OK) st = ibl_specular_plan_run(plan, s, out);
         ibl_specular_plan_destroy(plan);
         /* a mirror level the plan could only point-sample (its size does not divide the
          * source's) is area-resampled here, as the reference does */
@@ -260,9 +261,9 @@ ibl_status ibl_specular_set_metadata(ibl_context *ctx, const ibl_specular_info *
         snprintf(buf, sizeof buf, "%.9g", info->blinn_factor);
         st = ibl_texture_set_metadata(ctx, tex, "ibl.specular.blinn_factor", buf);
     }
-    if (st == IBL_OK && info->mapping == IBL_MAPPING_SEED) {
-        snprintf(buf, sizeof buf, "%.9g", info->seed_a);
-        st = ibl_texture_set_metadata(ctx, tex, "ibl.specular.seed_a", buf);
+    if (st == IBL_OK && info->mapping == IBL_MAPPING_TRIACE) {
+        snprintf(buf, sizeof buf, "%.9g", info->lod_offset);
+        st = ibl_texture_set_metadata(ctx, tex, "ibl.specular.lod_offset", buf);
     }
     if (st != IBL_OK) return st;
     size_t pos = 0;
@@ -290,8 +291,8 @@ ibl_status ibl_specular_manifest_json(ibl_context *ctx, const ibl_specular_info 
     if (info->filter == IBL_FILTER_BLINN) PUT("  \"blinn_factor\": %.9g,\n", info->blinn_factor);
     if (is_phong_family(info))
         PUT("  \"shininess_range\": [%.9g, %.9g],\n", info->shininess_min, info->shininess_max);
-    if (info->mapping == IBL_MAPPING_SEED)
-        PUT("  \"seed_lod\": \"lod = a - 0.5 * log2(shininess)\",\n  \"seed_a\": %.9g,\n", info->seed_a);
+    if (info->mapping == IBL_MAPPING_TRIACE)
+        PUT("  \"seed_lod\": \"lod = a - 0.5 * log2(shininess)\",\n  \"lod_offset\": %.9g,\n", info->lod_offset);
     PUT("  \"levels\": [\n");
     for (int l = 0; l < info->levels; l++) {
         PUT("    {\"level\": %d, \"size\": %d, ", l, ibl_level_size(info->size, l));

@@ -14,11 +14,12 @@
  * edge n only (the chain below is an exact area mean); it is ~0.94 n^2 for n >= 16 (docs give
  * the table). */
 #include "bake/specular_seed.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <string.h>
 
-static const double PI = 3.14159265358979323846;
 
 /* Level 0 when the source edge is an integer multiple r of the destination's: each texel is
  * the exact area mean of the r x r source texels it covers, weighted by their solid angles
@@ -76,7 +77,7 @@ static ibl_status block_mean(ibl_context *ctx, const ibl_cubemap *src, ibl_cubem
 ibl_status ibl__specular_box(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst)
 {
     if (!src || !dst || !src->data || !dst->data || dst->levels < 1 || dst->size < 1 || src->size < 1)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "box prefilter: missing cubemap");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "box prefilter: missing cubemap");
     ibl_status st = src->size % dst->size == 0 ? block_mean(ctx, src, dst)
                                                : ibl_cubemap_resample(ctx, src, dst);
     if (st != IBL_OK) return st;
@@ -202,7 +203,7 @@ static double lobe_distance(const ring_table *t, double s)
         double hi = exp((s + 1.0) * t->log_mu[b]), lo = exp((s + 1.0) * t->log_mu[b + 1]);
         cross += t->mass[b] * (hi - lo) / t->area[b];
     }
-    return -2.0 * cross + (s + 1.0) * (s + 1.0) / (2.0 * PI * (2.0 * s + 1.0));
+    return -2.0 * cross + (s + 1.0) * (s + 1.0) / (2.0 * IBL_PI * (2.0 * s + 1.0));
 }
 
 static double fit_shininess(int n)
@@ -219,7 +220,7 @@ static double fit_shininess(int n)
         t.log_mu[b] = q < 1 ? log1p(-q) : -INFINITY;
         if (b < FIT_BINS) {
             double r1 = t.root_qmax * (b + 1) / FIT_BINS;
-            t.area[b] = 2.0 * PI * (r1 * r1 - q);
+            t.area[b] = 2.0 * IBL_PI * (r1 * r1 - q);
         }
     }
     /* coarse scan in log s, then golden-section refinement around the best point */

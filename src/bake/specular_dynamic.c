@@ -10,6 +10,8 @@
  * (a box mip has no radiance centroid), so it is less exact next to small bright lights; the
  * chains it is meant for (16..64 texels) are coarse anyway. docs/SPECULAR.md "Dynamic path". */
 #include "specular_internal.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <string.h>
@@ -37,7 +39,6 @@ struct ibl__dynamic {
     size_t rows;
 };
 
-static const double PI = 3.14159265358979323846;
 
 void ibl__dynamic_destroy(ibl__dynamic *d)
 {
@@ -82,7 +83,7 @@ static size_t build_rows(ibl__dynamic *d, const ibl_specular_desc *desc, const i
     /* the lobe below `floor` of its peak is dropped (the row is renormalised): a Phong lobe
      * falls like a Gaussian, GGX's tail (1 / angle^4) still holds ~1% of its weight below 1e-4 */
     double floor_value = lobe->kind == IBL__LOBE_GGX ? 1e-8 : 1e-4;
-    double lo = 0.0, hi = 0.5 * PI;
+    double lo = 0.0, hi = 0.5 * IBL_PI;
     for (int i = 0; i < 60; i++) {
         double mid = 0.5 * (lo + hi);
         if (ibl__lobe_f(lobe, cos(mid)) > floor_value) lo = mid;
@@ -99,7 +100,7 @@ static size_t build_rows(ibl__dynamic *d, const ibl_specular_desc *desc, const i
                 if (!count_only) d->row_start[row] = (uint32_t)entry;
                 size_t first = entry;
                 double sum = 0.0;
-                double reach = cos(cull + 0.75 * texel < PI ? cull + 0.75 * texel : PI);
+                double reach = cos(cull + 0.75 * texel < IBL_PI ? cull + 0.75 * texel : IBL_PI);
                 const float *cen = d->centre + base * 3;
                 int nb = (M + DB - 1) / DB;
                 const float *cone = d->cone + d->cone_offset[lv->mip] * 4;
@@ -224,7 +225,7 @@ ibl_status ibl__dynamic_create(ibl_context *ctx, const ibl_specular_desc *desc,
         entries = build_rows(d, desc, &lobes[l], l, 1, entries);
         if (entries > MAX_ENTRIES) {
             ibl__dynamic_destroy(d);
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "specular plan: a dynamic plan of %d -> %d needs over %d weights; "
                             "use the static plan for sizes this large",
                             source_size, info->size, (int)MAX_ENTRIES);

@@ -36,6 +36,8 @@
  * Deterministic: every output value is a sum in a fixed order, independent of the threads.
  * Design and measurements: docs/SPECULAR.md "The fast method". */
 #include "specular_internal.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 #include "core/pixel_format.h"
 
 #include <math.h>
@@ -77,7 +79,6 @@ enum { BINFO = 6, TAB = 2048, TILE = 8, MAX_PIECES = 24, MAX_GRIDS = MAX_PIECES,
 enum { SUPER = 16 };
 #define CONES(cap) ((size_t)(cap) + ((size_t)(cap) + SUPER - 1) / SUPER) /* blocks, then supers */
 
-static const double PI = 3.14159265358979323846;
 static const double LUM[3] = {0.2126, 0.7152, 0.0722}; /* Rec. 709 luminance */
 
 typedef struct srclev {
@@ -698,7 +699,7 @@ static ibl_status plan_level(ibl_specular_plan *p, int level)
     double b0 = c0 * lobe->half_angle;
     double min_b0 = 2.0 * texel_angle(p->src[core_src].M);
     if (b0 < min_b0) b0 = min_b0;
-    double U = 1.0 - cos(b0 < PI ? b0 : PI);
+    double U = 1.0 - cos(b0 < IBL_PI ? b0 : IBL_PI);
     lv->ngrids = 0;
     lv->npieces = 0;
     double prevU = 0.0, inner[MAX_PIECES]; /* each piece's inner step scale (0: none) */
@@ -830,15 +831,15 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
     if (!ctx || !desc || !out) return IBL_ERR_INVALID_ARGUMENT;
     *out = NULL;
     if (desc->size < 1 || desc->size > 16384)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "specular plan: size %d out of range",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "specular plan: size %d out of range",
                         desc->size);
     if (desc->filter == IBL_FILTER_BOX || desc->filter == IBL_FILTER_GAUSS)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "specular plan: the %s filter has no plan (use ibl_specular_prefilter)",
                         ibl_specular_filter_name(desc->filter));
     int S = desc->source_size > 0 ? desc->source_size : desc->size;
     if (!is_pow2(S) || S > 16384)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "specular plan: source size %d is not a power of two", S);
     ibl_specular_plan *p = ibl_calloc(ctx, 1, sizeof *p);
     if (!p) return ibl_context_status(ctx);
@@ -1035,7 +1036,7 @@ static void select_bright(ibl_specular_plan *p, int l)
 {
     srclev *s = &p->src[l];
     size_t blocks = block_count(s);
-    double thr = BRIGHT_TAU * accuracy_scale(p) * s->power / (4.0 * PI) * s->bright_c;
+    double thr = BRIGHT_TAU * accuracy_scale(p) * s->power / (4.0 * IBL_PI) * s->bright_c;
     for (;;) { /* raise the bar until the brightest fit (a bounded direct sum) */
         int count = 0;
         for (size_t b = 0; b < blocks; b++) {
@@ -1235,7 +1236,7 @@ static void select_corrections(ibl_specular_plan *p, struct core *c)
     int pf = c->dim ? F_PD : F_P;
     bound_job bj = {p, c};
     ibl_parallel_for(p->ctx, (int)((blocks + BOUND_CHUNK - 1) / BOUND_CHUNK), bound_task, &bj);
-    double thr = CORR_TAU * accuracy_scale(p) * s->power / (4.0 * PI);
+    double thr = CORR_TAU * accuracy_scale(p) * s->power / (4.0 * IBL_PI);
     int cap = c->corr_cap * BT;
     for (;;) {
         int count = 0;
@@ -1879,17 +1880,17 @@ static int cap_range(const double a[3], double T, const float ax[3], const float
     if (pz > 1) pz = 1;
     if (pz < -1) pz = -1;
     double beta = acos(pz);
-    if (T >= beta || T >= PI - beta) {
+    if (T >= beta || T >= IBL_PI - beta) {
         *lo = -1, *hi = 1;
         return 1;
     }
     double phi = atan2(dot3(a, tg), dot3(a, ax));
     double d = asin(sin(T) / sin(beta));
     double p0 = phi - d, p1 = phi + d;
-    const double H = 0.5 * PI;
+    const double H = 0.5 * IBL_PI;
     if (p1 <= -H || p0 >= H) return 0;
-    *lo = p0 <= -0.25 * PI ? -1.0 : tan(p0);
-    *hi = p1 >= 0.25 * PI ? 1.0 : tan(p1);
+    *lo = p0 <= -0.25 * IBL_PI ? -1.0 : tan(p0);
+    *hi = p1 >= 0.25 * IBL_PI ? 1.0 : tan(p1);
     if (*lo < -1) *lo = -1;
     if (*hi > 1) *hi = 1;
     return *lo <= *hi;
@@ -1938,7 +1939,7 @@ static int cone_misses(const reach_test *t, const float *bc)
 {
     double c = dot3(t->axis, bc), r = bc[3], cr = bc[4], sr = bc[5];
     /* angle(axis, centre) > T + r: out of reach; < hole - r: inside the hole */
-    if (t->T + r < PI && c < t->cT * cr - t->sT * sr - 1e-7) return 1;
+    if (t->T + r < IBL_PI && c < t->cT * cr - t->sT * sr - 1e-7) return 1;
     return t->hole - r > 0 && c > t->cH * cr + t->sH * sr + 1e-7;
 }
 
@@ -1949,7 +1950,7 @@ static int add_candidate(sum_args *sa, const reach_test *t, const float *blocks,
     double r = bc[3], cr = bc[4], sr = bc[5];
     cand *cd = (cand *)&sa->cands[sa->ncand++];
     cd->block = b;
-    cd->cos_out = t->th_out + r >= PI ? -2.0f : (float)(t->cO * cr - t->sO * sr) - 1e-6f;
+    cd->cos_out = t->th_out + r >= IBL_PI ? -2.0f : (float)(t->cO * cr - t->sO * sr) - 1e-6f;
     cd->cos_in = t->th_in - r <= 0 ? 2.0f : (float)(t->cI * cr + t->sI * sr) + 1e-6f;
     return sa->ncand == CAND;
 }
@@ -2020,7 +2021,7 @@ static void grid_task(void *arg, int index)
         for (int f = 0; main_sum && f < 6; f++) {
             const float(*B)[3] = p->face_basis[f];
             double u0, u1, v0, v1;
-            if (T >= 0.5 * PI - 1e-9) {
+            if (T >= 0.5 * IBL_PI - 1e-9) {
                 u0 = v0 = -1, u1 = v1 = 1;
             } else {
                 if (!cap_range(axis, T, B[0], B[1], B[2], &u0, &u1)) continue;
@@ -2772,12 +2773,12 @@ static void mirror_row_task(void *arg, int index)
     }
 }
 
-ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cubemap *dst)
+ibl_status ibl_specular_plan_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cubemap *dst)
 {
     if (!p || !src || !dst || !src->data || !dst->data) return IBL_ERR_INVALID_ARGUMENT;
     ibl_context *ctx = p->ctx;
     if (src->size != p->S || dst->size != p->N || dst->levels != p->L)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "specular run: planned source %d -> %d x %d levels, got %d -> %d x %d",
                         p->S, p->N, p->L, src->size, dst->size, dst->levels);
     if (p->dyn) {
@@ -2787,7 +2788,7 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
             ibl_status st = ibl_edge_fixup_apply(ctx, p->desc.edge_fixup, dst, l);
             if (st != IBL_OK) return st;
         }
-        return ibl_progress(ctx, "prefilter", 1.0);
+        return ibl__progress(ctx, "prefilter", 1.0);
     }
     pyr_job pj = {p, src, 0};
     if (p->rec0) ibl_parallel_for(ctx, 6 * p->src[0].nby, level0_task, &pj);
@@ -2829,7 +2830,7 @@ ibl_status ibl_specular_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cu
         }
         ibl_status st = ibl_edge_fixup_apply(ctx, p->desc.edge_fixup, dst, l);
         if (st != IBL_OK) return st;
-        st = ibl_progress(ctx, "prefilter", (l + 1.0) / p->L);
+        st = ibl__progress(ctx, "prefilter", (l + 1.0) / p->L);
         if (st != IBL_OK) return st;
     }
     return IBL_OK;

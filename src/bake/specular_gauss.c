@@ -9,6 +9,7 @@
  * texels are already area means (a box of variance 1/12 texel^2), so the blur adds
  * sigma^2 = (n/2)^2 / (s+3) - 1/12 texels^2 (0 if negative). */
 #include "bake/specular_seed.h"
+#include "core/context_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -65,10 +66,10 @@ ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cub
                                const float *shininess_per_level)
 {
     if (!shininess_per_level)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "gauss prefilter: no shininess per level");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "gauss prefilter: no shininess per level");
     for (int l = 0; dst && l < dst->levels; l++)
         if (!(shininess_per_level[l] >= 0))
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "gauss prefilter: shininess of level %d is %g", l,
                             (double)shininess_per_level[l]);
     ibl_status st = ibl__specular_box(ctx, src, dst);
@@ -95,7 +96,7 @@ ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cub
         blur_job job = {dst, level, n, radius, kernel, scratch};
         ibl_parallel_for(ctx, 6 * n, rows_task, &job);
         ibl_parallel_for(ctx, 6 * n, columns_task, &job);
-        st = ibl_progress(ctx, "gauss prefilter", (double)(level + 1) / dst->levels);
+        st = ibl__progress(ctx, "gauss prefilter", (double)(level + 1) / dst->levels);
         if (st != IBL_OK) break;
     }
     ibl_free(ctx, kernel);

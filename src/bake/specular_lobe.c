@@ -4,10 +4,10 @@
  * Blinn through the seeds' fit cos^n(t) ~ cos^(4.2 n)(t/2); GGX: Walter et al. 2007 with v = n
  * (Karis 2013 split sum). */
 #include "specular_internal.h"
+#include "core/numeric.h"
 
 #include <math.h>
 
-static const double PI = 3.14159265358979323846;
 
 double ibl__lobe_f(const ibl__lobe *lobe, double x)
 {
@@ -42,7 +42,7 @@ void ibl__lobe_f012(const ibl__lobe *lobe, double x, double out[3])
 double ibl__lobe_log_slope(const ibl__lobe *lobe, double theta)
 {
     if (theta <= 0.0) return 0.0;
-    if (theta >= 0.5 * PI) theta = 0.5 * PI - 1e-9;
+    if (theta >= 0.5 * IBL_PI) theta = 0.5 * IBL_PI - 1e-9;
     double x = cos(theta), s = sin(theta);
     if (lobe->kind == IBL__LOBE_PHONG) return lobe->n * s / x;
     double t = 1.0 + (1.0 + x) * lobe->k;
@@ -56,7 +56,7 @@ double ibl__lobe_log_slope(const ibl__lobe *lobe, double theta)
 static double variation(const ibl__lobe *lobe, double theta)
 {
     if (theta <= 0.0) return 0.0;
-    if (theta > 0.5 * PI) theta = 0.5 * PI;
+    if (theta > 0.5 * IBL_PI) theta = 0.5 * IBL_PI;
     double f[3];
     ibl__lobe_f012(lobe, cos(theta), f);
     double floor_value = 0.1;
@@ -80,7 +80,7 @@ double ibl__lobe_max_log_slope(const ibl__lobe *lobe, double t0, double t1)
 /* The angle in [0, pi/2] where f falls to `value` (f decreases with the angle). */
 static double angle_where(const ibl__lobe *lobe, double value)
 {
-    double lo = 0.0, hi = 0.5 * PI;
+    double lo = 0.0, hi = 0.5 * IBL_PI;
     for (int i = 0; i < 100; i++) {
         double mid = 0.5 * (lo + hi);
         if (ibl__lobe_f(lobe, cos(mid)) > value) lo = mid;
@@ -114,7 +114,7 @@ static ibl__lobe make_ggx(double roughness)
     /* the D part of the log slope peaks near 2 alpha; find it on a fine scan */
     double best = 0, best_t = 0;
     for (int i = 1; i < 4000; i++) {
-        double t = 0.5 * PI * i / 4000.0;
+        double t = 0.5 * IBL_PI * i / 4000.0;
         double g = ibl__lobe_log_slope(&l, t) - tan(t);
         if (g > best) best = g, best_t = t;
     }

@@ -1,6 +1,7 @@
 /* Level <-> roughness / shininess presets. Each formula cites where it comes from; the
  * inverse mappings (roughness of a level) are solved from the engines' lod-of-roughness. */
 #include "specular_internal.h"
+#include "core/context_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -59,9 +60,9 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
 {
     memset(info, 0, sizeof *info);
     if (levels < 1 || levels > IBL_MAX_LEVELS)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: %d levels out of range", levels);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: %d levels out of range", levels);
     if ((unsigned)desc->filter >= IBL_FILTER_COUNT)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: unknown filter %d", desc->filter);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: unknown filter %d", desc->filter);
     info->filter = desc->filter;
     info->size = size;
     info->levels = levels;
@@ -70,22 +71,22 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
     info->shininess_min = desc->shininess_min > 0 ? desc->shininess_min : 1.0f;
     info->shininess_max = desc->shininess_max > 0 ? desc->shininess_max : 1000.0f;
     if (info->shininess_max < info->shininess_min)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: shininess range %g-%g is empty",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: shininess range %g-%g is empty",
                         info->shininess_min, info->shininess_max);
     ibl_specular_mapping m = desc->mapping;
     if ((unsigned)m >= IBL_MAPPING_COUNT)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: unknown mapping %d", m);
-    if (m == IBL_MAPPING_DEFAULT) m = desc->filter == IBL_FILTER_GGX ? IBL_MAPPING_LINEAR : IBL_MAPPING_SEED;
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: unknown mapping %d", m);
+    if (m == IBL_MAPPING_DEFAULT) m = desc->filter == IBL_FILTER_GGX ? IBL_MAPPING_LINEAR : IBL_MAPPING_TRIACE;
     info->mapping = m;
-    info->seed_a = (float)(0.5 * log2(info->shininess_max));
+    info->lod_offset = (float)(0.5 * log2(info->shininess_max));
     if (m == IBL_MAPPING_TABLE) {
         if (!desc->table || desc->table_count != levels)
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "prefilter: the mapping table has %d values for %d levels",
                             desc->table ? desc->table_count : 0, levels);
         for (int l = 0; l < levels; l++)
             if (!(desc->table[l] >= 0) || isinf(desc->table[l]))
-                return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                                 "prefilter: mapping table value %d (%g) is not a finite value >= 0",
                                 l, desc->table[l]);
     }
@@ -94,7 +95,7 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
      * mappings keep their levels and only level 0 becomes the mirror (most already put
      * roughness 0 there). */
     int first = info->mirror ? 1 : 0;
-    int shift = info->mirror && m == IBL_MAPPING_SEED;
+    int shift = info->mirror && m == IBL_MAPPING_TRIACE;
     int L = levels - shift; /* levels the mapping spreads over */
     int ggx = desc->filter == IBL_FILTER_GGX;
     for (int l = 0; l < levels; l++) {
@@ -109,7 +110,7 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
             else info->shininess[l] = desc->table[l];
             continue;
         }
-        if (desc->filter == IBL_FILTER_BOX && m == IBL_MAPPING_SEED) {
+        if (desc->filter == IBL_FILTER_BOX && m == IBL_MAPPING_TRIACE) {
             /* box: the chain's own fitted shininess (specular_box.c, least-squares fit of
              * the box-plus-bilinear kernel to a Phong lobe), clamped to the range */
             double s = ibl__box_level_shininess(size, l);
@@ -118,7 +119,7 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
             info->shininess[l] = (float)s;
             continue;
         }
-        if (m == IBL_MAPPING_SEED) {
+        if (m == IBL_MAPPING_TRIACE) {
             double s = seed_shininess(ml, info->shininess_min, info->shininess_max);
             if (ggx) info->roughness[l] = (float)pow(2.0 / (s + 2.0), 0.25);
             else info->shininess[l] = (float)s;

@@ -8,6 +8,8 @@
  * 8x8 texels whose nearest point is beyond the lobe's 1e-12 cut-off are skipped (their weight
  * is below 1e-12 of the peak). Slow by design: it is the yardstick. */
 #include "specular_internal.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <string.h>
@@ -123,11 +125,10 @@ void ibl__reference_eval_lobe(const ibl_specular_reference *r, const ibl__lobe *
         for (int i = 0; i < 4; i++) out[i] = p[i];
         return;
     }
-    const double PI_2 = 1.57079632679489661923;
     double acc[4] = {0, 0, 0, 0}, wsum = 0.0;
     /* a lobe that varies slowly enough everywhere never splits a texel away from the horizon:
      * those texels take the centre value without the angle and slope work (same result) */
-    double gmax = ibl__lobe_max_log_slope(lobe, 0.0, PI_2 - 0.05);
+    double gmax = ibl__lobe_max_log_slope(lobe, 0.0, IBL_HALF_PI - 0.05);
     int smooth = ceil(2.0 * r->max_radius * gmax / 0.2) <= 1.0;
     double sin_max_radius = sin(r->max_radius);
     for (int f = 0; f < 6; f++) {
@@ -136,8 +137,8 @@ void ibl__reference_eval_lobe(const ibl_specular_reference *r, const ibl__lobe *
             for (int bx = 0; bx < nb; bx++) {
                 const double *b = r->block + (((size_t)f * nb + by) * nb + bx) * 4;
                 double tmin = angle_between(R, b) - b[3];
-                if (tmin >= lobe->cull_angle || tmin >= PI_2) continue;
-                double skip_angle = (lobe->cull_angle < PI_2 ? lobe->cull_angle : PI_2) + b[3];
+                if (tmin >= lobe->cull_angle || tmin >= IBL_HALF_PI) continue;
+                double skip_angle = (lobe->cull_angle < IBL_HALF_PI ? lobe->cull_angle : IBL_HALF_PI) + b[3];
                 double cos_skip = skip_angle >= 3.14159265358979 ? -2.0 : cos(skip_angle);
                 int x1 = (bx + 1) * BLOCK < n ? (bx + 1) * BLOCK : n;
                 int y1 = (by + 1) * BLOCK < n ? (by + 1) * BLOCK : n;
@@ -159,12 +160,12 @@ void ibl__reference_eval_lobe(const ibl_specular_reference *r, const ibl__lobe *
                         }
                         double theta = angle_between(R, d);
                         double t0 = theta - gamma, t1 = theta + gamma;
-                        if (t0 >= lobe->cull_angle || t0 >= PI_2) continue;
+                        if (t0 >= lobe->cull_angle || t0 >= IBL_HALF_PI) continue;
                         if (t0 < 0) t0 = 0;
-                        double te = t1 < PI_2 - 0.05 ? t1 : PI_2 - 0.05;
+                        double te = t1 < IBL_HALF_PI - 0.05 ? t1 : IBL_HALF_PI - 0.05;
                         double g = t0 < te ? ibl__lobe_max_log_slope(lobe, t0, te) : 0.0;
                         double kk = ceil(2.0 * gamma * g / 0.2);
-                        if (t1 > PI_2 && lobe->horizon > 1e-3) {
+                        if (t1 > IBL_HALF_PI && lobe->horizon > 1e-3) {
                             /* the lobe's kink at the horizon: pieces of at most 0.01 rad where the lobe is
                              * still above 1e-3 of its peak 0.1 rad above the horizon */
                             double kh = ceil(2.0 * gamma / 0.01);
@@ -231,7 +232,7 @@ ibl_status ibl__specular_reference(ibl_context *ctx, const ibl_cubemap *src,
         ref_job job = {ref, desc, ibl__lobe_for_level(info, level), dst, level,
                        ibl_level_size(dst->size, level)};
         ibl_parallel_for(ctx, 6 * job.n, ref_row_task, &job);
-        st = ibl_progress(ctx, "prefilter (reference)", (level + 1.0) / dst->levels);
+        st = ibl__progress(ctx, "prefilter (reference)", (level + 1.0) / dst->levels);
         if (st != IBL_OK) break;
     }
     ibl_specular_reference_destroy(ref);

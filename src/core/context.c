@@ -2,6 +2,8 @@
  * with a default thread pool (workers pull indices from an atomic counter). */
 #define _POSIX_C_SOURCE 200809L
 #include "ibl/core.h"
+#include "core/cpu.h"
+#include "core/context_internal.h"
 
 #include <pthread.h>
 #include <stdarg.h>
@@ -33,6 +35,7 @@ struct ibl_context {
     ibl_context_desc desc;
     thread_pool *pool;
     int thread_count;
+    unsigned cpu_features; /* what kernels may use (core/cpu.h) */
     ibl_status last_status;
     char message[MESSAGE_BYTES];
 };
@@ -182,6 +185,7 @@ ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out)
     memset(ctx, 0, sizeof *ctx);
     ctx->desc = d;
     ctx->thread_count = 1;
+    ctx->cpu_features = d.kernels == IBL_KERNELS_PORTABLE ? 0u : ibl__cpu_detect();
     if (!d.parallel_for) {
         int threads = d.threads;
         if (threads <= 0) {
@@ -210,6 +214,11 @@ void ibl_context_destroy(ibl_context *ctx)
     a.free(ctx, a.user);
 }
 
+unsigned ibl__cpu_features(const ibl_context *ctx)
+{
+    return ctx ? ctx->cpu_features : ibl__cpu_detect();
+}
+
 const char *ibl_context_message(const ibl_context *ctx)
 {
     return ctx ? ctx->message : "";
@@ -225,7 +234,7 @@ int ibl_context_threads(const ibl_context *ctx)
     return ctx ? ctx->thread_count : 1;
 }
 
-ibl_status ibl_fail(ibl_context *ctx, ibl_status status, const char *fmt, ...)
+ibl_status ibl__fail(ibl_context *ctx, ibl_status status, const char *fmt, ...)
 {
     if (ctx) ctx->last_status = status;
     if (ctx && fmt) {
@@ -241,20 +250,20 @@ void *ibl_alloc(ibl_context *ctx, size_t bytes)
 {
     if (!ctx) return default_alloc(bytes, NULL);
     if ((uint64_t)bytes > ctx->desc.max_bytes) {
-        ibl_fail(ctx, IBL_ERR_TOO_LARGE,
+        ibl__fail(ctx, IBL_ERR_TOO_LARGE,
                  "needs %.1f MiB in one block, over the memory limit of %.1f MiB",
                  (double)bytes / 1048576.0, (double)ctx->desc.max_bytes / 1048576.0);
         return NULL;
     }
     void *p = ctx->desc.allocator.alloc(bytes, ctx->desc.allocator.user);
-    if (!p) ibl_fail(ctx, IBL_ERR_OUT_OF_MEMORY, "out of memory allocating %zu bytes", bytes);
+    if (!p) ibl__fail(ctx, IBL_ERR_OUT_OF_MEMORY, "out of memory allocating %zu bytes", bytes);
     return p;
 }
 
 void *ibl_calloc(ibl_context *ctx, size_t count, size_t size)
 {
     if (size != 0 && count > SIZE_MAX / size) {
-        ibl_fail(ctx, IBL_ERR_TOO_LARGE, "allocation size overflows");
+        ibl__fail(ctx, IBL_ERR_TOO_LARGE, "allocation size overflows");
         return NULL;
     }
     void *p = ibl_alloc(ctx, count * size);
@@ -283,10 +292,10 @@ void ibl_parallel_for(ibl_context *ctx, int count, ibl_task_fn task, void *task_
     pool_run(ctx->pool, count, task, task_arg);
 }
 
-ibl_status ibl_progress(ibl_context *ctx, const char *stage, double fraction)
+ibl_status ibl__progress(ibl_context *ctx, const char *stage, double fraction)
 {
     if (!ctx || !ctx->desc.progress) return IBL_OK;
     if (ctx->desc.progress(ctx->desc.progress_user, stage, fraction))
-        return ibl_fail(ctx, IBL_ERR_CANCELLED, "%s: cancelled", stage ? stage : "work");
+        return ibl__fail(ctx, IBL_ERR_CANCELLED, "%s: cancelled", stage ? stage : "work");
     return IBL_OK;
 }

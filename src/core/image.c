@@ -1,5 +1,6 @@
 /* Images, cubemaps and textures: allocation, views, metadata and the pixel policy. */
 #include "ibl/core.h"
+#include "core/context_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -44,11 +45,11 @@ ibl_status ibl_image_alloc(ibl_context *ctx, int width, int height, ibl_image *o
     if (!out) return IBL_ERR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
     if (width <= 0 || height <= 0)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "image size %dx%d is not positive", width,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "image size %dx%d is not positive", width,
                         height);
     size_t texels = (size_t)width * (size_t)height;
     if (texels > SIZE_MAX / (4 * sizeof(float)))
-        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "image size %dx%d overflows", width, height);
+        return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "image size %dx%d overflows", width, height);
     out->pixels = ibl_calloc(ctx, texels * 4, sizeof(float));
     if (!out->pixels) return ibl_context_status(ctx);
     out->width = width;
@@ -91,7 +92,7 @@ ibl_status ibl_sanitize_pixels(ibl_context *ctx, float *rgba, size_t texel_count
     }
     if (report) *report = r;
     if (r.inf_count && !clamp_infinite)
-        return ibl_fail(ctx, IBL_ERR_BAD_PIXELS,
+        return ibl__fail(ctx, IBL_ERR_BAD_PIXELS,
                         "%llu texels are infinite (use --clamp to clamp them)",
                         (unsigned long long)r.inf_count);
     return IBL_OK;
@@ -131,7 +132,7 @@ ibl_status ibl_cubemap_alloc(ibl_context *ctx, int size, int levels, ibl_cubemap
     memset(out, 0, sizeof *out);
     size_t n = ibl_cubemap_floats(size, levels);
     if (n == 0)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "invalid cubemap size %d with %d levels",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "invalid cubemap size %d with %d levels",
                         size, levels);
     float *data = ibl_calloc(ctx, n, sizeof(float));
     if (!data) return ibl_context_status(ctx);
@@ -201,7 +202,7 @@ ibl_status ibl_texture_alloc(ibl_context *ctx, ibl_texture_kind kind, int width,
     memset(out, 0, sizeof *out);
     size_t n = ibl_texture_floats(kind, width, height, depth, levels);
     if (n == 0)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "invalid texture dimensions %dx%dx%d with %d levels", width, height,
                         depth, levels);
     float *data = ibl_calloc(ctx, n, sizeof(float));

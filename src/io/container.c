@@ -1,5 +1,6 @@
 /* Helpers shared by the texture containers: see container.h. */
 #include "io/container.h"
+#include "core/context_internal.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -36,26 +37,26 @@ ibl_status ibl__check_dimensions(ibl_context *ctx, const char *name, ibl_texture
                                  uint64_t levels)
 {
     if (width == 0 || height == 0 || depth == 0)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: texture size %llux%llux%llu has a zero edge",
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: texture size %llux%llux%llu has a zero edge",
                         name, (unsigned long long)width, (unsigned long long)height,
                         (unsigned long long)depth);
     if (width > IBL_MAX_DIMENSION || height > IBL_MAX_DIMENSION || depth > IBL_MAX_DIMENSION)
-        return ibl_fail(ctx, IBL_ERR_TOO_LARGE,
+        return ibl__fail(ctx, IBL_ERR_TOO_LARGE,
                         "%s: texture size %llux%llux%llu exceeds the limit of %d texels per edge",
                         name, (unsigned long long)width, (unsigned long long)height,
                         (unsigned long long)depth, (int)IBL_MAX_DIMENSION);
     if (kind == IBL_TEXTURE_CUBE && width != height)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: cube map faces are %llux%llu, not square", name,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: cube map faces are %llux%llu, not square", name,
                         (unsigned long long)width, (unsigned long long)height);
     uint64_t max_dim = width > height ? width : height;
     if (kind == IBL_TEXTURE_3D && depth > max_dim) max_dim = depth;
     int full = ibl_full_mip_count((int)max_dim);
     if (levels == 0 || levels > (uint64_t)full)
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: %llu mip levels for a largest edge of %llu (at most %d possible)", name,
                         (unsigned long long)levels, (unsigned long long)max_dim, full);
     if (levels > IBL_MAX_LEVELS)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: %llu mip levels (at most %d supported)",
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: %llu mip levels (at most %d supported)",
                         name, (unsigned long long)levels, (int)IBL_MAX_LEVELS);
     return IBL_OK;
 }
@@ -63,19 +64,19 @@ ibl_status ibl__check_dimensions(ibl_context *ctx, const char *name, ibl_texture
 ibl_status ibl__check_texture(ibl_context *ctx, const ibl_texture *tex, const char *name)
 {
     if (!tex || !tex->data)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no texture data to write", name);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no texture data to write", name);
     if (tex->kind != IBL_TEXTURE_2D && tex->kind != IBL_TEXTURE_3D && tex->kind != IBL_TEXTURE_CUBE)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: unknown texture kind %d", name,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: unknown texture kind %d", name,
                         (int)tex->kind);
     if (tex->width <= 0 || tex->height <= 0 || tex->depth <= 0 || tex->levels <= 0 ||
         tex->width > IBL_MAX_DIMENSION || tex->height > IBL_MAX_DIMENSION ||
         tex->depth > IBL_MAX_DIMENSION ||
         ibl_texture_floats(tex->kind, tex->width, tex->height, tex->depth, tex->levels) == 0)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "%s: invalid texture dimensions %dx%dx%d with %d levels", name, tex->width,
                         tex->height, tex->depth, tex->levels);
     if (tex->metadata_count < 0 || (tex->metadata_count > 0 && !tex->metadata))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: invalid metadata list", name);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: invalid metadata list", name);
     return IBL_OK;
 }
 
@@ -108,21 +109,21 @@ ibl_status ibl__kv_build(ibl_context *ctx, const char *name, const ibl_key_value
         const ibl_key_value *kv = &tex->metadata[i];
         if (!kv->key || !kv->value || !kv->key[0]) {
             ibl_free(ctx, pairs);
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: metadata entry %d has no key",
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: metadata entry %d has no key",
                             name, i);
         }
         if (!reserved_key(kv->key)) pairs[n++] = *kv;
     }
     if (n > IBL__MAX_KEY_VALUES) {
         ibl_free(ctx, pairs);
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: %zu metadata entries (at most %d)",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: %zu metadata entries (at most %d)",
                         name, n, (int)IBL__MAX_KEY_VALUES);
     }
     qsort(pairs, n, sizeof *pairs, compare_pairs);
     size_t total = 0;
     for (size_t i = 0; i < n; i++) {
         if (i > 0 && strcmp(pairs[i - 1].key, pairs[i].key) == 0) {
-            ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: metadata key \"%s\" appears twice", name,
+            ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: metadata key \"%s\" appears twice", name,
                      pairs[i].key);
             ibl_free(ctx, pairs);
             return IBL_ERR_INVALID_ARGUMENT;
@@ -130,7 +131,7 @@ ibl_status ibl__kv_build(ibl_context *ctx, const char *name, const ibl_key_value
         size_t len = strlen(pairs[i].key) + 1 + strlen(pairs[i].value) + 1;
         if (len > 0x7fffffffu || total > (size_t)0x7fffffff) {
             ibl_free(ctx, pairs);
-            return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: metadata is too large", name);
+            return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: metadata is too large", name);
         }
         total += 4 + ((len + 3) & ~(size_t)3);
     }
@@ -160,21 +161,21 @@ ibl_status ibl__kv_parse(ibl_context *ctx, const char *name, const uint8_t *byte
     int count = 0;
     while (at < size) {
         if (++count > IBL__MAX_KEY_VALUES)
-            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: more than %d key/value entries", name,
+            return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: more than %d key/value entries", name,
                             (int)IBL__MAX_KEY_VALUES);
         if (size - at < 4)
-            return ibl_fail(ctx, IBL_ERR_FORMAT,
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: key/value data ends inside an entry's length at byte %zu", name, at);
         uint32_t len = ibl__rd32(bytes + at);
         at += 4;
         if (len > size - at)
-            return ibl_fail(ctx, IBL_ERR_FORMAT,
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: key/value entry of %u bytes runs past the key/value data", name,
                             len);
         const uint8_t *entry = bytes + at;
         const uint8_t *nul = memchr(entry, 0, len);
         if (!nul || nul == entry)
-            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: key/value entry at byte %zu has %s", name,
+            return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: key/value entry at byte %zu has %s", name,
                             at - 4, nul ? "an empty key" : "no NUL after its key");
         size_t klen = (size_t)(nul - entry);
         size_t vlen = len - klen - 1;
@@ -187,14 +188,14 @@ ibl_status ibl__kv_parse(ibl_context *ctx, const char *name, const uint8_t *byte
         value[vlen] = 0;
         ibl_status st = IBL_OK;
         if (ibl_texture_get_metadata(tex, key))
-            st = ibl_fail(ctx, IBL_ERR_FORMAT, "%s: metadata key \"%s\" appears twice", name, key);
+            st = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: metadata key \"%s\" appears twice", name, key);
         else if (ibl_texture_set_metadata(ctx, tex, key, value) != IBL_OK)
-            st = ibl_fail(ctx, IBL_ERR_OUT_OF_MEMORY, "%s: out of memory reading metadata", name);
+            st = ibl__fail(ctx, IBL_ERR_OUT_OF_MEMORY, "%s: out of memory reading metadata", name);
         ibl_free(ctx, key);
         if (st != IBL_OK) return st;
         size_t padded = ((size_t)len + 3) & ~(size_t)3;
         if (padded > size - at)
-            return ibl_fail(ctx, IBL_ERR_FORMAT,
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: key/value data ends inside the padding of an entry", name);
         at += padded;
     }

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "core/pixel_format.h"
+#include "core/context_internal.h"
 #include "io/container.h"
 
 enum {
@@ -94,7 +95,7 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
                            const char *name, void **bytes, size_t *size)
 {
     if (!name) name = "<dds>";
-    if (!bytes || !size) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output", name);
+    if (!bytes || !size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output", name);
     *bytes = NULL;
     *size = 0;
     ibl_status st = ibl__check_texture(ctx, tex, name);
@@ -102,7 +103,7 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
     ibl_format fmt = ibl__container_format(tex, desc);
     const dxgi_map *dx = map_format(fmt);
     if (!dx)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: DDS output does not support pixel format %s (use rgba16f, rgba32f, "
                         "rg11b10f, rgb9e5, rg16f or rg32f)",
                         name, ibl_format_name(fmt));
@@ -115,7 +116,7 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
         total += ibl__level_texels(tex->kind, tex->width, tex->height, tex->depth, l) * texel *
                  (uint64_t)faces;
     if (total > SIZE_MAX)
-        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
+        return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
     uint8_t *buf = ibl_calloc(ctx, (size_t)total, 1);
     if (!buf) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
 
@@ -171,23 +172,23 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
                            ibl_texture *out, ibl_file_info *info)
 {
     if (!name) name = "<dds>";
-    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
     memset(out, 0, sizeof *out);
-    if (!bytes && size) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
+    if (!bytes && size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
     if (size < 4 || ibl__rd32(bytes) != DDS_MAGIC)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: not a DDS file (wrong magic)", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a DDS file (wrong magic)", name);
     if (size < DATA_OFFSET_LEGACY)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated DDS header (%zu of %d bytes)", name,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated DDS header (%zu of %d bytes)", name,
                         size, DATA_OFFSET_LEGACY);
     const uint8_t *h = bytes + 4;
     if (ibl__rd32(h) != HEADER_SIZE || ibl__rd32(h + 72) != PIXELFORMAT_SIZE)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: DDS header size %u / pixel format size %u "
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: DDS header size %u / pixel format size %u "
                         "(must be 124 / 32)", name, ibl__rd32(h), ibl__rd32(h + 72));
     uint32_t height = ibl__rd32(h + 8), width = ibl__rd32(h + 12), depth = ibl__rd32(h + 20);
     uint32_t mips = ibl__rd32(h + 24), pf_flags = ibl__rd32(h + 76), fourcc = ibl__rd32(h + 80);
     uint32_t caps2 = ibl__rd32(h + 108);
     if (!(pf_flags & DDPF_FOURCC))
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: DDS with an RGB bit-mask pixel format is not supported (only float "
                         "formats)", name);
 
@@ -196,44 +197,44 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     size_t data_at;
     if (fourcc == FOURCC_DX10) {
         if (size < DATA_OFFSET_DX10)
-            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated DX10 header", name);
+            return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated DX10 header", name);
         const uint8_t *x = bytes + 4 + HEADER_SIZE;
         uint32_t dxgi = ibl__rd32(x), dim = ibl__rd32(x + 4), misc = ibl__rd32(x + 8);
         uint32_t array = ibl__rd32(x + 12);
         dx = map_dxgi(dxgi);
         if (!dx)
-            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+            return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                             "%s: unsupported DXGI format %u (supported: 10 R16G16B16A16_FLOAT, 2 "
                             "R32G32B32A32_FLOAT, 26 R11G11B10_FLOAT, 67 R9G9B9E5_SHAREDEXP, 34 "
                             "R16G16_FLOAT, 16 R32G32_FLOAT)",
                             name, dxgi);
         if (array != 1)
-            return ibl_fail(ctx, array == 0 ? IBL_ERR_FORMAT : IBL_ERR_UNSUPPORTED,
+            return ibl__fail(ctx, array == 0 ? IBL_ERR_FORMAT : IBL_ERR_UNSUPPORTED,
                             "%s: arraySize %u (only single textures are supported)", name, array);
         if (dim == DIM_TEXTURE3D) {
             kind = IBL_TEXTURE_3D;
         } else if (dim == DIM_TEXTURE2D || dim == DIM_TEXTURE1D) {
             if (misc & MISC_TEXTURECUBE) {
                 if (dim != DIM_TEXTURE2D)
-                    return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: a 1D texture flagged as a cube", name);
+                    return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: a 1D texture flagged as a cube", name);
                 kind = IBL_TEXTURE_CUBE;
             }
             if (dim == DIM_TEXTURE1D && height > 1)
-                return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: a 1D texture with height %u", name,
+                return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: a 1D texture with height %u", name,
                                 height);
         } else {
-            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: invalid resourceDimension %u", name, dim);
+            return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: invalid resourceDimension %u", name, dim);
         }
         data_at = DATA_OFFSET_DX10;
     } else {
         dx = map_fourcc(fourcc);
         if (!dx)
-            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+            return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                             "%s: unsupported DDS FourCC 0x%08x (supported: DX10, 112, 113, 115, 116)",
                             name, fourcc);
         if (caps2 & DDSCAPS2_CUBEMAP) {
             if ((caps2 & DDSCAPS2_CUBEMAP_ALLFACES) != DDSCAPS2_CUBEMAP_ALLFACES)
-                return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+                return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                                 "%s: cube map with missing faces is not supported", name);
             kind = IBL_TEXTURE_CUBE;
         } else if (caps2 & DDSCAPS2_VOLUME) {
@@ -242,7 +243,7 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
         data_at = DATA_OFFSET_LEGACY;
     }
     if (kind == IBL_TEXTURE_3D && depth == 0)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: volume texture with depth 0", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: volume texture with depth 0", name);
     if (kind != IBL_TEXTURE_3D) depth = 1;
     uint64_t levels = mips ? mips : 1;
     ibl_status st = ibl__check_dimensions(ctx, name, kind, width, height, depth, levels);
@@ -254,7 +255,7 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     for (int l = 0; l < (int)levels; l++)
         need += ibl__level_texels(kind, w, hh, d, l) * texel * (uint64_t)faces;
     if (need > size - data_at)
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: truncated: the texture needs %llu bytes of data, the file has %zu",
                         name, (unsigned long long)need, size - data_at);
 

@@ -10,6 +10,7 @@
  * data window outside it are cropped, display pixels without data are 0 (alpha 0).
  * Write: R,G,B(,A) as half or float, scanline, with the chosen lossless compression. */
 #include "io/exr_bridge.h"
+#include "core/context_internal.h"
 #include "io/io_internal.h"
 
 #include <stdatomic.h>
@@ -184,13 +185,13 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
 {
     memset(sh, 0, sizeof *sh);
     if (size < 8 || le32(b) != 20000630)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: not an OpenEXR file", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not an OpenEXR file", name);
     uint32_t version = (uint32_t)le32(b + 4);
     if ((version & 0xFF) != 2)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR version %u is not supported", name,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR version %u is not supported", name,
                         version & 0xFF);
     if (version & ~(uint32_t)0x1EFF)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: unknown OpenEXR feature flags 0x%x", name,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: unknown OpenEXR feature flags 0x%x", name,
                         version);
     sh->tiled = (version & 0x200) != 0;
     sh->multipart = (version & 0x1000) != 0;
@@ -210,36 +211,36 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
         }
         problem = walk_header(b, size, &pos, max_name, sh, 0);
     }
-    if (problem) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: %s", name, problem);
+    if (problem) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: %s", name, problem);
     if (sh->deep)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: deep OpenEXR data is not supported", name);
-    if (sh->channels == 0) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: no channels", name);
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: deep OpenEXR data is not supported", name);
+    if (sh->channels == 0) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: no channels", name);
     if (!sh->has_data || !sh->has_display)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: no data or display window", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR: no data or display window", name);
     for (int axis = 0; axis < 2; axis++) {
         int64_t d = box_extent(sh->data, axis), v = box_extent(sh->display, axis);
         if (d <= 0 || v <= 0 || d > IBL_MAX_DIMENSION || v > IBL_MAX_DIMENSION)
-            return ibl_fail(ctx, IBL_ERR_FORMAT,
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: absurd OpenEXR window (data %lldx%lld, display %lldx%lld)", name,
                             (long long)box_extent(sh->data, 0), (long long)box_extent(sh->data, 1),
                             (long long)box_extent(sh->display, 0), (long long)box_extent(sh->display, 1));
     }
     if (sh->compression < 0 || sh->compression > 9)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: unknown OpenEXR compression %d", name,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: unknown OpenEXR compression %d", name,
                         sh->compression);
     uint64_t w = (uint64_t)box_extent(sh->data, 0), h = (uint64_t)box_extent(sh->data, 1);
     uint64_t chunks;
     if (sh->tiled) {
         if (!sh->has_tiles || sh->tile_w == 0 || sh->tile_h == 0 || sh->tile_w > 0x7FFFFFFFu ||
             sh->tile_h > 0x7FFFFFFFu)
-            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR tile description", name);
+            return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: malformed OpenEXR tile description", name);
         /* OpenEXR allocates a tile (tile_w x tile_h pixels) per buffer and, reading through
          * InputFile, a row of tiles (width x tile_h of every channel): keep both sane. */
         uint64_t th = sh->tile_h;
         if (sh->tile_w > IBL_MAX_DIMENSION || th > IBL_MAX_DIMENSION ||
             (uint64_t)sh->tile_w * th * sh->pixel_bytes > EXR_MAX_BUFFER ||
             w * th * 4 * (uint64_t)(sh->channels < 4 ? sh->channels : 4) > EXR_MAX_BUFFER)
-            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR tiles of %ux%u are too large",
+            return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR tiles of %ux%u are too large",
                             name, sh->tile_w, sh->tile_h);
         /* Level 0 comes first in the offset table; only its tiles are read. */
         chunks = ((w + sh->tile_w - 1) / sh->tile_w) * ((h + sh->tile_h - 1) / sh->tile_h);
@@ -247,23 +248,23 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
         uint64_t lpc = (uint64_t)lines_per_chunk[sh->compression];
         chunks = (h + lpc - 1) / lpc;
         if (w * lpc * sh->pixel_bytes > EXR_MAX_BUFFER)
-            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR scanline blocks are too large", name);
+            return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR scanline blocks are too large", name);
     }
     /* Every chunk of level 0 must exist: offset in the file, its header and data inside. */
     if (chunks > (size - pos) / 8)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated OpenEXR (offset table)", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated OpenEXR (offset table)", name);
     sh->table = pos;
     size_t table_end = pos + (size_t)chunks * 8;
     size_t chunk_header = (sh->multipart ? 4u : 0u) + (sh->tiled ? 16u : 4u);
     for (uint64_t i = 0; i < chunks; i++) {
         uint64_t off = le64(b + pos + i * 8);
         if (off < table_end || off > size || size - off < chunk_header + 4)
-            return ibl_fail(ctx, IBL_ERR_FORMAT,
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: truncated or incomplete OpenEXR (chunk %llu of %llu missing)", name,
                             (unsigned long long)i, (unsigned long long)chunks);
         int32_t packed = le32(b + off + chunk_header);
         if (packed < 0 || (uint64_t)packed > size - off - chunk_header - 4)
-            return ibl_fail(ctx, IBL_ERR_FORMAT,
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: truncated OpenEXR (chunk %llu of %llu cut short)", name,
                             (unsigned long long)i, (unsigned long long)chunks);
     }
@@ -599,14 +600,14 @@ ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     ibl__exr_reader *reader = NULL;
     ibl__exr_header hd;
     int rc = ibl__exr_open(bytes, size, &reader, &hd, err, sizeof err);
-    if (rc) return ibl_fail(ctx, (ibl_status)rc, "%s: %s", name, err);
+    if (rc) return ibl__fail(ctx, (ibl_status)rc, "%s: %s", name, err);
     /* OpenEXR parsed the same windows; trust only what was checked above. */
     if (hd.data_min_x != sh.data[0] || hd.data_min_y != sh.data[1] || hd.data_max_x != sh.data[2] ||
         hd.data_max_y != sh.data[3] || hd.display_min_x != sh.display[0] ||
         hd.display_min_y != sh.display[1] || hd.display_max_x != sh.display[2] ||
         hd.display_max_y != sh.display[3]) {
         ibl__exr_close(reader);
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: inconsistent OpenEXR windows", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: inconsistent OpenEXR windows", name);
     }
     int dw = (int)box_extent(sh.data, 0), dh = (int)box_extent(sh.data, 1);
     int vw = (int)box_extent(sh.display, 0), vh = (int)box_extent(sh.display, 1);
@@ -645,7 +646,7 @@ ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     if (rc) {
         if (!same) ibl_free(ctx, target);
         ibl_texture_free(ctx, out);
-        return ibl_fail(ctx, (ibl_status)rc, "%s: %s", name, err);
+        return ibl__fail(ctx, (ibl_status)rc, "%s: %s", name, err);
     }
     if (!same) {
         /* Copy the overlap of the data window into the display window. */
@@ -697,7 +698,7 @@ ibl_status ibl__exr_encode(ibl_context *ctx, const ibl_image *image, const ibl_w
     case IBL_FORMAT_RGBA32F: channels = 4; half = 0; break;
     case IBL_FORMAT_RGB32F: channels = 3; half = 0; break;
     default:
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: OpenEXR output stores rgba16f, rgb16f, rgba32f or rgb32f, not %s", name,
                         ibl_format_name(desc->format));
     }
@@ -710,12 +711,12 @@ ibl_status ibl__exr_encode(ibl_context *ctx, const ibl_image *image, const ibl_w
     case IBL_EXR_DEFAULT:
     case IBL_EXR_ZIP: compression = 3; break;
     default:
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: unknown OpenEXR compression %d", name,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: unknown OpenEXR compression %d", name,
                         (int)desc->exr_compression);
     }
     char err[256] = "";
     int rc = ibl__exr_write(image->pixels, image->width, image->height, channels, half, compression,
                             exr_alloc, ctx, bytes, size, err, sizeof err);
-    if (rc) return ibl_fail(ctx, (ibl_status)rc, "%s: cannot encode OpenEXR: %s", name, err);
+    if (rc) return ibl__fail(ctx, (ibl_status)rc, "%s: cannot encode OpenEXR: %s", name, err);
     return IBL_OK;
 }

@@ -2,6 +2,7 @@
  * pixel policy and the writers' choice of container. The per-format code lives in
  * hdr.c, exr.c, pfm.c, stb.c and the container files; see io_internal.h for the contract. */
 #include "io/io_internal.h"
+#include "core/context_internal.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -93,7 +94,7 @@ ibl_status ibl__fail_named(ibl_context *ctx, ibl_status status, const char *name
     char saved[400];
     const char *m = ibl_context_message(ctx);
     snprintf(saved, sizeof saved, "%s", m && m[0] ? m : ibl_status_name(status));
-    return ibl_fail(ctx, status, "%s: %s", name, saved);
+    return ibl__fail(ctx, status, "%s: %s", name, saved);
 }
 
 static ibl_status read_all(ibl_context *ctx, int fd, const char *path, uint8_t *dst, size_t size,
@@ -104,7 +105,7 @@ static ibl_status read_all(ibl_context *ctx, int fd, const char *path, uint8_t *
         ssize_t n = read(fd, dst + done, size - done);
         if (n < 0) {
             if (errno == EINTR) continue;
-            return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot read: %s", path, strerror(errno));
+            return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot read: %s", path, strerror(errno));
         }
         if (n == 0) break;
         done += (size_t)n;
@@ -163,7 +164,7 @@ static ibl_status read_parallel(ibl_context *ctx, int fd, const char *path, uint
     for (int i = 0; i < chunks; i++) {
         done += j->got[i];
         if (j->err[i]) {
-            s = ibl_fail(ctx, IBL_ERR_IO, "%s: cannot read: %s", path, strerror(j->err[i]));
+            s = ibl__fail(ctx, IBL_ERR_IO, "%s: cannot read: %s", path, strerror(j->err[i]));
             break;
         }
         if (j->got[i] < (i == chunks - 1 ? size - (size_t)i * j->chunk : j->chunk)) break;
@@ -176,22 +177,22 @@ static ibl_status read_parallel(ibl_context *ctx, int fd, const char *path, uint
 ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_t *size)
 {
     if (!path || !bytes || !size)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_file: missing argument");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_file: missing argument");
     *bytes = NULL;
     *size = 0;
     int fd;
     do fd = open(path, O_RDONLY | O_CLOEXEC);
     while (fd < 0 && errno == EINTR);
-    if (fd < 0) return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    if (fd < 0) return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
     struct stat st;
     if (fstat(fd, &st) != 0) {
         int e = errno;
         close(fd);
-        return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(e));
+        return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(e));
     }
     if (S_ISDIR(st.st_mode)) {
         close(fd);
-        return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(EISDIR));
+        return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(EISDIR));
     }
     ibl_status s = IBL_OK;
     uint8_t *buf = NULL;
@@ -200,7 +201,7 @@ ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_
         /* The size is known: one allocation, which the context's memory limit may refuse. */
         if ((uint64_t)st.st_size > (uint64_t)SIZE_MAX) {
             close(fd);
-            return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: file too large", path);
+            return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: file too large", path);
         }
         size_t want = (size_t)st.st_size;
         buf = ibl_alloc(ctx, want ? want : 1);
@@ -213,7 +214,7 @@ ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_
                 ? read_parallel(ctx, fd, path, buf, want, &used)
                 : read_all(ctx, fd, path, buf, want, &used);
         if (s == IBL_OK && used != want)
-            s = ibl_fail(ctx, IBL_ERR_IO, "%s: file shrank while being read", path);
+            s = ibl__fail(ctx, IBL_ERR_IO, "%s: file shrank while being read", path);
     } else {
         /* Pipes and devices: grow geometrically; the memory limit bounds the total. */
         size_t cap = 0;
@@ -221,7 +222,7 @@ ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_
             if (used == cap) {
                 size_t ncap = cap ? cap * 2 : 65536;
                 if (ncap < cap) {
-                    s = ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: file too large", path);
+                    s = ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: file too large", path);
                     break;
                 }
                 uint8_t *grown = ibl_alloc(ctx, ncap);
@@ -277,10 +278,10 @@ ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void 
                                  size_t size)
 {
     if (!path || !path[0] || (!bytes && size))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_file_atomic: missing argument");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_file_atomic: missing argument");
     const char *slash = strrchr(path, '/');
     const char *base = slash ? slash + 1 : path;
-    if (!base[0]) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: not a file name", path);
+    if (!base[0]) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: not a file name", path);
     size_t dir_len = slash ? (size_t)(slash - path) + 1 : 0;
     /* "<dir>/.<base>.tmp-XXXXXX": same folder, so rename() stays on one file system. */
     size_t tmp_len = dir_len + 1 + strlen(base) + 12;
@@ -293,7 +294,7 @@ ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void 
     if (fd < 0) {
         int e = errno;
         ibl_free(ctx, tmp);
-        return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot create a temporary file next to it: %s", path,
+        return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot create a temporary file next to it: %s", path,
                         strerror(e));
     }
     /* mkstemp makes the file 0600; an output should look like any other: keep the mode of
@@ -320,10 +321,10 @@ ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void 
         what = "close";
     }
     /* last chance to cancel (Ctrl-C in the CLI): the target is still untouched */
-    if (s == IBL_OK && ibl_progress(ctx, "write", 1.0) == IBL_ERR_CANCELLED) {
+    if (s == IBL_OK && ibl__progress(ctx, "write", 1.0) == IBL_ERR_CANCELLED) {
         unlink(tmp);
         ibl_free(ctx, tmp);
-        return ibl_fail(ctx, IBL_ERR_CANCELLED, "%s: cancelled; nothing written", path);
+        return ibl__fail(ctx, IBL_ERR_CANCELLED, "%s: cancelled; nothing written", path);
     }
     if (s == IBL_OK && rename(tmp, path) != 0) {
         s = IBL_ERR_IO;
@@ -333,7 +334,7 @@ ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void 
     if (s != IBL_OK) {
         unlink(tmp);
         ibl_free(ctx, tmp);
-        return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot %s: %s", path, what, strerror(err));
+        return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot %s: %s", path, what, strerror(err));
     }
     ibl_free(ctx, tmp);
     /* The folder is not fsync'ed after the rename: the data was, so after a crash the name
@@ -391,7 +392,7 @@ static ibl_status sanitize(ibl_context *ctx, float *rgba, size_t count, int clam
     if (report) *report = r;
     /* the message of ibl_sanitize_pixels, for the whole image */
     if (r.inf_count && !clamp_infinite)
-        return ibl_fail(ctx, IBL_ERR_BAD_PIXELS, "%llu texels are infinite (use --clamp to clamp them)",
+        return ibl__fail(ctx, IBL_ERR_BAD_PIXELS, "%llu texels are infinite (use --clamp to clamp them)",
                         (unsigned long long)r.inf_count);
     return IBL_OK;
 }
@@ -401,7 +402,7 @@ ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, 
 {
     if (!name) name = "<memory>";
     if (!out || (!bytes && size))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: missing argument", name);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: missing argument", name);
     memset(out, 0, sizeof *out);
     ibl_read_desc rd;
     memset(&rd, 0, sizeof rd);
@@ -421,7 +422,7 @@ ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, 
     case IBL_FILE_KTX1: s = ibl__ktx1_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_DDS: s = ibl__dds_decode(ctx, b, size, name, out, &fi); break;
     default:
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: not a supported image file (%s; expected Radiance HDR, OpenEXR, "
                         "PFM, PNG, JPEG, KTX2, KTX or DDS)",
                         name, size < 4 ? "too short to identify" : "unknown magic bytes");
@@ -452,7 +453,7 @@ ibl_status ibl_read_texture(ibl_context *ctx, const char *path, const ibl_read_d
                             ibl_texture *out, ibl_file_info *info)
 {
     if (!out || !path)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_texture: missing argument");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_texture: missing argument");
     memset(out, 0, sizeof *out);
     void *bytes = NULL;
     size_t size = 0;
@@ -467,14 +468,14 @@ ibl_status ibl_read_image(ibl_context *ctx, const char *path, const ibl_read_des
                           ibl_image *out, ibl_file_info *info)
 {
     if (!out || !path)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_image: missing argument");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_image: missing argument");
     memset(out, 0, sizeof *out);
     ibl_texture tex;
     ibl_status s = ibl_read_texture(ctx, path, desc, &tex, info);
     if (s != IBL_OK) return s;
     if (tex.kind != IBL_TEXTURE_2D) {
         ibl_texture_free(ctx, &tex);
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: holds a %s texture, not a flat image",
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: holds a %s texture, not a flat image",
                         path, tex.kind == IBL_TEXTURE_CUBE ? "cube" : "3D");
     }
     if (tex.levels == 1 && tex.owns_data) {
@@ -500,7 +501,7 @@ ibl_status ibl_read_image(ibl_context *ctx, const char *path, const ibl_read_des
 static ibl_status check_image(ibl_context *ctx, const char *name, const ibl_image *image)
 {
     if (!image || !image->pixels || image->width <= 0 || image->height <= 0)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: empty image", name);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: empty image", name);
     return IBL_OK;
 }
 
@@ -531,7 +532,7 @@ static ibl_status encode_flat(ibl_context *ctx, ibl_file_type type, const ibl_im
     case IBL_FILE_JPEG: return ibl__jpeg_encode(ctx, image, desc, name, bytes, size);
     default: break;
     }
-    return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: not a flat image type", name);
+    return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: not a flat image type", name);
 }
 
 static ibl_status encode_container(ibl_context *ctx, ibl_file_type type, const ibl_texture *tex,
@@ -544,12 +545,12 @@ static ibl_status encode_container(ibl_context *ctx, ibl_file_type type, const i
     case IBL_FILE_DDS: return ibl__dds_encode(ctx, tex, desc, name, bytes, size);
     default: break;
     }
-    return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: not a texture container type", name);
+    return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: not a texture container type", name);
 }
 
 static ibl_status unknown_extension(ibl_context *ctx, const char *path)
 {
-    return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+    return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                     "%s: unknown output extension (use .hdr .exr .pfm .png .jpg .ktx2 .ktx .dds)",
                     path);
 }
@@ -565,7 +566,7 @@ static ibl_status write_encoded(ibl_context *ctx, const char *path, ibl_status s
 ibl_status ibl_write_image(ibl_context *ctx, const char *path, const ibl_image *image,
                            const ibl_write_desc *desc)
 {
-    if (!path) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_image: missing path");
+    if (!path) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_image: missing path");
     ibl_status s = check_image(ctx, path, image);
     if (s != IBL_OK) return s;
     ibl_write_desc wd;
@@ -588,7 +589,7 @@ ibl_status ibl_encode_texture(ibl_context *ctx, ibl_file_type type, const ibl_te
                               const ibl_write_desc *desc, void **bytes, size_t *size)
 {
     if (!texture || !texture->data || !bytes || !size)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_encode_texture: missing argument");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_encode_texture: missing argument");
     *bytes = NULL;
     *size = 0;
     ibl_write_desc wd;
@@ -598,10 +599,10 @@ ibl_status ibl_encode_texture(ibl_context *ctx, ibl_file_type type, const ibl_te
     if (ibl_file_type_is_container(type))
         return encode_container(ctx, type, texture, &wd, name, bytes, size);
     if (type == IBL_FILE_UNKNOWN)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_encode_texture: unknown file type");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_encode_texture: unknown file type");
     /* A flat format holds one 2D image: accept exactly that, never drop levels silently. */
     if (texture->kind != IBL_TEXTURE_2D || texture->levels != 1)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: holds one flat image; write cubes, 3D textures and mips to "
                         ".ktx2, .ktx or .dds",
                         name);
@@ -612,9 +613,9 @@ ibl_status ibl_encode_texture(ibl_context *ctx, ibl_file_type type, const ibl_te
 ibl_status ibl_write_texture(ibl_context *ctx, const char *path, const ibl_texture *texture,
                              const ibl_write_desc *desc)
 {
-    if (!path) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_texture: missing path");
+    if (!path) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_texture: missing path");
     if (!texture || !texture->data)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: empty texture", path);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: empty texture", path);
     ibl_file_type type = ibl_file_type_from_path(path);
     if (type == IBL_FILE_UNKNOWN) return unknown_extension(ctx, path);
     ibl_write_desc wd;
@@ -626,7 +627,7 @@ ibl_status ibl_write_texture(ibl_context *ctx, const char *path, const ibl_textu
     if (ibl_file_type_is_container(type)) {
         s = encode_container(ctx, type, texture, &wd, path, &bytes, &size);
     } else if (texture->kind != IBL_TEXTURE_2D || texture->levels != 1) {
-        s = ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        s = ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                      "%s: .%s holds one flat image; write cubes, 3D textures and mips to "
                      ".ktx2, .ktx or .dds",
                      path, ibl_file_type_name(type));

@@ -8,6 +8,7 @@
  * EXPOSURE= lines are ignored (as stb_image, OpenImageIO and most tools do): the values are
  * returned as stored. Only FORMAT=32-bit_rle_rgbe is accepted (XYZE is refused). */
 #include "io/io_internal.h"
+#include "core/context_internal.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -67,14 +68,14 @@ static ibl_status parse_header(ibl_context *ctx, const uint8_t *b, size_t size, 
 {
     memset(lay, 0, sizeof *lay);
     if (size < 2 || b[0] != '#' || b[1] != '?')
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: not a Radiance file (no \"#?\" signature)", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a Radiance file (no \"#?\" signature)", name);
     size_t pos = 0, len = 0;
     const uint8_t *line = next_line(b, size, &pos, &len); /* "#?RADIANCE" */
-    if (!line) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated Radiance header", name);
+    if (!line) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated Radiance header", name);
     for (;;) {
         line = next_line(b, size, &pos, &len);
         if (!line)
-            return ibl_fail(ctx, IBL_ERR_FORMAT,
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: truncated Radiance header (no empty line before the resolution)",
                             name);
         if (len && line[len - 1] == '\r') len--;
@@ -85,30 +86,30 @@ static ibl_status parse_header(ibl_context *ctx, const uint8_t *b, size_t size, 
             while (vl && (v[vl - 1] == ' ' || v[vl - 1] == '\t')) vl--;
             if (vl == 15 && memcmp(v, "32-bit_rle_rgbe", 15) == 0) continue;
             if (vl == 15 && memcmp(v, "32-bit_rle_xyze", 15) == 0)
-                return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+                return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                                 "%s: XYZE Radiance files are not supported (only RGBE)", name);
-            return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: unknown Radiance FORMAT \"%.*s\"", name,
+            return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: unknown Radiance FORMAT \"%.*s\"", name,
                             (int)(vl > 40 ? 40 : vl), (const char *)v);
         }
         /* EXPOSURE, PRIMARIES, COLORCORR, comments, program lines: ignored. */
     }
     line = next_line(b, size, &pos, &len);
-    if (!line) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated Radiance resolution line", name);
+    if (!line) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated Radiance resolution line", name);
     if (len && line[len - 1] == '\r') len--;
     size_t i = 0;
     char s1, a1, s2, a2;
     long v1, v2;
     if (!parse_axis(line, len, &i, &s1, &a1, &v1) || !parse_axis(line, len, &i, &s2, &a2, &v2) ||
         a1 == a2)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: bad Radiance resolution line \"%.*s\"", name,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: bad Radiance resolution line \"%.*s\"", name,
                         (int)(len > 40 ? 40 : len), (const char *)line);
     if (a1 == 'X')
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: column-major Radiance orientation \"%.*s\" is not supported "
                         "(expected \"-Y H +X W\")",
                         name, (int)(len > 40 ? 40 : len), (const char *)line);
     if (v1 <= 0 || v2 <= 0 || v1 > IBL_MAX_DIMENSION || v2 > IBL_MAX_DIMENSION)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: absurd Radiance image size %ldx%ld", name, v2, v1);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: absurd Radiance image size %ldx%ld", name, v2, v1);
     lay->height = (int)v1;
     lay->width = (int)v2;
     lay->flip_y = s1 == '+';
@@ -194,7 +195,7 @@ ibl_status ibl__hdr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
         const char *problem = read_scanline(&p, end, w, scan);
         if (problem) {
             ibl_free(ctx, scan);
-            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: %s in scanline %d of %d", name, problem, y, h);
+            return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: %s in scanline %d of %d", name, problem, y, h);
         }
     }
     s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, w, h, 1, 1, out);
@@ -298,10 +299,10 @@ ibl_status ibl__hdr_encode(ibl_context *ctx, const ibl_image *image, const ibl_w
 {
     int w = image->width, h = image->height;
     if (desc->format != IBL_FORMAT_DEFAULT && desc->format != IBL_FORMAT_RGBE)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: Radiance files store only rgbe, not %s",
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: Radiance files store only rgbe, not %s",
                         name, ibl_format_name(desc->format));
     if (w > IBL_MAX_DIMENSION || h > IBL_MAX_DIMENSION)
-        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: image %dx%d too large", name, w, h);
+        return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: image %dx%d too large", name, w, h);
     int rle = !desc->hdr_no_rle && w >= 8 && w <= 0x7fff;
     char header[160];
     int hl = snprintf(header, sizeof header,

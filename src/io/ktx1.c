@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "core/pixel_format.h"
+#include "core/context_internal.h"
 #include "io/container.h"
 
 static const uint8_t KTX1_IDENTIFIER[12] = {0xAB, 0x4B, 0x54, 0x58, 0x20, 0x31,
@@ -70,7 +71,7 @@ ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
                             const char *name, void **bytes, size_t *size)
 {
     if (!name) name = "<ktx>";
-    if (!bytes || !size) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output", name);
+    if (!bytes || !size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output", name);
     *bytes = NULL;
     *size = 0;
     ibl_status st = ibl__check_texture(ctx, tex, name);
@@ -78,7 +79,7 @@ ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     ibl_format fmt = ibl__container_format(tex, desc);
     const gl_map *gl = map_format(fmt);
     if (!gl)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: KTX1 output does not support pixel format %s (use rgba16f, rgba32f, "
                         "rg11b10f, rgb9e5, rg16f or rg32f)",
                         name, ibl_format_name(fmt));
@@ -96,7 +97,7 @@ ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     if (st != IBL_OK) return st;
     if (kvd_len > UINT32_MAX) {
         ibl_free(ctx, kvd);
-        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: metadata is too large", name);
+        return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: metadata is too large", name);
     }
 
     uint64_t total = HEADER_BYTES + kvd_len;
@@ -105,7 +106,7 @@ ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
         uint64_t image = cube ? face : face * (uint64_t)faces;
         if (image > UINT32_MAX) {
             ibl_free(ctx, kvd);
-            return ibl_fail(ctx, IBL_ERR_TOO_LARGE,
+            return ibl__fail(ctx, IBL_ERR_TOO_LARGE,
                             "%s: level %d needs %llu bytes, over KTX1's 4 GiB imageSize", name, l,
                             (unsigned long long)image);
         }
@@ -113,7 +114,7 @@ ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     }
     if (total > SIZE_MAX) {
         ibl_free(ctx, kvd);
-        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
+        return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
     }
     uint8_t *buf = ibl_calloc(ctx, (size_t)total, 1);
     if (!buf) {
@@ -161,18 +162,18 @@ static ibl_status orientation(ibl_context *ctx, const char *name, const ibl_text
     if (!o) return IBL_OK;
     for (const char *p = o; *p;) {
         if (!p[0] || !p[1] || p[1] != '=' || !p[2])
-            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: invalid KTXorientation \"%s\"", name, o);
+            return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: invalid KTXorientation \"%s\"", name, o);
         char axis = p[0], dir = p[2];
         if (axis == 'S' && (dir == 'r' || dir == 'l')) flips[0] = dir == 'l';
         else if (axis == 'T' && (dir == 'd' || dir == 'u')) flips[1] = dir == 'u';
         else if (axis == 'R' && (dir == 'i' || dir == 'o')) flips[2] = dir == 'o';
-        else return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: invalid KTXorientation \"%s\"", name, o);
+        else return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: invalid KTXorientation \"%s\"", name, o);
         p += 3;
         if (*p == ',') p++;
-        else if (*p) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: invalid KTXorientation \"%s\"", name, o);
+        else if (*p) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: invalid KTXorientation \"%s\"", name, o);
     }
     if (tex->kind == IBL_TEXTURE_CUBE && (flips[0] || flips[1]))
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: cube map faces must be stored S=r,T=d, the file says \"%s\"", name, o);
     if (tex->kind != IBL_TEXTURE_3D) flips[2] = 0;
     return IBL_OK;
@@ -182,20 +183,20 @@ ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
                             ibl_texture *out, ibl_file_info *info)
 {
     if (!name) name = "<ktx>";
-    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
     memset(out, 0, sizeof *out);
-    if (!bytes && size) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
+    if (!bytes && size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
     if (size < 12 || memcmp(bytes, KTX1_IDENTIFIER, 12) != 0)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: not a KTX 1 file (wrong identifier)", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a KTX 1 file (wrong identifier)", name);
     if (size < HEADER_BYTES)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated KTX header (%zu of %d bytes)", name,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated KTX header (%zu of %d bytes)", name,
                         size, HEADER_BYTES);
     uint32_t endian = ibl__rd32(bytes + 12);
     if (endian == 0x01020304u)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: big-endian KTX files are not supported",
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: big-endian KTX files are not supported",
                         name);
     if (endian != ENDIAN_REF)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: invalid endianness field 0x%08x", name, endian);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: invalid endianness field 0x%08x", name, endian);
     uint32_t type = ibl__rd32(bytes + 16), gl_format = ibl__rd32(bytes + 24);
     uint32_t internal = ibl__rd32(bytes + 28);
     uint32_t width = ibl__rd32(bytes + 36), height = ibl__rd32(bytes + 40);
@@ -205,20 +206,20 @@ ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
 
     const gl_map *gl = map_gl(internal);
     if (!gl || gl->type != type || gl->gl_format != gl_format)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: unsupported GL format (glInternalFormat 0x%04x, glFormat 0x%04x, "
                         "glType 0x%04x); supported: RGBA16F, RGBA32F, R11F_G11F_B10F, RGB9_E5, "
                         "RG16F, RG32F",
                         name, internal, gl_format, type);
     if (elements != 0)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: array textures (%u elements) are not supported",
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: array textures (%u elements) are not supported",
                         name, elements);
     if (faces != 1 && faces != 6)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: numberOfFaces %u (must be 1 or 6)", name, faces);
-    if (width == 0) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: pixelWidth is 0", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: numberOfFaces %u (must be 1 or 6)", name, faces);
+    if (width == 0) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: pixelWidth is 0", name);
     ibl_texture_kind kind = faces == 6 ? IBL_TEXTURE_CUBE : depth ? IBL_TEXTURE_3D : IBL_TEXTURE_2D;
     if ((faces == 6 && depth != 0) || (depth != 0 && height == 0))
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: pixelDepth %u with %u faces and height %u", name,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: pixelDepth %u with %u faces and height %u", name,
                         depth, faces, height);
     uint64_t levels = level_count ? level_count : 1;
     ibl_status st = ibl__check_dimensions(ctx, name, kind, width, height ? height : 1,
@@ -226,7 +227,7 @@ ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
     if (st != IBL_OK) return st;
     int w = (int)width, h = height ? (int)height : 1, d = depth ? (int)depth : 1;
     if (kvd_len > size - HEADER_BYTES)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: key/value data (%u bytes) runs past the end of "
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: key/value data (%u bytes) runs past the end of "
                         "the file", name, kvd_len);
 
     /* Walk the levels once to validate every imageSize before allocating. */
@@ -237,11 +238,11 @@ ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
         uint64_t face = ibl__level_texels(kind, w, h, d, (int)l) * texel;
         uint64_t expect = kind == IBL_TEXTURE_CUBE ? face : face * faces;
         if (size - at < 4)
-            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: file ends before the imageSize of level %llu",
+            return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: file ends before the imageSize of level %llu",
                             name, (unsigned long long)l);
         uint32_t image = ibl__rd32(bytes + at);
         if (image != expect)
-            return ibl_fail(ctx, IBL_ERR_FORMAT,
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: level %llu imageSize is %u bytes, its dimensions need %llu", name,
                             (unsigned long long)l, image, (unsigned long long)expect);
         at += 4;
@@ -249,7 +250,7 @@ ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
         /* faces (each padded to 4 for cubes) then mip padding to 4; face < 2^32 here */
         uint64_t span = (uint64_t)faces * ((face + 3) & ~(uint64_t)3);
         if (span > size - at)
-            return ibl_fail(ctx, IBL_ERR_FORMAT,
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: level %llu (%llu bytes) runs past the end of the file (%zu bytes)",
                             name, (unsigned long long)l, (unsigned long long)span, size);
         at += (size_t)span;

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "core/pixel_format.h"
+#include "core/context_internal.h"
 #include "io/container.h"
 
 static const uint8_t KTX2_IDENTIFIER[12] = {0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32,
@@ -172,7 +173,7 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
                             const char *name, void **bytes, size_t *size)
 {
     if (!name) name = "<ktx2>";
-    if (!bytes || !size) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output", name);
+    if (!bytes || !size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output", name);
     *bytes = NULL;
     *size = 0;
     ibl_status st = ibl__check_texture(ctx, tex, name);
@@ -180,7 +181,7 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     ibl_format fmt = ibl__container_format(tex, desc);
     const vk_map *vk = map_format(fmt);
     if (!vk)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: KTX2 output does not support pixel format %s (use rgba16f, rgba32f, "
                         "rg11b10f, rgb9e5, rg16f or rg32f)",
                         name, ibl_format_name(fmt));
@@ -211,7 +212,7 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
         total = (total + align - 1) / align * align;
         if (n > SIZE_MAX || total > SIZE_MAX - n) {
             ibl_free(ctx, kvd);
-            return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
+            return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
         }
         level_off[l] = (size_t)total;
         level_len[l] = (size_t)n;
@@ -273,26 +274,26 @@ static ibl_status check_dfd(ibl_context *ctx, const char *name, const uint8_t *d
                             ibl_format fmt)
 {
     if (len < 4 + 24)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: data format descriptor of %u bytes is too short",
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: data format descriptor of %u bytes is too short",
                         name, len);
     if (ibl__rd32(dfd) != len)
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: dfdTotalSize %u differs from dfdByteLength %u", name, ibl__rd32(dfd),
                         len);
     const uint8_t *b = dfd + 4;
     uint32_t w0 = ibl__rd32(b), block = ibl__rd32(b + 4) >> 16;
     if ((w0 & 0x1ffffu) != 0 || (w0 >> 17) != 0)
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: the first descriptor block is not a Khronos basic descriptor block",
                         name);
     if (block < 24 || block > len - 4 || (block - 24) % 16 != 0)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: descriptor block size %u is inconsistent", name,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: descriptor block size %u is inconsistent", name,
                         block);
     if (b[12] | b[13] | b[14] | b[15])
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: texel block dimensions in the descriptor are not 1x1x1x1", name);
     if ((size_t)b[16] != ibl_format_texel_bytes(fmt))
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: descriptor says %u bytes per texel, the vkFormat has %zu", name, b[16],
                         ibl_format_texel_bytes(fmt));
     return IBL_OK;
@@ -311,10 +312,10 @@ static ibl_status orientation(ibl_context *ctx, const char *name, const ibl_text
     if (ok && want >= 2) ok = o[1] == 'd' || o[1] == 'u';
     if (ok && want == 3) ok = o[2] == 'i' || o[2] == 'o';
     if (!ok)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: invalid KTXorientation \"%s\" for this texture",
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: invalid KTXorientation \"%s\" for this texture",
                         name, o);
     if (tex->kind == IBL_TEXTURE_CUBE && strcmp(o, "rd") != 0)
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: cube map orientation must be \"rd\", the file says \"%s\"", name, o);
     flips[0] = o[0] == 'l';
     flips[1] = want >= 2 && o[1] == 'u';
@@ -326,13 +327,13 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
                             ibl_texture *out, ibl_file_info *info)
 {
     if (!name) name = "<ktx2>";
-    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
     memset(out, 0, sizeof *out);
-    if (!bytes && size) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
+    if (!bytes && size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
     if (size < 12 || memcmp(bytes, KTX2_IDENTIFIER, 12) != 0)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: not a KTX 2.0 file (wrong identifier)", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a KTX 2.0 file (wrong identifier)", name);
     if (size < HEADER_BYTES)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated KTX2 header (%zu of %d bytes)", name,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated KTX2 header (%zu of %d bytes)", name,
                         size, HEADER_BYTES);
     uint32_t vkformat = ibl__rd32(bytes + 12), type_size = ibl__rd32(bytes + 16);
     uint32_t width = ibl__rd32(bytes + 20), height = ibl__rd32(bytes + 24);
@@ -345,36 +346,36 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
 
     const vk_map *vk = map_vk(vkformat);
     if (!vk)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: unsupported vkFormat %u (supported: 97 R16G16B16A16_SFLOAT, 109 "
                         "R32G32B32A32_SFLOAT, 122 B10G11R11_UFLOAT_PACK32, 123 "
                         "E5B9G9R9_UFLOAT_PACK32, 83 R16G16_SFLOAT, 103 R32G32_SFLOAT)",
                         name, vkformat);
     if (type_size != vk->type_size)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: typeSize %u, the vkFormat requires %u", name,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: typeSize %u, the vkFormat requires %u", name,
                         type_size, vk->type_size);
     if (scheme != 0)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: supercompression scheme %u is not supported (only uncompressed files)",
                         name, scheme);
     if (sgd_len != 0)
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: supercompression global data present without a scheme", name);
     if (layers != 0)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: array textures (%u layers) are not supported",
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: array textures (%u layers) are not supported",
                         name, layers);
     if (faces != 1 && faces != 6)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: faceCount %u (must be 1 or 6)", name, faces);
-    if (width == 0) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: pixelWidth is 0", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: faceCount %u (must be 1 or 6)", name, faces);
+    if (width == 0) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: pixelWidth is 0", name);
     ibl_texture_kind kind = IBL_TEXTURE_2D;
     int one_d = height == 0;
     if (faces == 6) {
         if (depth != 0)
-            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: a cube map with pixelDepth %u", name, depth);
+            return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: a cube map with pixelDepth %u", name, depth);
         kind = IBL_TEXTURE_CUBE;
     } else if (depth > 0) {
         if (one_d)
-            return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: pixelDepth %u with pixelHeight 0", name,
+            return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: pixelDepth %u with pixelHeight 0", name,
                             depth);
         kind = IBL_TEXTURE_3D;
     }
@@ -384,20 +385,20 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
     if (st != IBL_OK) return st;
     int w = (int)width, h = one_d ? 1 : (int)height, d = depth ? (int)depth : 1;
     if (size < HEADER_BYTES + LEVEL_ENTRY_BYTES * levels)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated level index", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated level index", name);
 
     if (!in_file(dfd_off, dfd_len, size))
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: data format descriptor (%u bytes at %u) lies outside the file", name,
                         dfd_len, dfd_off);
     st = check_dfd(ctx, name, bytes + dfd_off, dfd_len, vk->format);
     if (st != IBL_OK) return st;
     if (!in_file(kvd_off, kvd_len, size))
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: key/value data (%u bytes at %u) lies outside the file", name, kvd_len,
                         kvd_off);
     if (kvd_len && (uint64_t)kvd_off != (uint64_t)dfd_off + dfd_len)
-        return ibl_fail(ctx, IBL_ERR_FORMAT,
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: dfdTotalSize %u differs from kvdByteOffset - dfdByteOffset", name,
                         dfd_len);
 
@@ -409,13 +410,13 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
         /* at most 65536^3 texels * 6 faces * 16 bytes < 2^64 */
         uint64_t expect = ibl__level_texels(kind, w, h, d, (int)l) * faces * texel;
         if (len != expect || raw != expect)
-            return ibl_fail(ctx, IBL_ERR_FORMAT,
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: level %llu holds %llu bytes (uncompressed %llu), its dimensions "
                             "need %llu",
                             name, (unsigned long long)l, (unsigned long long)len,
                             (unsigned long long)raw, (unsigned long long)expect);
         if (!in_file(off, len, size))
-            return ibl_fail(ctx, IBL_ERR_FORMAT,
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: level %llu (%llu bytes at offset %llu) runs past the end of the "
                             "file (%zu bytes)",
                             name, (unsigned long long)l, (unsigned long long)len,

@@ -3,6 +3,7 @@
  * 32-bit floats stored bottom row first. The magnitude of the scale is ignored, as in most
  * readers. Written as little-endian RGB ("PF", scale -1); alpha is not stored. */
 #include "io/io_internal.h"
+#include "core/context_internal.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -53,27 +54,27 @@ ibl_status ibl__pfm_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
                            ibl_texture *out, ibl_file_info *info)
 {
     if (size < 3 || bytes[0] != 'P' || (bytes[1] != 'F' && bytes[1] != 'f'))
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: not a PFM file", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a PFM file", name);
     int channels = bytes[1] == 'F' ? 3 : 1;
     size_t pos = 2;
     char tw[32], th[32], ts[64];
     int w = 0, h = 0;
     if (!next_token(bytes, size, &pos, tw, sizeof tw) || !next_token(bytes, size, &pos, th, sizeof th) ||
         !next_token(bytes, size, &pos, ts, sizeof ts) || pos >= size)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated PFM header", name);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated PFM header", name);
     if (!parse_dim(tw, &w) || !parse_dim(th, &h))
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: bad PFM size \"%s x %s\" (1..%d)", name, tw, th,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: bad PFM size \"%s x %s\" (1..%d)", name, tw, th,
                         (int)IBL_MAX_DIMENSION);
     char *endp = NULL;
     double scale = strtod(ts, &endp);
     if (!endp || *endp || scale == 0.0 || !isfinite(scale))
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: bad PFM scale \"%s\"", name, ts);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: bad PFM scale \"%s\"", name, ts);
     pos++; /* the single white-space byte ending the header */
     int little = scale < 0.0;
     size_t row_bytes = (size_t)w * (size_t)channels * 4;
     size_t need = row_bytes * (size_t)h; /* w, h <= 2^16: no overflow in 64-bit size_t */
     if (size - pos < need)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: truncated PFM data (%zu of %zu bytes)", name,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated PFM data (%zu of %zu bytes)", name,
                         size - pos, need);
     ibl_status s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, w, h, 1, 1, out);
     if (s != IBL_OK) {
@@ -105,11 +106,11 @@ ibl_status ibl__pfm_encode(ibl_context *ctx, const ibl_image *image, const ibl_w
                            const char *name, void **bytes, size_t *size)
 {
     if (desc->format != IBL_FORMAT_DEFAULT && desc->format != IBL_FORMAT_RGB32F)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: PFM stores only rgb32f, not %s", name,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: PFM stores only rgb32f, not %s", name,
                         ibl_format_name(desc->format));
     int w = image->width, h = image->height;
     if (w > IBL_MAX_DIMENSION || h > IBL_MAX_DIMENSION)
-        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: image %dx%d too large", name, w, h);
+        return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: image %dx%d too large", name, w, h);
     char header[64];
     int hl = snprintf(header, sizeof header, "PF\n%d %d\n-1.0\n", w, h);
     size_t row_bytes = (size_t)w * 12;

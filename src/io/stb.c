@@ -8,6 +8,7 @@
  * written); one with neither is sRGB. iCCP profiles are not interpreted. Alpha is linear.
  * The sRGB curve is the exact piecewise function of IEC 61966-2-1. */
 #include "io/io_internal.h"
+#include "core/context_internal.h"
 
 #include <limits.h>
 #include <math.h>
@@ -179,7 +180,7 @@ static ibl_status png_decode(ibl_context *ctx, const uint8_t *bytes, size_t size
     ibl_status s = IBL_OK;
     if (!ok) {
         if (st->status != IBL_OK) s = ibl__fail_named(ctx, st->status, name);
-        else s = ibl_fail(ctx, IBL_ERR_FORMAT, "%s: corrupt PNG (%s)", name, st->error);
+        else s = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: corrupt PNG (%s)", name, st->error);
     } else {
         size_t texels = (size_t)out->width * (size_t)out->height;
         s = samples_to_float(ctx, st->raw, st->is16, png_decoding_power(bytes, size), texels,
@@ -203,12 +204,12 @@ ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
                            ibl_texture *out, ibl_file_info *info)
 {
     if (size >= 8 && bytes[0] == 0x89 && bytes[1] == 'P') return png_decode(ctx, bytes, size, name, out, info);
-    if (size > INT_MAX) return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: JPEG file too large", name);
+    if (size > INT_MAX) return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: JPEG file too large", name);
     int w = 0, h = 0, comp = 0;
     if (!stbi_info_from_memory(bytes, (int)size, &w, &h, &comp))
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: bad JPEG header (%s)", name, stbi_failure_reason());
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: bad JPEG header (%s)", name, stbi_failure_reason());
     if (w <= 0 || h <= 0 || w > IBL_MAX_DIMENSION || h > IBL_MAX_DIMENSION)
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: absurd JPEG image size %dx%d", name, w, h);
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: absurd JPEG image size %dx%d", name, w, h);
     /* Ours first: the memory limit refuses huge images before stb allocates its own. */
     ibl_status s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, w, h, 1, 1, out);
     if (s != IBL_OK) return ibl__fail_named(ctx, s, name);
@@ -217,7 +218,7 @@ ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     if (!pix || lw != w || lh != h) {
         if (pix) stbi_image_free(pix);
         ibl_texture_free(ctx, out);
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: corrupt JPEG data (%s)", name,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: corrupt JPEG data (%s)", name,
                         pix ? "size changed" : stbi_failure_reason());
     }
     s = samples_to_float(ctx, pix, 0, 0.0, (size_t)w * (size_t)h, out->data, name);
@@ -404,11 +405,11 @@ ibl_status ibl__png_encode(ibl_context *ctx, const ibl_image *image, const ibl_w
     if (desc->format == IBL_FORMAT_DEFAULT || desc->format == IBL_FORMAT_RGBA8_SRGB) sixteen = 0;
     else if (desc->format == IBL_FORMAT_RGBA16_UNORM) sixteen = 1;
     else
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: PNG stores rgba8 (sRGB preview) or rgba16 (linear), not %s", name,
                         ibl_format_name(desc->format));
     if (image->width > IBL_MAX_DIMENSION || image->height > IBL_MAX_DIMENSION)
-        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: image %dx%d too large", name, image->width,
+        return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: image %dx%d too large", name, image->width,
                         image->height);
     int channels = image_has_alpha(image) ? 4 : 3;
     png_state *st = ibl_calloc(ctx, 1, sizeof *st);
@@ -426,7 +427,7 @@ ibl_status ibl__png_encode(ibl_context *ctx, const ibl_image *image, const ibl_w
     if (!ok) {
         ibl_free(ctx, st->buf);
         ibl_status s = strcmp(st->error, "out of memory") == 0 ? IBL_ERR_OUT_OF_MEMORY : IBL_ERR_IO;
-        ibl_fail(ctx, s, "%s: cannot encode PNG: %s", name, st->error);
+        ibl__fail(ctx, s, "%s: cannot encode PNG: %s", name, st->error);
         ibl_free(ctx, st);
         return s;
     }
@@ -470,11 +471,11 @@ ibl_status ibl__jpeg_encode(ibl_context *ctx, const ibl_image *image, const ibl_
                             const char *name, void **bytes, size_t *size)
 {
     if (desc->format != IBL_FORMAT_DEFAULT && desc->format != IBL_FORMAT_RGBA8_SRGB)
-        return ibl_fail(ctx, IBL_ERR_UNSUPPORTED, "%s: JPEG stores only 8-bit sRGB, not %s", name,
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: JPEG stores only 8-bit sRGB, not %s", name,
                         ibl_format_name(desc->format));
     int w = image->width, h = image->height;
     if (w > 65535 || h > 65535)
-        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: JPEG is limited to 65535 pixels a side", name);
+        return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: JPEG is limited to 65535 pixels a side", name);
     size_t n = (size_t)w * (size_t)h;
     uint8_t *rgb = ibl_alloc(ctx, n * 3);
     if (!rgb) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
@@ -487,7 +488,7 @@ ibl_status ibl__jpeg_encode(ibl_context *ctx, const ibl_image *image, const ibl_
     ibl_free(ctx, rgb);
     if (!ok || sink.failed) {
         ibl_free(ctx, sink.buf);
-        return ibl_fail(ctx, sink.failed ? IBL_ERR_OUT_OF_MEMORY : IBL_ERR_IO,
+        return ibl__fail(ctx, sink.failed ? IBL_ERR_OUT_OF_MEMORY : IBL_ERR_IO,
                         "%s: cannot encode JPEG", name);
     }
     *bytes = sink.buf;

@@ -6,10 +6,10 @@
  * The centre looks toward -Z, right is +X, up is +Y (as seen from inside, like the equirect's
  * centre); the rim circle is the single direction +Z; the corners outside the disk are unused. */
 #include "layout_internal.h"
+#include "core/numeric.h"
 
 #include <math.h>
 
-static const double PI = 3.14159265358979323846;
 
 int ibl__angular_dir(double u, double v, double d[3])
 {
@@ -22,7 +22,7 @@ int ibl__angular_dir(double u, double v, double d[3])
         d[2] = -1;
         return 1;
     }
-    double theta = PI * r, s = sin(theta) / r;
+    double theta = IBL_PI * r, s = sin(theta) / r;
     d[0] = s * a;
     d[1] = -s * b;
     d[2] = -cos(theta);
@@ -32,7 +32,7 @@ int ibl__angular_dir(double u, double v, double d[3])
 void ibl__angular_uv(const double d[3], double *u, double *v)
 {
     double h = sqrt(d[0] * d[0] + d[1] * d[1]);
-    double r = atan2(h, -d[2]) / PI;
+    double r = atan2(h, -d[2]) / IBL_PI;
     double a = r, b = 0.0; /* +Z itself: any point of the rim; take the right one */
     if (h > 0.0) {
         a = r * d[0] / h;
@@ -48,7 +48,7 @@ double ibl__angular_density(double u, double v)
 {
     double a = 2.0 * u - 1.0, b = 2.0 * v - 1.0;
     double r = sqrt(a * a + b * b);
-    if (r < 1e-9) return PI * PI;
+    if (r < 1e-9) return IBL_PI * IBL_PI;
     if (r >= 1.0) return 0.0;
-    return PI * sin(PI * r) / r;
+    return IBL_PI * sin(IBL_PI * r) / r;
 }

@@ -30,6 +30,7 @@
  * the same bits), then the taps, two columns to a vector. The rest (windows under 1/16 pixel,
  * or wider than two) are computed in double (slow_values; the widest by window_value). */
 #include "layout_internal.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <string.h>
@@ -41,7 +42,6 @@ static const double SAMPLES_PER_COLUMN = 0.6;
 static const double POLE_ROWS = 4.0;
 /* Cells per texel there (their solid angle is a texel's / POLE_CELLS). */
 static const double POLE_CELLS = 4096.0;
-static const double PI = 3.14159265358979323846;
 /* Texels of the faces around the poles that take this many samples per axis or more take one
  * window per source column instead (polar_columns). The two methods blur a texel's edge
  * differently, so their border is not exactly energy-neutral: at this k the grid's windows
@@ -78,7 +78,7 @@ static inline double atan01(double x)
 
 int ibl__equirect_dir(double u, double v, double d[3])
 {
-    double phi = 2.0 * PI * (u - 0.5), theta = PI * v;
+    double phi = 2.0 * IBL_PI * (u - 0.5), theta = IBL_PI * v;
     double st = sin(theta);
     d[0] = st * sin(phi);
     d[1] = cos(theta);
@@ -89,8 +89,8 @@ int ibl__equirect_dir(double u, double v, double d[3])
 void ibl__equirect_uv(const double d[3], double *u, double *v)
 {
     double rho = sqrt(d[0] * d[0] + d[2] * d[2]);
-    *u = atan2(d[0], -d[2]) / (2.0 * PI) + 0.5;
-    *v = atan2(rho, d[1]) / PI;
+    *u = atan2(d[0], -d[2]) / (2.0 * IBL_PI) + 0.5;
+    *v = atan2(rho, d[1]) / IBL_PI;
 }
 
 /* A face's axes and the picture's sizes, for the fast path (fast_windows) */
@@ -199,7 +199,7 @@ enum { POLAR_BOX_ROWS = 12 };
 /* Solid angle (in pixel-row units of the integral of sin(theta)) of band [a, b]. */
 static inline double band(int H, double a, double b)
 {
-    return (H / PI) * (cos(PI * a / H) - cos(PI * b / H));
+    return (H / IBL_PI) * (cos(IBL_PI * a / H) - cos(IBL_PI * b / H));
 }
 
 /* The share of window [py0, py1] given to row r: the integral over the window of the row's
@@ -241,7 +241,7 @@ static void window_value(const eq_job *job, double px0, double px1, double py0, 
 {
     int W = job->im->width, H = job->im->height;
     /* sin(theta) and its slope at the window's centre (given by the caller, who has them) */
-    double k_rad = PI / H, c = 0.5 * (py0 + py1);
+    double k_rad = IBL_PI / H, c = 0.5 * (py0 + py1);
     double s_c = sin_t, s_d = k_rad * cos_t;
     /* a window reaching past a pole is cut there: the far side is already covered by the
      * neighbouring cells across the pole, and counting it twice would add energy */
@@ -323,8 +323,8 @@ static void window_value(const eq_job *job, double px0, double px1, double py0, 
 
 static double wrap_angle(double a)
 {
-    if (a > PI) a -= 2.0 * PI;
-    else if (a < -PI) a += 2.0 * PI;
+    if (a > IBL_PI) a -= 2.0 * IBL_PI;
+    else if (a < -IBL_PI) a += 2.0 * IBL_PI;
     return a;
 }
 
@@ -375,7 +375,7 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
         double sc = -1.0 + (tx + ring[c][0]) * cell, tc = -1.0 + (ty + ring[c][1]) * cell;
         double x = m[0] + sc * a[0] + tc * b[0], y = m[1] + sc * a[1] + tc * b[1],
                z = m[2] + sc * a[2] + tc * b[2];
-        double rho = sqrt(x * x + z * z), py = atan2(rho, y) / PI * H;
+        double rho = sqrt(x * x + z * z), py = atan2(rho, y) / IBL_PI * H;
         ylo = fmin(ylo, py);
         yhi = fmax(yhi, py);
         if (rho <= 1e-12 * fabs(y)) {
@@ -388,10 +388,10 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
         if (c > 0) winding += wrap_angle(phi - prev);
         prev = phi;
     }
-    int full = any_pole || fabs(winding) > PI;
+    int full = any_pole || fabs(winding) > IBL_PI;
     /* a texel only a few pixels across can lie between pixel corners: then every pixel of its
      * range is cut into cells, not only those its edges visibly cross */
-    int thin = yhi - ylo < 4.0 || (!full && (hi - lo) / (2.0 * PI) * W < 4.0);
+    int thin = yhi - ylo < 4.0 || (!full && (hi - lo) / (2.0 * IBL_PI) * W < 4.0);
     /* the closest approach to the pole can lie inside an edge: widen by a row */
     ylo = fmax(0.0, floor(ylo) - 1.0);
     yhi = fmin((double)H, ceil(yhi) + 1.0);
@@ -401,8 +401,8 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
     }
     long c0 = 0, c1 = W;
     if (!full) {
-        c0 = (long)floor(((centre + lo) / (2.0 * PI) + 0.5) * W) - 1;
-        c1 = (long)ceil(((centre + hi) / (2.0 * PI) + 0.5) * W) + 1;
+        c0 = (long)floor(((centre + lo) / (2.0 * IBL_PI) + 0.5) * W) - 1;
+        c1 = (long)ceil(((centre + hi) / (2.0 * IBL_PI) + 0.5) * W) + 1;
         if (c1 - c0 > W) {
             c0 = 0;
             c1 = W;
@@ -411,19 +411,19 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
     int r0 = (int)ylo, r1 = (int)yhi;
     double acc[4] = {0, 0, 0, 0}, wsum = 0;
     const double half = 0.5 * N;
-    const double dphi = 2.0 * PI / W;
+    const double dphi = 2.0 * IBL_PI / W;
     const double cd = cos(dphi), sd = sin(dphi);
     /* a parallel strays from the chord between two pixel corners by under dphi^2 / 8 radians,
      * at most 3 times that on the face plane: in texels, under this */
     const double margin = N * dphi * dphi / 4.0 + 1e-9;
-    const double phi_start = 2.0 * PI * ((double)c0 / W - 0.5);
+    const double phi_start = 2.0 * IBL_PI * ((double)c0 / W - 0.5);
     const double cos_start = cos(phi_start), sin_start = sin(phi_start);
     /* crossed pixels are cut into FINE rows of cells, each row into cells about as wide as
      * tall (a pixel near the pole is a thin wedge: sin(theta) dphi << dtheta) */
     enum { FINE = 16 };
     for (int r = r0; r < r1; r++) {
         const float *row = job->im->pixels + (size_t)r * W * 4;
-        double th0 = PI * r / H, th1 = PI * (r + 1) / H;
+        double th0 = IBL_PI * r / H, th1 = IBL_PI * (r + 1) / H;
         double st0 = sin(th0), ct0 = cos(th0), st1 = sin(th1), ct1 = cos(th1);
         double w_pixel = (ct0 - ct1) * dphi;
         double wedge = fmax(st0, st1) * dphi / (th1 - th0) * FINE;
@@ -509,8 +509,8 @@ static void eq_texel_near_pole(const eq_job *job, int face, int tx, int ty, floa
         for (int c = 0; c < 4; c++) out[c] = (float)(acc[c] / wsum);
     } else {
         /* a texel smaller than any cell: the picture at its centre */
-        double py = atan2(sqrt(cx * cx + cz * cz), cy) / PI * H;
-        double px = (centre / (2.0 * PI) + 0.5) * W;
+        double py = atan2(sqrt(cx * cx + cz * cz), cy) / IBL_PI * H;
+        double px = (centre / (2.0 * IBL_PI) + 0.5) * W;
         window_value(job, px, px, py, py, 0.0, 1.0, out);
     }
 }
@@ -521,9 +521,9 @@ static inline double atan2_nb(double y, double x)
     double ax = fabs(x), ay = fabs(y);
     double mn = ax < ay ? ax : ay, mx = ax < ay ? ay : ax;
     double r = atan01(mn / (mx > 0.0 ? mx : 1.0));
-    double r_steep = 0.5 * PI - r;
+    double r_steep = 0.5 * IBL_PI - r;
     r = ay > ax ? r_steep : r;
-    double r_back = PI - r;
+    double r_back = IBL_PI - r;
     r = x < 0.0 ? r_back : r;
     double r_neg = -r;
     return y < 0.0 ? r_neg : r;
@@ -598,7 +598,7 @@ static void slow_values(const eq_job *job, int face, eq_slow *bt)
 {
     int W = job->im->width, H = job->im->height, n = bt->n;
     const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
-    const double px_per_rad_u = W / (2.0 * PI), px_per_rad_v = H / PI;
+    const double px_per_rad_u = W / (2.0 * IBL_PI), px_per_rad_v = H / IBL_PI;
     double *x = bt->t0, *y = bt->t1, *z = bt->t2, *rho = bt->t3, *len = bt->t4;
     for (int i = 0; i < n; i++) {
         double sc = bt->sc[i], tc = bt->tc[i];
@@ -618,8 +618,8 @@ static void slow_values(const eq_job *job, int face, eq_slow *bt)
         double rho2 = xi * xi + zi * zi;
         double inv_len = 1.0 / len[i], inv_len2 = inv_len * inv_len;
         double wt = inv_len2 * inv_len;
-        double px = (atan2_nb(xi, -zi) * (0.5 / PI) + 0.5) * W;
-        double py = atan2_nb(rho[i], yi) * (H / PI);
+        double px = (atan2_nb(xi, -zi) * (0.5 / IBL_PI) + 0.5) * W;
+        double py = atan2_nb(rho[i], yi) * (H / IBL_PI);
         /* extents of this sample's cell in longitude and latitude (pixels): the gradients of
          * phi and theta along both face axes, times the cell size */
         double g1 = fabs(yi * (xi * a[0] + zi * a[2]) - rho2 * a[1]);
@@ -656,7 +656,7 @@ static void slow_values(const eq_job *job, int face, eq_slow *bt)
      * (as row_share) or polar bands (constant rows); kind 0 takes window_value. First the
      * positions and the polar bands in double, one sample at a time. */
     const long R = POLAR_BOX_ROWS < H / 4 ? POLAR_BOX_ROWS : H / 4;
-    const double k_rad = PI / H;
+    const double k_rad = IBL_PI / H;
     const int narrow_ok = W >= 8, polar_ok = W >= 8 && H >= 64;
     int n4 = (n + 3) & ~3;
     for (int i = 0; i < n4; i++) {
@@ -828,8 +828,8 @@ typedef int v8i __attribute__((vector_size(32)));
     VF r_ = t_ * (1.0f + t2_ * (-0.3333314528f + t2_ * (0.1999355085f + \
             t2_ * (-0.1420889944f + t2_ * (0.1065626393f + t2_ * (-0.0752896400f + \
             t2_ * (0.0429096138f + t2_ * (-0.0161657367f + t2_ * 0.0028662257f)))))))); \
-    r_ = LSEL(steep_, (float)(0.5 * PI) - r_, r_); \
-    r_ = LSEL(x_ < 0.0f, (float)PI - r_, r_); \
+    r_ = LSEL(steep_, (float)(0.5 * IBL_PI) - r_, r_); \
+    r_ = LSEL(x_ < 0.0f, (float)IBL_PI - r_, r_); \
     LSEL(y_ < 0.0f, -r_, r_); })
 
 /* four lanes: the portable code */
@@ -959,13 +959,13 @@ static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *
         lo = rel < lo ? rel : lo;
         hi = rel > hi ? rel : hi;
     }
-    if (!(hi - lo < 0.5 * PI)) return 0; /* not clear of the pole */
+    if (!(hi - lo < 0.5 * IBL_PI)) return 0; /* not clear of the pole */
     /* the columns whose centres phi_j = 2 pi ((j + 1/2) / W - 1/2) lie in the range */
-    double u_lo = ((centre + lo) / (2.0 * PI) + 0.5) * W - 0.5;
-    double u_hi = ((centre + hi) / (2.0 * PI) + 0.5) * W - 0.5;
+    double u_lo = ((centre + lo) / (2.0 * IBL_PI) + 0.5) * W - 0.5;
+    double u_hi = ((centre + hi) / (2.0 * IBL_PI) + 0.5) * W - 0.5;
     long j_lo = (long)ceil(u_lo), j_hi = (long)floor(u_hi);
     if (j_hi < j_lo) return 0;
-    const double my = m[1], dphi = 2.0 * PI / W;
+    const double my = m[1], dphi = 2.0 * IBL_PI / W;
     for (long j = j_lo; j <= j_hi; j++) {
         long jj = j % W;
         jj = jj < 0 ? jj + W : jj;
@@ -988,7 +988,7 @@ static int polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch *
         double li = 1.0 / sqrt(rin * rin + 1.0), lo_ = 1.0 / sqrt(rout * rout + 1.0);
         double wt = fabs(my * li - my * lo_) * dphi;
         if (!(wt > 0.0)) continue;
-        double py_in = atan2_nb(rin, my) * (H / PI), py_out = atan2_nb(rout, my) * (H / PI);
+        double py_in = atan2_nb(rin, my) * (H / IBL_PI), py_out = atan2_nb(rout, my) * (H / IBL_PI);
         /* sin and cos of the middle latitude: the bisector of the two ends' directions */
         double vx = rin * li + rout * lo_, vy = my * (li + lo_), vl = 1.0 / sqrt(vx * vx + vy * vy);
         if (bt->n == BATCH) batch_flush(job, face, bt, out);
@@ -1137,7 +1137,7 @@ static ibl_status equirect_to_cube(ibl_context *ctx, const ibl_image *image,
         return ibl_context_status(ctx);
     }
     for (int j = 0; j < W; j++) {
-        double phi = 2.0 * PI * ((j + 0.5) / W - 0.5);
+        double phi = 2.0 * IBL_PI * ((j + 0.5) / W - 0.5);
         cs[j] = sin(phi);
         cs[W + j] = cos(phi);
     }
@@ -1154,7 +1154,7 @@ static ibl_status equirect_to_cube(ibl_context *ctx, const ibl_image *image,
         /* The polar region: 3 texels, and at least POLE_ROWS source rows. */
         int N = out->size;
         double cell = 2.0 / N;
-        double radius = fmin(fmax(atan(3.0 * cell), POLE_ROWS * PI / H), 0.5 * PI);
+        double radius = fmin(fmax(atan(3.0 * cell), POLE_ROWS * IBL_PI / H), 0.5 * IBL_PI);
         job.pole_radius2 = sin(radius) * sin(radius);
         /* How finely the pixels are cut there: cells of about 1/POLE_CELLS of a texel. */
         job.pole_cell_area = cell * cell / POLE_CELLS;

@@ -56,8 +56,8 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
     const float *m = ff->m, *a = ff->a, *b = ff->b;
     const int Wi = ff->W;
     const float W = (float)ff->W, H = (float)ff->H;
-    const float px_per_rad_u = (float)(ff->W / (2.0 * PI)), px_per_rad_v = (float)(ff->H / PI);
-    const float k_rad = (float)(PI / ff->H), row_lo = (float)ff->R + 1.0f;
+    const float px_per_rad_u = (float)(ff->W / (2.0 * IBL_PI)), px_per_rad_v = (float)(ff->H / IBL_PI);
+    const float k_rad = (float)(IBL_PI / ff->H), row_lo = (float)ff->R + 1.0f;
     const float row_hi = (float)(ff->H - ff->R - 1);
     const VI narrow_ok = (VI){} - (ff->narrow_ok != 0);
     const VI polar_ok = (VI){} - (ff->narrow_ok && ff->H >= 64);
@@ -71,8 +71,8 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
         VF rho = LSQRT(rho2), len = LSQRT(len2);
         VF inv_len = 1.0f / len, inv_len2 = inv_len * inv_len;
         VF wt = inv_len2 * inv_len;
-        VF px = (LATAN2(x, -z) * (float)(0.5 / PI) + 0.5f) * W;
-        VF py = LATAN2(rho, y) * (float)(ff->H / PI);
+        VF px = (LATAN2(x, -z) * (float)(0.5 / IBL_PI) + 0.5f) * W;
+        VF py = LATAN2(rho, y) * (float)(ff->H / IBL_PI);
         VF g1 = LABS(y * (x * a[0] + z * a[2]) - rho2 * a[1]);
         VF g2 = LABS(y * (x * b[0] + z * b[2]) - rho2 * b[1]);
         VF ga = LABS(x * a[2] - z * a[0]), gb = LABS(x * b[2] - z * b[0]);
@@ -267,8 +267,8 @@ EQ_TARGET static void EQ_FN(texel_ks)(const eq_fast_face *ff, int ty, int tx0, i
 {
     const float *m = ff->m, *a = ff->a, *b = ff->b;
     const double cell = 2.0 / ff->N;
-    const float rows_per = (float)(SAMPLES_PER_ROW * cell * ff->H / PI);
-    const float cols_per = (float)(SAMPLES_PER_COLUMN * cell * ff->W / (2.0 * PI));
+    const float rows_per = (float)(SAMPLES_PER_ROW * cell * ff->H / IBL_PI);
+    const float cols_per = (float)(SAMPLES_PER_COLUMN * cell * ff->W / (2.0 * IBL_PI));
     const float fcell = (float)cell, tc = (float)(-1.0 + (ty + 0.5) * cell);
     for (int i = 0; i < n; i += LANES) {
         VF sc;

@@ -1,11 +1,12 @@
 /* Layout names, detection from the aspect ratio, the orientation (yaw / mirror / z-up) and the
  * dispatch of the conversions between flat pictures and cubemaps. Conventions: docs/CONVENTIONS.md. */
 #include "layout_internal.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <string.h>
 
-static const double PI = 3.14159265358979323846;
 
 /* ---- names ---- */
 
@@ -141,7 +142,7 @@ static void cos_sin_degrees(double deg, double *c, double *s)
     else if (r == 90.0) { *c = 0; *s = 1; }
     else if (r == 180.0) { *c = -1; *s = 0; }
     else if (r == 270.0) { *c = 0; *s = -1; }
-    else { *c = cos(r * PI / 180.0); *s = sin(r * PI / 180.0); }
+    else { *c = cos(r * IBL_PI / 180.0); *s = sin(r * IBL_PI / 180.0); }
 }
 
 /* world = Yaw * Mirror * Zup * picture: the picture's frame is first brought to +Y up, then
@@ -271,7 +272,7 @@ static ibl_status finish_cube(ibl_context *ctx, ibl_cubemap *picture, const ibl_
 static ibl_status check_image(ibl_context *ctx, const char *what, const ibl_image *im)
 {
     if (!im || !im->pixels || im->width <= 0 || im->height <= 0)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: empty image (%dx%d)", what,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: empty image (%dx%d)", what,
                         im ? im->width : 0, im ? im->height : 0);
     return IBL_OK;
 }
@@ -279,7 +280,7 @@ static ibl_status check_image(ibl_context *ctx, const char *what, const ibl_imag
 ibl_status ibl_image_to_cubemap(ibl_context *ctx, const ibl_image *image,
                                 const ibl_to_cube_desc *desc, ibl_cubemap *out)
 {
-    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: no output cubemap");
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: no output cubemap");
     memset(out, 0, sizeof *out);
     ibl_status st = check_image(ctx, "layout", image);
     if (st != IBL_OK) return st;
@@ -291,25 +292,25 @@ ibl_status ibl_image_to_cubemap(ibl_context *ctx, const ibl_image *image,
     if (layout == IBL_LAYOUT_AUTO) {
         layout = ibl_layout_detect(w, h);
         if (layout == IBL_LAYOUT_AUTO)
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "layout: cannot tell the layout of a %dx%d image from its aspect "
                             "ratio; name it (equirect, hcross, vcross, hstrip, vstrip, angular, "
                             "octahedral)", w, h);
     }
     if (layout == IBL_LAYOUT_FACES || layout == IBL_LAYOUT_CUBE)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "layout: %s is not a single-picture layout (use ibl_faces_to_cubemap)",
                         ibl_layout_name(layout));
     if ((int)layout < 0 || layout > IBL_LAYOUT_CUBE)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: unknown layout %d", (int)layout);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: unknown layout %d", (int)layout);
     if (!size_fits(layout, w, h))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: a %dx%d image is not a %s image",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: a %dx%d image is not a %s image",
                         w, h, ibl_layout_name(layout));
     int size = d.size > 0 ? d.size : ibl__natural_cube_size(layout, w, h);
     if (d.size < 0 || size < 1 || size > MAX_CUBE_SIZE)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: cube size %d out of range", d.size);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: cube size %d out of range", d.size);
     if (d.samples_per_axis < 0 || d.samples_per_axis > 64)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "layout: samples_per_axis %d out of range [0, 64]", d.samples_per_axis);
     ibl__frame frame;
     ibl__frame_from_orientation(&d.orientation, &frame);
@@ -342,16 +343,16 @@ ibl_status ibl_image_to_cubemap(ibl_context *ctx, const ibl_image *image,
 ibl_status ibl_faces_to_cubemap(ibl_context *ctx, const ibl_image faces[6],
                                 const ibl_to_cube_desc *desc, ibl_cubemap *out)
 {
-    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: no output cubemap");
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: no output cubemap");
     memset(out, 0, sizeof *out);
-    if (!faces) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "faces: no face images");
+    if (!faces) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "faces: no face images");
     static const char *face_names[6] = {"+X", "-X", "+Y", "-Y", "+Z", "-Z"};
     int n = faces[0].width;
     for (int f = 0; f < 6; f++) {
         ibl_status st = check_image(ctx, "faces", &faces[f]);
         if (st != IBL_OK) return st;
         if (faces[f].width != faces[f].height || faces[f].width != n)
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "faces: face %s is %dx%d; every face must be square and %dx%d",
                             face_names[f], faces[f].width, faces[f].height, n, n);
     }
@@ -360,7 +361,7 @@ ibl_status ibl_faces_to_cubemap(ibl_context *ctx, const ibl_image faces[6],
     if (desc) d = *desc;
     int size = d.size > 0 ? d.size : n;
     if (d.size < 0 || size > MAX_CUBE_SIZE)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "faces: cube size %d out of range", d.size);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "faces: cube size %d out of range", d.size);
     ibl__frame frame;
     ibl__frame_from_orientation(&d.orientation, &frame);
     ibl_cubemap picture;
@@ -374,26 +375,26 @@ ibl_status ibl_faces_to_cubemap(ibl_context *ctx, const ibl_image faces[6],
 ibl_status ibl_cubemap_to_image(ibl_context *ctx, const ibl_cubemap *cube,
                                 const ibl_from_cube_desc *desc, ibl_image *out)
 {
-    if (!out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: no output image");
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: no output image");
     memset(out, 0, sizeof *out);
     if (!cube || !cube->data || cube->size <= 0)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: empty cubemap");
-    if (!desc) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: no descriptor (the layout is required)");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: empty cubemap");
+    if (!desc) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: no descriptor (the layout is required)");
     ibl_from_cube_desc d = *desc;
     if (d.level < 0 || d.level >= cube->levels)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: level %d out of range [0, %d]",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: level %d out of range [0, %d]",
                         d.level, cube->levels - 1);
     if (d.width < 0 || d.width > 8 * MAX_CUBE_SIZE)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: width %d out of range", d.width);
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "layout: width %d out of range", d.width);
     if (d.samples_per_axis < 0 || d.samples_per_axis > 64)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "layout: samples_per_axis %d out of range [0, 64]", d.samples_per_axis);
     int n = ibl_level_size(cube->size, d.level);
     ibl__frame frame;
     ibl__frame_from_orientation(&d.orientation, &frame);
     ibl_cubemap level_view;
     ibl_status st = ibl_cubemap_wrap(n, 1, ibl_cubemap_face(cube, d.level, 0), &level_view);
-    if (st != IBL_OK) return ibl_fail(ctx, st, "layout: bad cubemap");
+    if (st != IBL_OK) return ibl__fail(ctx, st, "layout: bad cubemap");
     int cols, rows;
     switch (d.layout) {
     case IBL_LAYOUT_EQUIRECT:
@@ -404,7 +405,7 @@ ibl_status ibl_cubemap_to_image(ibl_context *ctx, const ibl_cubemap *cube,
                                 : d.layout == IBL_LAYOUT_ANGULAR ? 4 * n : 2 * n;
         int height = d.layout == IBL_LAYOUT_EQUIRECT ? width / 2 : width;
         if (d.layout == IBL_LAYOUT_EQUIRECT && (width < 2 || width % 2))
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "layout: an equirect image needs an even width (got %d)", width);
         st = ibl_image_alloc(ctx, width, height, out);
         if (st != IBL_OK) return st;
@@ -418,7 +419,7 @@ ibl_status ibl_cubemap_to_image(ibl_context *ctx, const ibl_cubemap *cube,
     case IBL_LAYOUT_VSTRIP: {
         ibl__cube_layout_grid(d.layout, &cols, &rows);
         if (d.width % cols)
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "layout: a %s image's width must be a multiple of %d (got %d)",
                             ibl_layout_name(d.layout), cols, d.width);
         int m = d.width ? d.width / cols : n;
@@ -441,7 +442,7 @@ ibl_status ibl_cubemap_to_image(ibl_context *ctx, const ibl_cubemap *cube,
         return st;
     }
     default:
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "layout: cannot write a cube as layout '%s' (use ibl_cubemap_to_faces "
                         "for six images)", ibl_layout_name(d.layout));
     }
@@ -450,12 +451,12 @@ ibl_status ibl_cubemap_to_image(ibl_context *ctx, const ibl_cubemap *cube,
 ibl_status ibl_cubemap_to_faces(ibl_context *ctx, const ibl_cubemap *cube, int level,
                                 ibl_image faces[6])
 {
-    if (!faces) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "faces: no output images");
+    if (!faces) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "faces: no output images");
     memset(faces, 0, 6 * sizeof faces[0]);
     if (!cube || !cube->data || cube->size <= 0)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "faces: empty cubemap");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "faces: empty cubemap");
     if (level < 0 || level >= cube->levels)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "faces: level %d out of range [0, %d]",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "faces: level %d out of range [0, %d]",
                         level, cube->levels - 1);
     int n = ibl_level_size(cube->size, level);
     for (int f = 0; f < 6; f++) {

@@ -4,11 +4,12 @@
  * by the solid angle it stands for; a cube read at a coarser resolution than its own is first
  * reduced with the area-correct mip chain so that nothing aliases. */
 #include "layout_internal.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <string.h>
 
-static const double PI = 3.14159265358979323846;
 
 static int map_dir(ibl_layout layout, double u, double v, double d[3])
 {
@@ -259,9 +260,9 @@ static void from_cube_row(void *arg, int y)
             /* the coarsest level whose texels (about pi/2/n radians) are no wider than the
              * pixel's long side, then samples half a texel apart along each axis */
             while (level + 1 < cube->levels &&
-                   PI / 2.0 / ibl_level_size(cube->size, level + 1) <= big)
+                   IBL_PI / 2.0 / ibl_level_size(cube->size, level + 1) <= big)
                 level++;
-            double texel = PI / 2.0 / ibl_level_size(cube->size, level);
+            double texel = IBL_PI / 2.0 / ibl_level_size(cube->size, level);
             kx = (int)ceil(2.0 * ex / texel);
             ky = (int)ceil(2.0 * ey / texel);
             if (kx < 1) kx = 1;
@@ -307,15 +308,15 @@ ibl_status ibl__cube_to_sphere(ibl_context *ctx, const ibl_cubemap *cube, int le
 {
     int n = ibl_level_size(cube->size, level);
     /* the output's pixel pitch in radians, roughly, against the cube's texel pitch */
-    double pitch = layout == IBL_LAYOUT_EQUIRECT ? PI / out->height
-                 : layout == IBL_LAYOUT_ANGULAR ? 2.0 * PI / out->width
-                                                : PI / out->width;
+    double pitch = layout == IBL_LAYOUT_EQUIRECT ? IBL_PI / out->height
+                 : layout == IBL_LAYOUT_ANGULAR ? 2.0 * IBL_PI / out->width
+                                                : IBL_PI / out->width;
     ibl_cubemap chain;
     memset(&chain, 0, sizeof chain);
     ibl_status st;
     int levels = 1;
     if (samples_per_axis == 0) {
-        while (levels < ibl_full_mip_count(n) && PI / 2.0 / ibl_level_size(n, levels) <= pitch)
+        while (levels < ibl_full_mip_count(n) && IBL_PI / 2.0 / ibl_level_size(n, levels) <= pitch)
             levels++;
     }
     if (levels > 1) {
@@ -329,7 +330,7 @@ ibl_status ibl__cube_to_sphere(ibl_context *ctx, const ibl_cubemap *cube, int le
         }
     } else {
         st = ibl_cubemap_wrap(n, 1, ibl_cubemap_face(cube, level, 0), &chain);
-        if (st != IBL_OK) return ibl_fail(ctx, st, "layout: bad cubemap level");
+        if (st != IBL_OK) return ibl__fail(ctx, st, "layout: bad cubemap level");
     }
     from_cube_job job = {layout, &chain, frame, out, samples_per_axis};
     ibl_parallel_for(ctx, out->height, from_cube_row, &job);

@@ -3,6 +3,7 @@
  * hierarchy for ray casting, and per-vertex ambient occlusion by cosine-weighted ray casting
  * when the file has none (the AO the seed's specular occlusion formulas take). */
 #include "render_internal.h"
+#include "core/context_internal.h"
 
 #include <errno.h>
 #include <float.h>
@@ -266,7 +267,7 @@ ibl_status ibl_mesh_load_obj(ibl_context *ctx, const char *path, int ao_rays, ib
 {
     memset(out, 0, sizeof *out);
     FILE *f = fopen(path, "r");
-    if (!f) return ibl_fail(ctx, IBL_ERR_IO, "%s: cannot open (%s)", path, strerror(errno));
+    if (!f) return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot open (%s)", path, strerror(errno));
     growable pos = {0, 0, 0, sizeof(float) * 4}, idx = {0, 0, 0, sizeof(int) * 3};
     ibl_status st = IBL_OK;
     int have_colour = 1;
@@ -279,7 +280,7 @@ ibl_status ibl_mesh_load_obj(ibl_context *ctx, const char *path, int ao_rays, ib
             int n = sscanf(line + 2, "%f %f %f %f %f %f", &p[0], &p[1], &p[2], &rgb[0], &rgb[1],
                            &rgb[2]);
             if (n < 3) {
-                st = ibl_fail(ctx, IBL_ERR_FORMAT, "%s:%d: bad vertex", path, line_no);
+                st = ibl__fail(ctx, IBL_ERR_FORMAT, "%s:%d: bad vertex", path, line_no);
                 break;
             }
             if (n >= 6)
@@ -297,7 +298,7 @@ ibl_status ibl_mesh_load_obj(ibl_context *ctx, const char *path, int ao_rays, ib
                  tok = strtok_r(NULL, " \t\r\n", &save)) {
                 int vi = parse_index(tok, (int)pos.count);
                 if (vi < 0) {
-                    st = ibl_fail(ctx, IBL_ERR_FORMAT, "%s:%d: bad face index", path, line_no);
+                    st = ibl__fail(ctx, IBL_ERR_FORMAT, "%s:%d: bad face index", path, line_no);
                     break;
                 }
                 corners[nc++] = vi;
@@ -315,7 +316,7 @@ ibl_status ibl_mesh_load_obj(ibl_context *ctx, const char *path, int ao_rays, ib
     }
     fclose(f);
     if (st == IBL_OK && (pos.count == 0 || idx.count == 0))
-        st = ibl_fail(ctx, IBL_ERR_FORMAT, "%s: no triangles", path);
+        st = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: no triangles", path);
     if (st != IBL_OK) {
         ibl_free(ctx, pos.data);
         ibl_free(ctx, idx.data);

@@ -2,6 +2,7 @@
  * image: what `ibl bake` would write, from the library's bake stages — the GGX chain
  * (specular.h, its own level mapping), the irradiance SH (sh.h) and the BRDF tables (brdf.h). */
 #include "render_internal.h"
+#include "core/context_internal.h"
 
 #include "ibl/brdf.h"
 #include "ibl/sh.h"
@@ -24,7 +25,7 @@ ibl_status ibl_render_probe_from_environment(ibl_context *ctx, const ibl_cubemap
     int table_size = desc && desc->table_size > 0 ? desc->table_size : 128;
     memset(out, 0, sizeof *out);
     if (!env || !env->data || env->size <= 0)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "render: no environment");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "render: no environment");
     int size = specular_size > 0 ? specular_size : (env->size < 128 ? env->size : 128);
     if (size > env->size) size = env->size;
     /* the environment with a full, area-correct mip chain for filtered lookups */

@@ -4,6 +4,8 @@
  * environment by Monte Carlo (importance sampling of each lobe with a per-pixel rotated
  * Hammersley set), so the difference is the error of the whole baked pipeline. */
 #include "render_internal.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 
 #include "ibl/io.h"
 
@@ -11,7 +13,6 @@
 #include <stdio.h>
 #include <string.h>
 
-static const float PI_F = 3.14159265358979f;
 
 enum { COLUMNS = 7, ROWS = 3, OBJECTS = COLUMNS * ROWS };
 static const float SPACING = 1.1f, RADIUS = 0.48f, EYE_Z = 12.0f;
@@ -139,15 +140,15 @@ static float eval_lobe(const lobe *b, ibl_vec3 n, ibl_vec3 v, ibl_vec3 l, float 
         /* tri-Ace 2010: (c1 s + c2) F (n.h)^s / max(n.l, n.v) */
         float lobe_h = powf(nh, b->shininess);
         spec = ibl_blinn_phong_norm(b->shininess) * lobe_h / fmaxf(nl, b->nv);
-        pdf = (b->shininess + 1.0f) / (2.0f * PI_F) * lobe_h / (4.0f * vh);
+        pdf = (b->shininess + 1.0f) / (2.0f * IBL_PI_F) * lobe_h / (4.0f * vh);
     } else {
         float d = ibl_ggx_d(b->alpha, nh);
         spec = d * ibl_smith_ggx_v(b->alpha, b->nv, nl);
         pdf = d * nh / (4.0f * vh);
     }
-    for (int c = 0; c < 3; c++) f[c] = spec * ibl_fresnel_schlick(b->f0[c], vh) + b->kd[c] / PI_F;
+    for (int c = 0; c < 3; c++) f[c] = spec * ibl_fresnel_schlick(b->f0[c], vh) + b->kd[c] / IBL_PI_F;
     *pdf_spec = pdf;
-    *pdf_diff = nl / PI_F;
+    *pdf_diff = nl / IBL_PI_F;
     return nl;
 }
 
@@ -169,7 +170,7 @@ static void reference_sample(const render_job *job, const lobe *b, ibl_vec3 n, i
     float vh = ibl__dot(v, h);
     dirs[0] = ibl__v3(2.0f * vh * h.x - v.x, 2.0f * vh * h.y - v.y, 2.0f * vh * h.z - v.z);
     /* cosine lobe */
-    float rr = sqrtf(u1), phi = 2.0f * PI_F * u0;
+    float rr = sqrtf(u1), phi = 2.0f * IBL_PI_F * u0;
     float x = rr * cosf(phi), y = rr * sinf(phi), z = sqrtf(fmaxf(0.0f, 1.0f - u1));
     dirs[1] = ibl__v3(t.x * x + bt.x * y + n.x * z, t.y * x + bt.y * y + n.y * z,
                       t.z * x + bt.z * y + n.z * z);
@@ -322,7 +323,7 @@ ibl_status ibl_render(ibl_context *ctx, const ibl_probe *probe, const ibl_render
     if (!desc) desc = &defaults;
     memset(out, 0, sizeof *out);
     if (!probe || !probe->specular.data)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "render: no probe");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "render: no probe");
     int w = desc->width > 0 ? desc->width : 1024;
     int h = desc->height > 0 ? desc->height : (desc->width > 0 ? (w + 1) / 2 : 512);
     render_job *job = ibl_calloc(ctx, 1, sizeof *job);

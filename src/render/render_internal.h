@@ -3,24 +3,10 @@
 #define IBL_RENDER_INTERNAL_H
 
 #include "ibl/render.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <stdint.h>
-
-static inline ibl_vec3 ibl__v3(float x, float y, float z)
-{
-    ibl_vec3 v = {x, y, z};
-    return v;
-}
-static inline float ibl__dot(ibl_vec3 a, ibl_vec3 b)
-{
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-static inline ibl_vec3 ibl__norm(ibl_vec3 a)
-{
-    float l = sqrtf(ibl__dot(a, a));
-    return l > 0.0f ? ibl__v3(a.x / l, a.y / l, a.z / l) : a;
-}
 
 /* Orthonormal tangent frame around a unit vector (Duff et al. 2017, "Building an
  * Orthonormal Basis, Revisited"). */

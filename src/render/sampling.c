@@ -1,8 +1,8 @@
 /* Low-discrepancy sequences and lobe sampling for the reference renderer and the in-memory
  * probe builder. */
 #include "render_internal.h"
+#include "core/numeric.h"
 
-static const float PI_F = 3.14159265358979f;
 
 void ibl__frame(ibl_vec3 n, ibl_vec3 *t, ibl_vec3 *b)
 {
@@ -53,11 +53,11 @@ ibl_vec3 ibl__sample_ggx(ibl_vec3 n, float alpha, float u0, float u1)
 {
     float a2 = alpha * alpha;
     float cos_t = sqrtf((1.0f - u1) / (1.0f + (a2 - 1.0f) * u1));
-    return from_frame(n, cos_t, 2.0f * PI_F * u0);
+    return from_frame(n, cos_t, 2.0f * IBL_PI_F * u0);
 }
 
 ibl_vec3 ibl__sample_phong(ibl_vec3 n, float s, float u0, float u1)
 {
     float cos_t = powf(1.0f - u1, 1.0f / (s + 1.0f));
-    return from_frame(n, cos_t, 2.0f * PI_F * u0);
+    return from_frame(n, cos_t, 2.0f * IBL_PI_F * u0);
 }

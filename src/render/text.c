@@ -1,6 +1,7 @@
 /* Labels for `ibl render --compare`: a 5x7 bitmap font drawn straight into float images, and
  * the side-by-side composition. The glyphs are drawn for this project. */
 #include "render_internal.h"
+#include "core/context_internal.h"
 
 #include <ctype.h>
 #include <string.h>
@@ -109,7 +110,7 @@ ibl_status ibl_render_side_by_side(ibl_context *ctx, const ibl_image *a, const c
 {
     memset(out, 0, sizeof *out);
     if (a->height != b->height)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "side by side: heights differ (%d and %d)",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "side by side: heights differ (%d and %d)",
                         a->height, b->height);
     int gap = a->width / 128 + 2;
     ibl_status st = ibl_image_alloc(ctx, a->width + gap + b->width, a->height, out);

@@ -4,6 +4,7 @@
  * metalness/roughness/AO/transmittance channel packing of the same section. The seed's
  * figure is not available; the arrangement below is ours and is described in shade.h. */
 #include "ibl/shade.h"
+#include "core/context_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -64,9 +65,9 @@ ibl_status ibl_atlas_pack(ibl_context *ctx, const ibl_cubemap *chain, const ibl_
                           ibl_image *out, ibl_atlas_layout *layout)
 {
     memset(out, 0, sizeof *out);
-    if (!chain || !chain->data) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "atlas: no chain");
+    if (!chain || !chain->data) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "atlas: no chain");
     if (ibl_atlas_plan(chain->size, chain->levels, desc, layout) != IBL_OK)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "atlas: bad chain (size %d, %d levels)",
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "atlas: bad chain (size %d, %d levels)",
                         chain->size, chain->levels);
     ibl_status st = ibl_image_alloc(ctx, layout->width, layout->height, out);
     if (st != IBL_OK) return st;
@@ -111,7 +112,7 @@ ibl_status ibl_atlas_unpack(ibl_context *ctx, const ibl_image *atlas,
     ibl_atlas_desc d = {.gutter = layout->gutter ? layout->gutter : -1};
     if (ibl_atlas_plan(size, layout->levels, &d, &check) != IBL_OK || check.width != atlas->width ||
         check.height > atlas->height)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "atlas: a %dx%d image does not hold a %d-level chain of size %d",
                         atlas->width, atlas->height, layout->levels, size);
     ibl_status st = ibl_cubemap_alloc(ctx, size, layout->levels, out);
@@ -222,12 +223,12 @@ ibl_status ibl_pack_material_channels(ibl_context *ctx, const ibl_image *metalne
             w = in[i]->width;
             h = in[i]->height;
         } else if (in[i]->width != w || in[i]->height != h) {
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "pack channels: inputs differ in size (%dx%d and %dx%d)", w, h,
                             in[i]->width, in[i]->height);
         }
     }
-    if (w == 0) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "pack channels: no input");
+    if (w == 0) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "pack channels: no input");
     ibl_status st = ibl_image_alloc(ctx, w, h, out);
     if (st != IBL_OK) return st;
     size_t count = (size_t)w * h;

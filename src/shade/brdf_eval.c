@@ -1,9 +1,9 @@
 /* The analytic BRDF pieces the runtime and the reference renderer share, written once. */
 #include "ibl/shade.h"
+#include "core/numeric.h"
 
 #include <math.h>
 
-static const float PI_F = 3.14159265358979f;
 
 /* Schlick 1994: F = F0 + (1 - F0)(1 - v.h)^5. */
 float ibl_fresnel_schlick(float f0, float v_dot_h)
@@ -19,7 +19,7 @@ float ibl_ggx_d(float alpha, float n_dot_h)
     if (n_dot_h <= 0.0f) return 0.0f;
     float a2 = alpha * alpha;
     float d = n_dot_h * n_dot_h * (a2 - 1.0f) + 1.0f;
-    return a2 / (PI_F * d * d);
+    return a2 / (IBL_PI_F * d * d);
 }
 
 /* Height-correlated Smith for GGX divided by 4 (n.l)(n.v) (Heitz 2014, "Understanding the

@@ -8,6 +8,7 @@
  *    diffuse Rd (1 - AmbientBRDF) ("AmbientBRDF texture usage").
  * Level selection goes through the probe's own mapping (probe.c). */
 #include "ibl/shade.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <string.h>
@@ -122,20 +123,10 @@ ibl_material ibl_material_blinn_phong(const float rd[3], const float f0[3], floa
     return m;
 }
 
-static float dot3(ibl_vec3 a, ibl_vec3 b)
-{
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-
-static float clamp01(float x)
-{
-    return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
-}
-
 void ibl_shade(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_material *m,
                const ibl_surface *s, ibl_shade_result *out)
 {
-    float nv = dot3(s->n, s->v);
+    float nv = ibl__dot(s->n, s->v);
     ibl_vec3 r = {2.0f * nv * s->n.x - s->v.x, 2.0f * nv * s->n.y - s->v.y,
                   2.0f * nv * s->n.z - s->v.z};
     if (!desc || !desc->mirror_direction) {
@@ -144,12 +135,12 @@ void ibl_shade(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_mat
          * cannot express; lerp(N, R, (1 - r)(sqrt(1 - r) + r)) */
         float rough = m->model == IBL_MATERIAL_BLINN_PHONG
                           ? ibl_roughness_from_shininess(m->shininess)
-                          : clamp01(m->roughness);
+                          : ibl__saturate(m->roughness);
         float smooth = 1.0f - rough;
         float f = smooth * (sqrtf(smooth) + rough);
         ibl_vec3 d = {s->n.x + (r.x - s->n.x) * f, s->n.y + (r.y - s->n.y) * f,
                       s->n.z + (r.z - s->n.z) * f};
-        float len = sqrtf(dot3(d, d));
+        float len = sqrtf(ibl__dot(d, d));
         if (len > 0.0f) r = (ibl_vec3){d.x / len, d.y / len, d.z / len};
     }
     ibl_shade_dir(probe, desc, m, s, r, out);
@@ -161,7 +152,7 @@ void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl
     static const ibl_shade_desc defaults;
     if (!desc) desc = &defaults;
     /* n.v at exactly 0 makes the tables' edge column meaningless; 1e-4 is below their step */
-    float nv = dot3(s->n, s->v);
+    float nv = ibl__dot(s->n, s->v);
     if (nv < 1e-4f) nv = 1e-4f;
     float irr[3], pref[3], spec[3], diffuse_color[3];
     float roughness, shininess, lod;
@@ -173,7 +164,7 @@ void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl
         lod = ibl_probe_lod_from_shininess(probe, shininess);
         if (desc->no_mirror && lod < 0.0f) lod = 0.0f;
     } else {
-        roughness = clamp01(m->roughness);
+        roughness = ibl__saturate(m->roughness);
         shininess = ibl_shininess_from_roughness(roughness);
         lod = ibl_probe_lod_from_roughness(probe, roughness);
     }
@@ -187,7 +178,7 @@ void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl
                            : m->f0[c];
             spec[c] = pref[c] * ab;
             float kd = desc->bp_diffuse == IBL_BP_DIFFUSE_F0 ? 1.0f - m->f0[c] : 1.0f - ab;
-            diffuse_color[c] = m->base_color[c] * clamp01(kd);
+            diffuse_color[c] = m->base_color[c] * ibl__saturate(kd);
         }
     } else {
         float a = 1.0f, b = 0.0f;

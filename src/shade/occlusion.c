@@ -5,16 +5,11 @@
  * Indirect Occlusion", section 6), Russell 2015 ("Horizon Occlusion for Normal Mapped
  * Reflections"). docs/SHADING.md discusses each. */
 #include "ibl/shade.h"
+#include "core/numeric.h"
 
 #include <math.h>
 #include <string.h>
 
-static const float PI_F = 3.14159265358979f;
-
-static float saturate(float x)
-{
-    return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
-}
 
 static const char *const so_names[IBL_SO_COUNT] = {
     "none", "ao", "triace", "triace-shininess", "triace-fast", "frostbite", "cone"};
@@ -57,10 +52,10 @@ int ibl_ambient_mix_from_name(const char *name, ibl_ambient_mix *out)
 static float cap_intersection(float r1, float r2, float d)
 {
     float rmin = r1 < r2 ? r1 : r2, rmax = r1 < r2 ? r2 : r1;
-    float small_cap = 2.0f * PI_F * (1.0f - cosf(rmin));
+    float small_cap = 2.0f * IBL_PI_F * (1.0f - cosf(rmin));
     if (d <= rmax - rmin) return small_cap;
     if (d >= r1 + r2) return 0.0f;
-    float x = 1.0f - saturate((d - (rmax - rmin)) / (2.0f * rmin));
+    float x = 1.0f - ibl__saturate((d - (rmax - rmin)) / (2.0f * rmin));
     return small_cap * x * x * (3.0f - 2.0f * x);
 }
 
@@ -71,54 +66,49 @@ static float cap_intersection(float r1, float r2, float d)
  * in docs/SHADING.md). Both cones are centred on their axes: n and R. */
 static float cone_so(float n_dot_e, float ao, float roughness)
 {
-    float vis = asinf(sqrtf(saturate(ao)));
+    float vis = asinf(sqrtf(ibl__saturate(ao)));
     float n = ibl_shininess_from_roughness(roughness);
     float c = powf(0.5f, 1.0f / (n + 1.0f));
     float spec = acosf(c);
     if (spec < 1e-4f) spec = 1e-4f;
     /* R is E mirrored about n: both make the same angle with n */
-    float d = acosf(saturate(n_dot_e));
-    float cap = 2.0f * PI_F * (1.0f - cosf(spec));
-    return saturate(cap_intersection(vis, spec, d) / cap);
+    float d = acosf(ibl__saturate(n_dot_e));
+    float cap = 2.0f * IBL_PI_F * (1.0f - cosf(spec));
+    return ibl__saturate(cap_intersection(vis, spec, d) / cap);
 }
 
 float ibl_specular_occlusion(ibl_so_formula f, float n_dot_e, float ao, float roughness,
                              float shininess)
 {
-    float ne = saturate(n_dot_e);
-    ao = saturate(ao);
+    float ne = ibl__saturate(n_dot_e);
+    ao = ibl__saturate(ao);
     switch (f) {
     case IBL_SO_NONE: return 1.0f;
     case IBL_SO_AO: return ao;
     /* tri-Ace 2010, "SO implementation (1)" */
-    case IBL_SO_TRIACE: return saturate(ne * ne + 2.0f * ao - 1.0f);
+    case IBL_SO_TRIACE: return ibl__saturate(ne * ne + 2.0f * ao - 1.0f);
     /* tri-Ace 2010, "SO implementation (2)" */
-    case IBL_SO_TRIACE_SHININESS: return saturate(powf(ne + ao, 0.01f * shininess) - 1.0f + ao);
+    case IBL_SO_TRIACE_SHININESS: return ibl__saturate(powf(ne + ao, 0.01f * shininess) - 1.0f + ao);
     /* tri-Ace 2010, "SO implementation (3)" */
     case IBL_SO_TRIACE_FAST: {
         float s = ne + ao;
-        return saturate(s * s - 1.0f + ao);
+        return ibl__saturate(s * s - 1.0f + ao);
     }
     /* Lagarde & de Rousiers 2014, "Moving Frostbite to PBR", specular occlusion */
     case IBL_SO_FROSTBITE:
-        return saturate(powf(ne + ao, exp2f(-16.0f * roughness - 1.0f)) - 1.0f + ao);
+        return ibl__saturate(powf(ne + ao, exp2f(-16.0f * roughness - 1.0f)) - 1.0f + ao);
     case IBL_SO_CONE: return cone_so(ne, ao, roughness);
     default: return 1.0f;
     }
 }
 
 /* Russell 2015: reflections of normal-mapped surfaces that point under the geometric horizon
- * are faded out: saturate(1 + k R.Ng)^2, k = 1.3 in Marmoset Toolbag. */
+ * are faded out: ibl__saturate(1 + k R.Ng)^2, k = 1.3 in Marmoset Toolbag. */
 float ibl_horizon_occlusion(ibl_vec3 r, ibl_vec3 ng, float k)
 {
     if (k <= 0.0f) k = 1.3f;
-    float h = saturate(1.0f + k * (r.x * ng.x + r.y * ng.y + r.z * ng.z));
+    float h = ibl__saturate(1.0f + k * (r.x * ng.x + r.y * ng.y + r.z * ng.z));
     return h * h;
-}
-
-static float lerpf(float a, float b, float t)
-{
-    return a + (b - a) * t;
 }
 
 /* tri-Ace 2010, "Ambient specular term computation" .. "Applying to the entire specular term". */
@@ -129,11 +119,11 @@ void ibl_ambient_mix_apply(ibl_ambient_mix mix, const float s_d[3], const float 
     for (int c = 0; c < 3; c++) {
         float sd = s_d ? s_d[c] : 0.0f, da = diffuse_ambient[c], sa = specular_ambient[c];
         switch (mix) {
-        case IBL_MIX_LERP_ALBEDO: out[c] = sd + lerpf(da * albedo[c], sa, so); break;
-        case IBL_MIX_LERP_AO: out[c] = sd + lerpf(da * ao, sa, so); break;
-        case IBL_MIX_AO_LERP_AO: out[c] = sd + ao * lerpf(da * ao, sa, so); break;
-        case IBL_MIX_LERP_AO2: out[c] = sd + lerpf(da * ao * ao, sa, so); break;
-        case IBL_MIX_ENTIRE: out[c] = sd * so + ao * lerpf(da * ao, sa, so); break;
+        case IBL_MIX_LERP_ALBEDO: out[c] = sd + ibl__lerpf(da * albedo[c], sa, so); break;
+        case IBL_MIX_LERP_AO: out[c] = sd + ibl__lerpf(da * ao, sa, so); break;
+        case IBL_MIX_AO_LERP_AO: out[c] = sd + ao * ibl__lerpf(da * ao, sa, so); break;
+        case IBL_MIX_LERP_AO2: out[c] = sd + ibl__lerpf(da * ao * ao, sa, so); break;
+        case IBL_MIX_ENTIRE: out[c] = sd * so + ao * ibl__lerpf(da * ao, sa, so); break;
         case IBL_MIX_MULTIPLY:
         default: out[c] = sd + sa * so; break;
         }

@@ -1,6 +1,8 @@
 /* The probe: validation of its plain parts, the level mapping (roughness/shininess <-> lod)
  * and the reads every shading model makes (prefiltered radiance, irradiance). */
 #include "ibl/shade.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 #include "shade/probe_internal.h"
 
 #include "ibl/io.h"
@@ -12,7 +14,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const float PI_F = 3.14159265358979f;
 
 static int cube_ok(const ibl_cubemap *c)
 {
@@ -29,12 +30,12 @@ static int axis_ok(const ibl_table_axis *a)
 
 ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *p)
 {
-    if (!p) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: NULL");
+    if (!p) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: NULL");
     if (!cube_ok(&p->specular))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: no prefiltered specular chain");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: no prefiltered specular chain");
     ibl_level_mapping *m = &p->mapping;
     if (m->levels <= 0 || m->levels > p->specular.levels)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "probe: the level mapping describes %d levels, the chain has %d", m->levels,
                         p->specular.levels);
     int have_r = 0, have_s = 0;
@@ -53,30 +54,30 @@ ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *p)
         }
     for (int k = 0; k < m->levels; k++)
         if (!(m->shininess[k] > 0.0f))
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: level %d has shininess %g", k,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: level %d has shininess %g", k,
                             (double)m->shininess[k]);
     for (int k = 1; k < m->levels; k++) {
         if (!(m->roughness[k] > m->roughness[k - 1]))
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "probe: level roughness must increase (level %d: %g after %g)", k,
                             (double)m->roughness[k], (double)m->roughness[k - 1]);
         if (!(m->shininess[k] < m->shininess[k - 1]))
-            return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "probe: level shininess must decrease (level %d: %g after %g)", k,
                             (double)m->shininess[k], (double)m->shininess[k - 1]);
     }
     if (p->mirror.data && !cube_ok(&p->mirror))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad mirror cube");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad mirror cube");
     if (p->sh_kind == IBL_SH_NONE && !cube_ok(&p->irradiance))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: neither irradiance cube nor SH");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: neither irradiance cube nor SH");
     const ibl_splitsum_view *ss = &p->splitsum;
     if (ss->data && (!axis_ok(&ss->n_dot_v) || !axis_ok(&ss->roughness) || ss->channels == 1 ||
                      ss->channels < 0))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad split-sum table");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad split-sum table");
     const ibl_ambient_brdf_view *ab = &p->ambient_brdf;
     if (ab->data && (!axis_ok(&ab->n_dot_v) || !axis_ok(&ab->shininess) || !axis_ok(&ab->f0) ||
                      ab->channels < 0))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad AmbientBRDF table");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad AmbientBRDF table");
     return IBL_OK;
 }
 
@@ -145,7 +146,7 @@ void ibl_probe_sample_specular(const ibl_probe *p, float lod, ibl_vec3 dir, floa
 }
 
 /* Ramamoorthi & Hanrahan 2001: E(n) = sum_l A_l sum_m L_lm Y_lm(n), A = (pi, 2pi/3, pi/4). */
-void ibl_sh9_irradiance(const float sh[9][3], ibl_sh_kind kind, ibl_vec3 n, float out[3])
+void ibl_sh9_eval_irradiance(const float sh[9][3], ibl_sh_kind kind, ibl_vec3 n, float out[3])
 {
     float x = n.x, y = n.y, z = n.z;
     float basis[9] = {0.282095f,
@@ -171,8 +172,8 @@ void ibl_probe_irradiance(const ibl_probe *p, ibl_vec3 n, float out[3])
 {
     float scale = p->intensity > 0.0f ? p->intensity : 1.0f;
     if (p->sh_kind != IBL_SH_NONE) {
-        ibl_sh9_irradiance(p->sh, p->sh_kind, n, out);
-        for (int c = 0; c < 3; c++) out[c] *= scale / PI_F;
+        ibl_sh9_eval_irradiance(p->sh, p->sh_kind, n, out);
+        for (int c = 0; c < 3; c++) out[c] *= scale / IBL_PI_F;
         return;
     }
     float t[4];
@@ -208,9 +209,9 @@ ibl_status ibl__probe_parse_manifest(ibl_context *ctx, const void *bytes, size_t
 {
     memset(files, 0, sizeof *files);
     if (size > ((size_t)64 << 20))
-        return ibl_fail(ctx, IBL_ERR_TOO_LARGE, "%s: a manifest of %zu bytes is too large", name, size);
+        return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: a manifest of %zu bytes is too large", name, size);
     char *text = ibl_alloc(ctx, size + 1);
-    if (!text) return ibl_fail(ctx, ibl_context_status(ctx), "%s: out of memory", name);
+    if (!text) return ibl__fail(ctx, ibl_context_status(ctx), "%s: out of memory", name);
     memcpy(text, bytes, size);
     /* the parse below stops at the first NUL, so an embedded NUL only shortens the text */
     text[size] = 0;
@@ -251,14 +252,14 @@ ibl_status ibl__probe_parse_manifest(ibl_context *ctx, const void *bytes, size_t
         if (e && *e == ',') files->ambient_shininess_max = strtof(e + 1, NULL);
     }
     ibl_free(ctx, text);
-    if (bad || k == 0) return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: no specular level mapping", name);
+    if (bad || k == 0) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: no specular level mapping", name);
     return IBL_OK;
 }
 
 ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out)
 {
     if (out) memset(out, 0, sizeof *out);
-    if (!dir || !out) return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: no directory");
+    if (!dir || !out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: no directory");
     char path[4][1024], manifest_path[1024];
     snprintf(manifest_path, sizeof manifest_path, "%s/manifest.json", dir);
     void *bytes = NULL;
@@ -299,7 +300,7 @@ static ibl_status read_cube(ibl_context *ctx, const char *path, const ibl_read_d
         ibl_image im = {tex.width, tex.height, tex.data};
         st = ibl_image_to_cubemap(ctx, &im, NULL, out);
     } else {
-        st = ibl_fail(ctx, IBL_ERR_FORMAT, "%s: not a cube texture", path);
+        st = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a cube texture", path);
     }
     ibl_texture_free(ctx, &tex);
     return st;
@@ -315,7 +316,7 @@ static ibl_status read_table(ibl_context *ctx, ibl_probe *p, const char *path,
     if (st != IBL_OK) return st;
     if (tex.kind != kind || !tex.owns_data) {
         ibl_texture_free(ctx, &tex);
-        return ibl_fail(ctx, IBL_ERR_FORMAT, "%s: expected a %s table", path,
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: expected a %s table", path,
                         kind == IBL_TEXTURE_3D ? "3D" : "2D");
     }
     *shape = tex;
@@ -333,7 +334,7 @@ ibl_status ibl_probe_load_files(ibl_context *ctx, const ibl_probe_files *f, ibl_
 {
     memset(out, 0, sizeof *out);
     if (!f || !f->specular)
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: no specular chain file");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: no specular chain file");
     ibl_read_desc rd = {.clamp_infinite = f->clamp_infinite};
     ibl_status st = read_cube(ctx, f->specular, &rd, 0, &out->owned_cubes[0]);
     if (st != IBL_OK) goto fail;

@@ -5,28 +5,12 @@
  * ("Image-based Lighting approaches and parallax-corrected cubemap"), tri-Ace 2010 (seeds
  * 000/001: "IBL Offset", "Shininess hack"), seed 003 (Daqi 2016, "Environment Switch"). */
 #include "ibl/shade.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
 
 #include <float.h>
 #include <math.h>
 #include <string.h>
-
-static float saturate(float x)
-{
-    return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
-}
-
-static ibl_vec3 v3(float x, float y, float z)
-{
-    ibl_vec3 v = {x, y, z};
-    return v;
-}
-
-static ibl_vec3 normalize3(ibl_vec3 a)
-{
-    float l = sqrtf(a.x * a.x + a.y * a.y + a.z * a.z);
-    if (l <= 0.0f) return a;
-    return v3(a.x / l, a.y / l, a.z / l);
-}
 
 float ibl_volume_size(const ibl_volume *v)
 {
@@ -53,7 +37,7 @@ float ibl_volume_weight(const ibl_volume *v, ibl_vec3 p)
     float d = inside_distance(v, p);
     if (d < 0.0f) return 0.0f;
     if (v->blend_distance <= 0.0f) return 1.0f;
-    return saturate(d / v->blend_distance);
+    return ibl__saturate(d / v->blend_distance);
 }
 
 void ibl_volume_sort(const ibl_volume *volumes, int count, int *order)
@@ -110,7 +94,7 @@ ibl_vec3 ibl_parallax_correct(const ibl_volume *proxy, ibl_vec3 probe_position, 
         if (t == FLT_MAX) return r;
     } else {
         /* |o + t r|^2 = R^2 with |r| = 1 in general: solve the quadratic with a = r.r */
-        ibl_vec3 o = v3(p.x - proxy->center.x, p.y - proxy->center.y, p.z - proxy->center.z);
+        ibl_vec3 o = ibl__v3(p.x - proxy->center.x, p.y - proxy->center.y, p.z - proxy->center.z);
         float a = r.x * r.x + r.y * r.y + r.z * r.z;
         float b = o.x * r.x + o.y * r.y + o.z * r.z;
         float c = o.x * o.x + o.y * o.y + o.z * o.z - proxy->radius * proxy->radius;
@@ -118,21 +102,21 @@ ibl_vec3 ibl_parallax_correct(const ibl_volume *proxy, ibl_vec3 probe_position, 
         float disc = b * b - a * c;
         t = (-b + sqrtf(disc > 0.0f ? disc : 0.0f)) / a;
     }
-    ibl_vec3 hit = v3(p.x + t * r.x, p.y + t * r.y, p.z + t * r.z);
-    return normalize3(
-        v3(hit.x - probe_position.x, hit.y - probe_position.y, hit.z - probe_position.z));
+    ibl_vec3 hit = ibl__v3(p.x + t * r.x, p.y + t * r.y, p.z + t * r.z);
+    return ibl__norm(
+        ibl__v3(hit.x - probe_position.x, hit.y - probe_position.y, hit.z - probe_position.z));
 }
 
 ibl_vec3 ibl_offset_reflection(ibl_vec3 r, ibl_vec3 p_obj, ibl_vec3 p_ibl, float c)
 {
-    return normalize3(v3(c * (p_obj.x - p_ibl.x) + r.x, c * (p_obj.y - p_ibl.y) + r.y,
+    return ibl__norm(ibl__v3(c * (p_obj.x - p_ibl.x) + r.x, c * (p_obj.y - p_ibl.y) + r.y,
                          c * (p_obj.z - p_ibl.z) + r.z));
 }
 
 float ibl_shininess_hack(float shininess, float light_size, float attenuation)
 {
     if (light_size <= 0.0f) return shininess;
-    float s = saturate(60.0f / light_size * (1.0f - attenuation));
+    float s = ibl__saturate(60.0f / light_size * (1.0f - attenuation));
     return shininess * s * s;
 }
 
@@ -142,14 +126,14 @@ float ibl_shininess_hack(float shininess, float light_size, float attenuation)
 float ibl_environment_switch(float position, float border, float size)
 {
     if (size <= 0.0f) return position >= border ? 1.0f : 0.0f;
-    return saturate((position - border) / size + 0.5f);
+    return ibl__saturate((position - border) / size + 0.5f);
 }
 
 ibl_screen_rect ibl_volume_screen_rect(const ibl_volume *v, const float m[16], int width,
                                        int height)
 {
     ibl_screen_rect full = {0, 0, width, height}, empty = {0, 0, 0, 0};
-    ibl_vec3 h = v->shape == IBL_VOLUME_BOX ? v->half_extent : v3(v->radius, v->radius, v->radius);
+    ibl_vec3 h = v->shape == IBL_VOLUME_BOX ? v->half_extent : ibl__v3(v->radius, v->radius, v->radius);
     float xmin = FLT_MAX, xmax = -FLT_MAX, ymin = FLT_MAX, ymax = -FLT_MAX;
     int all_far = 1;
     for (int i = 0; i < 8; i++) {
@@ -185,7 +169,7 @@ ibl_status ibl_tile_probes(ibl_context *ctx, const ibl_screen_rect *rects, const
 {
     memset(out, 0, sizeof *out);
     if (count < 0 || width <= 0 || height <= 0 || tile_size <= 0 || (count > 0 && !rects))
-        return ibl_fail(ctx, IBL_ERR_INVALID_ARGUMENT, "tile probes: bad arguments");
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "tile probes: bad arguments");
     int tx = (width + tile_size - 1) / tile_size, ty = (height + tile_size - 1) / tile_size;
     size_t tiles = (size_t)tx * (size_t)ty;
     int *offsets = ibl_calloc(ctx, tiles + 1, sizeof(int));
