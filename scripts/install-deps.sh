@@ -6,11 +6,12 @@
 #              libstb-dev (stb_image / stb_image_write: PNG and JPEG reading, JPEG writing)
 #              libpng-dev (PNG writing, 8-bit sRGB and 16-bit linear)
 #              libdeflate-dev (EXR ZIP/ZIPS chunks: 2-3x faster whole-buffer inflate than zlib)
+#              libjansson-dev (JSON: the bake manifest, sh.json, --json outputs)
 #   tests:     libcmocka-dev (test framework; CTest drives it)
 #   fuzzing:   clang libclang-rt-14-dev (libFuzzer, sanitizer runtimes)   [make fuzz only]
 #   benchmarks: hyperfine                                              [make bench only]
 set -eu
-PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libstb-dev libpng-dev libdeflate-dev libcmocka-dev"
+PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libstb-dev libpng-dev libdeflate-dev libjansson-dev libcmocka-dev"
 case "${1:-}" in
   --fuzz) PACKAGES="$PACKAGES clang libclang-rt-14-dev" ;;
   --bench) PACKAGES="$PACKAGES hyperfine" ;;

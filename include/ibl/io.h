@@ -98,9 +98,31 @@ ibl_status ibl_write_texture(ibl_context *ctx, const char *path, const ibl_textu
 ibl_status ibl_encode_texture(ibl_context *ctx, ibl_file_type type, const ibl_texture *texture,
                               const ibl_write_desc *desc, void **bytes, size_t *size);
 
-/* Writes bytes to path atomically (temporary file + rename). */
+/* Encodes an image into a new buffer (freed with ibl_free), as ibl_write_image would. */
+ibl_status ibl_encode_image(ibl_context *ctx, ibl_file_type type, const ibl_image *image,
+                            const ibl_write_desc *desc, void **bytes, size_t *size);
+
+/* Writes bytes to path atomically (a set of one file, below). */
 ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void *bytes,
                                  size_t size);
+
+/* A set of output files that appear together or not at all (src/io/output.c): each file is
+ * written and flushed under a temporary name beside its path, and only the commit renames
+ * them into place (after a last cancellation check), so a failure, a full disk or a Ctrl-C
+ * leaves every target untouched. Destroying an uncommitted set removes its temporaries. New
+ * files get mode 0666 minus the umask; a replaced file keeps its mode. */
+typedef struct ibl_output_set ibl_output_set;
+ibl_status ibl_output_set_create(ibl_context *ctx, ibl_output_set **out);
+/* An input no output of the set may replace (refused with IBL_ERR_INVALID_ARGUMENT). */
+ibl_status ibl_output_set_protect(ibl_output_set *set, const char *input_path);
+ibl_status ibl_output_set_add(ibl_output_set *set, const char *path, const void *bytes,
+                              size_t size);
+ibl_status ibl_output_set_add_image(ibl_output_set *set, const char *path,
+                                    const ibl_image *image, const ibl_write_desc *desc);
+ibl_status ibl_output_set_add_texture(ibl_output_set *set, const char *path,
+                                      const ibl_texture *texture, const ibl_write_desc *desc);
+ibl_status ibl_output_set_commit(ibl_output_set *set);
+void ibl_output_set_destroy(ibl_output_set *set);
 /* Reads a whole file into a new buffer (freed with ibl_free); refuses files over max_bytes. */
 ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_t *size);
 

@@ -132,6 +132,18 @@ ibl_status ibl_sh_apply_window(ibl_sh *radiance, ibl_sh_window window, double wi
  * the automatic window (4096 Fibonacci-sphere directions). */
 double ibl_sh_min_irradiance(const ibl_sh *radiance);
 
+/* ---- the JSON form -------------------------------------------------------------------------- */
+
+/* The JSON object of an SH set (what `ibl sh --json` prints and a bake's sh.json holds): the
+ * basis and axes, the window, radiance, irradiance and irradiance/pi coefficients, and the
+ * Ramamoorthi-Hanrahan matrices. input and projection are recorded when not NULL. The text
+ * is NUL-terminated, ends with a newline and is freed with ibl_free. */
+ibl_status ibl_sh_json(ibl_context *ctx, const ibl_sh *radiance, ibl_sh_window requested,
+                       const ibl_sh_window_report *window, const char *input,
+                       const char *projection, char **json);
+/* "none", "auto", "hanning" */
+const char *ibl_sh_window_name(ibl_sh_window window);
+
 #ifdef __cplusplus
 }
 #endif

@@ -252,97 +252,6 @@ ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_
     return IBL_OK;
 }
 
-/* ---- atomic write -------------------------------------------------------------------- */
-
-static ibl_status write_fd_all(int fd, const uint8_t *p, size_t n, int *err)
-{
-    while (n > 0) {
-        size_t chunk = n > ((size_t)1 << 30) ? ((size_t)1 << 30) : n;
-        ssize_t w = write(fd, p, chunk);
-        if (w < 0) {
-            if (errno == EINTR) continue;
-            *err = errno;
-            return IBL_ERR_IO;
-        }
-        if (w == 0) {
-            *err = EIO;
-            return IBL_ERR_IO;
-        }
-        p += w;
-        n -= (size_t)w;
-    }
-    return IBL_OK;
-}
-
-ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void *bytes,
-                                 size_t size)
-{
-    if (!path || !path[0] || (!bytes && size))
-        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_file_atomic: missing argument");
-    const char *slash = strrchr(path, '/');
-    const char *base = slash ? slash + 1 : path;
-    if (!base[0]) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: not a file name", path);
-    size_t dir_len = slash ? (size_t)(slash - path) + 1 : 0;
-    /* "<dir>/.<base>.tmp-XXXXXX": same folder, so rename() stays on one file system. */
-    size_t tmp_len = dir_len + 1 + strlen(base) + 12;
-    char *tmp = ibl_alloc(ctx, tmp_len);
-    if (!tmp) return ibl__fail_named(ctx, ibl_context_status(ctx), path);
-    memcpy(tmp, path, dir_len);
-    snprintf(tmp + dir_len, tmp_len - dir_len, ".%s.tmp-XXXXXX", base);
-
-    int fd = mkstemp(tmp);
-    if (fd < 0) {
-        int e = errno;
-        ibl_free(ctx, tmp);
-        return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot create a temporary file next to it: %s", path,
-                        strerror(e));
-    }
-    /* mkstemp makes the file 0600; an output should look like any other: keep the mode of
-     * the file being replaced, or use rw-r--r-- for a new one. */
-    struct stat st;
-    mode_t mode = 0644;
-    if (stat(path, &st) == 0 && S_ISREG(st.st_mode)) mode = st.st_mode & 07777;
-    int err = 0;
-    const char *what = "write";
-    ibl_status s = write_fd_all(fd, bytes, size, &err);
-    if (s == IBL_OK && fchmod(fd, mode) != 0) {
-        s = IBL_ERR_IO;
-        err = errno;
-        what = "set the mode of";
-    }
-    if (s == IBL_OK && fsync(fd) != 0) {
-        s = IBL_ERR_IO;
-        err = errno;
-        what = "flush";
-    }
-    if (close(fd) != 0 && s == IBL_OK) {
-        s = IBL_ERR_IO;
-        err = errno;
-        what = "close";
-    }
-    /* last chance to cancel (Ctrl-C in the CLI): the target is still untouched */
-    if (s == IBL_OK && ibl__progress(ctx, "write", 1.0) == IBL_ERR_CANCELLED) {
-        unlink(tmp);
-        ibl_free(ctx, tmp);
-        return ibl__fail(ctx, IBL_ERR_CANCELLED, "%s: cancelled; nothing written", path);
-    }
-    if (s == IBL_OK && rename(tmp, path) != 0) {
-        s = IBL_ERR_IO;
-        err = errno;
-        what = "replace";
-    }
-    if (s != IBL_OK) {
-        unlink(tmp);
-        ibl_free(ctx, tmp);
-        return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot %s: %s", path, what, strerror(err));
-    }
-    ibl_free(ctx, tmp);
-    /* The folder is not fsync'ed after the rename: the data was, so after a crash the name
-     * holds the old file or the new one, each complete; syncing the folder would only make
-     * the new name durable sooner, for milliseconds per file (docs/PERFORMANCE.md). */
-    return IBL_OK;
-}
-
 /* ---- reading: dispatch and pixel policy ---------------------------------------------- */
 
 /* ibl_sanitize_pixels over fixed chunks of texels through ibl_parallel_for; the counts are
@@ -555,17 +464,11 @@ static ibl_status unknown_extension(ibl_context *ctx, const char *path)
                     path);
 }
 
-static ibl_status write_encoded(ibl_context *ctx, const char *path, ibl_status s, void *bytes,
-                                size_t size)
+ibl_status ibl__encode_image_for_path(ibl_context *ctx, const char *path, const ibl_image *image,
+                                     const ibl_write_desc *desc, void **bytes, size_t *size)
 {
-    if (s == IBL_OK) s = ibl_write_file_atomic(ctx, path, bytes, size);
-    ibl_free(ctx, bytes);
-    return s;
-}
-
-ibl_status ibl_write_image(ibl_context *ctx, const char *path, const ibl_image *image,
-                           const ibl_write_desc *desc)
-{
+    *bytes = NULL;
+    *size = 0;
     if (!path) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_image: missing path");
     ibl_status s = check_image(ctx, path, image);
     if (s != IBL_OK) return s;
@@ -574,15 +477,79 @@ ibl_status ibl_write_image(ibl_context *ctx, const char *path, const ibl_image *
     if (desc) wd = *desc;
     ibl_file_type type = ibl_file_type_from_path(path);
     if (type == IBL_FILE_UNKNOWN) return unknown_extension(ctx, path);
-    void *bytes = NULL;
-    size_t size = 0;
     if (ibl_file_type_is_container(type)) {
         ibl_texture view = texture_view(image, &wd);
-        s = encode_container(ctx, type, &view, &wd, path, &bytes, &size);
-    } else {
-        s = encode_flat(ctx, type, image, &wd, path, &bytes, &size);
+        return encode_container(ctx, type, &view, &wd, path, bytes, size);
     }
-    return write_encoded(ctx, path, s, bytes, size);
+    return encode_flat(ctx, type, image, &wd, path, bytes, size);
+}
+
+ibl_status ibl__encode_texture_for_path(ibl_context *ctx, const char *path,
+                                       const ibl_texture *texture, const ibl_write_desc *desc,
+                                       void **bytes, size_t *size)
+{
+    *bytes = NULL;
+    *size = 0;
+    if (!path) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_texture: missing path");
+    if (!texture || !texture->data)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: empty texture", path);
+    ibl_file_type type = ibl_file_type_from_path(path);
+    if (type == IBL_FILE_UNKNOWN) return unknown_extension(ctx, path);
+    ibl_write_desc wd;
+    memset(&wd, 0, sizeof wd);
+    if (desc) wd = *desc;
+    if (ibl_file_type_is_container(type))
+        return encode_container(ctx, type, texture, &wd, path, bytes, size);
+    if (texture->kind != IBL_TEXTURE_2D || texture->levels != 1)
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
+                         "%s: .%s holds one flat image; write cubes, 3D textures and mips to "
+                         ".ktx2, .ktx or .dds",
+                         path, ibl_file_type_name(type));
+    ibl_image view = {texture->width, texture->height, texture->data};
+    return encode_flat(ctx, type, &view, &wd, path, bytes, size);
+}
+
+ibl_status ibl_write_image(ibl_context *ctx, const char *path, const ibl_image *image,
+                           const ibl_write_desc *desc)
+{
+    void *bytes;
+    size_t size;
+    ibl_status s = ibl__encode_image_for_path(ctx, path, image, desc, &bytes, &size);
+    if (s == IBL_OK) s = ibl_write_file_atomic(ctx, path, bytes, size);
+    ibl_free(ctx, bytes);
+    return s;
+}
+
+ibl_status ibl_write_texture(ibl_context *ctx, const char *path, const ibl_texture *texture,
+                             const ibl_write_desc *desc)
+{
+    void *bytes;
+    size_t size;
+    ibl_status s = ibl__encode_texture_for_path(ctx, path, texture, desc, &bytes, &size);
+    if (s == IBL_OK) s = ibl_write_file_atomic(ctx, path, bytes, size);
+    ibl_free(ctx, bytes);
+    return s;
+}
+
+ibl_status ibl_encode_image(ibl_context *ctx, ibl_file_type type, const ibl_image *image,
+                            const ibl_write_desc *desc, void **bytes, size_t *size)
+{
+    if (!bytes || !size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_encode_image: missing argument");
+    *bytes = NULL;
+    *size = 0;
+    const char *name = ibl_file_type_name(type);
+    ibl_status s = check_image(ctx, name, image);
+    if (s != IBL_OK) return s;
+    ibl_write_desc wd;
+    memset(&wd, 0, sizeof wd);
+    if (desc) wd = *desc;
+    if (type == IBL_FILE_UNKNOWN)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_encode_image: unknown file type");
+    if (ibl_file_type_is_container(type)) {
+        ibl_texture view = texture_view(image, &wd);
+        return encode_container(ctx, type, &view, &wd, name, bytes, size);
+    }
+    return encode_flat(ctx, type, image, &wd, name, bytes, size);
 }
 
 ibl_status ibl_encode_texture(ibl_context *ctx, ibl_file_type type, const ibl_texture *texture,
@@ -610,33 +577,6 @@ ibl_status ibl_encode_texture(ibl_context *ctx, ibl_file_type type, const ibl_te
     return encode_flat(ctx, type, &view, &wd, name, bytes, size);
 }
 
-ibl_status ibl_write_texture(ibl_context *ctx, const char *path, const ibl_texture *texture,
-                             const ibl_write_desc *desc)
-{
-    if (!path) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_texture: missing path");
-    if (!texture || !texture->data)
-        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: empty texture", path);
-    ibl_file_type type = ibl_file_type_from_path(path);
-    if (type == IBL_FILE_UNKNOWN) return unknown_extension(ctx, path);
-    ibl_write_desc wd;
-    memset(&wd, 0, sizeof wd);
-    if (desc) wd = *desc;
-    void *bytes = NULL;
-    size_t size = 0;
-    ibl_status s;
-    if (ibl_file_type_is_container(type)) {
-        s = encode_container(ctx, type, texture, &wd, path, &bytes, &size);
-    } else if (texture->kind != IBL_TEXTURE_2D || texture->levels != 1) {
-        s = ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
-                     "%s: .%s holds one flat image; write cubes, 3D textures and mips to "
-                     ".ktx2, .ktx or .dds",
-                     path, ibl_file_type_name(type));
-    } else {
-        ibl_image view = {texture->width, texture->height, texture->data};
-        s = encode_flat(ctx, type, &view, &wd, path, &bytes, &size);
-    }
-    return write_encoded(ctx, path, s, bytes, size);
-}
 
 /* ---- tone mapping -------------------------------------------------------------------- */
 

@@ -49,6 +49,13 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
  * reported by core calls such as ibl_alloc, whose messages do not name the file). */
 ibl_status ibl__fail_named(ibl_context *ctx, ibl_status status, const char *name);
 
+/* Encodes for the container path's extension names (what ibl_write_image/_texture write). */
+ibl_status ibl__encode_image_for_path(ibl_context *ctx, const char *path, const ibl_image *image,
+                                     const ibl_write_desc *desc, void **bytes, size_t *size);
+ibl_status ibl__encode_texture_for_path(ibl_context *ctx, const char *path,
+                                       const ibl_texture *texture, const ibl_write_desc *desc,
+                                       void **bytes, size_t *size);
+
 /* Largest edge any reader accepts before allocating (absurd sizes are refused). */
 enum { IBL_MAX_DIMENSION = 65536 };
 

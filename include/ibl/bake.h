@@ -1,0 +1,161 @@
+/*
+ * ibl/bake.h - the bake: everything a renderer needs from one environment, in memory
+ * (ibl_bake) and as a folder (manifest.json + textures). This module alone names the
+ * folder's files and writes and reads its manifest; the CLI, the renderer and engines go
+ * through it. docs/FORMATS.md ("Bake folder") has the manifest schema.
+ *
+ *   ibl_bake_desc d = {.specular = {.filter = IBL_FILTER_GGX, .size = 256}};
+ *   ibl_bake bake;
+ *   ibl_bake_compute(ctx, &environment, &d, &bake);   // every stage, in memory
+ *   ibl_bake_write(ctx, &bake, "out/bake");             // the folder, all or nothing
+ *   ibl_probe probe;
+ *   ibl_bake_probe(ctx, &bake, &probe);                 // the runtime's view of it
+ *   ...
+ *   ibl_bake_free(ctx, &bake);
+ *
+ * and on the runtime side: ibl_bake_load(ctx, "out/bake", NULL, &bake) then ibl_bake_probe.
+ *
+ * Units. A level of a GGX chain is tied to a perceptual roughness r (alpha = r^2). A level of
+ * a Phong-family chain (phong, blinn, box, gauss) is tied to the Blinn-Phong shininess of the
+ * material that reads it (the exponent of the tri-Ace 2010 normalised Blinn-Phong BRDF, what
+ * ibl_material.shininess holds); the Phong kernel the level was filtered with has exponent
+ * shininess / blinn_factor (the tri-Ace fit cos^n(t) ~ cos^(4.2 n)(t/2)). The manifest
+ * records both per level.
+ */
+#ifndef IBL_BAKE_H
+#define IBL_BAKE_H
+
+#include "brdf.h"
+#include "core.h"
+#include "io.h"
+#include "layout.h"
+#include "sh.h"
+#include "shade.h"
+#include "sky.h"
+#include "specular.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The manifest schema this library writes (and the newest it reads). */
+enum { IBL_BAKE_MANIFEST_VERSION = 1 };
+
+/* Containers the cube textures are written in. */
+enum { IBL_BAKE_KTX2 = 1u << 0, IBL_BAKE_DDS = 1u << 1 };
+
+/* Where the environment came from: recorded in the manifest so a bake can be reproduced. */
+typedef struct ibl_bake_source {
+    const char *name;            /* input path or name; NULL: "built-in sky" with sky set,
+                                    else "environment"                                     */
+    ibl_layout layout;           /* the layout it was read in (0: not recorded)             */
+    ibl_orientation orientation; /* yaw, mirror, z-up applied when reading it               */
+    const ibl_sky_desc *sky;     /* the built-in sky's parameters, when it is the sky       */
+} ibl_bake_source;
+
+typedef struct ibl_bake_desc {
+    ibl_specular_desc specular; /* the chain (specular.h; zero: GGX at the source's size,
+                                   linear mapping); ibl_specular_preset fills one          */
+    const char *preset;         /* recorded only: the preset the chain's desc came from    */
+    int irradiance_size;        /* irradiance map face edge; 0: 16                          */
+    int sh_bands;               /* 1..5; 0: 3                                               */
+    ibl_sh_window sh_window;    /* windowing of the SH (sh.h)                               */
+    double sh_window_width;
+    int lut_size;               /* split-sum and multiple-scattering tables; 0: 128        */
+    int ambient_brdf;           /* the tri-Ace AmbientBRDF volume: 0 or 1 written, -1 not   */
+    float ambient_shininess_min, ambient_shininess_max; /* its material shininess axis; 0:
+                                   the chain's range for the Phong family, 1..100000 else   */
+    ibl_format format;          /* storage of the cube textures; 0: rgba16f                 */
+    unsigned containers;        /* IBL_BAKE_KTX2 | IBL_BAKE_DDS; 0: both                    */
+    int preview_width;          /* environment.png (equirect) width; 0: 1024; -1: none      */
+    ibl_bake_source source;
+} ibl_bake_desc;
+
+/* One bake, owned (ibl_bake_free). Parts a folder did not hold are left empty (data NULL). */
+typedef struct ibl_bake {
+    /* what was baked, every default resolved */
+    ibl_specular_info specular_info;
+    ibl_edge_fixup edge_fixup;
+    int irradiance_size, sh_bands, lut_size, working_size;
+    ibl_sh_window sh_window_requested;
+    double sh_window_width;
+    ibl_format format;
+    unsigned containers;
+    char *source_name;   /* owned */
+    char *preset;        /* owned; NULL when none was recorded */
+    ibl_layout source_layout;
+    ibl_orientation source_orientation;
+    int has_sky;
+    ibl_sky_desc sky;    /* defaults resolved */
+
+    ibl_cubemap specular;    /* the prefiltered chain, level 0 the sharpest               */
+    ibl_cubemap irradiance;  /* E/pi per texel (one level)                                 */
+    ibl_sh sh;               /* radiance SH, windowed as asked                            */
+    ibl_sh_window_report sh_window;
+    ibl_image splitsum;      /* [roughness][n.v] RGBA: R = A, G = B (brdf.h)               */
+    ibl_table_axis splitsum_n_dot_v, splitsum_roughness;
+    ibl_image brdf_extra;    /* R = E, G = E_avg, B = sheen albedo, A = its average         */
+    ibl_texture ambient_brdf; /* 3D [F0][shininess][n.v], R = AmbientBRDF (kind 3D)          */
+    ibl_table_axis ambient_n_dot_v, ambient_shininess, ambient_f0;
+    ibl_blinn_normalization ambient_normalization;
+    ibl_cubemap environment; /* the unfiltered working cube (in-memory bakes only): the
+                                probe's mirror and background; never written whole       */
+    ibl_image preview;       /* linear equirect preview (environment.png), if asked        */
+} ibl_bake;
+
+/* Runs every stage on level 0 of env: the specular chain, the irradiance map, the SH, the
+ * BRDF tables and the preview. desc may be NULL for every default. Bit-identical at any
+ * thread count. On failure *out is empty. */
+ibl_status ibl_bake_compute(ibl_context *ctx, const ibl_cubemap *env, const ibl_bake_desc *desc,
+                            ibl_bake *out);
+
+/* Writes the bake into folder dir as one transaction: the files are built in a staging
+ * folder beside dir and swapped in, so dir always holds one complete bake (the old one or
+ * the new one) even if the process is killed; a second writer of the same folder at the same
+ * time is refused (IBL_ERR_IO, "... is being written by another process"); stale staging
+ * folders of killed runs are removed. A dir that exists must be a bake folder (it holds a
+ * manifest.json written by ibl) or empty: other files are never deleted. */
+ibl_status ibl_bake_write(ibl_context *ctx, const ibl_bake *bake, const char *dir);
+
+/* ibl_bake_compute then ibl_bake_write. */
+ibl_status ibl_bake(ibl_context *ctx, const ibl_cubemap *env, const ibl_bake_desc *desc,
+                    const char *dir);
+
+/* Reads a bake folder (or the manifest.json path itself): the manifest, then the files it
+ * lists. desc (may be NULL) applies to every texture read (e.g. clamp_infinite). Errors name
+ * the file and, for the manifest, the field. */
+ibl_status ibl_bake_load(ibl_context *ctx, const char *path, const ibl_read_desc *desc,
+                         ibl_bake *out);
+
+/* A bake put together from separate files (e.g. a chain made by another tool). */
+typedef struct ibl_bake_parts {
+    const char *specular;      /* required: a cube texture with its chain (.ktx2 .dds .ktx);
+                                  a chain ibl wrote describes its own levels (KTX2 metadata) */
+    ibl_level_mapping mapping; /* when the chain does not describe itself: what each level
+                                  was filtered for; levels 0: roughness k / (levels - 1)    */
+    const char *environment;   /* optional: the unfiltered environment (cube texture, or an
+                                  image in any layout ibl_image_to_cubemap detects)         */
+    const char *irradiance;    /* optional: E/pi as a cube texture or image; without it the
+                                  SH is projected from the environment (or the chain)       */
+    const char *splitsum;      /* optional: a split-sum table as brdf.h and `ibl lut` write */
+    const char *ambient_brdf;  /* optional: an AmbientBRDF volume as `ibl lut` writes it     */
+    float ambient_shininess_min, ambient_shininess_max; /* its shininess range; 0: 1, 2000 */
+    int ambient_linear;        /* its shininess rows are linearly spaced (default: log)     */
+} ibl_bake_parts;
+
+ibl_status ibl_bake_load_parts(ibl_context *ctx, const ibl_bake_parts *parts,
+                               const ibl_read_desc *desc, ibl_bake *out);
+
+/* The runtime's view of a bake: pointers into it (the bake must outlive the probe), the level
+ * mapping, the SH or irradiance map, the tables; validated. */
+ibl_status ibl_bake_probe(ibl_context *ctx, const ibl_bake *bake, ibl_probe *out);
+
+void ibl_bake_free(ibl_context *ctx, ibl_bake *bake);
+
+/* The manifest.json text of a bake (NUL-terminated, freed with ibl_free). */
+ibl_status ibl_bake_manifest(ibl_context *ctx, const ibl_bake *bake, char **json);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
