@@ -53,13 +53,15 @@ int main(int argc, char **argv)
     enum { RUNS = 9, PROBE_RUNS = 3 };
     double t_probe[PROBE_RUNS], t_render[RUNS];
     ibl_probe probe;
+    ibl_bake_data bake;
+    ibl_bake_desc bd;
+    ibl_render_bake_desc(&env, 128, &bd);
     for (int r = 0; r < PROBE_RUNS; r++) {
         double t0 = now();
-        if (ibl_render_probe_from_environment(
-                ctx, &env, &(ibl_render_probe_desc){.specular_size = 128}, &probe) != IBL_OK)
-            return 1;
+        if (ibl_bake_compute(ctx, &env, &bd, &bake) != IBL_OK) return 1;
+        if (ibl_bake_probe(ctx, &bake, &probe) != IBL_OK) return 1;
         t_probe[r] = now() - t0;
-        if (r + 1 < PROBE_RUNS) ibl_probe_free(ctx, &probe);
+        if (r + 1 < PROBE_RUNS) ibl_bake_free(ctx, &bake);
     }
     ibl_render_desc d = {.width = 1024, .height = 512, .environment = &env};
     for (int r = 0; r < RUNS; r++) {
@@ -74,9 +76,10 @@ int main(int argc, char **argv)
     printf("threads %d\n", ibl_context_threads(ctx));
     printf("render 1024x512 runtime (split-sum):   median %.3f s (min %.3f, max %.3f)\n",
            t_render[RUNS / 2], t_render[0], t_render[RUNS - 1]);
-    printf("in-memory probe from a 256 cube (specular.h chain of 128, SH9, tables): median %.3f s\n",
+    printf("in-memory bake of a 256 cube (ibl_render_bake_desc: chain of 128, irradiance, SH, "
+           "tables): median %.3f s\n",
            t_probe[PROBE_RUNS / 2]);
-    ibl_probe_free(ctx, &probe);
+    ibl_bake_free(ctx, &bake);
     ibl_cubemap_free(ctx, &env);
     ibl_context_destroy(ctx);
     return 0;

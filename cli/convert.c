@@ -76,15 +76,14 @@ int cli_cmd_convert(int argc, char **argv)
         else if (cli_is(&a, arg, "--format", NULL)) {
             const char *v = cli_value(&a, arg);
             int ok = 0;
-            wd.format = ibl_format_from_name(v, &ok);
+            ok = ibl_format_from_name(v, &wd.format);
             if (!ok) cli_usage_error(&a, "unknown pixel format '%s'", v);
         } else if (cli_is(&a, arg, "--out-layout", NULL)) {
             const char *v = cli_value(&a, arg);
             if (strcmp(v, "faces") == 0) faces = 1;
             else {
-                out_layout = ibl_layout_from_name(v);
-                if (out_layout == IBL_LAYOUT_AUTO || out_layout == IBL_LAYOUT_CUBE ||
-                    out_layout == IBL_LAYOUT_FACES)
+                if (!ibl_layout_from_name(v, &out_layout) || out_layout == IBL_LAYOUT_AUTO ||
+                    out_layout == IBL_LAYOUT_CUBE || out_layout == IBL_LAYOUT_FACES)
                     cli_usage_error(&a, "unknown output layout '%s'", v);
             }
         } else cli_positional_or_unknown(&a, arg);

@@ -9,8 +9,7 @@ int cli_input_option(cli_args *a, const char *arg, cli_input_options *o)
 {
     if (cli_is(a, arg, "--layout", NULL)) {
         const char *v = cli_value(a, arg);
-        o->layout = ibl_layout_from_name(v);
-        if (o->layout == IBL_LAYOUT_AUTO && strcmp(v, "auto") != 0)
+        if (!ibl_layout_from_name(v, &o->layout))
             cli_usage_error(a, "unknown layout '%s' (equirect, hcross, vcross, hstrip, vstrip, "
                                "angular, octahedral, auto)", v);
         return 1;
@@ -19,7 +18,7 @@ int cli_input_option(cli_args *a, const char *arg, cli_input_options *o)
         o->orientation.yaw_degrees = (float)cli_double(a, arg, -3600, 3600);
         return 1;
     }
-    if (cli_is(a, arg, "--mirror", NULL)) {
+    if (cli_is(a, arg, "--mirror-input", NULL)) {
         o->orientation.mirror = 1;
         return 1;
     }
@@ -159,4 +158,17 @@ int cli_read_cubemap_faces(ibl_context *ctx, const cli_common *c, const char *co
     }
     for (int f = 0; f < 6; f++) ibl_image_free(ctx, &faces[f]);
     return rc;
+}
+
+void cli_check_not_inside(const cli_args *a, const char *input, const char *folder)
+{
+    char parent[4096];
+    const char *slash = strrchr(input, '/');
+    if (slash) snprintf(parent, sizeof parent, "%.*s", (int)(slash - input + 1), input);
+    else snprintf(parent, sizeof parent, ".");
+    struct stat si, sf;
+    if (stat(input, &si) == 0 && stat(parent, &si) == 0 && stat(folder, &sf) == 0 &&
+        si.st_dev == sf.st_dev && si.st_ino == sf.st_ino)
+        cli_usage_error(a, "the input %s is inside %s, which the bake replaces whole; move it or "
+                           "bake elsewhere", input, folder);
 }

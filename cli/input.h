@@ -5,12 +5,21 @@
 #include "cli.h"
 
 typedef struct cli_input_options {
-    ibl_layout layout;        /* --layout (0: detect)        */
-    ibl_orientation orientation; /* --yaw --mirror --z-up    */
-    int size;                 /* --size of the cube (0: auto) */
+    ibl_layout layout;           /* --layout (0: detect)              */
+    ibl_orientation orientation; /* --yaw --mirror-input --z-up       */
+    int size;                    /* the cube's edge (0: the input's)  */
 } cli_input_options;
 
-/* Parses --layout, --yaw, --mirror, --z-up into o; returns 1 if arg was one of them. */
+/* The one table of options that say how an environment is read; every command that reads one
+ * takes them (and prints this in its --help). */
+#define CLI_INPUT_HELP                                                                          \
+    "  --layout L           layout of a flat input: auto (default: from the aspect ratio),\n"   \
+    "                       equirect, hcross, vcross, hstrip, vstrip, angular, octahedral\n"    \
+    "  --yaw DEG            rotate the environment about the up axis\n"                         \
+    "  --mirror-input       flip the input left-right\n"                                         \
+    "  --z-up               the input was made with +Z up\n"
+
+/* Parses --layout, --yaw, --mirror-input, --z-up into o; returns 1 if arg was one of them. */
 int cli_input_option(cli_args *a, const char *arg, cli_input_options *o);
 
 /* Reads path (flat image in any layout, or a cube texture) into a one-level cubemap (level 0
@@ -26,6 +35,8 @@ int cli_read_cubemap_faces(ibl_context *ctx, const cli_common *c, const char *co
 
 /* Refuses (usage error, exit 2) an output path that names the same file as the input. */
 void cli_check_distinct(const cli_args *a, const char *input, const char *output);
+/* Refuses (usage error) an input that lies in the folder an output replaces whole. */
+void cli_check_not_inside(const cli_args *a, const char *input, const char *folder);
 /* The container of an output path, checked before any work: an unknown extension or an output
  * that is one of the command's input files is a usage error. */
 ibl_file_type cli_check_output(const cli_args *a, const char *output);

@@ -160,7 +160,7 @@ int cli_cmd_lut(int argc, char **argv)
     memset(&wd, 0, sizeof wd);
     if (format_name) {
         int ok = 0;
-        wd.format = ibl_format_from_name(format_name, &ok);
+        ok = ibl_format_from_name(format_name, &wd.format);
         if (!ok) cli_usage_error(&a, "unknown --format '%s'", format_name);
         if (text) cli_usage_error(&a, "--format does not apply to C headers and text tables");
     }

@@ -1,6 +1,6 @@
 /* ibl render: the preview of a probe on spheres or a mesh, its Monte Carlo reference, and
- * labelled side-by-side comparisons. A thin client of render.h and shade.h. */
-#include "cli.h"
+ * labelled side-by-side comparisons. A thin client of bake.h and render.h. */
+#include "input.h"
 
 #include "ibl/render.h"
 
@@ -16,9 +16,9 @@ static const char usage[] =
     "dielectric row, and a row of Blinn-Phong shininess values) lit by the baked probe, with a\n"
     "small CPU ray tracer. OUT .png/.jpg is tone-mapped (filmic), .exr/.hdr/.pfm is linear.\n"
     "\n"
-    "INPUT is a bake directory (what `ibl bake` writes), an environment image in any layout\n"
-    "(prefiltered in memory; see docs/SHADING.md), a cube texture (.ktx2/.dds), or 'sky' for\n"
-    "the built-in procedural sky.\n"
+    "INPUT is a bake folder (what `ibl bake` writes) or its manifest.json, an environment in\n"
+    "any layout or a cube texture (.ktx2/.dds; baked in memory first, see docs/SHADING.md), or\n"
+    "'sky' for the built-in procedural sky.\n"
     "\n"
     "options:\n"
     "  -o, --output FILE     output image (required)\n"
@@ -27,13 +27,13 @@ static const char usage[] =
     "  --exposure EV         exposure for tone-mapped outputs (default: automatic, the\n"
     "                        image's mean luminance maps to middle grey)\n"
     "  --width W             image width (default 1024); --height H (default W/2)\n"
-    "  --layout L            layout of INPUT (equirect, hcross, ...; default: detect)\n"
     "  --specular-size N     face size of the in-memory prefiltered chain (default 128)\n"
-    "  --chain FILE          use this prefiltered chain (cube .ktx2/.dds, level k at roughness\n"
-    "                        k/(levels-1)) instead of prefiltering INPUT, which stays the\n"
-    "                        background, mirror and SH source; with --lut FILE (split-sum\n"
-    "                        table) and --ambient FILE (AmbientBRDF volume, as `ibl lut`\n"
-    "                        writes them; --ambient-range A:B, default 1:2000)\n"
+    "  --chain FILE          use this prefiltered chain (a cube .ktx2/.dds; one ibl wrote\n"
+    "                        describes its levels, any other is taken as level k at\n"
+    "                        roughness k/(levels-1)) instead of prefiltering INPUT, which\n"
+    "                        stays the background, mirror and SH source; with --lut FILE\n"
+    "                        (split-sum table) and --ambient FILE (AmbientBRDF volume, as\n"
+    "                        `ibl lut` writes them; --ambient-range A:B, default 1:2000)\n"
     "  --so FORMULA          specular occlusion: none ao triace triace-shininess triace-fast\n"
     "                        frostbite cone (default none)\n"
     "  --mix MODE            ambient composition: multiply lerp-albedo lerp-ao ao-lerp-ao\n"
@@ -54,7 +54,9 @@ static const char usage[] =
     "                        sphere-ao=, horizon, mirror-direction, nearest-level,\n"
     "                        reference, applied over the other options, e.g.\n"
     "                        --compare so=none so=triace-fast,sphere-ao=0.2\n"
-    "                        --compare '' reference,samples=512\n";
+    "                        --compare '' reference,samples=512\n"
+    CLI_INPUT_HELP
+    "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n";
 
 typedef struct variant {
     ibl_render_desc desc;
@@ -122,57 +124,6 @@ static void apply_spec(cli_args *a, ibl_render_desc *d, const char *spec)
     }
 }
 
-static int is_directory(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
-}
-
-static ibl_status load_environment(ibl_context *ctx, const cli_args *a, const char *path,
-                                   ibl_layout layout, ibl_cubemap *out)
-{
-    ibl_status st;
-    ibl_read_desc rd = {.clamp_infinite = a->common.clamp};
-    ibl_image im = {0};
-    if (strcmp(path, "sky") == 0) {
-        st = ibl_sky_render(ctx, NULL, &im);
-    } else {
-        ibl_file_info info;
-        ibl_texture tex;
-        st = ibl_read_texture(ctx, path, &rd, &tex, &info);
-        if (st != IBL_OK) return st;
-        cli_report_pixels(&a->common, path, &info.pixels);
-        if (tex.kind == IBL_TEXTURE_CUBE) {
-            ibl_cubemap view;
-            st = ibl_cubemap_from_texture(&tex, &view);
-            if (st == IBL_OK) st = ibl_cubemap_alloc(ctx, view.size, 1, out);
-            if (st == IBL_OK)
-                memcpy(out->data, view.data, ibl_cubemap_floats(view.size, 1) * sizeof(float));
-            ibl_texture_free(ctx, &tex);
-            return st;
-        }
-        /* a flat image: level 0 of the 2D texture, viewed as an image */
-        im.width = tex.width;
-        im.height = tex.height;
-        im.pixels = tex.data;
-        ibl_to_cube_desc cd = {.layout = layout};
-        st = ibl_image_to_cubemap(ctx, &im, &cd, out);
-        ibl_texture_free(ctx, &tex);
-        return st;
-    }
-    if (st != IBL_OK) return st;
-    ibl_to_cube_desc cd = {.layout = IBL_LAYOUT_EQUIRECT};
-    st = ibl_image_to_cubemap(ctx, &im, &cd, out);
-    ibl_image_free(ctx, &im);
-    return st;
-}
-
-static int is_display_output(const char *path)
-{
-    ibl_file_type t = ibl_file_type_from_path(path);
-    return t == IBL_FILE_PNG || t == IBL_FILE_JPEG;
-}
-
 /* Mean relative error of the runtime image against the reference over each sphere. */
 static void report_errors(const ibl_image *fast, const ibl_image *ref, const int *ids, int mesh)
 {
@@ -204,150 +155,171 @@ static void report_errors(const ibl_image *fast, const ibl_image *ref, const int
     printf("worst |error| %.2f%%\n", 100 * worst);
 }
 
-int cli_cmd_render(int argc, char **argv)
+/* What the command line asked for besides the variants. */
+typedef struct render_options {
+    const char *output, *scene, *cmp[2];
+    double exposure;
+    int exposure_given, specular_size, report;
+    cli_input_options input;
+    ibl_bake_parts parts;
+    ibl_render_desc base;
+} render_options;
+
+static void parse_ambient_range(cli_args *a, const char *arg, ibl_bake_parts *parts)
 {
-    cli_args a = {argc, argv, 0, "render", usage, {0}, {0}, 0};
-    const char *output = NULL, *scene = NULL, *cmp[2] = {NULL, NULL};
-    double exposure = 0;
-    int exposure_given = 0;
-    int width = 0, height = 0, specular_size = 0, report = 0;
-    ibl_layout layout = IBL_LAYOUT_AUTO;
-    ibl_probe_files files = {0};
-    ibl_render_desc base = {0};
-    const char *arg;
-    while ((arg = cli_next(&a))) {
-        if (cli_common_option(&a, arg)) continue;
-        if (cli_is(&a, arg, "--output", "-o"))
-            output = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--scene", NULL))
-            scene = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--exposure", NULL)) {
-            exposure = cli_double(&a, arg, -40, 40);
-            exposure_given = 1;
+    const char *v = cli_value(a, arg);
+    char *end = NULL;
+    double lo = strtod(v, &end), hi = end && *end == ':' ? strtod(end + 1, &end) : -1;
+    if (!end || *end || !(lo > 0 && hi > lo))
+        cli_usage_error(a, "--ambient-range wants A:B with 0 < A < B, not '%s'", v);
+    parts->ambient_shininess_min = (float)lo;
+    parts->ambient_shininess_max = (float)hi;
+}
+
+/* The options of the shading itself (also the keys of --compare). */
+static int shading_option(cli_args *a, const char *arg, ibl_render_desc *d)
+{
+    static const char *const keys[] = {"--so", "--mix", "--energy", NULL};
+    for (int i = 0; keys[i]; i++)
+        if (cli_is(a, arg, keys[i], NULL)) {
+            const char *v = cli_value(a, arg);
+            if (!apply_setting(d, keys[i] + 2, v)) cli_usage_error(a, "unknown %s '%s'", keys[i], v);
+            return 1;
         }
-        else if (cli_is(&a, arg, "--width", NULL))
-            width = cli_int(&a, arg, 8, 16384);
-        else if (cli_is(&a, arg, "--height", NULL))
-            height = cli_int(&a, arg, 4, 16384);
-        else if (cli_is(&a, arg, "--specular-size", NULL))
-            specular_size = cli_int(&a, arg, 4, 1024);
-        else if (cli_is(&a, arg, "--samples", NULL))
-            base.reference_samples = cli_int(&a, arg, 1, 1 << 20);
-        else if (cli_is(&a, arg, "--reference", NULL))
-            base.reference = 1;
-        else if (cli_is(&a, arg, "--report", NULL))
-            report = 1;
-        else if (cli_is(&a, arg, "--chain", NULL))
-            files.specular = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--lut", NULL))
-            files.splitsum = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--ambient", NULL))
-            files.ambient_brdf = cli_value(&a, arg);
-        else if (cli_is(&a, arg, "--ambient-range", NULL)) {
-            const char *v = cli_value(&a, arg);
-            char *end = NULL;
-            double lo = strtod(v, &end), hi = end && *end == ':' ? strtod(end + 1, &end) : -1;
-            if (!end || *end || !(lo > 0 && hi > lo))
-                cli_usage_error(&a, "--ambient-range wants A:B with 0 < A < B, not '%s'", v);
-            files.ambient_shininess_min = (float)lo;
-            files.ambient_shininess_max = (float)hi;
-        } else if (cli_is(&a, arg, "--supersample", NULL))
-            base.supersample = cli_int(&a, arg, 1, 16);
-        else if (cli_is(&a, arg, "--horizon", NULL))
-            base.shade.horizon_occlusion = 1;
-        else if (cli_is(&a, arg, "--mirror-direction", NULL))
-            base.shade.mirror_direction = 1;
-        else if (cli_is(&a, arg, "--sphere-ao", NULL))
-            base.sphere_ao_min = (float)cli_double(&a, arg, 0, 1);
-        else if (cli_is(&a, arg, "--layout", NULL)) {
-            const char *v = cli_value(&a, arg);
-            layout = ibl_layout_from_name(v);
-            if (layout == IBL_LAYOUT_AUTO && strcmp(v, "auto") != 0)
-                cli_usage_error(&a, "unknown layout '%s'", v);
-        } else if (cli_is(&a, arg, "--so", NULL)) {
-            const char *v = cli_value(&a, arg);
-            if (!ibl_so_formula_from_name(v, &base.shade.so))
-                cli_usage_error(&a, "unknown --so '%s'", v);
-        } else if (cli_is(&a, arg, "--mix", NULL)) {
-            const char *v = cli_value(&a, arg);
-            if (!ibl_ambient_mix_from_name(v, &base.shade.mix))
-                cli_usage_error(&a, "unknown --mix '%s'", v);
-        } else if (cli_is(&a, arg, "--energy", NULL)) {
-            const char *v = cli_value(&a, arg);
-            if (!energy_from_name(v, &base.shade.energy))
-                cli_usage_error(&a, "unknown --energy '%s'", v);
-        } else if (cli_is(&a, arg, "--compare", NULL)) {
-            cmp[0] = cli_value(&a, arg);
-            if (a.index >= a.argc) cli_usage_error(&a, "--compare needs two variants");
-            cmp[1] = a.argv[a.index++];
+    if (cli_is(a, arg, "--horizon", NULL)) d->shade.horizon_occlusion = 1;
+    else if (cli_is(a, arg, "--mirror-direction", NULL)) d->shade.mirror_direction = 1;
+    else if (cli_is(a, arg, "--sphere-ao", NULL)) d->sphere_ao_min = (float)cli_double(a, arg, 0, 1);
+    else if (cli_is(a, arg, "--supersample", NULL)) d->supersample = cli_int(a, arg, 1, 16);
+    else if (cli_is(a, arg, "--samples", NULL)) d->reference_samples = cli_int(a, arg, 1, 1 << 20);
+    else if (cli_is(a, arg, "--reference", NULL)) d->reference = 1;
+    else return 0;
+    return 1;
+}
+
+static void parse(cli_args *a, render_options *o)
+{
+    const char *arg;
+    while ((arg = cli_next(a))) {
+        if (cli_common_option(a, arg) || cli_input_option(a, arg, &o->input) ||
+            shading_option(a, arg, &o->base))
+            continue;
+        if (cli_is(a, arg, "--output", "-o")) o->output = cli_value(a, arg);
+        else if (cli_is(a, arg, "--scene", NULL)) o->scene = cli_value(a, arg);
+        else if (cli_is(a, arg, "--exposure", NULL)) {
+            o->exposure = cli_double(a, arg, -40, 40);
+            o->exposure_given = 1;
+        } else if (cli_is(a, arg, "--width", NULL)) o->base.width = cli_int(a, arg, 8, 16384);
+        else if (cli_is(a, arg, "--height", NULL)) o->base.height = cli_int(a, arg, 4, 16384);
+        else if (cli_is(a, arg, "--specular-size", NULL)) o->specular_size = cli_int(a, arg, 4, 1024);
+        else if (cli_is(a, arg, "--report", NULL)) o->report = 1;
+        else if (cli_is(a, arg, "--chain", NULL)) o->parts.specular = cli_value(a, arg);
+        else if (cli_is(a, arg, "--lut", NULL)) o->parts.splitsum = cli_value(a, arg);
+        else if (cli_is(a, arg, "--ambient", NULL)) o->parts.ambient_brdf = cli_value(a, arg);
+        else if (cli_is(a, arg, "--ambient-range", NULL)) parse_ambient_range(a, arg, &o->parts);
+        else if (cli_is(a, arg, "--compare", NULL)) {
+            o->cmp[0] = cli_value(a, arg);
+            if (a->index >= a->argc) cli_usage_error(a, "--compare needs two variants");
+            o->cmp[1] = a->argv[a->index++];
         } else {
-            cli_positional_or_unknown(&a, arg);
+            cli_positional_or_unknown(a, arg);
         }
     }
-    if (a.positional_count != 1) cli_usage_error(&a, "needs one INPUT");
-    if (!output) cli_usage_error(&a, "needs -o OUT");
-    if (ibl_file_type_from_path(output) == IBL_FILE_UNKNOWN)
-        cli_usage_error(&a, "cannot tell the output format of '%s' from its extension", output);
-    base.width = width;
-    base.height = height;
+    if (a->positional_count != 1) cli_usage_error(a, "needs one INPUT");
+    if (!o->output) cli_usage_error(a, "needs -o OUT");
+    cli_check_output(a, o->output);
+    if ((o->parts.splitsum || o->parts.ambient_brdf) && !o->parts.specular)
+        cli_usage_error(a, "--lut and --ambient go with --chain");
+}
 
-    ibl_context *ctx = cli_context(&a.common);
-    const char *input = a.positional[0];
-    ibl_probe probe = {0};
+static int is_bake(const char *path)
+{
+    struct stat st;
+    size_t n = strlen(path);
+    return (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) ||
+           (n >= 5 && strcmp(path + n - 5, ".json") == 0);
+}
+
+/* The environment INPUT names: the built-in sky or a file in any layout. */
+static int read_environment(ibl_context *ctx, const cli_args *a, const render_options *o,
+                            const char *input, ibl_cubemap *env)
+{
+    if (strcmp(input, "sky") != 0) return cli_read_cubemap(ctx, &a->common, input, &o->input, env, NULL);
+    ibl_image im;
+    ibl_status st = ibl_sky_render(ctx, NULL, &im);
+    if (st == IBL_OK) {
+        ibl_to_cube_desc cd = {.layout = IBL_LAYOUT_EQUIRECT, .orientation = o->input.orientation};
+        st = ibl_image_to_cubemap(ctx, &im, &cd, env);
+        ibl_image_free(ctx, &im);
+    }
+    if (st != IBL_OK) cli_report_failure(ctx, "sky", st);
+    return cli_exit_code(st);
+}
+
+/* The bake the probe views: a folder, or made here from an environment (with a chain given
+ * by --chain, or prefiltered in memory). */
+static int make_bake(ibl_context *ctx, const cli_args *a, const render_options *o,
+                     ibl_bake_data *bake)
+{
+    const char *input = a->positional[0];
+    ibl_read_desc rd = {.clamp_infinite = a->common.clamp};
+    ibl_status st;
+    if (is_bake(input)) {
+        st = ibl_bake_load(ctx, input, &rd, bake);
+        if (st != IBL_OK) cli_report_failure(ctx, input, st);
+        return st == IBL_OK ? CLI_EXIT_OK : CLI_EXIT_BAD_INPUT;
+    }
     ibl_cubemap env = {0};
-    ibl_mesh mesh = {0};
+    int rc = read_environment(ctx, a, o, input, &env);
+    if (rc != CLI_EXIT_OK) return rc;
+    if (o->parts.specular) {
+        st = ibl_bake_load_parts(ctx, &o->parts, &rd, bake);
+        if (st == IBL_OK) bake->environment = env; /* the background and mirror */
+        else ibl_cubemap_free(ctx, &env);
+    } else {
+        ibl_bake_desc d;
+        ibl_render_bake_desc(&env, o->specular_size, &d);
+        st = ibl_bake_compute(ctx, &env, &d, bake);
+        ibl_cubemap_free(ctx, &env);
+    }
+    if (st != IBL_OK) cli_report_failure(ctx, o->parts.specular ? o->parts.specular : input, st);
+    return st == IBL_OK ? CLI_EXIT_OK : CLI_EXIT_BAD_INPUT;
+}
+
+/* Renders the variants (and the report), tone-maps and writes OUT. */
+static ibl_status render_and_write(ibl_context *ctx, const cli_args *a, const render_options *o,
+                                   const ibl_probe *probe, const ibl_mesh *mesh)
+{
+    variant v[2];
+    int count = o->cmp[0] ? 2 : 1;
+    for (int i = 0; i < count; i++) {
+        v[i].desc = o->base;
+        v[i].desc.mesh = mesh;
+        snprintf(v[i].label, sizeof v[i].label, "%s", o->cmp[i] && o->cmp[i][0] ? o->cmp[i] : "default");
+        if (o->cmp[i]) apply_spec((cli_args *)a, &v[i].desc, o->cmp[i]);
+    }
+    if (o->report && v[0].desc.supersample < 4 && !v[0].desc.reference) v[0].desc.supersample = 4;
     ibl_image images[2] = {{0}}, out = {0};
     int *ids = NULL;
-    ibl_status st;
-    double t0 = cli_seconds();
-    if (is_directory(input)) {
-        st = ibl_probe_load(ctx, input, &probe);
-    } else {
-        st = load_environment(ctx, &a, input, layout, &env);
-        if (st == IBL_OK && files.specular) {
-            files.mirror = input;
-            files.clamp_infinite = a.common.clamp;
-            if (strcmp(input, "sky") == 0) files.mirror = NULL;
-            st = ibl_probe_load_files(ctx, &files, &probe);
-        } else if (st == IBL_OK) {
-            ibl_render_probe_desc pd = {.specular_size = specular_size};
-            st = ibl_render_probe_from_environment(ctx, &env, &pd, &probe);
-        }
-        if (st == IBL_OK) base.environment = &env;
-    }
-    if (st == IBL_OK && scene && strcmp(scene, "balls") != 0) {
-        st = ibl_mesh_load_obj(ctx, scene, 0, &mesh);
-        base.mesh = &mesh;
-    }
-    double t1 = cli_seconds();
-    if (st == IBL_OK) cli_info(&a.common, "probe ready in %.2f s\n", t1 - t0);
-
-    variant v[2];
-    int count = cmp[0] ? 2 : 1;
-    for (int i = 0; i < count; i++) {
-        v[i].desc = base;
-        snprintf(v[i].label, sizeof v[i].label, "%s", cmp[i] && cmp[i][0] ? cmp[i] : "default");
-        if (cmp[i]) apply_spec(&a, &v[i].desc, cmp[i]);
-    }
-    if (report && v[0].desc.supersample < 4 && !v[0].desc.reference) v[0].desc.supersample = 4;
-    if (report && st == IBL_OK) {
-        int w = width ? width : 1024, h = height ? height : (width ? (w + 1) / 2 : 512);
+    ibl_status st = IBL_OK;
+    if (o->report) {
+        int w = o->base.width ? o->base.width : 1024;
+        int h = o->base.height ? o->base.height : (o->base.width ? (w + 1) / 2 : 512);
         ids = malloc(sizeof(int) * (size_t)w * h);
         if (!ids) st = IBL_ERR_OUT_OF_MEMORY;
     }
     for (int i = 0; i < count && st == IBL_OK; i++) {
         double s0 = cli_seconds();
-        st = ibl_render(ctx, &probe, &v[i].desc, &images[i], i == 0 ? ids : NULL);
+        st = ibl_render(ctx, probe, &v[i].desc, &images[i], i == 0 ? ids : NULL);
         if (st == IBL_OK)
-            cli_info(&a.common, "rendered %dx%d%s in %.3f s\n", images[i].width, images[i].height,
+            cli_info(&a->common, "rendered %dx%d%s in %.3f s\n", images[i].width, images[i].height,
                      v[i].desc.reference ? " (reference)" : "", cli_seconds() - s0);
     }
-    if (st == IBL_OK && report) {
+    if (st == IBL_OK && o->report) {
         ibl_render_desc rd = v[0].desc;
         rd.reference = !rd.reference;
         if (!rd.reference && rd.supersample < 4) rd.supersample = 4;
         ibl_image other;
-        st = ibl_render(ctx, &probe, &rd, &other, NULL);
+        st = ibl_render(ctx, probe, &rd, &other, NULL);
         if (st == IBL_OK) {
             report_errors(rd.reference ? &images[0] : &other, rd.reference ? &other : &images[0],
                           ids, rd.mesh != NULL);
@@ -355,27 +327,45 @@ int cli_cmd_render(int argc, char **argv)
         }
     }
     if (st == IBL_OK) {
-        int display = is_display_output(output);
+        int display = cli_is_display_format(o->output);
         /* one exposure for every image of a comparison, from the first */
-        if (display && !exposure_given) exposure = cli_auto_exposure(&images[0]);
-        for (int i = 0; i < count && display; i++) ibl_render_tonemap(&images[i], (float)exposure);
-        ibl_write_desc wd = {0};
-        if (display) wd.tonemap = IBL_TONEMAP_NONE;
-        if (count == 2) {
+        float exposure = o->exposure_given ? (float)o->exposure : ibl_image_auto_exposure(&images[0]);
+        for (int i = 0; i < count && display; i++) ibl_render_tonemap(&images[i], exposure);
+        ibl_write_desc wd = {.tonemap = display ? IBL_TONEMAP_NONE : IBL_TONEMAP_DEFAULT};
+        if (count == 2)
             st = ibl_render_side_by_side(ctx, &images[0], v[0].label, &images[1], v[1].label, &out);
-            if (st == IBL_OK) st = ibl_write_image(ctx, output, &out, &wd);
-        } else {
-            st = ibl_write_image(ctx, output, &images[0], &wd);
-        }
-        if (st == IBL_OK) cli_info(&a.common, "wrote %s\n", output);
+        if (st == IBL_OK) st = ibl_write_image(ctx, o->output, count == 2 ? &out : &images[0], &wd);
+        if (st == IBL_OK) cli_info(&a->common, "wrote %s\n", o->output);
     }
-    if (st != IBL_OK) cli_error("%s", ibl_context_message(ctx));
     free(ids);
     ibl_image_free(ctx, &out);
     for (int i = 0; i < 2; i++) ibl_image_free(ctx, &images[i]);
+    return st;
+}
+
+int cli_cmd_render(int argc, char **argv)
+{
+    cli_args a = {argc, argv, 0, "render", usage, {0}, {0}, 0};
+    render_options o;
+    memset(&o, 0, sizeof o);
+    parse(&a, &o);
+    ibl_context *ctx = cli_context(&a.common);
+    ibl_bake_data bake = {0};
+    ibl_probe probe;
+    ibl_mesh mesh = {0};
+    double t0 = cli_seconds();
+    int rc = make_bake(ctx, &a, &o, &bake);
+    ibl_status st = IBL_OK;
+    if (rc == CLI_EXIT_OK) {
+        st = ibl_bake_probe(ctx, &bake, &probe);
+        if (st == IBL_OK && o.scene && strcmp(o.scene, "balls") != 0)
+            st = ibl_mesh_load_obj(ctx, o.scene, 0, &mesh);
+        if (st == IBL_OK) cli_info(&a.common, "probe ready in %.2f s\n", cli_seconds() - t0);
+        if (st == IBL_OK) st = render_and_write(ctx, &a, &o, &probe, mesh.positions ? &mesh : NULL);
+        if (st != IBL_OK) cli_report_failure(ctx, a.positional[0], st), rc = CLI_EXIT_BAD_INPUT;
+    }
     ibl_mesh_free(ctx, &mesh);
-    ibl_probe_free(ctx, &probe);
-    ibl_cubemap_free(ctx, &env);
+    ibl_bake_free(ctx, &bake);
     ibl_context_destroy(ctx);
-    return cli_exit_code(st);
+    return rc;
 }

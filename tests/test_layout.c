@@ -86,13 +86,19 @@ static void names_and_detection(void **state)
     ibl_layout all[] = {IBL_LAYOUT_EQUIRECT, IBL_LAYOUT_HCROSS, IBL_LAYOUT_VCROSS,
                         IBL_LAYOUT_HSTRIP,   IBL_LAYOUT_VSTRIP, IBL_LAYOUT_ANGULAR,
                         IBL_LAYOUT_OCTAHEDRAL, IBL_LAYOUT_FACES, IBL_LAYOUT_CUBE};
-    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
-        assert_int_equal(ibl_layout_from_name(ibl_layout_name(all[i])), all[i]);
+    ibl_layout l = IBL_LAYOUT_AUTO;
+    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
+        assert_true(ibl_layout_from_name(ibl_layout_name(all[i]), &l));
+        assert_int_equal(l, all[i]);
+    }
     assert_string_equal(ibl_layout_name(IBL_LAYOUT_EQUIRECT), "equirect");
-    assert_int_equal(ibl_layout_from_name("HCross"), IBL_LAYOUT_HCROSS);
-    assert_int_equal(ibl_layout_from_name("latlong"), IBL_LAYOUT_EQUIRECT);
-    assert_int_equal(ibl_layout_from_name("nonsense"), IBL_LAYOUT_AUTO);
-    assert_int_equal(ibl_layout_from_name(NULL), IBL_LAYOUT_AUTO);
+    assert_true(ibl_layout_from_name("HCross", &l));
+    assert_int_equal(l, IBL_LAYOUT_HCROSS);
+    assert_true(ibl_layout_from_name("latlong", &l));
+    assert_int_equal(l, IBL_LAYOUT_EQUIRECT);
+    assert_false(ibl_layout_from_name("nonsense", &l));
+    assert_false(ibl_layout_from_name(NULL, &l));
+    assert_int_equal(l, IBL_LAYOUT_EQUIRECT); /* untouched by a failed parse */
 
     assert_int_equal(ibl_layout_detect(2048, 1024), IBL_LAYOUT_EQUIRECT);
     assert_int_equal(ibl_layout_detect(400, 300), IBL_LAYOUT_HCROSS);

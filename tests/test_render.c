@@ -22,10 +22,14 @@
 
 /* Probes for tests: small tables keep the sanitizer build fast. */
 static ibl_status build_probe(ibl_context *ctx, const ibl_cubemap *env, int specular_size,
-                              int table_size, ibl_probe *out)
+                              int table_size, ibl_bake_data *bake, ibl_probe *out)
 {
-    ibl_render_probe_desc d = {.specular_size = specular_size, .table_size = table_size};
-    return ibl_render_probe_from_environment(ctx, env, &d, out);
+    ibl_bake_desc d;
+    ibl_render_bake_desc(env, specular_size, &d);
+    d.lut_size = table_size;
+    ibl_status st = ibl_bake_compute(ctx, env, &d, bake);
+    if (st == IBL_OK) st = ibl_bake_probe(ctx, bake, out);
+    return st;
 }
 
 /* Face colours (face index + 1) / 10 in red: any pixel names the face its ray left through. */
@@ -73,7 +77,8 @@ static void sphere_hits_and_background(void **state)
     ibl_cubemap env;
     face_coloured_cube(ctx, &env);
     ibl_probe probe;
-    assert_int_equal(build_probe(ctx, &env, 8, 16, &probe), IBL_OK);
+    ibl_bake_data bake;
+    assert_int_equal(build_probe(ctx, &env, 8, 16, &bake, &probe), IBL_OK);
     ibl_render_desc d = {.width = 140, .height = 70, .environment = &env};
     ibl_image im;
     int *ids = malloc(sizeof(int) * 140 * 70);
@@ -107,7 +112,7 @@ static void sphere_hits_and_background(void **state)
     }
     free(ids);
     ibl_image_free(ctx, &im);
-    ibl_probe_free(ctx, &probe);
+    ibl_bake_free(ctx, &bake);
     ibl_cubemap_free(ctx, &env);
     ibl_context_destroy(ctx);
 }
@@ -165,12 +170,13 @@ static void split_sum_vs_reference(void **state)
     ibl_cubemap env;
     smooth_cube(ctx, &env, 32);
     ibl_probe probe;
-    assert_int_equal(build_probe(ctx, &env, 32, 64, &probe), IBL_OK);
+    ibl_bake_data bake;
+    assert_int_equal(build_probe(ctx, &env, 32, 64, &bake, &probe), IBL_OK);
     double worst[2];
     sphere_errors(ctx, &probe, &env, 512, worst);
     assert_true(worst[0] <= 0.02);
     assert_true(worst[1] <= 0.07);
-    ibl_probe_free(ctx, &probe);
+    ibl_bake_free(ctx, &bake);
     ibl_cubemap_free(ctx, &env);
     ibl_context_destroy(ctx);
 }
@@ -188,13 +194,14 @@ static void split_sum_vs_reference_hdri(void **state)
     assert_int_equal(ibl_image_to_cubemap(ctx, &im, &cd, &env), IBL_OK);
     ibl_image_free(ctx, &im);
     ibl_probe probe;
-    assert_int_equal(build_probe(ctx, &env, 32, 64, &probe), IBL_OK);
+    ibl_bake_data bake;
+    assert_int_equal(build_probe(ctx, &env, 32, 64, &bake, &probe), IBL_OK);
     double worst[2];
     sphere_errors(ctx, &probe, &env, 256, worst);
     print_message("worst: GGX %.2f%%, Blinn-Phong %.2f%%\n", 100 * worst[0], 100 * worst[1]);
     assert_true(worst[0] <= HDRI_BOUND_GGX);
     assert_true(worst[1] <= HDRI_BOUND_BP);
-    ibl_probe_free(ctx, &probe);
+    ibl_bake_free(ctx, &bake);
     ibl_cubemap_free(ctx, &env);
     ibl_context_destroy(ctx);
 }
@@ -209,7 +216,8 @@ static void identical_at_any_thread_count(void **state)
         ibl_cubemap env;
         smooth_cube(ctx, &env, 16);
         ibl_probe probe;
-        assert_int_equal(build_probe(ctx, &env, 16, 16, &probe), IBL_OK);
+        ibl_bake_data bake;
+        assert_int_equal(build_probe(ctx, &env, 16, 16, &bake, &probe), IBL_OK);
         for (int mode = 0; mode < 2; mode++) {
             ibl_render_desc d = {.width = 64,
                                  .height = 32,
@@ -227,7 +235,7 @@ static void identical_at_any_thread_count(void **state)
                 ibl_image_free(ctx, &im);
             }
         }
-        ibl_probe_free(ctx, &probe);
+        ibl_bake_free(ctx, &bake);
         ibl_cubemap_free(ctx, &env);
         if (t == 2) {
             ibl_image_free(ctx, &first[0]);
@@ -306,7 +314,8 @@ static void obj_mesh(void **state)
     ibl_cubemap env;
     face_coloured_cube(ctx, &env);
     ibl_probe probe;
-    assert_int_equal(build_probe(ctx, &env, 8, 16, &probe), IBL_OK);
+    ibl_bake_data bake;
+    assert_int_equal(build_probe(ctx, &env, 8, 16, &bake, &probe), IBL_OK);
     int ids[64 * 32];
     ibl_render_desc d = {.width = 64, .height = 32, .mesh = &m, .environment = &env};
     ibl_image im;
@@ -355,7 +364,7 @@ static void obj_mesh(void **state)
     print_message("corner AO: ray-cast %.4f, grid %.4f\n", m.ao[0], open);
     assert_near(m.ao[0], open, 0.05);
     ibl_mesh_free(ctx, &m);
-    ibl_probe_free(ctx, &probe);
+    ibl_bake_free(ctx, &bake);
     ibl_cubemap_free(ctx, &env);
     ibl_context_destroy(ctx);
 }
@@ -400,7 +409,8 @@ static void cli_render(void **state)
     ibl_cubemap env;
     face_coloured_cube(c2, &env);
     ibl_probe probe;
-    assert_int_equal(build_probe(c2, &env, 16, 16, &probe), IBL_OK);
+    ibl_bake_data bake;
+    assert_int_equal(build_probe(c2, &env, 16, 16, &bake, &probe), IBL_OK);
     ibl_texture chain = ibl_texture_from_cubemap(&probe.specular);
     assert_int_equal(ibl_write_texture(c2, test_path("chain.ktx2"), &chain, NULL), IBL_OK);
     ibl_image lutimg;
@@ -414,7 +424,7 @@ static void cli_render(void **state)
                       test_data("studio.exr"), png, test_path("lut.exr"));
     assert_int_equal(rc, 1);
     ibl_image_free(c2, &lutimg);
-    ibl_probe_free(c2, &probe);
+    ibl_bake_free(c2, &bake);
     ibl_cubemap_free(c2, &env);
     ibl_context_destroy(c2);
     assert_int_equal(

@@ -595,117 +595,6 @@ static void ambient_brdf_usage(void **state)
     ibl_context_destroy(ctx);
 }
 
-/* Loading the parts from files: a chain (KTX2), the split-sum table and the AmbientBRDF
- * volume as `ibl lut` computes them (KTX2, float32: exact), read back into a probe whose reads
- * equal the in-memory values. */
-static void load_files(void **state)
-{
-    (void)state;
-    ibl_context *ctx = test_context(1);
-    ibl_cubemap chain;
-    assert_int_equal(ibl_cubemap_alloc(ctx, 16, 5, &chain), IBL_OK);
-    for (int k = 0; k < 5; k++) {
-        int n = ibl_level_size(16, k);
-        float *f = ibl_cubemap_face(&chain, k, 0);
-        for (size_t i = 0; i < (size_t)6 * n * n; i++)
-            for (int c = 0; c < 4; c++) f[i * 4 + c] = (float)(k + 1);
-    }
-    ibl_write_desc wd = {.format = IBL_FORMAT_RGBA32F};
-    ibl_texture tex = ibl_texture_from_cubemap(&chain);
-    assert_int_equal(ibl_write_texture(ctx, test_path("spec.ktx2"), &tex, &wd), IBL_OK);
-    ibl_image lut2;
-    ibl_brdf_lut_desc ld = {.size = 16};
-    assert_int_equal(ibl_brdf_lut(ctx, &ld, &lut2), IBL_OK);
-    ibl_texture t2 = {IBL_TEXTURE_2D, 16, 16, 1, 1, IBL_FORMAT_RGBA32F, lut2.pixels, 0, NULL, 0, 0};
-    assert_int_equal(ibl_write_texture(ctx, test_path("lut.ktx2"), &t2, &wd), IBL_OK);
-    ibl_ambient_brdf_desc ad = {.size_nv = 8, .size_shininess = 8, .size_f0 = 4};
-    ibl_texture vol;
-    assert_int_equal(ibl_ambient_brdf_volume(ctx, &ad, &vol), IBL_OK);
-    assert_int_equal(ibl_write_texture(ctx, test_path("amb.ktx2"), &vol, &wd), IBL_OK);
-
-    ibl_probe_files files = {.specular = test_path("spec.ktx2"),
-                             .splitsum = test_path("lut.ktx2"),
-                             .ambient_brdf = test_path("amb.ktx2")};
-    ibl_probe p;
-    assert_int_equal(ibl_probe_load_files(ctx, &files, &p), IBL_OK);
-    assert_int_equal(p.mapping.levels, 5);
-    /* default mapping: roughness k/4, and the levels come back in place */
-    static const float one[3] = {1, 1, 1};
-    ibl_surface s = surface_at(0.7);
-    for (int k = 0; k < 5; k++) {
-        float out[3];
-        assert_near(ibl_probe_lod_from_roughness(&p, k / 4.0f), k, 1e-6);
-        ibl_probe_sample_specular(&p, (float)k, (ibl_vec3){0.2f, 0.3f, -0.9f}, out);
-        assert_near(out[0], k + 1, 0);
-    }
-    /* SH from level 0 (constant 1): IEM = 1 */
-    float irr[3];
-    ibl_probe_irradiance(&p, (ibl_vec3){0, 1, 0}, irr);
-    assert_near(irr[0], 1.0, 1e-5);
-    /* the tables at texel centres are the computed texels */
-    float a, b;
-    ibl_splitsum_lookup(&p.splitsum, 5.5f / 16, 9.5f / 16, &a, &b);
-    assert_near(a, ibl_image_texel(&lut2, 5, 9)[0], 1e-6);
-    assert_near(b, ibl_image_texel(&lut2, 5, 9)[1], 1e-6);
-    float sh3 = (float)ibl_ambient_brdf_row_shininess(&ad, 3);
-    float v = ibl_ambient_brdf_lookup(&p.ambient_brdf, 2.5f / 8, sh3, 1.5f / 4);
-    assert_near(v, vol.data[(((size_t)1 * 8 + 3) * 8 + 2) * 4], 1e-5);
-    /* and the probe shades */
-    ibl_material m = ibl_material_gltf(one, 1.0f, 0.5f);
-    ibl_shade_result r;
-    ibl_shade(&p, NULL, &m, &s, &r);
-    assert_true(r.specular[0] > 0.0f && r.lod == 2.0f);
-    ibl_probe_free(ctx, &p);
-    /* a 2D file is not a chain; a missing file is an I/O error naming it */
-    files.specular = test_path("lut.ktx2");
-    assert_int_equal(ibl_probe_load_files(ctx, &files, &p), IBL_ERR_FORMAT);
-    assert_non_null(strstr(ibl_context_message(ctx), "lut.ktx2"));
-    files.specular = test_path("none.ktx2");
-    assert_int_equal(ibl_probe_load_files(ctx, &files, &p), IBL_ERR_IO);
-    /* a bake directory: manifest.json (as `ibl bake` writes it) names the mapping */
-    assert_int_equal(ibl_probe_load(ctx, test_tmpdir(), &p), IBL_ERR_IO); /* no manifest */
-    char cmd[1024];
-    snprintf(cmd, sizeof cmd, "mkdir -p '%s' && cp '%s' '%s/specular.ktx2' && cp '%s' '%s/brdf_lut.ktx2'",
-             test_path("bake"), test_path("spec.ktx2"), test_path("bake"), test_path("lut.ktx2"),
-             test_path("bake"));
-    assert_int_equal(system(cmd), 0);
-    FILE *mf = fopen(test_path("bake/manifest.json"), "w");
-    assert_non_null(mf);
-    fputs("{\n  \"generator\": \"ibl\",\n  \"specular\": {\n    \"filter\": \"ggx\",\n"
-          "    \"levels\": [\n"
-          "      {\"level\": 0, \"size\": 16, \"roughness\": 0, \"mirror\": true},\n"
-          "      {\"level\": 1, \"size\": 8, \"roughness\": 0.1},\n"
-          "      {\"level\": 2, \"size\": 4, \"roughness\": 0.3},\n"
-          "      {\"level\": 3, \"size\": 2, \"roughness\": 0.6},\n"
-          "      {\"level\": 4, \"size\": 1, \"roughness\": 1}\n    ]\n  },\n"
-          "  \"files\": [{\"file\": \"specular.ktx2\", \"kind\": \"specular\"}]\n}\n",
-          mf);
-    fclose(mf);
-    assert_int_equal(ibl_probe_load(ctx, test_path("bake"), &p), IBL_OK);
-    assert_int_equal(p.mapping.levels, 5);
-    assert_near(ibl_probe_lod_from_roughness(&p, 0.3f), 2.0, 1e-6);
-    assert_near(ibl_probe_lod_from_roughness(&p, 0.45f), 2.5, 1e-6);
-    assert_non_null(p.splitsum.data);
-    ibl_probe_free(ctx, &p);
-    /* a Phong chain: level shininess are Phong exponents n, the material's Blinn exponent 4.2 n */
-    mf = fopen(test_path("bake/manifest.json"), "w");
-    assert_non_null(mf);
-    fputs("{\"specular\": {\"filter\": \"phong\", \"shininess_range\": [1, 1000],\n"
-          "  \"levels\": [{\"level\": 0, \"shininess\": null, \"mirror\": true},\n"
-          "    {\"level\": 1, \"shininess\": 100}, {\"level\": 2, \"shininess\": 25},\n"
-          "    {\"level\": 3, \"shininess\": 6}, {\"level\": 4, \"shininess\": 1}]}}\n", mf);
-    fclose(mf);
-    assert_int_equal(ibl_probe_load(ctx, test_path("bake"), &p), IBL_OK);
-    assert_near(p.mapping.shininess[0], 1e6, 0);
-    assert_near(p.mapping.shininess[2], 4.2 * 25, 1e-4);
-    assert_near(ibl_probe_lod_from_shininess(&p, 4.2f * 6), 3.0, 1e-5);
-    ibl_probe_free(ctx, &p);
-    ibl_texture_free(ctx, &vol);
-    ibl_image_free(ctx, &lut2);
-    ibl_cubemap_free(ctx, &chain);
-    ibl_context_destroy(ctx);
-}
-
 /* Two constant probes blended by weight: the sum of their results by weight, by hand. */
 static void probe_blending(void **state)
 {
@@ -753,7 +642,6 @@ int main(void)
         cmocka_unit_test(atlas_round_trip),
         cmocka_unit_test(channel_packing),
         cmocka_unit_test(ambient_brdf_usage),
-        cmocka_unit_test(load_files),
         cmocka_unit_test(probe_blending),
     };
     return cmocka_run_group_tests_name("shade", tests, NULL, NULL);

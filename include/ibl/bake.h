@@ -1,11 +1,11 @@
 /*
  * ibl/bake.h - the bake: everything a renderer needs from one environment, in memory
- * (ibl_bake) and as a folder (manifest.json + textures). This module alone names the
+ * (ibl_bake_data) and as a folder (manifest.json + textures). This module alone names the
  * folder's files and writes and reads its manifest; the CLI, the renderer and engines go
  * through it. docs/FORMATS.md ("Bake folder") has the manifest schema.
  *
  *   ibl_bake_desc d = {.specular = {.filter = IBL_FILTER_GGX, .size = 256}};
- *   ibl_bake bake;
+ *   ibl_bake_data bake;
  *   ibl_bake_compute(ctx, &environment, &d, &bake);   // every stage, in memory
  *   ibl_bake_write(ctx, &bake, "out/bake");             // the folder, all or nothing
  *   ibl_probe probe;
@@ -62,17 +62,26 @@ typedef struct ibl_bake_desc {
     ibl_sh_window sh_window;    /* windowing of the SH (sh.h)                               */
     double sh_window_width;
     int lut_size;               /* split-sum and multiple-scattering tables; 0: 128        */
-    int ambient_brdf;           /* the tri-Ace AmbientBRDF volume: 0 or 1 written, -1 not   */
-    float ambient_shininess_min, ambient_shininess_max; /* its material shininess axis; 0:
-                                   the chain's range for the Phong family, 1..100000 else   */
+    int ambient_brdf;           /* the tri-Ace AmbientBRDF volume: 0 for Phong-family chains
+                                   only, 1 always, -1 never                                */
+    ibl_ambient_brdf_desc ambient; /* its sizes, normalisation and material shininess axis
+                                   (brdf.h; a zero axis: the chain's range for the Phong
+                                   family, 1..100000 for GGX)                              */
     ibl_format format;          /* storage of the cube textures; 0: rgba16f                 */
     unsigned containers;        /* IBL_BAKE_KTX2 | IBL_BAKE_DDS; 0: both                    */
     int preview_width;          /* environment.png (equirect) width; 0: 1024; -1: none      */
+    int keep_environment;       /* keep a copy of env in the bake (the probe's mirror and
+                                   background, e.g. for `ibl render`); never written        */
     ibl_bake_source source;
 } ibl_bake_desc;
 
+/* Wall time of each stage of ibl_bake_compute, milliseconds (also in the manifest). */
+typedef struct ibl_bake_timing {
+    double specular, diffuse, brdf, preview, total;
+} ibl_bake_timing;
+
 /* One bake, owned (ibl_bake_free). Parts a folder did not hold are left empty (data NULL). */
-typedef struct ibl_bake {
+typedef struct ibl_bake_data {
     /* what was baked, every default resolved */
     ibl_specular_info specular_info;
     ibl_edge_fixup edge_fixup;
@@ -98,16 +107,17 @@ typedef struct ibl_bake {
     ibl_texture ambient_brdf; /* 3D [F0][shininess][n.v], R = AmbientBRDF (kind 3D)          */
     ibl_table_axis ambient_n_dot_v, ambient_shininess, ambient_f0;
     ibl_blinn_normalization ambient_normalization;
-    ibl_cubemap environment; /* the unfiltered working cube (in-memory bakes only): the
+    ibl_cubemap environment; /* with keep_environment: the unfiltered working cube, the
                                 probe's mirror and background; never written whole       */
     ibl_image preview;       /* linear equirect preview (environment.png), if asked        */
-} ibl_bake;
+    ibl_bake_timing timing_ms;
+} ibl_bake_data;
 
 /* Runs every stage on level 0 of env: the specular chain, the irradiance map, the SH, the
  * BRDF tables and the preview. desc may be NULL for every default. Bit-identical at any
  * thread count. On failure *out is empty. */
 ibl_status ibl_bake_compute(ibl_context *ctx, const ibl_cubemap *env, const ibl_bake_desc *desc,
-                            ibl_bake *out);
+                            ibl_bake_data *out);
 
 /* Writes the bake into folder dir as one transaction: the files are built in a staging
  * folder beside dir and swapped in, so dir always holds one complete bake (the old one or
@@ -115,17 +125,23 @@ ibl_status ibl_bake_compute(ibl_context *ctx, const ibl_cubemap *env, const ibl_
  * time is refused (IBL_ERR_IO, "... is being written by another process"); stale staging
  * folders of killed runs are removed. A dir that exists must be a bake folder (it holds a
  * manifest.json written by ibl) or empty: other files are never deleted. */
-ibl_status ibl_bake_write(ibl_context *ctx, const ibl_bake *bake, const char *dir);
+ibl_status ibl_bake_write(ibl_context *ctx, const ibl_bake_data *bake, const char *dir);
 
-/* ibl_bake_compute then ibl_bake_write. */
+/* ibl_bake_compute then ibl_bake_write, with the folder locked first (a second writer is
+ * refused before any work is done). result (may be NULL) receives the bake; the caller frees
+ * it. Every failure message names dir. */
 ibl_status ibl_bake(ibl_context *ctx, const ibl_cubemap *env, const ibl_bake_desc *desc,
-                    const char *dir);
+                    const char *dir, ibl_bake_data *result);
+
+/* The names of the files a bake's folder holds (manifest.json last); returns their count
+ * (at most max are stored). */
+int ibl_bake_files(const ibl_bake_data *bake, const char **names, int max);
 
 /* Reads a bake folder (or the manifest.json path itself): the manifest, then the files it
  * lists. desc (may be NULL) applies to every texture read (e.g. clamp_infinite). Errors name
  * the file and, for the manifest, the field. */
 ibl_status ibl_bake_load(ibl_context *ctx, const char *path, const ibl_read_desc *desc,
-                         ibl_bake *out);
+                         ibl_bake_data *out);
 
 /* A bake put together from separate files (e.g. a chain made by another tool). */
 typedef struct ibl_bake_parts {
@@ -144,16 +160,24 @@ typedef struct ibl_bake_parts {
 } ibl_bake_parts;
 
 ibl_status ibl_bake_load_parts(ibl_context *ctx, const ibl_bake_parts *parts,
-                               const ibl_read_desc *desc, ibl_bake *out);
+                               const ibl_read_desc *desc, ibl_bake_data *out);
 
 /* The runtime's view of a bake: pointers into it (the bake must outlive the probe), the level
  * mapping, the SH or irradiance map, the tables; validated. */
-ibl_status ibl_bake_probe(ibl_context *ctx, const ibl_bake *bake, ibl_probe *out);
+ibl_status ibl_bake_probe(ibl_context *ctx, const ibl_bake_data *bake, ibl_probe *out);
 
-void ibl_bake_free(ibl_context *ctx, ibl_bake *bake);
+void ibl_bake_free(ibl_context *ctx, ibl_bake_data *bake);
 
 /* The manifest.json text of a bake (NUL-terminated, freed with ibl_free). */
-ibl_status ibl_bake_manifest(ibl_context *ctx, const ibl_bake *bake, char **json);
+ibl_status ibl_bake_manifest(ibl_context *ctx, const ibl_bake_data *bake, char **json);
+
+/* The manifest of a lone chain (what `ibl prefilter` writes beside it): "format":
+ * "ibl-chain" and the "specular" object of a bake manifest, its "files" naming the given
+ * files (for a chain in flat images, one per face and level, in level-major order
+ * +X -X +Y -Y +Z -Z). */
+ibl_status ibl_chain_manifest(ibl_context *ctx, const ibl_specular_info *info,
+                              ibl_edge_fixup edge_fixup, ibl_format format,
+                              const char *const *files, int file_count, char **json);
 
 #ifdef __cplusplus
 }

@@ -118,8 +118,9 @@ typedef enum ibl_format {
 
 /* "rgba16f", "rgba32f", "rg11b10f", "rgb9e5", "rg16f", "rg32f", ... */
 const char *ibl_format_name(ibl_format format);
-/* Parses a name as above; returns IBL_FORMAT_DEFAULT for NULL/unknown and sets *ok = 0. */
-ibl_format ibl_format_from_name(const char *name, int *ok);
+/* Parses a name as above (case-insensitive; also "b10g11r11", "e5b9g9r9"); 0 if unknown
+ * (*out untouched). */
+int ibl_format_from_name(const char *name, ibl_format *out);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Images: one 2D float RGBA picture (a reader's output, a layout's input).                 */

@@ -39,6 +39,9 @@ ibl_file_type ibl_file_type_from_path(const char *path);
 ibl_file_type ibl_file_type_sniff(const void *bytes, size_t size);
 /* Non-zero if the type stores textures (ktx2, ktx1, dds) rather than one flat image. */
 int ibl_file_type_is_container(ibl_file_type type);
+/* Non-zero if a writer of the type stores that pixel format (IBL_FORMAT_DEFAULT: always), so
+ * that a bad combination is refused before any work. */
+int ibl_file_type_writes_format(ibl_file_type type, ibl_format format);
 
 typedef struct ibl_read_desc {
     int clamp_infinite; /* accept +-Inf and clamp them (the CLI's --clamp)              */
@@ -128,6 +131,9 @@ ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_
 
 /* Tone mapping used by 8-bit writers: linear value -> display value in [0, 1] (before sRGB). */
 float ibl_tonemap_apply(ibl_tonemap tonemap, float linear);
+/* The exposure (EV) that maps the image's mean Rec.709 luminance to middle grey (0.18): the
+ * default of 8-bit previews. 0 for a black image. */
+float ibl_image_auto_exposure(const ibl_image *image);
 
 #ifdef __cplusplus
 }

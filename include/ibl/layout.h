@@ -28,7 +28,9 @@ typedef enum ibl_layout {
 } ibl_layout;
 
 const char *ibl_layout_name(ibl_layout layout); /* "equirect", "hcross", ... */
-ibl_layout ibl_layout_from_name(const char *name); /* IBL_LAYOUT_AUTO if unknown */
+/* Case-insensitive; also "latlong", "equirectangular", "probe", "octahedron". 0 if unknown
+ * (*out untouched). */
+int ibl_layout_from_name(const char *name, ibl_layout *out);
 /* The layout an image of this size most likely holds (IBL_LAYOUT_AUTO if none fits). 1:1
  * images are reported as angular; pass --layout octahedral to override. */
 ibl_layout ibl_layout_detect(int width, int height);

@@ -14,6 +14,7 @@
 
 #include "core.h"
 #include "cubemap.h"
+#include "bake.h"
 #include "shade.h"
 
 #ifdef __cplusplus
@@ -79,16 +80,11 @@ void ibl_render_text(ibl_image *image, int x, int y, int scale, const char *text
 ibl_status ibl_render_side_by_side(ibl_context *ctx, const ibl_image *a, const char *label_a,
                                    const ibl_image *b, const char *label_b, ibl_image *out);
 
-typedef struct ibl_render_probe_desc {
-    int specular_size; /* face edge of the prefiltered chain; 0: min(128, the environment's) */
-    int table_size;    /* edge of the split-sum table; 0: 128                                */
-} ibl_render_probe_desc;
-
-/* Builds a probe from an unfiltered environment in memory: the prefiltered GGX chain, the
- * irradiance SH and the BRDF tables (what `ibl bake` would write). The probe owns its parts
- * (ibl_probe_free); its mirror is a copy of the environment. desc may be NULL. */
-ibl_status ibl_render_probe_from_environment(ibl_context *ctx, const ibl_cubemap *environment,
-                                             const ibl_render_probe_desc *desc, ibl_probe *out);
+/* The bake `ibl render` makes of a plain environment (bake.h, ibl_bake_compute): a GGX chain
+ * of edge specular_size (0: min(128, the environment's)) down to 4x4, the BRDF tables, the
+ * AmbientBRDF for Blinn-Phong materials up to shininess 100000, no preview, and the
+ * environment kept as the probe's mirror and background. */
+void ibl_render_bake_desc(const ibl_cubemap *environment, int specular_size, ibl_bake_desc *out);
 
 #ifdef __cplusplus
 }

@@ -4,7 +4,8 @@
  *
  *   ibl_probe    the baked data of one environment: the prefiltered specular chain with its
  *                level <-> roughness/shininess mapping, the irradiance (cube or 9 SH
- *                coefficients) and the BRDF tables, all plain data (see docs/SHADING.md).
+ *                coefficients) and the BRDF tables, all plain data (see docs/SHADING.md);
+ *                bake.h makes and loads bakes and gives their probes. No file I/O here.
  *   ibl_shade    ambient diffuse + specular radiance at a surface point for a glTF
  *                metal/roughness (GGX) or the seed's normalised Blinn-Phong material, with
  *                specular occlusion and the seed's ambient-specular compositions.
@@ -97,60 +98,30 @@ typedef enum ibl_sh_kind {
     IBL_SH_IRRADIANCE /* already convolved: E(n) = sum c_i Y_i(n)                        */
 } ibl_sh_kind;
 
-/* Everything the runtime needs about one environment. Non-owning unless loaded by
- * ibl_probe_load_files or built by ibl_render_probe_from_environment (then ibl_probe_free
- * releases it). Fill it by hand from in-memory parts and call ibl_probe_validate once. The
- * SH basis and axes are sh.h's (IBL_SH_BASIS_NAME, world x y z, +Y up). */
+/* Everything the runtime needs about one environment: plain data, never owning. Fill it by
+ * hand from in-memory parts and call ibl_probe_validate once, or get it from a bake with
+ * ibl_bake_probe (bake.h), which loads folders. The SH basis and axes are sh.h's
+ * (IBL_SH_BASIS_NAME, world x y z, +Y up). */
 typedef struct ibl_probe {
     ibl_cubemap specular; /* prefiltered chain, level 0 the sharpest                      */
     ibl_level_mapping mapping;
-    ibl_cubemap mirror;     /* optional unfiltered, high-resolution environment (seed 000
-                                   "Problems with large shininess": the mirror option)         */
+    ibl_cubemap mirror;     /* optional unfiltered, high-resolution environment (tri-Ace
+                               2010 "Problems with large shininess": the mirror option)   */
     float mirror_shininess; /* shininess from which the mirror is used alone; 0: 10000    */
-    ibl_cubemap irradiance; /* optional: IEM(n) = E(n) / pi, the seed's irradiance map     */
-    ibl_sh_kind sh_kind;
+    ibl_cubemap irradiance; /* optional: IEM(n) = E(n) / pi, tri-Ace 2010's irradiance map */
+    ibl_sh_kind sh_kind;    /* which diffuse source ibl_probe_irradiance reads            */
     float sh[9][3]; /* real SH, order (0,0) (1,-1) (1,0) (1,1) (2,-2) (2,-1) (2,0)
                                    (2,1) (2,2); basis 0.282095, 0.488603 (y, z, x), ...        */
     ibl_splitsum_view splitsum;
     ibl_ambient_brdf_view ambient_brdf;
     float intensity; /* scales every radiance read from the probe; 0: 1             */
-    /* owned storage when loaded (internal) */
-    void *owned[8];
-    int owned_count;
-    ibl_cubemap owned_cubes[4];
 } ibl_probe;
 
-/* Checks the probe's parts (sizes, monotonic mapping, tables) and fills a missing shininess
- * table; records the reason on failure. */
+/* Checks the probe's parts (sizes, a monotonic mapping, tables) and fills a missing
+ * roughness or shininess table from the other; records the reason on failure. Levels may
+ * repeat a value (engine mappings end in several levels of roughness 1): lookups then take
+ * the sharpest level of the run. */
 ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *probe);
-/* Loads what `ibl bake` writes into dir: manifest.json (the level mapping, the AmbientBRDF
- * shininess range), specular.ktx2 (or .dds), irradiance.ktx2 (or .dds), brdf_lut.ktx2 and,
- * for the Phong family, ambient_brdf.ktx2. ibl_probe_load_files loads the same parts from
- * files named one by one. */
-ibl_status ibl_probe_load(ibl_context *ctx, const char *dir, ibl_probe *out);
-
-/* The parts of a probe as files (what the bake stages and `ibl lut` write). */
-typedef struct ibl_probe_files {
-    const char *specular;      /* required: cube texture with its chain (.ktx2 .dds .ktx)      */
-    ibl_level_mapping mapping; /* what each level was filtered for; levels 0 (all zero):
-                                  the whole chain at roughness k / (levels - 1)               */
-    const char *mirror;        /* optional: the unfiltered environment (cube texture, or an
-                                  image in any layout ibl_image_to_cubemap detects)           */
-    const char *irradiance;    /* optional: IEM = E/pi as a cube texture or image; without it
-                                  the probe gets 9 SH coefficients projected from the mirror
-                                  (or from the chain's level 0)                              */
-    const char *splitsum;      /* optional: brdf.h split-sum table (2D, R = A, G = B, texels at
-                                  ((i + 0.5)/N, (j + 0.5)/N), row 0 r ~ 0), e.g. `ibl lut`     */
-    const char *ambient_brdf;  /* optional: brdf.h AmbientBRDF volume (3D, R = the albedo)      */
-    float ambient_shininess_min, ambient_shininess_max; /* its shininess range; 0: 1, 2000  */
-    int ambient_linear; /* its shininess rows are linearly spaced (default: log)       */
-    int clamp_infinite; /* reading: accept infinite texels and clamp them              */
-} ibl_probe_files;
-
-/* Reads the files into a probe that owns them (ibl_probe_free) and validates it. Messages
- * name the file at fault. */
-ibl_status ibl_probe_load_files(ibl_context *ctx, const ibl_probe_files *files, ibl_probe *out);
-void ibl_probe_free(ibl_context *ctx, ibl_probe *probe);
 
 /* Fractional level for a roughness / shininess through the probe's own mapping (exact level
  * k at the value of level k). For shininess above level 0's, returns a negative lod whose

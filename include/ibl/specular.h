@@ -130,13 +130,16 @@ void ibl_specular_reference_eval(const ibl_specular_reference *ref, const ibl_sp
                                  int level, ibl_vec3 dir, double out[4]);
 void ibl_specular_reference_destroy(ibl_specular_reference *ref);
 
-/* Writes the mapping and per-level parameters as KTX2 key/values ("ibl.specular.*"). */
+/* Describes the chain in a texture's KTX2 key/values, "ibl.specular.*": filter, mapping,
+ * mirror, blinn_factor, lod_offset (tri-Ace mapping), and per level (space-separated,
+ * 0 = mirror level) "roughness" for GGX, or "shininess" (the material's Blinn-Phong
+ * exponent) and "phong_exponent" (the kernel's) for the Phong family. docs/FORMATS.md. */
 ibl_status ibl_specular_set_metadata(ibl_context *ctx, const ibl_specular_info *info,
                                      ibl_texture *tex);
-/* The manifest.json text (NUL-terminated, freed with ibl_free): "filter", "mapping",
- * "mirror", "levels": [{"level", "size", "roughness" | "shininess"}, ...]. */
-ibl_status ibl_specular_manifest_json(ibl_context *ctx, const ibl_specular_info *info,
-                                      char **json);
+/* Reads that description back (size from the texture; the mapping's shininess range is not
+ * stored and set to the defaults). name is used in messages. IBL_ERR_FORMAT if absent. */
+ibl_status ibl_specular_info_from_metadata(ibl_context *ctx, const ibl_texture *tex,
+                                           const char *name, ibl_specular_info *info);
 
 /* ---- the dynamic (per-frame) path: plan once, refilter many times ---- */
 

@@ -6,6 +6,7 @@
 #include "ibl/brdf.h"
 #include "core/context_internal.h"
 #include "core/numeric.h"
+#include "core/defaults.h"
 
 #include <math.h>
 #include <string.h>
@@ -55,15 +56,25 @@ double ibl_ambient_brdf(double nv, double shininess, double f0,
     return out;
 }
 
-double ibl_ambient_brdf_row_shininess(const ibl_ambient_brdf_desc *desc, int j)
+/* The desc with every zero field at its documented default. */
+static ibl_ambient_brdf_desc resolve_desc(const ibl_ambient_brdf_desc *in)
 {
     ibl_ambient_brdf_desc d;
     memset(&d, 0, sizeof d);
-    if (desc) d = *desc;
-    int m = d.size_shininess > 0 ? d.size_shininess : 32;
-    double lo = d.shininess_min > 0 ? d.shininess_min : 1.0;
-    double hi = d.shininess_max > 0 ? d.shininess_max : 2000.0;
-    double v = (j + 0.5) / m;
+    if (in) d = *in;
+    if (d.size_nv == 0) d.size_nv = 32;
+    if (d.size_shininess == 0) d.size_shininess = 32;
+    if (d.size_f0 == 0) d.size_f0 = 16;
+    if (d.shininess_min == 0) d.shininess_min = IBL_DEFAULT_AMBIENT_TABLE_MIN;
+    if (d.shininess_max == 0) d.shininess_max = IBL_DEFAULT_AMBIENT_TABLE_MAX;
+    return d;
+}
+
+double ibl_ambient_brdf_row_shininess(const ibl_ambient_brdf_desc *desc, int j)
+{
+    ibl_ambient_brdf_desc d = resolve_desc(desc);
+    double lo = d.shininess_min, hi = d.shininess_max;
+    double v = (j + 0.5) / d.size_shininess;
     if (d.spacing == IBL_SHININESS_LINEAR) return lo + (hi - lo) * v;
     return lo * exp(log(hi / lo) * v);
 }
@@ -71,13 +82,7 @@ double ibl_ambient_brdf_row_shininess(const ibl_ambient_brdf_desc *desc, int j)
 static ibl_status check_desc(ibl_context *ctx, const ibl_ambient_brdf_desc *in,
                              ibl_ambient_brdf_desc *d)
 {
-    memset(d, 0, sizeof *d);
-    if (in) *d = *in;
-    if (d->size_nv == 0) d->size_nv = 32;
-    if (d->size_shininess == 0) d->size_shininess = 32;
-    if (d->size_f0 == 0) d->size_f0 = 16;
-    if (d->shininess_min == 0) d->shininess_min = 1.0;
-    if (d->shininess_max == 0) d->shininess_max = 2000.0;
+    *d = resolve_desc(in);
     if (d->size_nv < 1 || d->size_nv > 4096 || d->size_shininess < 1 ||
         d->size_shininess > 4096 || d->size_f0 < 1 || d->size_f0 > 1024)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,

@@ -2,10 +2,12 @@
  * kernels, mirror level, edge fixups) and what is written beside the result (KTX2 metadata,
  * manifest.json). Design: docs/SPECULAR.md. */
 #include "specular_internal.h"
+#include "core/defaults.h"
 #include "core/context_internal.h"
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static const char *const filter_names[IBL_FILTER_COUNT] = {"ggx", "phong", "blinn", "box", "gauss"};
@@ -241,15 +243,48 @@ done:
     return st;
 }
 
-/* ---- metadata and manifest ---- */
+/* ---- metadata: a chain that describes itself ---- */
+
+/* KTX2 key/values (specular.h): the filter, the mapping, the mirror flag, the Blinn factor,
+ * the tri-Ace lod offset, and per level the GGX roughness or, for the Phong family, both the
+ * material shininess and the Phong kernel exponent (0 marks a mirror level). */
 
 static int is_phong_family(const ibl_specular_info *info) { return info->filter != IBL_FILTER_GGX; }
+
+/* the material shininess of a Phong-family level (bake.h "Units"); 0 for a mirror level */
+static double material_shininess(const ibl_specular_info *info, int l)
+{
+    double s = info->shininess[l];
+    if (!(s > 0)) return 0;
+    return info->filter == IBL_FILTER_BLINN ? s : s * info->blinn_factor;
+}
+
+static double kernel_exponent(const ibl_specular_info *info, int l)
+{
+    double s = info->shininess[l];
+    if (!(s > 0)) return 0;
+    return info->filter == IBL_FILTER_BLINN ? s / info->blinn_factor : s;
+}
+
+typedef double (*level_value_fn)(const ibl_specular_info *info, int l);
+
+static double roughness_of(const ibl_specular_info *info, int l) { return info->roughness[l]; }
+
+static ibl_status set_level_list(ibl_context *ctx, ibl_texture *tex, const char *key,
+                                 const ibl_specular_info *info, level_value_fn value)
+{
+    char buf[24 * IBL_MAX_LEVELS + 8];
+    size_t pos = 0;
+    for (int l = 0; l < info->levels; l++)
+        pos += (size_t)snprintf(buf + pos, sizeof buf - pos, "%s%.9g", l ? " " : "", value(info, l));
+    return ibl_texture_set_metadata(ctx, tex, key, buf);
+}
 
 ibl_status ibl_specular_set_metadata(ibl_context *ctx, const ibl_specular_info *info,
                                      ibl_texture *tex)
 {
     if (!ctx || !info || !tex) return IBL_ERR_INVALID_ARGUMENT;
-    char buf[64 * IBL_MAX_LEVELS + 64];
+    char buf[64];
     ibl_status st = ibl_texture_set_metadata(ctx, tex, "ibl.specular.filter",
                                              ibl_specular_filter_name(info->filter));
     if (st == IBL_OK)
@@ -257,7 +292,7 @@ ibl_status ibl_specular_set_metadata(ibl_context *ctx, const ibl_specular_info *
                                       ibl_specular_mapping_name(info->mapping));
     if (st == IBL_OK)
         st = ibl_texture_set_metadata(ctx, tex, "ibl.specular.mirror", info->mirror ? "1" : "0");
-    if (st == IBL_OK && info->filter == IBL_FILTER_BLINN) {
+    if (st == IBL_OK) {
         snprintf(buf, sizeof buf, "%.9g", info->blinn_factor);
         st = ibl_texture_set_metadata(ctx, tex, "ibl.specular.blinn_factor", buf);
     }
@@ -266,47 +301,66 @@ ibl_status ibl_specular_set_metadata(ibl_context *ctx, const ibl_specular_info *
         st = ibl_texture_set_metadata(ctx, tex, "ibl.specular.lod_offset", buf);
     }
     if (st != IBL_OK) return st;
-    size_t pos = 0;
-    for (int l = 0; l < info->levels; l++) {
-        float v = is_phong_family(info) ? info->shininess[l] : info->roughness[l];
-        pos += (size_t)snprintf(buf + pos, sizeof buf - pos, "%s%.9g", l ? " " : "", v);
-    }
-    return ibl_texture_set_metadata(ctx, tex,
-                                    is_phong_family(info) ? "ibl.specular.shininess"
-                                                          : "ibl.specular.roughness",
-                                    buf);
+    if (!is_phong_family(info))
+        return set_level_list(ctx, tex, "ibl.specular.roughness", info, roughness_of);
+    st = set_level_list(ctx, tex, "ibl.specular.shininess", info, material_shininess);
+    if (st == IBL_OK) st = set_level_list(ctx, tex, "ibl.specular.phong_exponent", info, kernel_exponent);
+    return st;
 }
 
-ibl_status ibl_specular_manifest_json(ibl_context *ctx, const ibl_specular_info *info, char **json)
+/* Parses "v v v ..." into out (at most IBL_MAX_LEVELS); the count, or -1 if malformed. */
+static int parse_level_list(const char *text, float *out)
 {
-    if (!ctx || !info || !json) return IBL_ERR_INVALID_ARGUMENT;
-    size_t cap = 1024 + (size_t)info->levels * 160;
-    char *b = ibl_alloc(ctx, cap);
-    if (!b) return ibl_context_status(ctx);
-    size_t n = 0;
-#define PUT(...) n += (size_t)snprintf(b + n, cap - n, __VA_ARGS__)
-    PUT("{\n  \"filter\": \"%s\",\n  \"mapping\": \"%s\",\n", ibl_specular_filter_name(info->filter),
-        ibl_specular_mapping_name(info->mapping));
-    PUT("  \"size\": %d,\n  \"mirror\": %s,\n", info->size, info->mirror ? "true" : "false");
-    if (info->filter == IBL_FILTER_BLINN) PUT("  \"blinn_factor\": %.9g,\n", info->blinn_factor);
-    if (is_phong_family(info))
-        PUT("  \"shininess_range\": [%.9g, %.9g],\n", info->shininess_min, info->shininess_max);
-    if (info->mapping == IBL_MAPPING_TRIACE)
-        PUT("  \"seed_lod\": \"lod = a - 0.5 * log2(shininess)\",\n  \"lod_offset\": %.9g,\n", info->lod_offset);
-    PUT("  \"levels\": [\n");
-    for (int l = 0; l < info->levels; l++) {
-        PUT("    {\"level\": %d, \"size\": %d, ", l, ibl_level_size(info->size, l));
-        int mirror = is_phong_family(info) ? !(info->shininess[l] > 0) : !(info->roughness[l] > 0);
-        if (is_phong_family(info)) {
-            if (mirror) PUT("\"shininess\": null, \"mirror\": true}");
-            else PUT("\"shininess\": %.9g}", info->shininess[l]);
-        } else {
-            PUT("\"roughness\": %.9g%s}", info->roughness[l], mirror ? ", \"mirror\": true" : "");
-        }
-        PUT("%s\n", l + 1 < info->levels ? "," : "");
+    int n = 0;
+    const char *p = text;
+    while (*p) {
+        while (*p == ' ') p++;
+        if (!*p) break;
+        char *end = NULL;
+        double v = strtod(p, &end);
+        if (end == p || n == IBL_MAX_LEVELS || !(v >= 0) || isinf(v)) return -1;
+        out[n++] = (float)v;
+        p = end;
     }
-    PUT("  ]\n}\n");
-#undef PUT
-    *json = b;
+    return n;
+}
+
+ibl_status ibl_specular_info_from_metadata(ibl_context *ctx, const ibl_texture *tex,
+                                           const char *name, ibl_specular_info *info)
+{
+    if (!tex || !info) return IBL_ERR_INVALID_ARGUMENT;
+    if (!name) name = "chain";
+    memset(info, 0, sizeof *info);
+    const char *filter = ibl_texture_get_metadata(tex, "ibl.specular.filter");
+    if (!filter) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: no ibl.specular metadata", name);
+    if (!ibl_specular_filter_from_name(filter, &info->filter))
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: ibl.specular.filter: unknown filter '%s'", name, filter);
+    const char *mapping = ibl_texture_get_metadata(tex, "ibl.specular.mapping");
+    if (!mapping || !ibl_specular_mapping_from_name(mapping, &info->mapping))
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: ibl.specular.mapping: missing or unknown", name);
+    const char *mirror = ibl_texture_get_metadata(tex, "ibl.specular.mirror");
+    info->mirror = mirror && strcmp(mirror, "1") == 0;
+    const char *bf = ibl_texture_get_metadata(tex, "ibl.specular.blinn_factor");
+    info->blinn_factor = bf ? strtof(bf, NULL) : IBL_DEFAULT_BLINN_FACTOR;
+    if (!(info->blinn_factor > 0 && info->blinn_factor < 1e3f))
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: ibl.specular.blinn_factor: not a positive number", name);
+    const char *a = ibl_texture_get_metadata(tex, "ibl.specular.lod_offset");
+    if (a) info->lod_offset = strtof(a, NULL);
+    const char *key = info->filter == IBL_FILTER_GGX     ? "ibl.specular.roughness"
+                      : info->filter == IBL_FILTER_BLINN ? "ibl.specular.shininess"
+                                                          : "ibl.specular.phong_exponent";
+    const char *list = ibl_texture_get_metadata(tex, key);
+    float *values = info->filter == IBL_FILTER_GGX ? info->roughness : info->shininess;
+    int n = list ? parse_level_list(list, values) : -1;
+    if (n < 1 || n > tex->levels)
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: %s: %s", name, key,
+                         n < 0 ? "missing or malformed" : "more values than the texture has levels");
+    for (int l = 0; info->filter == IBL_FILTER_GGX && l < n; l++)
+        if (info->roughness[l] > 1.0f)
+            return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: %s: roughness %g above 1", name, key, info->roughness[l]);
+    info->levels = n;
+    info->size = tex->width;
+    info->shininess_min = IBL_DEFAULT_SHININESS_MIN;
+    info->shininess_max = IBL_DEFAULT_SHININESS_MAX;
     return IBL_OK;
 }

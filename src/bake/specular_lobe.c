@@ -5,6 +5,7 @@
  * (Karis 2013 split sum). */
 #include "specular_internal.h"
 #include "core/numeric.h"
+#include "core/defaults.h"
 
 #include <math.h>
 
@@ -136,7 +137,8 @@ ibl__lobe ibl__lobe_for_level(const ibl_specular_info *info, int level)
     }
     double s = info->shininess[level];
     if (!(s > 0.0) || isinf(s)) return mirror;
-    if (info->filter == IBL_FILTER_BLINN) s /= info->blinn_factor > 0 ? info->blinn_factor : 4.2;
+    if (info->filter == IBL_FILTER_BLINN)
+        s /= info->blinn_factor > 0 ? info->blinn_factor : IBL_DEFAULT_BLINN_FACTOR;
     if (s > 1e7) return mirror;
     return make_phong(s);
 }

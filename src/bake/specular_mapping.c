@@ -1,6 +1,7 @@
 /* Level <-> roughness / shininess presets. Each formula cites where it comes from; the
  * inverse mappings (roughness of a level) are solved from the engines' lod-of-roughness. */
 #include "specular_internal.h"
+#include "core/defaults.h"
 #include "core/context_internal.h"
 
 #include <math.h>
@@ -67,9 +68,9 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
     info->size = size;
     info->levels = levels;
     info->mirror = desc->mirror != 0;
-    info->blinn_factor = desc->blinn_factor > 0 ? desc->blinn_factor : 4.2f;
-    info->shininess_min = desc->shininess_min > 0 ? desc->shininess_min : 1.0f;
-    info->shininess_max = desc->shininess_max > 0 ? desc->shininess_max : 1000.0f;
+    info->blinn_factor = desc->blinn_factor > 0 ? desc->blinn_factor : IBL_DEFAULT_BLINN_FACTOR;
+    info->shininess_min = desc->shininess_min > 0 ? desc->shininess_min : IBL_DEFAULT_SHININESS_MIN;
+    info->shininess_max = desc->shininess_max > 0 ? desc->shininess_max : IBL_DEFAULT_SHININESS_MAX;
     if (info->shininess_max < info->shininess_min)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: shininess range %g-%g is empty",
                         info->shininess_min, info->shininess_max);

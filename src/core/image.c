@@ -17,25 +17,23 @@ const char *ibl_format_name(ibl_format format)
     return format_names[format];
 }
 
-ibl_format ibl_format_from_name(const char *name, int *ok)
+int ibl_format_from_name(const char *name, ibl_format *out)
 {
-    if (ok) *ok = 0;
-    if (!name) return IBL_FORMAT_DEFAULT;
-    for (int i = 1; i < IBL_FORMAT_COUNT; i++) {
+    if (!name) return 0;
+    for (int i = 1; i < IBL_FORMAT_COUNT; i++)
         if (strcasecmp(name, format_names[i]) == 0) {
-            if (ok) *ok = 1;
-            return (ibl_format)i;
+            *out = (ibl_format)i;
+            return 1;
         }
-    }
     if (strcasecmp(name, "b10g11r11") == 0 || strcasecmp(name, "r11g11b10f") == 0) {
-        if (ok) *ok = 1;
-        return IBL_FORMAT_RG11B10F;
+        *out = IBL_FORMAT_RG11B10F;
+        return 1;
     }
     if (strcasecmp(name, "e5b9g9r9") == 0) {
-        if (ok) *ok = 1;
-        return IBL_FORMAT_RGB9E5;
+        *out = IBL_FORMAT_RGB9E5;
+        return 1;
     }
-    return IBL_FORMAT_DEFAULT;
+    return 0;
 }
 
 /* ---- images ---- */

@@ -87,6 +87,27 @@ int ibl_file_type_is_container(ibl_file_type type)
     return type == IBL_FILE_KTX2 || type == IBL_FILE_KTX1 || type == IBL_FILE_DDS;
 }
 
+int ibl_file_type_writes_format(ibl_file_type type, ibl_format f)
+{
+    if (f == IBL_FORMAT_DEFAULT) return type != IBL_FILE_UNKNOWN;
+    switch (type) {
+    case IBL_FILE_KTX2:
+    case IBL_FILE_KTX1:
+    case IBL_FILE_DDS:
+        return f == IBL_FORMAT_RGBA16F || f == IBL_FORMAT_RGBA32F || f == IBL_FORMAT_RG11B10F ||
+               f == IBL_FORMAT_RGB9E5 || f == IBL_FORMAT_RG16F || f == IBL_FORMAT_RG32F;
+    case IBL_FILE_EXR:
+        return f == IBL_FORMAT_RGBA16F || f == IBL_FORMAT_RGB16F || f == IBL_FORMAT_RGBA32F ||
+               f == IBL_FORMAT_RGB32F;
+    case IBL_FILE_PNG: return f == IBL_FORMAT_RGBA8_SRGB || f == IBL_FORMAT_RGBA16_UNORM;
+    case IBL_FILE_JPEG: return f == IBL_FORMAT_RGBA8_SRGB;
+    case IBL_FILE_HDR: return f == IBL_FORMAT_RGBE;
+    case IBL_FILE_PFM: return f == IBL_FORMAT_RGB32F;
+    case IBL_FILE_UNKNOWN: break;
+    }
+    return 0;
+}
+
 /* ---- whole-file read ----------------------------------------------------------------- */
 
 ibl_status ibl__fail_named(ibl_context *ctx, ibl_status status, const char *name)
@@ -591,4 +612,19 @@ float ibl_tonemap_apply(ibl_tonemap tonemap, float linear)
     if (x >= 8.0f) return 1.0f;
     float y = (x * (2.51f * x + 0.03f)) / (x * (2.43f * x + 0.59f) + 0.14f);
     return y < 1.0f ? y : 1.0f;
+}
+
+float ibl_image_auto_exposure(const ibl_image *image)
+{
+    if (!image || !image->pixels) return 0.0f;
+    double sum = 0;
+    size_t n = (size_t)image->width * image->height;
+    for (size_t i = 0; i < n; i++) {
+        const float *p = image->pixels + i * 4;
+        /* the plain mean: a log-average would favour dark images, the mean is steadier */
+        sum += 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    }
+    double mean = n ? sum / (double)n : 0;
+    if (!(mean > 0)) return 0.0f;
+    return (float)log2(0.18 / mean);
 }

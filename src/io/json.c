@@ -73,6 +73,19 @@ json_t *ibl__json_number(double x)
     return json_real(x);
 }
 
+json_t *ibl__json_float(float x)
+{
+    if (!isfinite(x)) return json_null();
+    /* the shortest decimal that reads back as the same float (0.3f is "0.3", not the
+     * 0.300000012 its double prints as) */
+    char buf[32];
+    for (int digits = 6; digits <= 9; digits++) {
+        snprintf(buf, sizeof buf, "%.*g", digits, (double)x);
+        if ((float)strtod(buf, NULL) == x) break;
+    }
+    return ibl__json_number(strtod(buf, NULL));
+}
+
 json_t *ibl__json_bool(int b) { return json_boolean(b); }
 
 void ibl__json_set(json_t *object, const char *key, json_t *value)

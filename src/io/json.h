@@ -15,6 +15,7 @@
 
 json_t *ibl__json_string(const char *s);  /* NULL s: JSON null */
 json_t *ibl__json_number(double x);       /* integers stay integers; NaN/Inf: null */
+json_t *ibl__json_float(float x);         /* the shortest text that reads back as x  */
 json_t *ibl__json_bool(int b);
 /* Sets key to value (stealing the reference); a NULL value (allocation failure) is recorded
  * in the object as a failure that ibl__json_text reports. */

@@ -40,12 +40,14 @@ static int same_name(const char *a, const char *b)
     return *a == *b;
 }
 
-ibl_layout ibl_layout_from_name(const char *name)
+int ibl_layout_from_name(const char *name, ibl_layout *out)
 {
-    if (!name) return IBL_LAYOUT_AUTO;
-    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
-        if (same_name(name, names[i].name)) return names[i].layout;
-    return IBL_LAYOUT_AUTO;
+    for (size_t i = 0; name && i < sizeof names / sizeof names[0]; i++)
+        if (same_name(name, names[i].name)) {
+            *out = names[i].layout;
+            return 1;
+        }
+    return 0;
 }
 
 ibl_layout ibl_layout_detect(int width, int height)

@@ -367,3 +367,25 @@ void ibl_render_tonemap(ibl_image *im, float exposure_ev)
             im->pixels[i * 4 + c] =
                 ibl_tonemap_apply(IBL_TONEMAP_FILMIC, im->pixels[i * 4 + c] * s);
 }
+
+void ibl_render_bake_desc(const ibl_cubemap *env, int specular_size, ibl_bake_desc *out)
+{
+    memset(out, 0, sizeof *out);
+    int env_size = env ? env->size : 128;
+    int size = specular_size > 0 ? specular_size : (env_size < 128 ? env_size : 128);
+    if (size > env_size) size = env_size;
+    /* levels down to 4x4 (or 1x1 for tiny inputs): smaller levels add nothing for GGX */
+    int levels = ibl_full_mip_count(size) - 2;
+    out->specular.filter = IBL_FILTER_GGX;
+    out->specular.size = size;
+    out->specular.levels = levels < 1 ? 1 : levels;
+    out->preview_width = -1;
+    out->keep_environment = 1;
+    /* the Blinn-Phong row reads the AmbientBRDF even on a GGX chain; a small volume is
+     * enough for a preview (it is interpolated in log shininess) */
+    out->ambient_brdf = 1;
+    out->ambient.size_nv = 16;
+    out->ambient.size_shininess = 24;
+    out->ambient.size_f0 = 8;
+    out->source.name = "environment";
+}

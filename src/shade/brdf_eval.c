@@ -1,6 +1,7 @@
 /* The analytic BRDF pieces the runtime and the reference renderer share, written once. */
 #include "ibl/shade.h"
 #include "core/numeric.h"
+#include "core/defaults.h"
 
 #include <math.h>
 
@@ -44,7 +45,7 @@ float ibl_blinn_phong_norm(float shininess)
 float ibl_shininess_from_roughness(float roughness)
 {
     float a = roughness * roughness;
-    if (a * a < 2e-6f) return 1e6f;
+    if (a * a < 2e-6f) return IBL_MIRROR_SHININESS;
     float n = 2.0f / (a * a) - 2.0f;
     return n < 0.0f ? 0.0f : n;
 }

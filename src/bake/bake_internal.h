@@ -1,0 +1,55 @@
+/* Internal contract of the bake module (bake.c computes, bake_manifest.c writes and reads
+ * the manifest, bake_folder.c owns the folder): the one table of the folder's files. */
+#ifndef IBL_BAKE_INTERNAL_H
+#define IBL_BAKE_INTERNAL_H
+
+#include "ibl/bake.h"
+
+/* Every file a bake folder can hold. Nothing else names them. */
+typedef enum ibl__bake_file {
+    IBL__BAKE_SPECULAR_KTX2 = 0,
+    IBL__BAKE_SPECULAR_DDS,
+    IBL__BAKE_IRRADIANCE_KTX2,
+    IBL__BAKE_IRRADIANCE_DDS,
+    IBL__BAKE_SH_JSON,
+    IBL__BAKE_SPLITSUM,
+    IBL__BAKE_BRDF_EXTRA,
+    IBL__BAKE_AMBIENT_BRDF,
+    IBL__BAKE_PREVIEW,
+    IBL__BAKE_MANIFEST,
+    IBL__BAKE_FILE_COUNT
+} ibl__bake_file;
+
+typedef struct ibl__bake_file_info {
+    const char *name;   /* in the folder                                       */
+    const char *kind;   /* the manifest's "kind" of the file                   */
+    const char *layout; /* what its texels are, for people reading the manifest */
+} ibl__bake_file_info;
+
+const ibl__bake_file_info *ibl__bake_file_info_of(ibl__bake_file file);
+/* The file of that name, or IBL__BAKE_FILE_COUNT. */
+ibl__bake_file ibl__bake_file_named(const char *name);
+/* Is the file part of this bake (which containers, which optional parts)? */
+int ibl__bake_has_file(const ibl_bake_data *bake, ibl__bake_file file);
+
+/* What a manifest says besides the numbers it fills into an ibl_bake_data: the file each part is
+ * read from (NULL: the part is absent). */
+typedef struct ibl__bake_manifest_files {
+    const char *specular[2];   /* the containers listed, KTX2 first when both     */
+    const char *irradiance[2];
+    const char *splitsum;
+    const char *ambient_brdf;
+} ibl__bake_manifest_files;
+
+/* Parses manifest bytes into *bake (every number; no textures) and *files (pointers into
+ * *root, which the caller releases with json_decref through ibl__bake_manifest_release). */
+ibl_status ibl__bake_manifest_parse(ibl_context *ctx, const void *bytes, size_t size,
+                                    const char *name, ibl_bake_data *bake,
+                                    ibl__bake_manifest_files *files, void **root);
+void ibl__bake_manifest_release(void *root);
+
+/* The material shininess a level of a Phong-family chain stands for (bake.h "Units"), and
+ * the reverse. */
+float ibl__bake_material_shininess(const ibl_specular_info *info, int level);
+
+#endif
