@@ -97,7 +97,19 @@ int cli_is(cli_args *a, const char *arg, const char *name, const char *alias)
         pending_value = arg + n + 1;
         return 1;
     }
+    /* a one-letter alias takes its value attached, as getopt does: -j2, -oOUT */
+    if (alias && alias[0] == '-' && alias[1] && !alias[2] && strncmp(arg, alias, 2) == 0 && arg[2]) {
+        pending_value = arg + 2;
+        return 1;
+    }
     return 0;
+}
+
+int cli_flag(cli_args *a, const char *arg, const char *name, const char *alias)
+{
+    if (!cli_is(a, arg, name, alias)) return 0;
+    if (pending_value) cli_usage_error(a, "%s takes no value", name);
+    return 1;
 }
 
 const char *cli_value(cli_args *a, const char *arg)
@@ -133,7 +145,7 @@ double cli_double(cli_args *a, const char *arg, double min, double max)
 
 int cli_common_option(cli_args *a, const char *arg)
 {
-    if (cli_is(a, arg, "--quiet", "-q")) {
+    if (cli_flag(a, arg, "--quiet", "-q")) {
         a->common.quiet = 1;
         return 1;
     }
@@ -141,7 +153,7 @@ int cli_common_option(cli_args *a, const char *arg)
         a->common.threads = cli_int(a, arg, 0, 256);
         return 1;
     }
-    if (cli_is(a, arg, "--clamp", NULL)) {
+    if (cli_flag(a, arg, "--clamp", NULL)) {
         a->common.clamp = 1;
         return 1;
     }

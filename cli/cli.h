@@ -33,6 +33,8 @@ const char *cli_next(cli_args *a);
  * ("--size 16" or "--size=16"); a missing value is a usage error. */
 int cli_is(cli_args *a, const char *arg, const char *name, const char *alias);
 const char *cli_value(cli_args *a, const char *arg);
+/* cli_is for an option without a value ("--flag=x" is a usage error). */
+int cli_flag(cli_args *a, const char *arg, const char *name, const char *alias);
 int cli_int(cli_args *a, const char *arg, int min, int max);
 double cli_double(cli_args *a, const char *arg, double min, double max);
 /* Handles the common options; returns 1 if arg was one of them. */

@@ -105,11 +105,14 @@ void ibl__output_direction(const ibl_specular_desc *desc, const ibl__lobe *lobe,
     for (int i = 0; i < 3; i++) dir[i] /= len;
 }
 
+/* The levels asked for, or the full chain down to 1x1 ended early where the mapping has no
+ * more distinct levels (the triace mapping at the bottom of its range). */
 static int chain_levels(const ibl_specular_desc *desc, int size)
 {
     int full = ibl_full_mip_count(size);
-    int levels = desc->levels > 0 ? desc->levels : full;
-    return levels > full ? full : levels;
+    if (desc->levels > 0) return desc->levels > full ? full : desc->levels;
+    int distinct = ibl__mapping_distinct_levels(desc);
+    return distinct < full ? distinct : full;
 }
 
 ibl_status ibl_specular_levels(ibl_context *ctx, const ibl_specular_desc *desc, int source_size,

@@ -89,6 +89,8 @@ void ibl__dynamic_mips(ibl__dynamic *d, const ibl_cubemap *src); /* first, once 
 void ibl__dynamic_level(ibl__dynamic *d, ibl_cubemap *dst, int level);
 void ibl__dynamic_destroy(ibl__dynamic *d);
 
+/* The most levels desc's mapping can make distinct (IBL_MAX_LEVELS when unbounded). */
+int ibl__mapping_distinct_levels(const ibl_specular_desc *desc);
 /* Fills info from desc for a chain of the given output size and levels. */
 ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc, int size,
                                  int levels, ibl_specular_info *info);

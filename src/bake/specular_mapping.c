@@ -48,12 +48,27 @@ static double mapped_roughness(ibl_specular_mapping m, int l, int L, int size)
     return r;
 }
 
-/* The seeds' lod = a - 0.5 log2(shininess) with a = 0.5 log2(max): level 0 is the sharpest
- * lobe of the range, each level 4x less shiny, clamped to the minimum. */
-static double seed_shininess(int l, double smin, double smax)
+/* tri-Ace 2010's lod = a - 0.5 log2(shininess) with a = 0.5 log2(max): level 0 is the
+ * sharpest lobe of the range, each level 4x less shiny, the last one at the minimum. */
+static double triace_shininess(int l, double smin, double smax)
 {
     double s = smax / pow(4.0, l);
     return s < smin ? smin : s;
+}
+
+int ibl__mapping_distinct_levels(const ibl_specular_desc *desc)
+{
+    ibl_specular_mapping m = desc->mapping;
+    if (m == IBL_MAPPING_DEFAULT) m = desc->filter == IBL_FILTER_GGX ? IBL_MAPPING_LINEAR : IBL_MAPPING_TRIACE;
+    /* the box chain's levels carry their own fitted shininess: every level is distinct */
+    if (m != IBL_MAPPING_TRIACE || desc->filter == IBL_FILTER_BOX) return IBL_MAX_LEVELS;
+    double smin = desc->shininess_min > 0 ? desc->shininess_min : IBL_DEFAULT_SHININESS_MIN;
+    double smax = desc->shininess_max > 0 ? desc->shininess_max : IBL_DEFAULT_SHININESS_MAX;
+    /* level l has max / 4^l until that reaches the minimum: the level that reaches it is the
+     * last distinct one (tri-Ace 2010 ties the chain's end to the range's end) */
+    int n = 1;
+    while (n < IBL_MAX_LEVELS && smax / pow(4.0, n - 1) > smin) n++;
+    return n + (desc->mirror ? 1 : 0);
 }
 
 ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc, int size,
@@ -80,6 +95,13 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
     if (m == IBL_MAPPING_DEFAULT) m = desc->filter == IBL_FILTER_GGX ? IBL_MAPPING_LINEAR : IBL_MAPPING_TRIACE;
     info->mapping = m;
     info->lod_offset = (float)(0.5 * log2(info->shininess_max));
+    int distinct = ibl__mapping_distinct_levels(desc);
+    if (levels > distinct)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "prefilter: the triace mapping over shininess %g-%g has %d distinct "
+                         "levels%s; %d levels would repeat the last (ask for at most %d, or widen "
+                         "the range)", info->shininess_min, info->shininess_max, distinct,
+                         info->mirror ? " with the mirror level" : "", levels, distinct);
     if (m == IBL_MAPPING_TABLE) {
         if (!desc->table || desc->table_count != levels)
             return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
@@ -113,15 +135,12 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
         }
         if (desc->filter == IBL_FILTER_BOX && m == IBL_MAPPING_TRIACE) {
             /* box: the chain's own fitted shininess (specular_box.c, least-squares fit of
-             * the box-plus-bilinear kernel to a Phong lobe), clamped to the range */
-            double s = ibl__box_level_shininess(size, l);
-            if (s > info->shininess_max) s = info->shininess_max;
-            if (s < info->shininess_min) s = info->shininess_min;
-            info->shininess[l] = (float)s;
+             * the box-plus-bilinear kernel to a Phong lobe), what the level really holds */
+            info->shininess[l] = ibl__box_level_shininess(size, l);
             continue;
         }
         if (m == IBL_MAPPING_TRIACE) {
-            double s = seed_shininess(ml, info->shininess_min, info->shininess_max);
+            double s = triace_shininess(ml, info->shininess_min, info->shininess_max);
             if (ggx) info->roughness[l] = (float)pow(2.0 / (s + 2.0), 0.25);
             else info->shininess[l] = (float)s;
             continue;

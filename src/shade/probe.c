@@ -54,14 +54,14 @@ ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *p)
             return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: level %d has shininess %g", k,
                             (double)m->shininess[k]);
     for (int k = 1; k < m->levels; k++) {
-        if (!(m->roughness[k] > m->roughness[k - 1]))
+        if (!(m->roughness[k] >= m->roughness[k - 1]))
             return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
-                            "probe: level roughness must increase (level %d: %g after %g)", k,
-                            (double)m->roughness[k], (double)m->roughness[k - 1]);
-        if (!(m->shininess[k] < m->shininess[k - 1]))
+                             "probe: level roughness must not decrease (level %d: %g after %g)", k,
+                             (double)m->roughness[k], (double)m->roughness[k - 1]);
+        if (!(m->shininess[k] <= m->shininess[k - 1]))
             return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
-                            "probe: level shininess must decrease (level %d: %g after %g)", k,
-                            (double)m->shininess[k], (double)m->shininess[k - 1]);
+                             "probe: level shininess must not increase (level %d: %g after %g)", k,
+                             (double)m->shininess[k], (double)m->shininess[k - 1]);
     }
     if (p->mirror.data && !cube_ok(&p->mirror))
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad mirror cube");
