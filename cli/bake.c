@@ -151,6 +151,12 @@ int cli_cmd_bake(int argc, char **argv)
     ibl_status st = IBL_OK;
     if (rc == CLI_EXIT_OK) {
         st = ibl_bake(ctx, &env, &o.desc, o.dir, &bake);
+        if (st == IBL_OK && bake.clamped_texels)
+            cli_info(&a.common, "ibl: warning: %s: %llu texels above %g were stored as %g (the "
+                                "largest %s value; --format rgba32f keeps them)\n", o.dir,
+                     (unsigned long long)bake.clamped_texels,
+                     (double)ibl_format_max_value(bake.format), (double)ibl_format_max_value(bake.format),
+                     ibl_format_name(bake.format));
         if (st == IBL_OK) print_summary(&a.common, o.dir, &bake);
         else cli_report_failure(ctx, o.dir, st), rc = cli_exit_code(st);
         if (st == IBL_OK) ibl_bake_free(ctx, &bake);

@@ -1,13 +1,12 @@
 #!/bin/sh
-# make demo: the main job on the built-in environment, no input file needed.
+# make demo: the main job on the built-in environment, no input file needed. The preview is
+# rendered from the bake itself: if ibl cannot read what it wrote, the demo fails.
 set -eu
 IBL=${1:-build/ibl}
 OUT=${2:-out/demo}
 mkdir -p "$OUT"
 "$IBL" bake -o "$OUT/bake"
-if "$IBL" render "$OUT/bake" -o "$OUT/preview.png" -q 2>/dev/null; then :; else
-  "$IBL" render sky -o "$OUT/preview.png" -q
-fi
+"$IBL" render "$OUT/bake" -o "$OUT/preview.png" -q
 echo
 echo "demo results:"
 echo "  $OUT/bake/            everything a renderer needs (manifest.json lists each file)"

@@ -111,6 +111,8 @@ typedef struct ibl_bake_data {
                                 probe's mirror and background; never written whole       */
     ibl_image preview;       /* linear equirect preview (environment.png), if asked        */
     ibl_bake_timing timing_ms;
+    uint64_t clamped_texels; /* cube texels past the storage format's largest value (e.g. a
+                                sun above 65504 in rgba16f), stored as that value          */
 } ibl_bake_data;
 
 /* Runs every stage on level 0 of env: the specular chain, the irradiance map, the SH, the

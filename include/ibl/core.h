@@ -116,6 +116,9 @@ typedef enum ibl_format {
     IBL_FORMAT_COUNT
 } ibl_format;
 
+/* The largest magnitude a format stores (65504 for half floats, 1 for 8/16-bit unorm,
+ * FLT_MAX for 32-bit floats); writers store larger values as this one. */
+float ibl_format_max_value(ibl_format format);
 /* "rgba16f", "rgba32f", "rg11b10f", "rgb9e5", "rg16f", "rg32f", ... */
 const char *ibl_format_name(ibl_format format);
 /* Parses a name as above (case-insensitive; also "b10g11r11", "e5b9g9r9"); 0 if unknown

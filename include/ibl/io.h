@@ -82,12 +82,19 @@ typedef enum ibl_exr_compression {
     IBL_EXR_PIZ
 } ibl_exr_compression;
 
+/* What a writer changed to fit the file's format. */
+typedef struct ibl_write_report {
+    uint64_t clamped_texels; /* texels with a value past the format's largest, stored as it
+                                (ibl_format_max_value; e.g. a sun above 65504 in rgba16f) */
+} ibl_write_report;
+
 typedef struct ibl_write_desc {
     ibl_format format;        /* 0: the container's default (see docs/FORMATS.md)      */
     float exposure_ev;        /* 8-bit outputs: scale by 2^exposure_ev before tonemap  */
     ibl_tonemap tonemap;
     ibl_exr_compression exr_compression;
     int hdr_no_rle;           /* Radiance: write flat scanlines                        */
+    ibl_write_report *report; /* optional: receives what was changed (added to)        */
 } ibl_write_desc;
 
 /* Writes one flat image; the container follows the extension (.hdr .exr .pfm .png .jpg, or

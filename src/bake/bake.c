@@ -238,6 +238,18 @@ static ibl_status record_parameters(ibl_context *ctx, const ibl_cubemap *env,
     return IBL_OK;
 }
 
+/* Texels of a cube with a colour channel past max (what the writer will clamp). */
+static uint64_t count_over(const ibl_cubemap *c, float max)
+{
+    uint64_t n = 0;
+    size_t texels = c->data ? ibl_cubemap_floats(c->size, c->levels) / 4 : 0;
+    for (size_t i = 0; i < texels; i++) {
+        const float *p = c->data + i * 4;
+        n += (uint64_t)(p[0] > max || p[1] > max || p[2] > max);
+    }
+    return n;
+}
+
 ibl_status ibl_bake_compute(ibl_context *ctx, const ibl_cubemap *env, const ibl_bake_desc *desc,
                             ibl_bake_data *out)
 {
@@ -262,6 +274,10 @@ ibl_status ibl_bake_compute(ibl_context *ctx, const ibl_cubemap *env, const ibl_
     if (st == IBL_OK) st = stage_preview(ctx, env, &d, out);
     if (st == IBL_OK && d.keep_environment) st = keep_environment(ctx, env, out);
     if (st == IBL_OK) out->timing_ms.preview = now_ms() - t;
+    if (st == IBL_OK) {
+        float max = ibl_format_max_value(d.format);
+        out->clamped_texels = count_over(&out->specular, max) + count_over(&out->irradiance, max);
+    }
     out->timing_ms.total = now_ms() - t0;
     if (st != IBL_OK) ibl_bake_free(ctx, out);
     return st;

@@ -6,6 +6,7 @@
  * done on the bit patterns, so results do not depend on the FPU rounding mode. */
 #include "core/pixel_format.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -66,6 +67,14 @@ uint16_t ibl_float_to_half(float f)
     /* 65520 = 65504 + half an ulp: from there on the nearest is Inf (IEEE overflow). */
     if (x >= 0x477ff000u) return (uint16_t)(sign | 0x7c00u);
     return (uint16_t)(sign | to_small_float(x, 10));
+}
+
+/* Storage rounding that never makes a finite value infinite: past 65504 it is 65504. */
+static uint16_t half_saturated(float v)
+{
+    if (v > 65504.0f) v = 65504.0f;
+    else if (v < -65504.0f) v = -65504.0f;
+    return ibl_float_to_half(v);
 }
 
 float ibl_half_to_float(uint16_t h)
@@ -253,7 +262,7 @@ static size_t pack_rgba16f_sse2(const float *rgba, size_t count, uint8_t *dst)
             _mm_storeu_si128((__m128i *)(void *)(dst + i * 8), _mm_packs_epi32(h[0], h[1]));
         } else {
             for (size_t j = 0; j < 8; j++) {
-                uint16_t v = ibl_float_to_half(rgba[i * 4 + j]);
+                uint16_t v = half_saturated(rgba[i * 4 + j]);
                 dst[i * 8 + 2 * j] = (uint8_t)v;
                 dst[i * 8 + 2 * j + 1] = (uint8_t)(v >> 8);
             }
@@ -263,9 +272,38 @@ static size_t pack_rgba16f_sse2(const float *rgba, size_t count, uint8_t *dst)
 }
 #endif
 
-void ibl_pack_texels(ibl_format format, const float *rgba, size_t count, uint8_t *dst)
+/* Stored as the format's largest value instead of infinity (or its own clamp): counts the
+ * texels with a channel above it, for the writer's report. */
+static size_t count_over(const float *rgba, size_t count, int channels, float max)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < count; i++) {
+        int over = 0;
+        for (int c = 0; c < channels; c++) over |= fabsf(rgba[i * 4 + (size_t)c]) > max;
+        n += (size_t)over;
+    }
+    return n;
+}
+
+float ibl_format_max_value(ibl_format format)
+{
+    switch (format) {
+    case IBL_FORMAT_RGBA16F:
+    case IBL_FORMAT_RGB16F:
+    case IBL_FORMAT_RG16F: return 65504.0f;
+    case IBL_FORMAT_RG11B10F: return 65024.0f; /* 6-bit mantissa, exponent 30 */
+    case IBL_FORMAT_RGB9E5: return 65408.0f;   /* (511/512) 2^16 */
+    case IBL_FORMAT_RGBA8_SRGB:
+    case IBL_FORMAT_RGBA16_UNORM: return 1.0f;
+    default: return FLT_MAX;
+    }
+}
+
+size_t ibl_pack_texels(ibl_format format, const float *rgba, size_t count, uint8_t *dst)
 {
     int channels = ibl_format_channels(format);
+    float max = ibl_format_max_value(format);
+    size_t clamped = max < FLT_MAX ? count_over(rgba, count, channels, max) : 0;
     switch (format) {
     case IBL_FORMAT_RGBA16F:
 #if defined(__SSE2__)
@@ -281,7 +319,7 @@ void ibl_pack_texels(ibl_format format, const float *rgba, size_t count, uint8_t
     case IBL_FORMAT_RGB16F:
         for (size_t i = 0; i < count; i++) {
             for (int c = 0; c < channels; c++) {
-                uint16_t h = ibl_float_to_half(rgba[i * 4 + (size_t)c]);
+                uint16_t h = half_saturated(rgba[i * 4 + (size_t)c]);
                 dst[0] = (uint8_t)h;
                 dst[1] = (uint8_t)(h >> 8);
                 dst += 2;
@@ -306,6 +344,7 @@ void ibl_pack_texels(ibl_format format, const float *rgba, size_t count, uint8_t
         break;
     default: break; /* ibl_format_texel_bytes is 0: nothing to write */
     }
+    return clamped;
 }
 
 void ibl_unpack_texels(ibl_format format, const uint8_t *src, size_t count, float *rgba)

@@ -22,8 +22,10 @@ void ibl_unpack_rg11b10(uint32_t v, float rgb[3]);
 size_t ibl_format_texel_bytes(ibl_format format);
 /* Channels a storage format keeps (4, 3 or 2). */
 int ibl_format_channels(ibl_format format);
-/* Packs `count` RGBA float texels into `dst` (little-endian) in a fixed-size format. */
-void ibl_pack_texels(ibl_format format, const float *rgba, size_t count, uint8_t *dst);
+/* Packs `count` RGBA float texels into `dst` (little-endian) in a fixed-size format. Values
+ * past the format's largest (ibl_format_max_value) are stored as that value, never as
+ * infinity; returns how many texels had such a channel. */
+size_t ibl_pack_texels(ibl_format format, const float *rgba, size_t count, uint8_t *dst);
 /* Unpacks into RGBA float; missing channels become 0 (G, B) and 1 (A). */
 void ibl_unpack_texels(ibl_format format, const uint8_t *src, size_t count, float *rgba);
 

@@ -4,6 +4,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <stdatomic.h>
 #include <string.h>
 
 #include "core/pixel_format.h"
@@ -251,14 +252,16 @@ typedef struct convert_job {
     uint8_t *dst_b;
     const uint8_t *src_b;
     float *dst_f;
+    atomic_size_t clamped; /* an integer sum: the same in any order */
 } convert_job;
 
 static void pack_chunk(void *arg, int index)
 {
-    const convert_job *j = arg;
+    convert_job *j = arg;
     size_t first = (size_t)index * CHUNK_TEXELS;
     size_t n = j->count - first < CHUNK_TEXELS ? j->count - first : CHUNK_TEXELS;
-    ibl_pack_texels(j->format, j->src_f + first * 4, n, j->dst_b + first * j->texel_bytes);
+    size_t c = ibl_pack_texels(j->format, j->src_f + first * 4, n, j->dst_b + first * j->texel_bytes);
+    if (c) atomic_fetch_add(&j->clamped, c);
 }
 
 static void unpack_chunk(void *arg, int index)
@@ -277,18 +280,19 @@ static int chunk_count(size_t count)
     return chunks > 0x7fffffff ? 0 : (int)chunks;
 }
 
-void ibl__pack(ibl_context *ctx, ibl_format format, const float *rgba, size_t count, uint8_t *dst)
+size_t ibl__pack(ibl_context *ctx, ibl_format format, const float *rgba, size_t count, uint8_t *dst)
 {
-    convert_job j = {format, count, ibl_format_texel_bytes(format), rgba, dst, NULL, NULL};
+    convert_job j = {format, count, ibl_format_texel_bytes(format), rgba, dst, NULL, NULL, 0};
     int chunks = chunk_count(count);
-    if (chunks <= 1) ibl_pack_texels(format, rgba, count, dst);
-    else ibl_parallel_for(ctx, chunks, pack_chunk, &j);
+    if (chunks <= 1) return ibl_pack_texels(format, rgba, count, dst);
+    ibl_parallel_for(ctx, chunks, pack_chunk, &j);
+    return atomic_load(&j.clamped);
 }
 
 void ibl__unpack(ibl_context *ctx, ibl_format format, const uint8_t *src, size_t count,
                  float *rgba)
 {
-    convert_job j = {format, count, ibl_format_texel_bytes(format), NULL, NULL, src, rgba};
+    convert_job j = {format, count, ibl_format_texel_bytes(format), NULL, NULL, src, rgba, 0};
     int chunks = chunk_count(count);
     if (chunks <= 1) ibl_unpack_texels(format, src, count, rgba);
     else ibl_parallel_for(ctx, chunks, unpack_chunk, &j);

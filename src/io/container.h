@@ -67,8 +67,9 @@ ibl_status ibl__kv_parse(ibl_context *ctx, const char *name, const uint8_t *byte
 void ibl__flip_texture(ibl_texture *tex, int flip_x, int flip_y, int flip_z);
 
 /* ibl_pack_texels / ibl_unpack_texels split into fixed chunks of texels run through
- * ibl_parallel_for: the output does not depend on the thread count. */
-void ibl__pack(ibl_context *ctx, ibl_format format, const float *rgba, size_t count, uint8_t *dst);
+ * ibl_parallel_for: the output does not depend on the thread count. ibl__pack returns the
+ * texels clamped to the format's range. */
+size_t ibl__pack(ibl_context *ctx, ibl_format format, const float *rgba, size_t count, uint8_t *dst);
 void ibl__unpack(ibl_context *ctx, ibl_format format, const uint8_t *src, size_t count,
                  float *rgba);
 

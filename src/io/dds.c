@@ -94,6 +94,7 @@ static const dxgi_map *map_fourcc(uint32_t fourcc)
 ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size)
 {
+    size_t clamped = 0; /* texels stored at the format's largest value */
     if (!name) name = "<dds>";
     if (!bytes || !size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output", name);
     *bytes = NULL;
@@ -159,12 +160,13 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
         for (int l = 0; l < tex->levels; l++) {
             size_t count =
                 (size_t)ibl__level_texels(tex->kind, tex->width, tex->height, tex->depth, l);
-            ibl__pack(ctx, fmt, ibl_texture_level(tex, l, f), count, buf + at);
+            clamped += ibl__pack(ctx, fmt, ibl_texture_level(tex, l, f), count, buf + at);
             at += count * texel;
         }
     }
     *bytes = buf;
     *size = (size_t)total;
+    if (desc && desc->report) desc->report->clamped_texels += clamped;
     return IBL_OK;
 }
 

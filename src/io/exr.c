@@ -15,6 +15,7 @@
 
 #include <stdatomic.h>
 #include <stdio.h>
+#include <math.h>
 #include <string.h>
 #include <libdeflate.h>
 #if defined(__SSE2__)
@@ -718,5 +719,15 @@ ibl_status ibl__exr_encode(ibl_context *ctx, const ibl_image *image, const ibl_w
     int rc = ibl__exr_write(image->pixels, image->width, image->height, channels, half, compression,
                             exr_alloc, ctx, bytes, size, err, sizeof err);
     if (rc) return ibl__fail(ctx, (ibl_status)rc, "%s: cannot encode OpenEXR: %s", name, err);
+    if (half && desc->report) {
+        /* the C++ side stores values past 65504 as 65504; count them as the containers do */
+        size_t n = (size_t)image->width * (size_t)image->height, over = 0;
+        for (size_t i = 0; i < n; i++) {
+            int o = 0;
+            for (int c = 0; c < channels; c++) o |= fabsf(image->pixels[i * 4 + (size_t)c]) > 65504.0f;
+            over += (size_t)o;
+        }
+        desc->report->clamped_texels += over;
+    }
     return IBL_OK;
 }

@@ -70,6 +70,7 @@ static size_t pad4(size_t n)
 ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_write_desc *desc,
                             const char *name, void **bytes, size_t *size)
 {
+    size_t clamped = 0; /* texels stored at the format's largest value */
     if (!name) name = "<ktx>";
     if (!bytes || !size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output", name);
     *bytes = NULL;
@@ -144,12 +145,13 @@ ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
         ibl__wr32(buf + at, (uint32_t)(cube ? face : face * (size_t)faces));
         at += 4;
         for (int f = 0; f < faces; f++) {
-            ibl__pack(ctx, fmt, ibl_texture_level(tex, l, f), count, buf + at);
+            clamped += ibl__pack(ctx, fmt, ibl_texture_level(tex, l, f), count, buf + at);
             at += pad4(face);
         }
     }
     *bytes = buf;
     *size = (size_t)total;
+    if (desc && desc->report) desc->report->clamped_texels += clamped;
     return IBL_OK;
 }
 

@@ -172,6 +172,7 @@ static size_t lcm4(size_t texel)
 ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_write_desc *desc,
                             const char *name, void **bytes, size_t *size)
 {
+    size_t clamped = 0; /* texels stored at the format's largest value */
     if (!name) name = "<ktx2>";
     if (!bytes || !size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output", name);
     *bytes = NULL;
@@ -256,9 +257,10 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     ibl_free(ctx, kvd);
     /* A level's images are layer, face, slice, row: exactly our in-memory level block. */
     for (int l = 0; l < tex->levels; l++)
-        ibl__pack(ctx, fmt, ibl_texture_level(tex, l, 0), level_len[l] / texel, buf + level_off[l]);
+        clamped += ibl__pack(ctx, fmt, ibl_texture_level(tex, l, 0), level_len[l] / texel, buf + level_off[l]);
     *bytes = buf;
     *size = (size_t)total;
+    if (desc && desc->report) desc->report->clamped_texels += clamped;
     return IBL_OK;
 }
 
