@@ -31,6 +31,7 @@ static const char usage[] =
     "                         rg11b10f, rgb9e5\n"
     "  --working-size N       face edge the input is read at (default: the chain's, at least\n"
     "                         128; 256 without --size)\n"
+    "  --preview-width W      width of environment.png (default 1024; 0: no preview)\n"
     CLI_INPUT_HELP
     "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n"
     "\n"
@@ -71,6 +72,10 @@ static void parse(cli_args *a, bake_options *o)
         else if (cli_is(a, arg, "--sh-bands", NULL)) o->desc.sh_bands = cli_int(a, arg, 1, IBL_SH_MAX_BANDS);
         else if (cli_is(a, arg, "--lut-size", NULL)) o->desc.lut_size = cli_int(a, arg, 2, 4096);
         else if (cli_is(a, arg, "--working-size", NULL)) o->input.size = cli_int(a, arg, 1, 16384);
+        else if (cli_is(a, arg, "--preview-width", NULL)) {
+            int w = cli_int(a, arg, 0, 16384);
+            o->desc.preview_width = w > 0 ? w : -1;
+        }
         else if (cli_is(a, arg, "--window", NULL)) parse_window(a, arg, &o->desc);
         else if (cli_is(a, arg, "--format", NULL)) {
             const char *v = cli_value(a, arg);
