@@ -44,22 +44,6 @@ typedef struct bake_options {
     ibl_bake_desc desc;
 } bake_options;
 
-static void parse_window(cli_args *a, const char *arg, ibl_bake_desc *d)
-{
-    const char *v = cli_value(a, arg);
-    if (strcmp(v, "none") == 0) {
-        d->sh_window = IBL_SH_WINDOW_NONE;
-    } else if (strcmp(v, "auto") == 0) {
-        d->sh_window = IBL_SH_WINDOW_AUTO;
-    } else {
-        char *end;
-        d->sh_window_width = strtod(v, &end);
-        if (!*v || *end || !(d->sh_window_width > 0 && d->sh_window_width < 1e6))
-            cli_usage_error(a, "--window wants none, auto or a positive width, not '%s'", v);
-        d->sh_window = IBL_SH_WINDOW_HANNING;
-    }
-}
-
 static void parse(cli_args *a, bake_options *o)
 {
     const char *arg;
@@ -76,7 +60,8 @@ static void parse(cli_args *a, bake_options *o)
             int w = cli_int(a, arg, 0, 16384);
             o->desc.preview_width = w > 0 ? w : -1;
         }
-        else if (cli_is(a, arg, "--window", NULL)) parse_window(a, arg, &o->desc);
+        else if (cli_is(a, arg, "--window", NULL))
+            cli_sh_window_value(a, arg, &o->desc.sh_window, &o->desc.sh_window_width);
         else if (cli_is(a, arg, "--format", NULL)) {
             const char *v = cli_value(a, arg);
             if (!ibl_format_from_name(v, &o->desc.format) ||

@@ -37,32 +37,54 @@ double cli_seconds(void)
     return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
+/* Prints text on one line: control characters (a newline in a file name) are shown as \xNN,
+ * so that every message stays one line a script can read. */
+static void put_one_line(const char *text)
+{
+    for (const unsigned char *p = (const unsigned char *)text; *p; p++) {
+        if (*p < 0x20 || *p == 0x7f) fprintf(stderr, "\\x%02x", *p);
+        else fputc(*p, stderr);
+    }
+}
+
+static void put_message(const char *prefix, const char *fmt, va_list ap, const char *suffix)
+{
+    char buf[8192];
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    fputs(prefix, stderr);
+    put_one_line(buf);
+    fputs(suffix, stderr);
+    fputc('\n', stderr);
+}
+
 void cli_usage_error(const cli_args *a, const char *fmt, ...)
 {
+    char prefix[64], suffix[96];
+    const char *cmd = a && a->command ? a->command : "";
+    snprintf(prefix, sizeof prefix, "ibl %s: ", cmd);
+    snprintf(suffix, sizeof suffix, " (see 'ibl %s --help')", cmd);
     va_list ap;
-    fprintf(stderr, "ibl %s: ", a && a->command ? a->command : "");
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    put_message(prefix, fmt, ap, suffix);
     va_end(ap);
-    fprintf(stderr, " (see 'ibl %s --help')\n", a && a->command ? a->command : "");
     exit(CLI_EXIT_USAGE);
 }
 
 void cli_error(const char *fmt, ...)
 {
     va_list ap;
-    fputs("ibl: ", stderr);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    put_message("ibl: ", fmt, ap, "");
     va_end(ap);
-    fputc('\n', stderr);
 }
 
 void cli_report_failure(ibl_context *ctx, const char *path, ibl_status status)
 {
     const char *msg = ibl_context_message(ctx);
-    if (msg && *msg) cli_error("%s", msg);
-    else cli_error("%s: %s", path, ibl_status_name(status));
+    size_t n = path ? strlen(path) : 0;
+    if (!msg || !*msg) cli_error("%s: %s", path, ibl_status_name(status));
+    else if (path && (strncmp(msg, path, n) != 0 || msg[n] != ':')) cli_error("%s: %s", path, msg);
+    else cli_error("%s", msg);
 }
 
 void cli_info(const cli_common *c, const char *fmt, ...)
@@ -141,6 +163,22 @@ double cli_double(cli_args *a, const char *arg, double min, double max)
     if (!*v || *end || !(x >= min && x <= max))
         cli_usage_error(a, "%s wants a number from %g to %g, not '%s'", arg, min, max, v);
     return x;
+}
+
+void cli_sh_window_value(cli_args *a, const char *arg, ibl_sh_window *window, double *width)
+{
+    const char *v = cli_value(a, arg);
+    if (strcmp(v, "none") == 0) {
+        *window = IBL_SH_WINDOW_NONE;
+    } else if (strcmp(v, "auto") == 0) {
+        *window = IBL_SH_WINDOW_AUTO;
+    } else {
+        char *end = NULL;
+        *width = strtod(v, &end);
+        if (!*v || *end || !(*width > 0 && *width < 1e6))
+            cli_usage_error(a, "%s wants none, auto or a positive width, not '%s'", arg, v);
+        *window = IBL_SH_WINDOW_HANNING;
+    }
 }
 
 int cli_common_option(cli_args *a, const char *arg)
@@ -242,19 +280,16 @@ void cli_report_pixels(const cli_common *c, const char *path, const ibl_pixel_re
                  (unsigned long long)r->inf_count);
 }
 
-float cli_auto_exposure(const ibl_image *image)
+void cli_warn_clamped(const cli_common *c, const char *path, const ibl_write_report *r,
+                      ibl_format format)
 {
-    double sum = 0;
-    size_t n = (size_t)image->width * image->height;
-    for (size_t i = 0; i < n; i++) {
-        const float *p = image->pixels + i * 4;
-        /* Rec.709 luminance; log-average would favour dark images, the mean is steadier */
-        sum += 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-    }
-    double mean = n ? sum / (double)n : 0;
-    if (!(mean > 0)) return 0.0f;
-    return (float)log2(0.18 / mean);
+    if (!r || !r->clamped_texels) return;
+    cli_info(c, "ibl: warning: %s: %llu texels above %g were stored as %g (the largest %s value)\n",
+             path, (unsigned long long)r->clamped_texels, (double)ibl_format_max_value(format),
+             (double)ibl_format_max_value(format),
+             ibl_format_name(format ? format : IBL_FORMAT_RGBA16F));
 }
+
 
 int cli_is_display_format(const char *path)
 {

@@ -37,6 +37,8 @@ const char *cli_value(cli_args *a, const char *arg);
 int cli_flag(cli_args *a, const char *arg, const char *name, const char *alias);
 int cli_int(cli_args *a, const char *arg, int min, int max);
 double cli_double(cli_args *a, const char *arg, double min, double max);
+/* The value of an SH window option: none, auto or a Hanning width. */
+void cli_sh_window_value(cli_args *a, const char *arg, ibl_sh_window *window, double *width);
 /* Handles the common options; returns 1 if arg was one of them. */
 int cli_common_option(cli_args *a, const char *arg);
 /* Stores a positional argument or fails with a usage error for an unknown option. */
@@ -70,22 +72,15 @@ int cli_exit_code(ibl_status status);
 ibl_context *cli_context(const cli_common *c);
 /* Prints warnings about sanitised pixels of a file that was read. */
 void cli_report_pixels(const cli_common *c, const char *path, const ibl_pixel_report *r);
-/* Exposure (EV) that maps the image's mean luminance to middle grey (0.18): the default for
- * 8-bit previews when the user gives no --exposure. */
-float cli_auto_exposure(const ibl_image *image);
+/* Warns about texels a writer stored at the format's largest value. */
+void cli_warn_clamped(const cli_common *c, const char *path, const ibl_write_report *r,
+                      ibl_format format);
 /* Non-zero if the path's container stores 8-bit display values (PNG, JPEG). */
 int cli_is_display_format(const char *path);
 /* Seconds since an arbitrary start (monotonic). */
 double cli_seconds(void);
 /* Installs SIGINT/SIGTERM handlers so that Ctrl-C cancels through the progress callback. */
 void cli_install_signal_handlers(void);
-
-/* The JSON object `ibl sh --json` prints (also the bake's sh.json). window: what was asked. */
-#include <stdio.h>
-#include "ibl/sh.h"
-void cli_sh_write_json(FILE *f, const char *input, const char *method, int bands,
-                       ibl_sh_window window, const ibl_sh_window_report *rep,
-                       const ibl_sh *radiance);
 
 /* Every subcommand: int cli_cmd_NAME(int argc, char **argv); */
 #define IBL_COMMAND(name, summary) int cli_cmd_##name(int argc, char **argv);

@@ -26,7 +26,8 @@ static const char usage[] =
     "  --window W           sh: none (default), auto, or a Hanning width\n"
     "  --format F           storage format (rgba16f, rgba32f, rg11b10f, rgb9e5, ...)\n"
     "  --out-layout NAME    flat outputs: hcross (default), vcross, hstrip, vstrip, equirect\n"
-    "  --layout NAME --yaw DEG --mirror --z-up   how to read a flat input\n";
+    CLI_INPUT_HELP
+    "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n";
 
 int cli_cmd_irradiance(int argc, char **argv)
 {
@@ -59,23 +60,10 @@ int cli_cmd_irradiance(int argc, char **argv)
             else if (strcmp(v, "full") == 0) d.scale = IBL_IRRADIANCE_FULL;
             else cli_usage_error(&a, "--scale wants over-pi or full, not '%s'", v);
         } else if (cli_is(&a, arg, "--window", NULL)) {
-            const char *v = cli_value(&a, arg);
-            if (strcmp(v, "none") == 0) {
-                d.sh_window = IBL_SH_WINDOW_NONE;
-            } else if (strcmp(v, "auto") == 0) {
-                d.sh_window = IBL_SH_WINDOW_AUTO;
-            } else {
-                char *end = NULL;
-                d.sh_window_width = strtod(v, &end);
-                if (!*v || *end || !(d.sh_window_width > 0 && d.sh_window_width < 1e6))
-                    cli_usage_error(&a, "--window wants auto, none or a positive width, not '%s'", v);
-                d.sh_window = IBL_SH_WINDOW_HANNING;
-            }
+            cli_sh_window_value(&a, arg, &d.sh_window, &d.sh_window_width);
         } else if (cli_is(&a, arg, "--format", NULL)) {
             const char *v = cli_value(&a, arg);
-            int ok = 0;
-            ok = ibl_format_from_name(v, &wd.format);
-            if (!ok) cli_usage_error(&a, "unknown format '%s'", v);
+            if (!ibl_format_from_name(v, &wd.format)) cli_usage_error(&a, "unknown format '%s'", v);
         } else if (cli_is(&a, arg, "--out-layout", NULL)) {
             const char *v = cli_value(&a, arg);
             if (!ibl_layout_from_name(v, &out_layout) || out_layout == IBL_LAYOUT_AUTO ||
@@ -89,6 +77,8 @@ int cli_cmd_irradiance(int argc, char **argv)
     if (a.positional_count != 1) cli_usage_error(&a, "wants exactly one input file");
     if (!out_path) cli_usage_error(&a, "wants an output file (-o OUT)");
     ibl_file_type out_type = cli_check_output(&a, out_path);
+    if (!ibl_file_type_writes_format(out_type, wd.format))
+        cli_usage_error(&a, "%s cannot store %s pixels", out_path, ibl_format_name(wd.format));
     const char *in = a.positional[0];
     ibl_context *ctx = cli_context(&a.common);
     double t0 = cli_seconds();
@@ -102,6 +92,8 @@ int cli_cmd_irradiance(int argc, char **argv)
         ibl_context_destroy(ctx);
         return rc;
     }
+    ibl_write_report report = {0};
+    wd.report = &report;
     ibl_status st = ibl_irradiance_cubemap(ctx, &cube, &d, &result);
     if (st == IBL_OK) {
         if (ibl_file_type_is_container(out_type)) {
@@ -126,10 +118,11 @@ int cli_cmd_irradiance(int argc, char **argv)
     ibl_cubemap_free(ctx, &result);
     ibl_image_free(ctx, &flat);
     if (st != IBL_OK) {
-        cli_report_failure(ctx, in, st);
+        cli_report_failure(ctx, out_path, st);
         ibl_context_destroy(ctx);
-        return CLI_EXIT_BAD_INPUT;
+        return cli_exit_code(st);
     }
+    cli_warn_clamped(&a.common, out_path, &report, wd.format);
     static const char *const methods[] = {"convolve", "sh", "reference"};
     cli_info(&a.common, "%s: %dx%dx6 irradiance (%s, %s) in %.3f s\n", out_path,
              d.size ? d.size : 16, d.size ? d.size : 16, methods[d.method],

@@ -28,7 +28,8 @@ static const char usage[] =
     "  --shininess-spacing S    log (default) or linear\n"
     "  --f0-steps K             ambient-brdf F0 slices (default 16)\n"
     "  --compact                ambient-brdf: the 2D form RG = (X, Y), AmbientBRDF = F0*X + Y\n"
-    "  --normalization N        ambient-brdf: triace (the linear fit 0.0397436 s + 0.0856832, default) or exact\n"
+    "  --normalization N        ambient-brdf: triace (tri-Ace 2010's linear fit 0.0397436 s +\n"
+    "                           0.0856832, default) or exact\n"
     "  --format F               rg16f (default for 2 channels in .ktx2/.ktx/.dds), rg32f,\n"
     "                           rgba16f, rgba32f; PNG: rgba16 (default); EXR: rgb32f (default),\n"
     "                           rgb16f, rgba16f, rgba32f\n"
@@ -79,206 +80,201 @@ static float max_value(const float *px, size_t texels, int channels)
     return m;
 }
 
+typedef struct lut_options {
+    const char *out, *symbol, *channels;
+    lut_kind kind;
+    int size, compact;
+    ibl_ambient_brdf_desc ambient;
+    ibl_write_desc wd;
+    int text; /* a C header or text table */
+} lut_options;
+
+static lut_kind kind_from_name(cli_args *a, const char *k)
+{
+    static const struct {
+        const char *name;
+        lut_kind kind;
+    } kinds[] = {{"splitsum", KIND_SPLITSUM},         {"splitsum-separable", KIND_SEPARABLE},
+                 {"multiscatter", KIND_MULTISCATTER}, {"sheen", KIND_SHEEN},
+                 {"ambient-brdf", KIND_AMBIENT}};
+    for (size_t i = 0; i < sizeof kinds / sizeof kinds[0]; i++)
+        if (strcmp(k, kinds[i].name) == 0) return kinds[i].kind;
+    cli_usage_error(a, "unknown --kind '%s' (splitsum, splitsum-separable, multiscatter, sheen, "
+                       "ambient-brdf)", k);
+}
+
+/* The AmbientBRDF options; returns 1 if arg was one of them. */
+static int ambient_option(cli_args *a, const char *arg, lut_options *o)
+{
+    ibl_ambient_brdf_desc *d = &o->ambient;
+    if (cli_is(a, arg, "--f0-steps", NULL)) {
+        d->size_f0 = cli_int(a, arg, 1, 1024);
+    } else if (cli_is(a, arg, "--shininess-range", NULL)) {
+        const char *v = cli_value(a, arg);
+        char *end = NULL;
+        d->shininess_min = strtod(v, &end);
+        const char *b = end && *end == ':' ? end + 1 : NULL;
+        if (b) d->shininess_max = strtod(b, &end);
+        if (!b || !*b || *end || !(d->shininess_min > 0) || !(d->shininess_max > d->shininess_min) ||
+            !(d->shininess_max <= 1e6))
+            cli_usage_error(a, "--shininess-range wants A:B with 0 < A < B <= 1e6, not '%s'", v);
+    } else if (cli_is(a, arg, "--shininess-spacing", NULL)) {
+        const char *v = cli_value(a, arg);
+        if (strcmp(v, "log") == 0) d->spacing = IBL_SHININESS_LOG;
+        else if (strcmp(v, "linear") == 0) d->spacing = IBL_SHININESS_LINEAR;
+        else cli_usage_error(a, "--shininess-spacing wants log or linear, not '%s'", v);
+    } else if (cli_is(a, arg, "--normalization", NULL)) {
+        const char *v = cli_value(a, arg);
+        if (strcmp(v, "triace") == 0) d->normalization = IBL_BLINN_TRIACE_FIT;
+        else if (strcmp(v, "exact") == 0) d->normalization = IBL_BLINN_EXACT;
+        else cli_usage_error(a, "--normalization wants triace or exact, not '%s'", v);
+    } else if (cli_flag(a, arg, "--compact", NULL)) {
+        o->compact = 1;
+    } else {
+        return 0;
+    }
+    return 1;
+}
+
+static void parse(cli_args *a, lut_options *o)
+{
+    const char *arg, *format = NULL;
+    int ambient = 0;
+    while ((arg = cli_next(a)) != NULL) {
+        if (cli_common_option(a, arg)) continue;
+        if (ambient_option(a, arg, o)) ambient = 1;
+        else if (cli_is(a, arg, "--output", "-o")) o->out = cli_value(a, arg);
+        else if (cli_is(a, arg, "--kind", NULL)) o->kind = kind_from_name(a, cli_value(a, arg));
+        else if (cli_is(a, arg, "--size", NULL)) o->size = cli_int(a, arg, 1, 4096);
+        else if (cli_is(a, arg, "--channels", NULL)) o->channels = cli_value(a, arg);
+        else if (cli_is(a, arg, "--format", NULL)) format = cli_value(a, arg);
+        else if (cli_is(a, arg, "--symbol", NULL)) o->symbol = cli_value(a, arg);
+        else if (cli_is(a, arg, "--order", NULL)) o->ambient.order = cli_int(a, arg, 4, 192);
+        else cli_positional_or_unknown(a, arg);
+    }
+    if (a->positional_count) cli_usage_error(a, "unexpected argument '%s'", a->positional[0]);
+    if (!o->out) cli_usage_error(a, "missing -o FILE");
+    if (ambient && o->kind != KIND_AMBIENT)
+        cli_usage_error(a, "--shininess-*, --f0-steps, --compact and --normalization need "
+                           "--kind ambient-brdf");
+    if (o->channels && o->kind == KIND_AMBIENT)
+        cli_usage_error(a, "--channels applies to the split-sum kinds only");
+    ibl_file_type type = ibl_file_type_from_path(o->out);
+    o->text = type == IBL_FILE_UNKNOWN;
+    if (format && !ibl_format_from_name(format, &o->wd.format))
+        cli_usage_error(a, "unknown --format '%s'", format);
+    if (format && o->text) cli_usage_error(a, "--format does not apply to C headers and text tables");
+    if (!o->text && !ibl_file_type_writes_format(type, o->wd.format))
+        cli_usage_error(a, "%s cannot store %s pixels", o->out, ibl_format_name(o->wd.format));
+    if (o->symbol && !ends_with(o->out, ".h")) cli_usage_error(a, "--symbol applies to .h outputs only");
+    if (o->wd.format == IBL_FORMAT_DEFAULT && type == IBL_FILE_PNG) o->wd.format = IBL_FORMAT_RGBA16_UNORM;
+}
+
+/* The AmbientBRDF volume (or its compact 2D form) into tex / img, with its description. */
+static ibl_status compute_ambient(ibl_context *ctx, lut_options *o, ibl_texture *tex,
+                                  ibl_image *img, char *comment, size_t cap)
+{
+    ibl_ambient_brdf_desc *d = &o->ambient;
+    d->size_nv = d->size_shininess = o->size;
+    snprintf(comment, cap,
+             "tri-Ace 2010 AmbientBRDF, %s normalisation, shininess %g..%g %s spacing.\n%s",
+             d->normalization == IBL_BLINN_EXACT ? "exact" : "triace",
+             d->shininess_min > 0 ? d->shininess_min : 1.0,
+             d->shininess_max > 0 ? d->shininess_max : 2000.0,
+             d->spacing == IBL_SHININESS_LINEAR ? "linear" : "log",
+             o->compact ? "x = n.v, y = shininess row; channels X, Y: AmbientBRDF = F0 * X + Y"
+                        : "x = n.v, y = shininess row, z = F0 slice; channels: specular, diffuse "
+                          "factor (1 - F0)");
+    return o->compact ? ibl_ambient_brdf_table(ctx, d, img) : ibl_ambient_brdf_volume(ctx, d, tex);
+}
+
+/* A split-sum-family table into img; *channels receives its channel count. */
+static ibl_status compute_splitsum(ibl_context *ctx, const cli_args *a, const lut_options *o,
+                                   ibl_image *img, int *channels, char *comment, size_t cap)
+{
+    ibl_brdf_lut_desc d = {.size = o->size, .order = o->ambient.order};
+    d.visibility = o->kind == KIND_SEPARABLE ? IBL_VISIBILITY_SEPARABLE : IBL_VISIBILITY_HEIGHT_CORRELATED;
+    const char *what = o->kind == KIND_SEPARABLE
+                           ? "split-sum GGX (Karis 2013), Schlick-GGX k = alpha/2; channels A, B: "
+                             "specular = F0 * A + F90 * B"
+                           : "split-sum GGX (Karis 2013), height-correlated Smith; channels A, B: "
+                             "specular = F0 * A + F90 * B";
+    if (o->kind == KIND_MULTISCATTER) {
+        d.channels[0] = IBL_BRDF_ALBEDO;
+        d.channels[1] = IBL_BRDF_ALBEDO_AVG;
+        what = "GGX (height-correlated) directional albedo E and its average E_avg (Kulla-Conty "
+               "multiple-scattering compensation)";
+    } else if (o->kind == KIND_SHEEN) {
+        d.channels[0] = IBL_BRDF_SHEEN;
+        d.channels[1] = IBL_BRDF_SHEEN_AVG;
+        what = "Charlie sheen (Estevez-Kulla 2017, Neubelt-Pettineo visibility) directional albedo "
+               "E and its average";
+    }
+    if (o->channels) {
+        memset(d.channels, 0, sizeof d.channels);
+        if (!parse_channels(o->channels, d.channels))
+            cli_usage_error(a, "--channels wants up to 4 of a,b,e,eavg,sheen,sheenavg,0,1, not '%s'",
+                            o->channels);
+        what = "custom channels (see --channels)";
+    }
+    snprintf(comment, cap, "%s.\nx = n.v, y = perceptual roughness r (alpha = r^2); row 0 is r ~ 0.",
+             what);
+    *channels = ibl_brdf_lut_channel_count(&d);
+    return ibl_brdf_lut(ctx, &d, img);
+}
+
+/* The table as a text/C header, a container, or a flat image (3D volumes stack their slices). */
+static ibl_status write_table(ibl_context *ctx, const cli_common *c, lut_options *o,
+                              ibl_texture *tex, int channels, const char *comment)
+{
+    ibl_file_type type = ibl_file_type_from_path(o->out);
+    if (o->text) return ibl_write_table(ctx, o->out, tex, channels, o->symbol ? o->symbol : "ibl_brdf_lut", comment);
+    if (ibl_file_type_is_container(type)) {
+        if (o->wd.format == IBL_FORMAT_DEFAULT) o->wd.format = channels <= 2 ? IBL_FORMAT_RG16F : IBL_FORMAT_RGBA16F;
+        tex->format = o->wd.format;
+        ibl_status st = ibl_texture_set_metadata(ctx, tex, "ibl.lut", comment);
+        return st == IBL_OK ? ibl_write_texture(ctx, o->out, tex, &o->wd) : st;
+    }
+    size_t texels = (size_t)tex->width * tex->height * tex->depth;
+    if (type == IBL_FILE_PNG && max_value(tex->data, texels, channels) > 1.0f)
+        cli_info(c, "ibl: warning: %s: values above 1 are clipped by PNG\n", o->out);
+    ibl_image flat = {tex->width, tex->height * tex->depth, tex->data};
+    return ibl_write_image(ctx, o->out, &flat, &o->wd);
+}
+
 int cli_cmd_lut(int argc, char **argv)
 {
     cli_args a = {argc, argv, 0, "lut", usage, {0}, {0}, 0};
-    const char *out = NULL, *format_name = NULL, *symbol = NULL, *channels_arg = NULL;
-    lut_kind kind = KIND_SPLITSUM;
-    int size = 0, f0_steps = 0, compact = 0, order = 0;
-    double smin = 0, smax = 0;
-    ibl_shininess_spacing spacing = IBL_SHININESS_LOG;
-    ibl_blinn_normalization norm = IBL_BLINN_TRIACE_FIT;
-    int saw_ambient_option = 0;
-    const char *arg;
-    while ((arg = cli_next(&a)) != NULL) {
-        if (cli_common_option(&a, arg)) continue;
-        if (cli_is(&a, arg, "--output", "-o")) {
-            out = cli_value(&a, arg);
-        } else if (cli_is(&a, arg, "--kind", NULL)) {
-            const char *k = cli_value(&a, arg);
-            if (strcmp(k, "splitsum") == 0) kind = KIND_SPLITSUM;
-            else if (strcmp(k, "splitsum-separable") == 0) kind = KIND_SEPARABLE;
-            else if (strcmp(k, "multiscatter") == 0) kind = KIND_MULTISCATTER;
-            else if (strcmp(k, "sheen") == 0) kind = KIND_SHEEN;
-            else if (strcmp(k, "ambient-brdf") == 0) kind = KIND_AMBIENT;
-            else
-                cli_usage_error(&a, "unknown --kind '%s' (splitsum, splitsum-separable, "
-                                    "multiscatter, sheen, ambient-brdf)", k);
-        } else if (cli_is(&a, arg, "--size", NULL)) {
-            size = cli_int(&a, arg, 1, 4096);
-        } else if (cli_is(&a, arg, "--f0-steps", NULL)) {
-            f0_steps = cli_int(&a, arg, 1, 1024);
-            saw_ambient_option = 1;
-        } else if (cli_is(&a, arg, "--shininess-range", NULL)) {
-            const char *v = cli_value(&a, arg);
-            char *end = NULL;
-            smin = strtod(v, &end);
-            if (!end || *end != ':') cli_usage_error(&a, "--shininess-range wants A:B, not '%s'", v);
-            const char *b = end + 1;
-            smax = strtod(b, &end);
-            if (!*b || *end || !(smin > 0) || !(smax > smin) || !(smax <= 1e6))
-                cli_usage_error(&a, "--shininess-range wants 0 < A < B <= 1e6, not '%s'", v);
-            saw_ambient_option = 1;
-        } else if (cli_is(&a, arg, "--shininess-spacing", NULL)) {
-            const char *v = cli_value(&a, arg);
-            if (strcmp(v, "log") == 0) spacing = IBL_SHININESS_LOG;
-            else if (strcmp(v, "linear") == 0) spacing = IBL_SHININESS_LINEAR;
-            else cli_usage_error(&a, "--shininess-spacing wants log or linear, not '%s'", v);
-            saw_ambient_option = 1;
-        } else if (cli_is(&a, arg, "--normalization", NULL)) {
-            const char *v = cli_value(&a, arg);
-            if (strcmp(v, "triace") == 0) norm = IBL_BLINN_TRIACE_FIT;
-            else if (strcmp(v, "exact") == 0) norm = IBL_BLINN_EXACT;
-            else cli_usage_error(&a, "--normalization wants seed or exact, not '%s'", v);
-            saw_ambient_option = 1;
-        } else if (cli_is(&a, arg, "--compact", NULL)) {
-            compact = 1;
-            saw_ambient_option = 1;
-        } else if (cli_is(&a, arg, "--channels", NULL)) {
-            channels_arg = cli_value(&a, arg);
-        } else if (cli_is(&a, arg, "--format", NULL)) {
-            format_name = cli_value(&a, arg);
-        } else if (cli_is(&a, arg, "--symbol", NULL)) {
-            symbol = cli_value(&a, arg);
-        } else if (cli_is(&a, arg, "--order", NULL)) {
-            order = cli_int(&a, arg, 4, 192);
-        } else {
-            cli_positional_or_unknown(&a, arg);
-        }
-    }
-    if (a.positional_count) cli_usage_error(&a, "unexpected argument '%s'", a.positional[0]);
-    if (!out) cli_usage_error(&a, "missing -o FILE");
-    if (saw_ambient_option && kind != KIND_AMBIENT)
-        cli_usage_error(&a, "--shininess-*, --f0-steps, --compact and --normalization need "
-                            "--kind ambient-brdf");
-    if (channels_arg && kind == KIND_AMBIENT)
-        cli_usage_error(&a, "--channels applies to the split-sum kinds only");
-
-    ibl_file_type type = ibl_file_type_from_path(out);
-    int text = type == IBL_FILE_UNKNOWN;
-    ibl_write_desc wd;
-    memset(&wd, 0, sizeof wd);
-    if (format_name) {
-        int ok = 0;
-        ok = ibl_format_from_name(format_name, &wd.format);
-        if (!ok) cli_usage_error(&a, "unknown --format '%s'", format_name);
-        if (text) cli_usage_error(&a, "--format does not apply to C headers and text tables");
-    }
-    if (symbol && !ends_with(out, ".h")) cli_usage_error(&a, "--symbol applies to .h outputs only");
-
+    lut_options o;
+    memset(&o, 0, sizeof o);
+    parse(&a, &o);
     ibl_context *ctx = cli_context(&a.common);
-    ibl_status st = IBL_OK;
     ibl_texture tex;
-    memset(&tex, 0, sizeof tex);
-    int nch = 2;
     ibl_image img;
+    memset(&tex, 0, sizeof tex);
     memset(&img, 0, sizeof img);
+    int channels = 2;
     char comment[512];
     double t0 = cli_seconds();
-
-    if (kind == KIND_AMBIENT) {
-        ibl_ambient_brdf_desc d;
-        memset(&d, 0, sizeof d);
-        d.size_nv = d.size_shininess = size;
-        d.size_f0 = f0_steps;
-        d.shininess_min = smin;
-        d.shininess_max = smax;
-        d.spacing = spacing;
-        d.normalization = norm;
-        d.order = order;
-        snprintf(comment, sizeof comment,
-                 "tri-Ace AmbientBRDF (seed 000), %s normalisation, shininess %g..%g %s spacing.\n"
-                 "%s",
-                 norm == IBL_BLINN_EXACT ? "exact" : "triace", smin > 0 ? smin : 1.0,
-                 smax > 0 ? smax : 2000.0, spacing == IBL_SHININESS_LINEAR ? "linear" : "log",
-                 compact ? "x = n.v, y = shininess row; channels X, Y: AmbientBRDF = F0 * X + Y"
-                         : "x = n.v, y = shininess row, z = F0 slice; channels: specular, "
-                           "diffuse factor (1 - F0)");
-        if (compact) {
-            st = ibl_ambient_brdf_table(ctx, &d, &img);
-        } else {
-            st = ibl_ambient_brdf_volume(ctx, &d, &tex);
-        }
-    } else {
-        ibl_brdf_lut_desc d;
-        memset(&d, 0, sizeof d);
-        d.size = size;
-        d.order = order;
-        d.visibility = kind == KIND_SEPARABLE ? IBL_VISIBILITY_SEPARABLE
-                                              : IBL_VISIBILITY_HEIGHT_CORRELATED;
-        const char *what = "split-sum GGX (Karis 2013), height-correlated Smith; channels A, B: "
-                           "specular = F0 * A + F90 * B";
-        if (kind == KIND_SEPARABLE)
-            what = "split-sum GGX (Karis 2013), Schlick-GGX k = alpha/2; channels A, B: "
-                   "specular = F0 * A + F90 * B";
-        if (kind == KIND_MULTISCATTER) {
-            d.channels[0] = IBL_BRDF_ALBEDO;
-            d.channels[1] = IBL_BRDF_ALBEDO_AVG;
-            what = "GGX (height-correlated) directional albedo E and its average E_avg "
-                   "(Kulla-Conty multiple-scattering compensation)";
-        } else if (kind == KIND_SHEEN) {
-            d.channels[0] = IBL_BRDF_SHEEN;
-            d.channels[1] = IBL_BRDF_SHEEN_AVG;
-            what = "Charlie sheen (Estevez-Kulla 2017, Neubelt-Pettineo visibility) directional "
-                   "albedo E and its average";
-        }
-        if (channels_arg) {
-            memset(d.channels, 0, sizeof d.channels);
-            if (!parse_channels(channels_arg, d.channels))
-                cli_usage_error(&a, "--channels wants up to 4 of a,b,e,eavg,sheen,sheenavg,0,1, "
-                                    "not '%s'", channels_arg);
-            what = "custom channels (see --channels)";
-        }
-        snprintf(comment, sizeof comment, "%s.\nx = n.v, y = perceptual roughness r (alpha = r^2); "
-                 "row 0 is r ~ 0.", what);
-        nch = ibl_brdf_lut_channel_count(&d);
-        st = ibl_brdf_lut(ctx, &d, &img);
-    }
-    if (st != IBL_OK) goto fail;
-
-    /* One texture view over whatever was computed (2D image or 3D volume). */
-    if (!tex.data) {
-        tex.kind = IBL_TEXTURE_2D;
-        tex.width = img.width;
-        tex.height = img.height;
-        tex.depth = 1;
-        tex.levels = 1;
-        tex.data = img.pixels;
-    }
-    size_t texels = (size_t)tex.width * tex.height * tex.depth;
-    if (text) {
-        st = ibl_write_table(ctx, out, &tex, nch, symbol ? symbol : "ibl_brdf_lut", comment);
-    } else if (ibl_file_type_is_container(type)) {
-        if (wd.format == IBL_FORMAT_DEFAULT) wd.format = nch <= 2 ? IBL_FORMAT_RG16F : IBL_FORMAT_RGBA16F;
-        tex.format = wd.format;
-        st = ibl_texture_set_metadata(ctx, &tex, "ibl.lut", comment);
-        if (st == IBL_OK) st = ibl_write_texture(ctx, out, &tex, &wd);
-    } else {
-        if (type == IBL_FILE_PNG && wd.format == IBL_FORMAT_DEFAULT) wd.format = IBL_FORMAT_RGBA16_UNORM;
-        if (type == IBL_FILE_PNG && max_value(tex.data, texels, nch) > 1.0f)
-            cli_info(&a.common, "ibl: warning: %s: values above 1 are clipped by PNG\n", out);
-        /* a 3D volume as slices stacked top to bottom */
-        ibl_image flat = {tex.width, tex.height * tex.depth, tex.data};
-        st = ibl_write_image(ctx, out, &flat, &wd);
-    }
-    if (st != IBL_OK) goto fail;
-    if (tex.depth > 1)
-        cli_info(&a.common, "%s: %dx%dx%d, %d channels, %.2f s\n", out, tex.width, tex.height,
-                 tex.depth, nch, cli_seconds() - t0);
+    ibl_status st = o.kind == KIND_AMBIENT
+                        ? compute_ambient(ctx, &o, &tex, &img, comment, sizeof comment)
+                        : compute_splitsum(ctx, &a, &o, &img, &channels, comment, sizeof comment);
+    if (st == IBL_OK && !tex.data) /* one texture view over a 2D result */
+        tex = (ibl_texture){.kind = IBL_TEXTURE_2D, .width = img.width, .height = img.height,
+                            .depth = 1, .levels = 1, .data = img.pixels};
+    if (st == IBL_OK) st = write_table(ctx, &a.common, &o, &tex, channels, comment);
+    if (st == IBL_OK && tex.depth > 1)
+        cli_info(&a.common, "%s: %dx%dx%d, %d channels, %.2f s\n", o.out, tex.width, tex.height,
+                 tex.depth, channels, cli_seconds() - t0);
+    else if (st == IBL_OK)
+        cli_info(&a.common, "%s: %dx%d, %d channel%s, %.2f s\n", o.out, tex.width, tex.height,
+                 channels, channels > 1 ? "s" : "", cli_seconds() - t0);
     else
-        cli_info(&a.common, "%s: %dx%d, %d channel%s, %.2f s\n", out, tex.width, tex.height, nch,
-                 nch > 1 ? "s" : "", cli_seconds() - t0);
-
-fail:
-    if (st != IBL_OK) cli_error("%s", ibl_context_message(ctx));
+        cli_report_failure(ctx, o.out, st);
     /* tex is either the volume (owns its texels) or a view of img; both may own metadata */
-    if (img.pixels) {
-        tex.owns_data = 0;
-        ibl_texture_free(ctx, &tex);
-        ibl_image_free(ctx, &img);
-    } else {
-        ibl_texture_free(ctx, &tex);
-    }
+    if (img.pixels) tex.owns_data = 0;
+    ibl_texture_free(ctx, &tex);
+    ibl_image_free(ctx, &img);
     ibl_context_destroy(ctx);
     return cli_exit_code(st);
 }

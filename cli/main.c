@@ -67,7 +67,13 @@ int main(int argc, char **argv)
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++) {
         if (strcmp(name, commands[i].name) == 0) {
             cli_install_signal_handlers();
-            return commands[i].run(argc - 2, argv + 2);
+            int rc = commands[i].run(argc - 2, argv + 2);
+            /* what went to standard output must have arrived (a full disk, a closed pipe) */
+            if (fflush(stdout) != 0 || ferror(stdout)) {
+                cli_error("cannot write to standard output");
+                if (rc == CLI_EXIT_OK) rc = CLI_EXIT_BAD_INPUT;
+            }
+            return rc;
         }
     }
     fprintf(stderr, "ibl: unknown command '%s' (see 'ibl --help')\n", name);

@@ -21,8 +21,8 @@ static const char usage[] =
     "  --fast-centres     the cheap dynamic path: only the six face-centre texels\n"
     "  --fast-means       the same from the six face means (what a 1x1 mip level holds);\n"
     "                     docs/DIFFUSE.md has the errors of both\n"
-    "  --layout NAME --yaw DEG --mirror --z-up   how to read a flat input (with an\n"
-    "                     orientation, equirect inputs are projected through a cube)\n"
+    CLI_INPUT_HELP
+    "                     (with an orientation, equirect inputs are projected through a cube)\n"
     "  --json             one JSON object instead of text\n"
     "\n"
     "Basis: real, orthonormal, no Condon-Shortley phase, order (l,m) = (0,0) (1,-1) (1,0)\n"
@@ -34,25 +34,12 @@ static const char *const coeff_names[IBL_SH_MAX_COEFFS] = {
     "4,-2", "4,-1", "4,0",  "4,1",  "4,2",  "4,3",  "4,4",
 };
 
-static void print_json_coeffs(FILE *f, const char *key, const ibl_sh *sh, int last)
-{
-    fprintf(f, "  \"%s\": [", key);
-    for (int i = 0; i < sh->bands * sh->bands; i++)
-        fprintf(f, "%s[%.9g, %.9g, %.9g]", i ? ", " : "", sh->c[i][0], sh->c[i][1], sh->c[i][2]);
-    fprintf(f, "]%s\n", last ? "" : ",");
-}
-
 static void print_text_coeffs(const char *title, const char *sym, const ibl_sh *sh)
 {
     printf("%s\n", title);
     for (int i = 0; i < sh->bands * sh->bands; i++)
         printf("  %s(%-5s) %14.7g %14.7g %14.7g\n", sym, coeff_names[i], sh->c[i][0], sh->c[i][1],
                sh->c[i][2]);
-}
-
-static const char *window_name(ibl_sh_window w)
-{
-    return w == IBL_SH_WINDOW_HANNING ? "hanning" : w == IBL_SH_WINDOW_AUTO ? "auto" : "none";
 }
 
 /* An equirect image read as it is: projected directly with exact pixel solid angles. Returns
@@ -81,58 +68,6 @@ static int read_plain_equirect(ibl_context *ctx, const cli_common *common, const
     return 0;
 }
 
-void cli_sh_write_json(FILE *f, const char *in, const char *method, int bands,
-                       ibl_sh_window window, const ibl_sh_window_report *rep,
-                       const ibl_sh *radiance)
-{
-    ibl_sh irr, over_pi;
-    ibl_sh_radiance_to_irradiance(radiance, &irr);
-    over_pi = irr;
-    ibl_sh_scale(&over_pi, 1.0 / 3.14159265358979323846);
-    double m[3][4][4];
-    ibl_sh_polynomial(radiance, m);
-    fprintf(f, "{\n");
-    fprintf(f, "  \"input\": \"");
-    for (const char *p = in; *p; p++) {
-        if (*p == '"' || *p == '\\') fputc('\\', f);
-        if ((unsigned char)*p >= 0x20) fputc(*p, f);
-    }
-    fprintf(f, "\",\n  \"projection\": \"%s\",\n", method);
-    fprintf(f, "  \"bands\": %d,\n", bands);
-    fprintf(f, "  \"basis\": \"%s\",\n", IBL_SH_BASIS_NAME);
-    fprintf(f, "  \"condon_shortley_phase\": false,\n");
-    fprintf(f, "  \"order\": \"index l*l+l+m: (0,0) (1,-1) (1,0) (1,1) (2,-2) (2,-1) (2,0) (2,1) "
-           "(2,2) ...\",\n");
-    fprintf(f, "  \"axes\": {\"up\": \"+y\", \"frame\": \"right-handed world frame, +Y up\", "
-           "\"formula_x\": \"+x\", \"formula_y\": \"+y\", \"formula_z\": \"+z\", "
-           "\"note\": \"the R&H formulas take the world x, y, z directly; their polar axis z is "
-           "the horizontal world +Z and up enters through y (L1-1, L2-2, L2-1)\"},\n");
-    fprintf(f, "  \"window\": {\"requested\": \"%s\", \"applied\": \"%s\", \"width\": %.9g, "
-           "\"factors\": [",
-           window_name(window), window_name(rep->applied), rep->width);
-    for (int l = 0; l < bands; l++) fprintf(f, "%s%.9g", l ? ", " : "", rep->factors[l]);
-    fprintf(f, "], \"min_irradiance_before\": %.9g, \"min_irradiance_after\": %.9g},\n",
-           rep->min_irradiance_before, rep->min_irradiance_after);
-    fprintf(f, "  \"cosine_factors\": [");
-    for (int l = 0; l < bands; l++) fprintf(f, "%s%.17g", l ? ", " : "", ibl_sh_cosine_factor(l));
-    fprintf(f, "],\n");
-    print_json_coeffs(f, "radiance", radiance, 0);
-    print_json_coeffs(f, "irradiance", &irr, 0);
-    print_json_coeffs(f, "irradiance_over_pi", &over_pi, 0);
-    fprintf(f, "  \"polynomial\": {\"form\": \"E(n) = [x y z 1] M [x y z 1]^T (irradiance, R&H 2001 "
-           "eq. 12, first 9 coefficients)\", \"constants\": [%g, %g, %g, %g, %g], \"matrix\": {",
-           IBL_SH_RH_C1, IBL_SH_RH_C2, IBL_SH_RH_C3, IBL_SH_RH_C4, IBL_SH_RH_C5);
-    static const char *const ch[3] = {"r", "g", "b"};
-    for (int c = 0; c < 3; c++) {
-        fprintf(f, "%s\"%s\": [", c ? ", " : "", ch[c]);
-        for (int i = 0; i < 4; i++)
-            fprintf(f, "%s[%.9g, %.9g, %.9g, %.9g]", i ? ", " : "", m[c][i][0], m[c][i][1],
-                   m[c][i][2], m[c][i][3]);
-        fprintf(f, "]");
-    }
-    fprintf(f, "}}\n}\n");
-}
-
 int cli_cmd_sh(int argc, char **argv)
 {
     cli_args a = {argc, argv, 0, "sh", usage, {0}, {0}, 0};
@@ -146,18 +81,7 @@ int cli_cmd_sh(int argc, char **argv)
         if (cli_is(&a, arg, "--bands", NULL)) {
             bands = cli_int(&a, arg, 1, IBL_SH_MAX_BANDS);
         } else if (cli_is(&a, arg, "--window", NULL)) {
-            const char *v = cli_value(&a, arg);
-            if (strcmp(v, "none") == 0) {
-                window = IBL_SH_WINDOW_NONE;
-            } else if (strcmp(v, "auto") == 0) {
-                window = IBL_SH_WINDOW_AUTO;
-            } else {
-                char *end = NULL;
-                width = strtod(v, &end);
-                if (!*v || *end || !(width > 0 && width < 1e6))
-                    cli_usage_error(&a, "--window wants auto, none or a positive width, not '%s'", v);
-                window = IBL_SH_WINDOW_HANNING;
-            }
+            cli_sh_window_value(&a, arg, &window, &width);
         } else if (cli_is(&a, arg, "--json", NULL)) {
             json = 1;
         } else if (cli_is(&a, arg, "--fast-centres", "--fast-centers")) {
@@ -213,18 +137,26 @@ int cli_cmd_sh(int argc, char **argv)
     double m[3][4][4];
     ibl_sh_polynomial(&radiance, m);
     if (json) {
-        cli_sh_write_json(stdout, in, method, bands, window, &rep, &radiance);
+        char *text = NULL;
+        st = ibl_sh_json(ctx, &radiance, window, &rep, in, method, &text);
+        if (st != IBL_OK) {
+            cli_report_failure(ctx, in, st);
+            ibl_context_destroy(ctx);
+            return CLI_EXIT_BAD_INPUT;
+        }
+        fputs(text, stdout);
+        ibl_free(ctx, text);
     } else {
         printf("input: %s (%s projection, %d bands)\n", in, method, bands);
         printf("basis: %s\n", IBL_SH_BASIS_NAME);
         printf("axes: world frame +Y up; the formulas take world x, y, z directly\n");
         if (rep.applied == IBL_SH_WINDOW_HANNING) {
-            printf("window: hanning W = %.6g (requested %s), factors", rep.width, window_name(window));
+            printf("window: hanning W = %.6g (requested %s), factors", rep.width, ibl_sh_window_name(window));
             for (int l = 0; l < bands; l++) printf(" %.6g", rep.factors[l]);
             printf("; min irradiance %.6g -> %.6g\n", rep.min_irradiance_before,
                    rep.min_irradiance_after);
         } else {
-            printf("window: none (requested %s); min irradiance %.6g\n", window_name(window),
+            printf("window: none (requested %s); min irradiance %.6g\n", ibl_sh_window_name(window),
                    rep.min_irradiance_before);
         }
         print_text_coeffs("radiance L_lm:", "L", &radiance);

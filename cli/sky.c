@@ -53,7 +53,7 @@ int cli_cmd_sky(int argc, char **argv)
     ibl_image image;
     ibl_status st = ibl_sky_render(ctx, &d, &image);
     if (st == IBL_OK) {
-        if (!exposure_given && cli_is_display_format(out)) wd.exposure_ev = cli_auto_exposure(&image);
+        if (!exposure_given && cli_is_display_format(out)) wd.exposure_ev = ibl_image_auto_exposure(&image);
         st = ibl_write_image(ctx, out, &image, &wd);
         ibl_image_free(ctx, &image);
     }

@@ -4,6 +4,7 @@
 #include "test_support.h"
 
 
+#include <jansson.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -579,13 +580,18 @@ static void cli_sh(void **state)
     const char *out;
     const char *in = test_data("uffizi_latlong_256x128.hdr");
     assert_int_equal(test_run_cli(&out, "sh '%s' --json -q", in), 0);
-    assert_true(out[0] == '{');
-    static const char *const keys[] = {"\"radiance\": [[", "\"irradiance\": [[",
-                                       "\"irradiance_over_pi\": [[", "\"polynomial\"",
-                                       "\"basis\"", "\"axes\"", "\"up\": \"+y\"", "\"window\""};
-    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) assert_non_null(strstr(out, keys[i]));
-    double r, g, b;
-    assert_int_equal(sscanf(strstr(out, "\"radiance\": [[") + 14, "%lf, %lf, %lf", &r, &g, &b), 3);
+    json_error_t err;
+    json_t *root = json_loads(out, 0, &err);
+    if (!root) fail_msg("not JSON: %s (line %d)", err.text, err.line);
+    static const char *const keys[] = {"radiance", "irradiance", "irradiance_over_pi", "polynomial",
+                                       "basis", "axes", "window", "bands", "input", "projection"};
+    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) assert_non_null(json_object_get(root, keys[i]));
+    assert_string_equal(json_string_value(json_object_get(json_object_get(root, "axes"), "up")), "+y");
+    json_t *c0 = json_array_get(json_object_get(root, "radiance"), 0);
+    assert_int_equal(json_array_size(json_object_get(root, "radiance")), 9);
+    double r = json_number_value(json_array_get(c0, 0)), g = json_number_value(json_array_get(c0, 1)),
+           b = json_number_value(json_array_get(c0, 2));
+    json_decref(root);
     ibl_context *ctx = test_context(1);
     ibl_image im;
     assert_int_equal(ibl_read_image(ctx, in, NULL, &im, NULL), IBL_OK);
