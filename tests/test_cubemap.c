@@ -221,6 +221,22 @@ static void sanitize_policy(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* The table of a face's solid angles is the per-texel function, and a face is 4 pi / 6. */
+static void solid_angle_table(void **state)
+{
+    (void)state;
+    enum { N = 13 };
+    float table[N * N];
+    ibl_cube_solid_angle_table(N, table);
+    double sum = 0;
+    for (int y = 0; y < N; y++)
+        for (int x = 0; x < N; x++) {
+            assert_near(table[y * N + x], ibl_cube_texel_solid_angle(N, x, y), 1e-7 * table[y * N + x]);
+            sum += table[y * N + x];
+        }
+    assert_near(sum, 4.0 * PI / 6.0, 1e-6);
+}
+
 static void count_hit(void *arg, int index)
 {
     __atomic_fetch_add(&((int *)arg)[index], 1, __ATOMIC_RELAXED);
@@ -249,6 +265,7 @@ int main(void)
         cmocka_unit_test(trilinear_between_levels),
         cmocka_unit_test(texture_layout_matches_cubemap),
         cmocka_unit_test(sanitize_policy),
+        cmocka_unit_test(solid_angle_table),
         cmocka_unit_test(parallel_for_covers_every_index),
     };
     return cmocka_run_group_tests_name("cubemap", tests, NULL, NULL);

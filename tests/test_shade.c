@@ -323,6 +323,78 @@ static void influence_blending(void **state)
     }
 }
 
+/* A volume's size and weight by hand: a box's is 8 hx hy hz and a sphere's 4/3 pi r^3; the
+ * weight is 1 deeper than the blend distance, 0 outside, linear in between. */
+static void volume_size_and_weight(void **state)
+{
+    (void)state;
+    ibl_volume box = {IBL_VOLUME_BOX, {1, 2, 3}, {2, 1, 4}, 0, 0.5f};
+    ibl_volume ball = {IBL_VOLUME_SPHERE, {0, 0, 0}, {0, 0, 0}, 2, 1};
+    assert_near(ibl_volume_size(&box), 64.0, 1e-5);
+    assert_near(ibl_volume_size(&ball), 4.0 / 3.0 * PI * 8.0, 1e-4);
+    assert_near(ibl_volume_weight(&box, (ibl_vec3){1, 2, 3}), 1.0, 0);
+    assert_near(ibl_volume_weight(&box, (ibl_vec3){2.75f, 2, 3}), 0.5, 1e-6); /* 0.25 inside */
+    assert_near(ibl_volume_weight(&box, (ibl_vec3){3.5f, 2, 3}), 0.0, 0);
+    assert_near(ibl_volume_weight(&ball, (ibl_vec3){0, 1.5f, 0}), 0.5, 1e-6);
+    assert_near(ibl_volume_weight(&ball, (ibl_vec3){0, 0.5f, 0}), 1.0, 0);
+    assert_near(ibl_volume_weight(&ball, (ibl_vec3){0, 2.5f, 0}), 0.0, 0);
+}
+
+/* The runtime's SH9 irradiance (float) against the float64 library: the radiance convolved
+ * (ibl_sh_radiance_to_irradiance) and evaluated (ibl_sh_eval); 1e-5 relative is float
+ * rounding of nine terms. An irradiance set is taken as it is. */
+static void sh9_irradiance(void **state)
+{
+    (void)state;
+    ibl_sh rad = {.bands = 3};
+    float c[9][3];
+    for (int i = 0; i < 9; i++)
+        for (int k = 0; k < 3; k++) c[i][k] = (float)(rad.c[i][k] = (i == 0 ? 2.0 : 0.3) * (1 + k) * ((i % 3) - 0.7));
+    ibl_sh irr;
+    ibl_sh_radiance_to_irradiance(&rad, &irr);
+    for (int t = 0; t < 200; t++) {
+        double z = 1.0 - 2.0 * (t + 0.5) / 200, r = sqrt(1 - z * z), phi = t * 2.399963;
+        double d[3] = {r * cos(phi), r * sin(phi), z};
+        double want[3];
+        ibl_sh_eval(&irr, d, want);
+        float got[3];
+        ibl_sh9_eval_irradiance(c, IBL_SH_RADIANCE, (ibl_vec3){(float)d[0], (float)d[1], (float)d[2]}, got);
+        for (int k = 0; k < 3; k++) assert_near(got[k], want[k] > 0 ? want[k] : 0, 1e-5 * (1 + fabs(want[k])));
+        float e[9][3];
+        for (int i = 0; i < 9; i++)
+            for (int k = 0; k < 3; k++) e[i][k] = (float)irr.c[i][k];
+        ibl_sh9_eval_irradiance(e, IBL_SH_IRRADIANCE, (ibl_vec3){(float)d[0], (float)d[1], (float)d[2]}, got);
+        for (int k = 0; k < 3; k++) assert_near(got[k], want[k] > 0 ? want[k] : 0, 1e-5 * (1 + fabs(want[k])));
+    }
+}
+
+/* ibl_shade_dir with the reflection vector is ibl_shade along R; an axis' index inverts its
+ * value. */
+static void shade_dir_and_axes(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_probe p;
+    ibl_cubemap cube;
+    white_probe(ctx, &p, &cube, 4);
+    test_fill_smooth(&cube);
+    static const float base[3] = {0.9f, 0.6f, 0.3f};
+    ibl_material m = ibl_material_gltf(base, 1.0f, 0.4f);
+    ibl_surface s = {.n = {0, 1, 0}, .v = {0.6f, 0.8f, 0}};
+    ibl_shade_desc d = {.mirror_direction = 1};
+    ibl_shade_result a, b;
+    ibl_shade(&p, &d, &m, &s, &a);
+    ibl_shade_dir(&p, &d, &m, &s, (ibl_vec3){-0.6f, 0.8f, 0}, &b);
+    for (int c = 0; c < 3; c++) assert_near(a.color[c], b.color[c], 1e-6);
+    ibl_cubemap_free(ctx, &cube);
+    ibl_table_axis lin = {17, 0.25f, 4.25f, 0}, lg = {9, 1.0f, 256.0f, 1};
+    for (int i = 0; i < 17; i++) assert_near(ibl_table_axis_index(&lin, ibl_table_axis_value(&lin, i)), i, 1e-5);
+    for (int i = 0; i < 9; i++) assert_near(ibl_table_axis_index(&lg, ibl_table_axis_value(&lg, i)), i, 1e-5);
+    assert_near(ibl_table_axis_index(&lg, 0.5f), 0, 0); /* clamped */
+    assert_near(ibl_table_axis_index(&lg, 16.0f), 4, 1e-5);
+    ibl_context_destroy(ctx);
+}
+
 static void tiled_culling(void **state)
 {
     (void)state;
@@ -637,6 +709,9 @@ int main(void)
         cmocka_unit_test(shininess_hack_and_offset),
         cmocka_unit_test(parallax),
         cmocka_unit_test(influence_blending),
+        cmocka_unit_test(volume_size_and_weight),
+        cmocka_unit_test(sh9_irradiance),
+        cmocka_unit_test(shade_dir_and_axes),
         cmocka_unit_test(tiled_culling),
         cmocka_unit_test(level_mapping_round_trip),
         cmocka_unit_test(atlas_round_trip),

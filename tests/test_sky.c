@@ -289,6 +289,38 @@ static void thread_count_independent(void **state)
     ibl_context_destroy(c8);
 }
 
+static float ibl__dot_sun(ibl_vec3 a, ibl_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+/* A rendered pixel away from the sun is the model's radiance at the pixel-centre direction
+ * within the pixel's variation (1%: the render averages over the pixel). */
+static void model_radiance_matches_render(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_sky_desc d = {.sun_elevation_deg = 30, .width = 256};
+    ibl_sky_model model;
+    assert_int_equal(ibl_sky_model_init(ctx, &d, &model), IBL_OK);
+    ibl_image im;
+    assert_int_equal(ibl_sky_render(ctx, &d, &im), IBL_OK);
+    int checked = 0;
+    for (int y = 4; y < 128; y += 17)
+        for (int x = 3; x < 256; x += 29) {
+            double theta = PI * (y + 0.5) / 128, phi = 2 * PI * (x + 0.5) / 256;
+            /* layout.h's equirect: the centre column looks toward -Z, the right quarter +X */
+            ibl_vec3 dir = {(float)(sin(theta) * sin(phi - PI)), (float)cos(theta),
+                            (float)(-sin(theta) * cos(phi - PI))};
+            if (ibl__dot_sun(dir, model.sun.direction) > 0.99f || fabs(cos(theta)) < 0.05) continue;
+            float rgb[3];
+            ibl_sky_model_radiance(&model, dir, rgb);
+            const float *p = ibl_image_texel(&im, x, y);
+            for (int c = 0; c < 3; c++) assert_near(p[c], rgb[c], 0.01 * rgb[c] + 1e-6);
+            checked++;
+        }
+    assert_true(checked > 40);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -299,6 +331,7 @@ int main(void)
         cmocka_unit_test(disk_energy),
         cmocka_unit_test(illuminance_and_ground),
         cmocka_unit_test(thread_count_independent),
+        cmocka_unit_test(model_radiance_matches_render),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -71,11 +71,6 @@ ibl_status ibl_render(ibl_context *ctx, const ibl_probe *probe, const ibl_render
  * the result is display-referred in [0, 1], before the sRGB transfer function. */
 void ibl_render_tonemap(ibl_image *image, float exposure_ev);
 
-/* Draws text with the built-in 5x7 bitmap font (upper case, digits, common punctuation;
- * lower case is drawn as upper case), each font pixel scale x scale image pixels, on a
- * dark box for legibility. */
-void ibl_render_text(ibl_image *image, int x, int y, int scale, const char *text,
-                     const float rgba[4]);
 /* A new image with a and b (same height) side by side, separated by a gap, each labelled. */
 ibl_status ibl_render_side_by_side(ibl_context *ctx, const ibl_image *a, const char *label_a,
                                    const ibl_image *b, const char *label_b, ibl_image *out);

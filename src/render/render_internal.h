@@ -21,6 +21,12 @@ ibl_vec3 ibl__sample_ggx(ibl_vec3 n, float alpha, float u0, float u1);
 /* Half vector sampled from the normalised Blinn-Phong NDF ((s + 1)/2pi (n.h)^s). */
 ibl_vec3 ibl__sample_phong(ibl_vec3 n, float shininess, float u0, float u1);
 
+/* Draws text with the built-in 5x7 bitmap font (upper case, digits, common punctuation;
+ * lower case is drawn as upper case), each font pixel scale x scale image pixels, on a dark
+ * box for legibility (text.c: the labels of side-by-side comparisons). */
+void ibl__render_text(ibl_image *image, int x, int y, int scale, const char *text,
+                      const float rgba[4]);
+
 /* Environment importance sampling (env_sampling.c). */
 typedef struct ibl__env_sampler ibl__env_sampler;
 ibl__env_sampler *ibl__env_sampler_create(ibl_context *ctx, const ibl_cubemap *env);

@@ -88,7 +88,7 @@ static void fill_rect(ibl_image *im, int x0, int y0, int w, int h, const float r
     }
 }
 
-void ibl_render_text(ibl_image *im, int x, int y, int scale, const char *text, const float rgba[4])
+void ibl__render_text(ibl_image *im, int x, int y, int scale, const char *text, const float rgba[4])
 {
     if (scale < 1) scale = 1;
     static const float box[4] = {0.0f, 0.0f, 0.0f, 1.0f};
@@ -124,7 +124,7 @@ ibl_status ibl_render_side_by_side(ibl_context *ctx, const ibl_image *a, const c
                (size_t)b->width * 4 * sizeof(float));
     }
     int scale = a->height >= 512 ? 3 : (a->height >= 192 ? 2 : 1);
-    if (label_a) ibl_render_text(out, 2 * scale, 2 * scale, scale, label_a, white);
-    if (label_b) ibl_render_text(out, a->width + gap + 2 * scale, 2 * scale, scale, label_b, white);
+    if (label_a) ibl__render_text(out, 2 * scale, 2 * scale, scale, label_a, white);
+    if (label_b) ibl__render_text(out, a->width + gap + 2 * scale, 2 * scale, scale, label_b, white);
     return IBL_OK;
 }
