@@ -56,8 +56,8 @@ int cli_cmd_irradiance(int argc, char **argv)
             else cli_usage_error(&a, "--method wants convolve, sh or reference, not '%s'", v);
         } else if (cli_is(&a, arg, "--scale", NULL)) {
             const char *v = cli_value(&a, arg);
-            if (strcmp(v, "over-pi") == 0) d.scale = IBL_IRRADIANCE_OVER_PI;
-            else if (strcmp(v, "full") == 0) d.scale = IBL_IRRADIANCE_FULL;
+            if (strcmp(v, "over-pi") == 0) d.scale = IBL_IRRADIANCE_SCALE_OVER_PI;
+            else if (strcmp(v, "full") == 0) d.scale = IBL_IRRADIANCE_SCALE_FULL;
             else cli_usage_error(&a, "--scale wants over-pi or full, not '%s'", v);
         } else if (cli_is(&a, arg, "--window", NULL)) {
             cli_sh_window_value(&a, arg, &d.sh_window, &d.sh_window_width);
@@ -100,7 +100,7 @@ int cli_cmd_irradiance(int argc, char **argv)
             ibl_texture t = ibl_texture_from_cubemap(&result);
             t.format = wd.format;
             st = ibl_texture_set_metadata(ctx, &t, "ibl.irradiance",
-                                          d.scale == IBL_IRRADIANCE_FULL ? "E" : "E/pi");
+                                          d.scale == IBL_IRRADIANCE_SCALE_FULL ? "E" : "E/pi");
             if (st == IBL_OK) {
                 t.owns_metadata = 1;
                 st = ibl_write_texture(ctx, out_path, &t, &wd);
@@ -126,7 +126,7 @@ int cli_cmd_irradiance(int argc, char **argv)
     static const char *const methods[] = {"convolve", "sh", "reference"};
     cli_info(&a.common, "%s: %dx%dx6 irradiance (%s, %s) in %.3f s\n", out_path,
              d.size ? d.size : 16, d.size ? d.size : 16, methods[d.method],
-             d.scale == IBL_IRRADIANCE_FULL ? "E" : "E/pi", cli_seconds() - t0);
+             d.scale == IBL_IRRADIANCE_SCALE_FULL ? "E" : "E/pi", cli_seconds() - t0);
     ibl_context_destroy(ctx);
     return CLI_EXIT_OK;
 }

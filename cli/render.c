@@ -63,25 +63,12 @@ typedef struct variant {
     char label[96];
 } variant;
 
-static int energy_from_name(const char *s, ibl_energy_compensation *out)
-{
-    if (strcmp(s, "none") == 0)
-        *out = IBL_ENERGY_NONE;
-    else if (strcmp(s, "fdez-aguera") == 0)
-        *out = IBL_ENERGY_FDEZ_AGUERA;
-    else if (strcmp(s, "turquin") == 0)
-        *out = IBL_ENERGY_TURQUIN;
-    else
-        return 0;
-    return 1;
-}
-
 /* One "key[=value]" override; returns 0 if unknown or malformed. */
 static int apply_setting(ibl_render_desc *d, const char *key, const char *value)
 {
     if (strcmp(key, "so") == 0) return value && ibl_so_formula_from_name(value, &d->shade.so);
     if (strcmp(key, "mix") == 0) return value && ibl_ambient_mix_from_name(value, &d->shade.mix);
-    if (strcmp(key, "energy") == 0) return value && energy_from_name(value, &d->shade.energy);
+    if (strcmp(key, "energy") == 0) return value && ibl_energy_compensation_from_name(value, &d->shade.energy);
     if (strcmp(key, "horizon") == 0) return d->shade.horizon_occlusion = 1;
     if (strcmp(key, "nearest-level") == 0) return d->shade.nearest_level = 1;
     if (strcmp(key, "mirror-direction") == 0) return d->shade.mirror_direction = 1;

@@ -55,7 +55,7 @@ static void constant_environment(void **state)
                     ibl_irradiance_desc d = {0};
                     d.size = out_sizes[o];
                     d.method = methods[m];
-                    d.scale = scale ? IBL_IRRADIANCE_FULL : IBL_IRRADIANCE_OVER_PI;
+                    d.scale = scale ? IBL_IRRADIANCE_SCALE_FULL : IBL_IRRADIANCE_SCALE_OVER_PI;
                     ibl_cubemap out;
                     assert_int_equal(ibl_irradiance_cubemap(ctx, &src, &d, &out), IBL_OK);
                     assert_int_equal(out.size, out_sizes[o]);

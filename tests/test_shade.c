@@ -69,7 +69,7 @@ static void white_probe(ibl_context *ctx, ibl_probe *p, ibl_cubemap *cube, int l
     p->specular = *cube;
     p->mapping.levels = levels;
     for (int k = 0; k < levels; k++) p->mapping.roughness[k] = (float)k / (float)(levels - 1);
-    p->sh_kind = IBL_SH_RADIANCE;
+    p->sh_kind = IBL_SH_KIND_RADIANCE;
     /* projection of L = 1 on Y00: 0.282095 * 4 pi */
     for (int c = 0; c < 3; c++) p->sh[0][c] = (float)(0.28209479 * 4.0 * PI);
     p->splitsum = make_table(ctx);
@@ -358,12 +358,12 @@ static void sh9_irradiance(void **state)
         double want[3];
         ibl_sh_eval(&irr, d, want);
         float got[3];
-        ibl_sh9_eval_irradiance(c, IBL_SH_RADIANCE, (ibl_vec3){(float)d[0], (float)d[1], (float)d[2]}, got);
+        ibl_sh9_eval_irradiance(c, IBL_SH_KIND_RADIANCE, (ibl_vec3){(float)d[0], (float)d[1], (float)d[2]}, got);
         for (int k = 0; k < 3; k++) assert_near(got[k], want[k] > 0 ? want[k] : 0, 1e-5 * (1 + fabs(want[k])));
         float e[9][3];
         for (int i = 0; i < 9; i++)
             for (int k = 0; k < 3; k++) e[i][k] = (float)irr.c[i][k];
-        ibl_sh9_eval_irradiance(e, IBL_SH_IRRADIANCE, (ibl_vec3){(float)d[0], (float)d[1], (float)d[2]}, got);
+        ibl_sh9_eval_irradiance(e, IBL_SH_KIND_IRRADIANCE, (ibl_vec3){(float)d[0], (float)d[1], (float)d[2]}, got);
         for (int k = 0; k < 3; k++) assert_near(got[k], want[k] > 0 ? want[k] : 0, 1e-5 * (1 + fabs(want[k])));
     }
 }
@@ -475,7 +475,7 @@ static void level_mapping_round_trip(void **state)
     p.mapping.levels = L;
     const float rough[L] = {0.0f, 0.13f, 0.4f, 0.77f, 1.0f}; /* uneven on purpose */
     memcpy(p.mapping.roughness, rough, sizeof rough);
-    p.sh_kind = IBL_SH_IRRADIANCE;
+    p.sh_kind = IBL_SH_KIND_IRRADIANCE;
     assert_int_equal(ibl_probe_validate(ctx, &p), IBL_OK);
     static const float one[3] = {1, 1, 1};
     ibl_surface s = surface_at(0.8);
@@ -681,7 +681,7 @@ static void probe_blending(void **state)
         p[i].specular = cube[i];
         p[i].mapping.levels = 2;
         p[i].mapping.roughness[1] = 1.0f;
-        p[i].sh_kind = IBL_SH_IRRADIANCE;
+        p[i].sh_kind = IBL_SH_KIND_IRRADIANCE;
         assert_int_equal(ibl_probe_validate(ctx, &p[i]), IBL_OK);
     }
     const ibl_probe *list[2] = {&p[0], &p[1]};

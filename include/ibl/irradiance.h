@@ -2,9 +2,9 @@
  * ibl/irradiance.h - irradiance environment maps (IEM): the diffuse cubemap.
  *
  * A texel of the result holds, for the normal n through the texel centre,
- *   E(n) / pi = (1/pi) * integral of L(w) max(0, n.w) dw        (default, IBL_IRRADIANCE_OVER_PI)
+ *   E(n) / pi = (1/pi) * integral of L(w) max(0, n.w) dw        (default, IBL_IRRADIANCE_SCALE_OVER_PI)
  * i.e. the radiance reflected by a white Lambertian surface, or E(n) itself
- * (IBL_IRRADIANCE_FULL). Alpha is 1. docs/DIFFUSE.md has the design and measured errors.
+ * (IBL_IRRADIANCE_SCALE_FULL). Alpha is 1. docs/DIFFUSE.md has the design and measured errors.
  *
  * Methods:
  *  - CONVOLVE (default; the seed's "Generate IEM (2)"): the radiance is reduced area-correctly
@@ -31,8 +31,8 @@ typedef enum ibl_irradiance_method {
 } ibl_irradiance_method;
 
 typedef enum ibl_irradiance_scale {
-    IBL_IRRADIANCE_OVER_PI = 0, /* E / pi: multiply by albedo in the shader */
-    IBL_IRRADIANCE_FULL         /* E                                        */
+    IBL_IRRADIANCE_SCALE_OVER_PI = 0, /* E / pi: multiply by albedo in the shader */
+    IBL_IRRADIANCE_SCALE_FULL         /* E                                        */
 } ibl_irradiance_scale;
 
 typedef struct ibl_irradiance_desc {

@@ -93,9 +93,9 @@ typedef struct ibl_level_mapping {
 } ibl_level_mapping;
 
 typedef enum ibl_sh_kind {
-    IBL_SH_NONE = 0,  /* no SH: use the irradiance cube                                  */
-    IBL_SH_RADIANCE,  /* projection of the radiance L (convolved with the cosine here)   */
-    IBL_SH_IRRADIANCE /* already convolved: E(n) = sum c_i Y_i(n)                        */
+    IBL_SH_KIND_NONE = 0,  /* no SH: use the irradiance cube                                  */
+    IBL_SH_KIND_RADIANCE,  /* projection of the radiance L (convolved with the cosine here)   */
+    IBL_SH_KIND_IRRADIANCE /* already convolved: E(n) = sum c_i Y_i(n)                        */
 } ibl_sh_kind;
 
 /* Everything the runtime needs about one environment: plain data, never owning. Fill it by
@@ -198,6 +198,8 @@ const char *ibl_so_formula_name(ibl_so_formula f); /* "none", "ao", "triace", ..
 int ibl_so_formula_from_name(const char *name, ibl_so_formula *out); /* 0 if unknown  */
 const char *ibl_ambient_mix_name(ibl_ambient_mix m); /* "multiply", "lerp-albedo", ...  */
 int ibl_ambient_mix_from_name(const char *name, ibl_ambient_mix *out);
+const char *ibl_energy_compensation_name(ibl_energy_compensation e); /* "none", "fdez-aguera", "turquin" */
+int ibl_energy_compensation_from_name(const char *name, ibl_energy_compensation *out);
 
 /* SO for one formula. n_dot_e: n.E (E toward the eye); roughness for FROSTBITE/CONE,
  * shininess for TRIACE_SHININESS (the other is ignored). */

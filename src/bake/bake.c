@@ -327,9 +327,9 @@ ibl_status ibl_bake_probe(ibl_context *ctx, const ibl_bake_data *b, ibl_probe *p
     if (b->irradiance.data) {
         p->irradiance = b->irradiance;
         p->irradiance.owns_data = 0;
-        p->sh_kind = IBL_SH_NONE;
+        p->sh_kind = IBL_SH_KIND_NONE;
     } else {
-        p->sh_kind = b->sh.bands > 0 ? IBL_SH_RADIANCE : IBL_SH_NONE;
+        p->sh_kind = b->sh.bands > 0 ? IBL_SH_KIND_RADIANCE : IBL_SH_KIND_NONE;
     }
     if (b->splitsum.pixels)
         p->splitsum = (ibl_splitsum_view){b->splitsum.pixels, 4, b->splitsum_n_dot_v, b->splitsum_roughness};

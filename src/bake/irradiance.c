@@ -100,7 +100,7 @@ ibl_status ibl_irradiance_plan_create(ibl_context *ctx, const ibl_irradiance_pla
      * (the seed stores this normalising coefficient in its texture): a constant environment
      * stays exactly constant, and the discretisation error of the cosine lobe's integral,
      * which should be pi, does not show up as a brightness error */
-    double target = scale == IBL_IRRADIANCE_FULL ? IBL_PI : 1.0;
+    double target = scale == IBL_IRRADIANCE_SCALE_FULL ? IBL_PI : 1.0;
     for (size_t i = 0; i < nd; i++) {
         const double *n = ddir + 3 * i;
         double sum = 0;
@@ -388,7 +388,7 @@ ibl_status ibl_irradiance_cubemap(ibl_context *ctx, const ibl_cubemap *src,
     if (d.sh_bands < 1 || d.sh_bands > IBL_SH_MAX_BANDS)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "irradiance: SH bands %d out of range 1..5",
                         d.sh_bands);
-    double target = d.scale == IBL_IRRADIANCE_FULL ? IBL_PI : 1.0;
+    double target = d.scale == IBL_IRRADIANCE_SCALE_FULL ? IBL_PI : 1.0;
     switch (d.method) {
     case IBL_IRRADIANCE_REFERENCE: return reference_iem(ctx, src, d.size, target, out);
     case IBL_IRRADIANCE_SH: return sh_iem(ctx, src, &d, target, out);

@@ -16,6 +16,23 @@ static const char *const so_names[IBL_SO_COUNT] = {
 static const char *const mix_names[IBL_MIX_COUNT] = {"multiply",   "lerp-albedo", "lerp-ao",
                                                      "ao-lerp-ao", "lerp-ao2",    "entire"};
 
+static const char *const energy_names[] = {"none", "fdez-aguera", "turquin"};
+
+const char *ibl_energy_compensation_name(ibl_energy_compensation e)
+{
+    return (unsigned)e < sizeof energy_names / sizeof energy_names[0] ? energy_names[e] : "unknown";
+}
+
+int ibl_energy_compensation_from_name(const char *name, ibl_energy_compensation *out)
+{
+    for (unsigned i = 0; name && i < sizeof energy_names / sizeof energy_names[0]; i++)
+        if (strcmp(name, energy_names[i]) == 0) {
+            *out = (ibl_energy_compensation)i;
+            return 1;
+        }
+    return 0;
+}
+
 const char *ibl_so_formula_name(ibl_so_formula f)
 {
     return (unsigned)f < IBL_SO_COUNT ? so_names[f] : "unknown";

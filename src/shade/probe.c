@@ -65,7 +65,7 @@ ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *p)
     }
     if (p->mirror.data && !cube_ok(&p->mirror))
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad mirror cube");
-    if (p->sh_kind == IBL_SH_NONE && !cube_ok(&p->irradiance))
+    if (p->sh_kind == IBL_SH_KIND_NONE && !cube_ok(&p->irradiance))
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: neither irradiance cube nor SH");
     const ibl_splitsum_view *ss = &p->splitsum;
     if (ss->data && (!axis_ok(&ss->n_dot_v) || !axis_ok(&ss->roughness) || ss->channels == 1 ||
@@ -158,7 +158,7 @@ void ibl_sh9_eval_irradiance(const float sh[9][3], ibl_sh_kind kind, ibl_vec3 n,
     for (int c = 0; c < 3; c++) {
         float e = 0.0f;
         for (int i = 0; i < 9; i++)
-            e += (kind == IBL_SH_RADIANCE ? band[i] : 1.0f) * sh[i][c] * basis[i];
+            e += (kind == IBL_SH_KIND_RADIANCE ? band[i] : 1.0f) * sh[i][c] * basis[i];
         out[c] = e > 0.0f ? e : 0.0f;
     }
 }
@@ -166,7 +166,7 @@ void ibl_sh9_eval_irradiance(const float sh[9][3], ibl_sh_kind kind, ibl_vec3 n,
 void ibl_probe_irradiance(const ibl_probe *p, ibl_vec3 n, float out[3])
 {
     float scale = p->intensity > 0.0f ? p->intensity : 1.0f;
-    if (p->sh_kind != IBL_SH_NONE) {
+    if (p->sh_kind != IBL_SH_KIND_NONE) {
         ibl_sh9_eval_irradiance(p->sh, p->sh_kind, n, out);
         for (int c = 0; c < 3; c++) out[c] *= scale / IBL_PI_F;
         return;
