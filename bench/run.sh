@@ -14,7 +14,7 @@ run "$B/bench_containers" x 2
 run "$B/bench_io" "$DATA"
 run "$B/bench_layout" 1024 256 2 11
 run "$B/bench_render"
-run "$B/bench_seed_kernels"
+run "$B/bench_triace_kernels"
 run "$B/bench_sh" "$DATA"
 run "$B/bench_specular" --dynamic
 if [ "${BENCH_FULL:-0}" = 1 ]; then

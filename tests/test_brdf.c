@@ -11,7 +11,7 @@
 static const double PI = 3.14159265358979323846;
 
 /* ---- brute force: midpoint rule over (theta_l, phi_l), the hemisphere of light directions.
- * The integrands are smooth except for the seed's max() kink, so the midpoint rule's error
+ * The integrands are smooth except for the max() kink of tri-Ace 2010's denominator, so the midpoint rule's error
  * is O(h^2): with 1200 x 1200 cells and lobes no narrower than alpha = 0.09 it is below
  * 1e-5, an order under the tolerances used with it. ---- */
 
@@ -76,10 +76,10 @@ static double sheen_brdf(const double *l, const double *v, const double *h, cons
 
 typedef struct blinn_p {
     double s, norm, f0;
-    int literal; /* the seed's AmbientBRDF integrand: (n.h)^s left out */
+    int literal; /* tri-Ace 2010's AmbientBRDF integrand read literally: (n.h)^s left out */
 } blinn_p;
 
-/* Seed 000: (c1 s + c2) F(w.h) (n.h)^s / max(n.w', n.w). */
+/* tri-Ace 2010's specular term: (c1 s + c2) F(w.h) (n.h)^s / max(n.w', n.w). */
 static double blinn_brdf(const double *l, const double *v, const double *h, const void *pp)
 {
     const blinn_p *p = pp;
@@ -143,7 +143,8 @@ static void splitsum_rough_closed_forms(void **state)
                 4 * pow(1 - log(2.0), 2), 1e-4);
 }
 
-/* Published values (issue 4) at (n.v, r) = (0.5, 0.5), within 2e-4. */
+/* Six-digit reference values at (n.v, r) = (0.5, 0.5) (docs/BRDF.md "Against closed forms"),
+ * within 2e-4, the tables' stated accuracy. */
 static void splitsum_published(void **state)
 {
     (void)state;
@@ -334,7 +335,7 @@ static void ambient_albedo(void **state)
     const double ss[] = {0.5, 1, 10, 100, 2000};
     for (int k = 0; k < 5; k++)
         assert_near(ibl_ambient_brdf(1.0, ss[k], 1.0, IBL_BLINN_EXACT, 0), 1.0, 1e-4);
-    /* the seed's fit is Gotanda's exact factor's asymptote 1/(8 pi): within 0.2% at s = 2000 */
+    /* tri-Ace's linear fit is the exact factor's asymptote 1/(8 pi): within 0.2% at s = 2000 */
     assert_near(ibl_blinn_normalization_factor(IBL_BLINN_TRIACE_FIT, 2000) /
                     ibl_blinn_normalization_factor(IBL_BLINN_EXACT, 2000), 1.0, 4e-3);
 }
@@ -378,7 +379,7 @@ static void ambient_volume_vs_table(void **state)
 
 /* Constant environment L: the table value times the normalised prefiltered value (lobe-
  * weighted average of L = L) reproduces the full integral of f_spec L (n.w'), computed by
- * brute force. The seed's literal reading (table without (n.h)^s, times the unnormalised
+ * brute force. The talk's literal reading (table without (n.h)^s, times the unnormalised
  * prefiltered integral) does not, and its table grows without bound with shininess. */
 static void ambient_constant_environment(void **state)
 {

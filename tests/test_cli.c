@@ -147,7 +147,7 @@ static void existing_output_kept(void **state)
     assert_memory_equal(buf, "precious", 8);
 }
 
-/* Acceptance (issue 2): converting each real HDRI to a 256-face RGBA32F KTX2 keeps the
+/* Converting each real HDRI to a 256-face RGBA32F KTX2 keeps the
  * solid-angle-weighted mean radiance within 0.5%, and `ibl info` agrees on both files. */
 static void conversion_keeps_mean_radiance(void **state)
 {

@@ -8,7 +8,8 @@
 
 static const double PI = 3.14159265358979323846;
 
-/* Test vectors from issue 2 (spherical-quadrilateral areas); tolerance 1e-12 in double. */
+/* Spherical-quadrilateral areas computed independently (the closed form of Driscoll 2012
+ * against numerical integration of the face's area element); tolerance 1e-12 in double. */
 static void solid_angle_vectors(void **state)
 {
     (void)state;

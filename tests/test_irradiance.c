@@ -76,7 +76,7 @@ static void constant_environment(void **state)
 /* Radiance z^2: E(n)/pi = (1 + n_z^2)/4 exactly. Tolerances are the measured errors times
  * about 3: the reference on a 32-cube carries the texel quadrature error of the cosine's
  * horizon kink (measured 6.7e-5, bound 2e-4); SH only the projection's O(N^-2) error
- * (6.3e-5, bound 2e-4); the seed's convolve of an 8x8x6 reduction (1.4e-3, bound 5e-3). */
+ * (6.3e-5, bound 2e-4); tri-Ace 2010's convolution of an 8x8x6 reduction (1.4e-3, bound 5e-3). */
 static void analytic_z2(void **state)
 {
     (void)state;
@@ -182,7 +182,7 @@ static void fast_vs_reference(void **state)
     ibl_context_destroy(ctx);
 }
 
-/* Real HDRIs (tests/data, CC0): the seed's 8x8x6 reduction moves each bright light to the
+/* Real HDRIs (tests/data, CC0): the 8x8x6 reduction moves each bright light to the
  * centre of an ~11 degree texel before the cosine, so the fast result is off by up to the
  * cosine's change over that texel times the light's share of the irradiance. Measured on
  * 64-cubes (max over texels, relative to the mean): studio 0.070, sunset 0.024 with the

@@ -161,7 +161,7 @@ static void sphere_errors(ibl_context *ctx, const ibl_probe *probe, const ibl_cu
 /* Split-sum shading against the Monte Carlo reference on a smooth synthetic environment, where
  * the split sum's n = v = r assumption costs little. Measured worst (specular.h chain, brdf.h's
  * 64 table): GGX 1.3% (metal r = 1: the dominant-direction lean is a fit), the reference's own noise at
- * 512 samples being ~0.2% here; Blinn-Phong 4.7% at n = 1 (the seed's Rd (1 - AmbientBRDF)
+ * 512 samples being ~0.2% here; Blinn-Phong 4.7% at n = 1 (tri-Ace 2010's Rd (1 - AmbientBRDF)
  * diffuse weight, and the lean fitted for GGX). Bounds: 2% and 7%. */
 static void split_sum_vs_reference(void **state)
 {

@@ -76,7 +76,7 @@ static void basis_matches_legendre(void **state)
         for (int l = 0; l < 5; l++)
             for (int m = -l; m <= l; m++) assert_near(y[l * l + l + m], ref_sh(l, m, d), 1e-12);
     }
-    /* the constants named in the issue / testdata README */
+    /* the basis constants of the Uffizi table's header (shared/testdata README) */
     double d[3] = {0.48, 0.6, 0.64}, y[9];
     ibl_sh_eval_basis(3, d, y);
     assert_near(y[0], 0.282095, 1e-6);
@@ -468,7 +468,7 @@ static void quad_radiance(const double *d, float *out)
     out[0] = out[1] = out[2] = (float)v;
 }
 
-/* The seed's six-value path must recover such a radiance exactly (analytic coefficients): from
+/* tri-Ace 2010's six-value path must recover such a radiance exactly (analytic coefficients): from
  * point values (the centre texel of an odd cube lies on the axis: float rounding, 1e-5) and
  * from face means (the 1x1 level of a 64-cube's area-correct mip chain, or
  * ibl_sh_project_face_means on a 48-cube: the texel quadrature of the means, O(N^-2),
@@ -548,7 +548,8 @@ static void uffizi_table(void **state)
              * offsets, row weightings and the RGBE (m + 0.5) rounding move them by < 1e-3):
              * L10 blue -0.0031 (table .00), L2-2 blue -0.0242 (-.03), L20 green -0.2756
              * (-.28), L22 blue -0.2848 (-.28). They get their measured distance plus 5e-4;
-             * the other 23 keep the issue's 0.003. */
+             * the other 23 keep 0.003: the README's 0.002 plus the
+             * two-digit rounding of the published table. */
             double tol = 0.003;
             if (i == 2 && c == 2) tol = 0.0036;
             if (i == 4 && c == 2) tol = 0.0063;
@@ -571,7 +572,7 @@ static void uffizi_table(void **state)
     ibl_context_destroy(ctx);
 }
 
-/* ibl sh: one JSON object with the issue's keys; its radiance equals the library's direct
+/* ibl sh: one JSON object with every normalisation's key; its radiance equals the library's direct
  * equirect projection (printed with 9 significant digits: 1e-7 relative); usage errors exit 2,
  * unreadable input exits 1. */
 static void cli_sh(void **state)

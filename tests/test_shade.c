@@ -1,5 +1,5 @@
 /* Runtime shading (shade.h) against independent references: a float64 quadrature of the GGX
- * directional albedo written here, hand-computed values of the seed's formulas, analytic
+ * directional albedo written here, hand-computed values of tri-Ace 2010's formulas, analytic
  * ray/box and ray/sphere hits, and exact round trips. */
 #include "test_support.h"
 
@@ -130,8 +130,8 @@ static void furnace(void **state)
 }
 
 /* ---------------------------------------------------------------------------------------- */
-/* The seed's SO conditions. theta is the elevation of E above the tangent plane (n.E =
- * sin theta); the seed's isotropic occlusion up to elevation alpha gives AO = cos^2 alpha, so
+/* tri-Ace 2010's SO conditions. theta is the elevation of E above the tangent plane (n.E =
+ * sin theta); the talk's isotropic occlusion up to elevation alpha gives AO = cos^2 alpha, so
  * theta = acos(sqrt(AO)) is the occlusion boundary (docs/SHADING.md). Expected values are the
  * closed forms worked by hand in docs/SHADING.md. */
 static void so_conditions(void **state)
@@ -161,7 +161,7 @@ static void so_conditions(void **state)
         assert_near(ibl_specular_occlusion(IBL_SO_FROSTBITE, e1, (float)ao, 0, 0),
                     fmin(1, sqrt(1 + ao) - 1 + ao), 1e-5);
     }
-    /* The seed's table of conditions at its design point AO = 1/2 (docs/SHADING.md):
+    /* The talk's table of conditions at its design point AO = 1/2 (docs/SHADING.md):
      * (1) meets all three; (3) meets theta = 0 and pi/2 but gives 0.957 at the boundary. */
     float ao = 0.5f, em = (float)sin(acos(sqrt(0.5)));
     assert_near(ibl_specular_occlusion(IBL_SO_TRIACE, 0, ao, 0, 0), 0.0, 1e-6);
@@ -501,14 +501,15 @@ static void level_mapping_round_trip(void **state)
     ibl_material bp = ibl_material_blinn_phong(one, one, 2e6f);
     ibl_shade(&p, NULL, &bp, &s, &res);
     assert_near(res.lod, 0.0, 1e-6);
-    /* a Phong bake whose level 0 is shininess 2000: beyond it the mirror takes over (seed) */
+    /* a Phong bake whose level 0 is shininess 2000: beyond it the mirror takes over (tri-Ace 2010's
+     * mirror option) */
     p.mapping.shininess[0] = 2000;
     for (int k = 1; k < L; k++) p.mapping.shininess[k] = 2000.0f / powf(8.0f, (float)k);
     bp = ibl_material_blinn_phong(one, one, 1e5f);
     ibl_shade(&p, NULL, &bp, &s, &res);
     assert_near(res.lod, -1.0, 1e-6);
     assert_near(res.specular[0], 100.0, 1e-4);
-    /* shininess between levels: linear in log2 (the seed's lod = a - 0.5 log2 n form) */
+    /* shininess between levels: linear in log2 (tri-Ace 2010's lod = a - 0.5 log2 n form) */
     bp = ibl_material_blinn_phong(one, one, 2000.0f / powf(8.0f, 1.5f));
     ibl_shade(&p, NULL, &bp, &s, &res);
     assert_near(res.lod, 1.5, 1e-5);
@@ -636,7 +637,7 @@ static void channel_packing(void **state)
 }
 
 /* Blinn-Phong with the AmbientBRDF volume: the table value is used for the specular and the
- * seed's diffuse is Rd (1 - value) (hand-built table, linear in every axis, so the trilinear
+ * talk's diffuse is Rd (1 - value) (hand-built table, linear in every axis, so the trilinear
  * lookup is exact). */
 static void ambient_brdf_usage(void **state)
 {

@@ -13,7 +13,7 @@
  * means are tabulated once and s is found by a 1D search. The result depends on the level's
  * edge n only (the chain below is an exact area mean); it is ~0.94 n^2 for n >= 16 (docs give
  * the table). */
-#include "bake/specular_seed.h"
+#include "bake/specular_kernels.h"
 #include "core/context_internal.h"
 #include "core/numeric.h"
 

@@ -8,7 +8,7 @@
  * plane; a texel of a face of edge n spans 2/n radians at the face centre; the level's
  * texels are already area means (a box of variance 1/12 texel^2), so the blur adds
  * sigma^2 = (n/2)^2 / (s+3) - 1/12 texels^2 (0 if negative). */
-#include "bake/specular_seed.h"
+#include "bake/specular_kernels.h"
 #include "core/context_internal.h"
 
 #include <math.h>

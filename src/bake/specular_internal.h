@@ -5,10 +5,10 @@
 #define IBL_SPECULAR_INTERNAL_H
 
 #include "ibl/specular.h"
-#include "bake/specular_seed.h"
+#include "bake/specular_kernels.h"
 
 /* The seed kernels (box, gauss) and the box chain's fitted shininess live in specular_box.c /
- * specular_gauss.c and are declared once, in specular_seed.h. */
+ * specular_gauss.c and are declared once, in specular_kernels.h. */
 
 /* A radially symmetric lobe f(x) of x = cos(angle between the lobe axis and l), normalised to
  * f(1) = 1; zero for x <= 0. */

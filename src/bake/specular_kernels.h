@@ -1,9 +1,9 @@
-/* The tri-Ace seed's two fastest prefilter kernels (seeds 000/001 "Generate PMREM (1)" box,
- * "Generate PMREM (2)" Gaussian, "Mipmap LOD"). Internal: the prefilter (specular.c) calls
- * them for --filter box and --filter gauss. docs/EDGE_FIXUP.md ("Seed kernels") documents
- * the fits and formulas. */
-#ifndef IBL_BAKE_SPECULAR_SEED_H
-#define IBL_BAKE_SPECULAR_SEED_H
+/* tri-Ace 2010's two fastest prefilter kernels ("Generate PMREM (1)" box, "Generate PMREM
+ * (2)" Gaussian, "Mipmap LOD"). Internal: the prefilter (specular.c) calls them for --filter
+ * box and --filter gauss. docs/EDGE_FIXUP.md ("The box and Gaussian kernels") documents the
+ * fits and formulas. */
+#ifndef IBL_BAKE_SPECULAR_KERNELS_H
+#define IBL_BAKE_SPECULAR_KERNELS_H
 
 #include "ibl/core.h"
 #include "ibl/cubemap.h"

@@ -1,7 +1,7 @@
-/* The seed's dynamic profiles (box 16x16x6, gauss 32x32x6, refiltered from a freshly
+/* tri-Ace 2010's dynamic profiles (box 16x16x6, gauss 32x32x6, refiltered from a freshly
  * rendered 64x64x6 cube) and the edge fixups' per-texel and per-level costs. Synthetic input:
- * the figures do not depend on the content. Usage: bench_seed_kernels [ignored data dir] */
-#include "bake/specular_seed.h"
+ * the figures do not depend on the content. Usage: bench_triace_kernels [ignored data dir] */
+#include "bake/specular_kernels.h"
 #include "ibl/ibl.h"
 
 #include <math.h>
@@ -56,7 +56,7 @@ int main(int argc, char **argv)
             ibl_cubemap_alloc(ctx, 32, 6, &gauss) != IBL_OK)
             return 1;
         fill(&src);
-        /* the seed's gauss configuration: shininess 1..1000 over 6 levels, lod = a - 0.5 log2 s */
+        /* the talk's gauss configuration: shininess 1..1000 over 6 levels, lod = a - 0.5 log2 s */
         float shininess[6];
         for (int l = 0; l < 6; l++) shininess[l] = (float)(1000.0 * pow(1000.0, -l / 5.0));
         double t_box[RUNS], t_gauss[RUNS], t_overlap[RUNS], t_overlap2[RUNS];

@@ -1,10 +1,10 @@
-/* The seed's box and Gaussian kernels: furnace and energy checks, the box chain's fitted
+/* tri-Ace 2010's box and Gaussian kernels: furnace and energy checks, the box chain's fitted
  * shininess against a brute-force 2D least-squares fit of the real chain's delta response,
  * the Gaussian's spread against the discrete Gaussian of the documented sigma, no filtering
  * across face edges, and bit-identical output at 1, 2 and 8 threads. */
 #include "test_support.h"
 
-#include "bake/specular_seed.h"
+#include "bake/specular_kernels.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -307,7 +307,7 @@ static void gauss_delta_spread(void **state)
     ibl_context_destroy(ctx);
 }
 
-/* The seed's point: nothing crosses a face edge. One lit face; the five others stay exactly
+/* The talk's point: nothing crosses a face edge. One lit face; the five others stay exactly
  * 0 at every level, and the lit face's energy stays on it (renormalised kernel). */
 static void gauss_stays_in_face(void **state)
 {
