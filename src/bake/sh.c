@@ -7,6 +7,7 @@
 #include "core/context_internal.h"
 #include "core/cpu.h"
 #include "core/numeric.h"
+#include "layout/layout_internal.h"
 
 #include "ibl/cubemap.h"
 
@@ -492,7 +493,7 @@ static void equirect_task(void *arg, int task)
     double s[MAX_WEIGHTS][3];
     for (int y = y0; y < y1; y++) {
         /* exact solid angle of a pixel of this row: (2 pi / W) (cos theta0 - cos theta1) */
-        double omega = 2.0 * IBL_PI / w * (cos(IBL_PI * y / h) - cos(IBL_PI * (y + 1) / h));
+        double omega = ibl__equirect_row_solid_angle(w, h, y);
         double theta = IBL_PI * (y + 0.5) / h, st = sin(theta), ct = cos(theta);
         const float *px = ibl_image_texel(job->image, 0, y);
         row_sums(job->simd, job->colw, px, w, nw, s);

@@ -44,15 +44,14 @@ double ibl__octahedral_density(const double d[3]);
 /* Natural sizes: the cube face a layout image holds (or resolves to), and back. */
 int ibl__natural_cube_size(ibl_layout layout, int width, int height);
 
-/* equirect.c (out: a cube already allocated, level 0 written) */
+/* equirect/: the exact solid angle of each pixel of row `row` (0 at the top) of a width x height
+ * equirect, (2 pi / width) (cos theta0 - cos theta1) with theta0 = pi row / height and
+ * theta1 = pi (row + 1) / height */
+double ibl__equirect_row_solid_angle(int width, int height, int row);
+/* equirect/to_cube.c (out: a cube already allocated, level 0 written). The vector kernels
+ * follow the context (ibl__cpu_has); every choice gives the same bits. */
 ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const ibl__frame *frame,
                                  int samples_per_axis, ibl_cubemap *out);
-/* The same without the AVX2 code (for tests: both give the same bits), and whether this CPU
- * runs the AVX2 code. */
-ibl_status ibl__equirect_to_cube_portable(ibl_context *ctx, const ibl_image *image,
-                                          const ibl__frame *frame, int samples_per_axis,
-                                          ibl_cubemap *out);
-int ibl__equirect_has_avx2(void);
 /* sphere.c: angular and octahedral to cube; any sphere layout from a cube */
 ibl_status ibl__sphere_to_cube(ibl_context *ctx, ibl_layout layout, const ibl_image *image,
                                const ibl__frame *frame, int samples_per_axis, ibl_cubemap *out);

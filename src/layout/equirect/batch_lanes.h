@@ -1,10 +1,24 @@
-/* The fast path of src/layout/equirect.c (which includes this file twice): its vector code
- * written once for LANES floats to a vector, 4 (plain SSE or any target; the portable code) or
- * 8 (one AVX2 register). Every lane goes through the same float operations in the same order
- * at either width, and nothing is fused into multiply-adds, so both give the same bits.
- * Expects: LANES, EQ_FN(name) (the name of this width's copy), EQ_TARGET (its attributes), and
- * the types and L* macros of equirect.c; undefines its parameters at the end. */
+/* The float-lane kernels of the equirect -> cube batch engine (to_cube.c), written once for
+ * LANES floats to a vector and compiled twice: four lanes (batch_lanes_portable.c: plain SSE
+ * or any target) and eight (batch_lanes_avx2.c: one AVX2 register). Every lane goes through the
+ * same float operations in the same order at either width, and nothing is fused into
+ * multiply-adds, so both give the same bits.
+ *
+ * Float is enough here: a window's ends move by under 3e-4 pixel (float spacing at 2048
+ * pixels, and the float polynomial atan2), against windows 1/16 pixel and wider; narrower
+ * ones, and the wide ones, are left to batch_double.c. The windows are those of
+ * area_windows.c (tent rows, or constant bands next to a pole) restricted to at most two
+ * pixels each way, so that fixed 4 x 4 taps cover them and nothing branches per lane.
+ *
+ * The includer defines LANES (4 or 8), LANE_TARGET (the functions' attribute) and
+ * LANE_KERNELS (the name of the eq_lane_kernels table this copy defines). */
+#include "equirect_internal.h"
+
+#include <math.h>
+
 #if LANES == 8
+typedef float v8f __attribute__((vector_size(32)));
+typedef int v8i __attribute__((vector_size(32)));
 #define VF v8f
 #define VI v8i
 #else
@@ -12,12 +26,70 @@
 #define VI v4i
 #endif
 
+/* Samples per axis: this many per source row / column the texel spans (at least 1). */
+static const double SAMPLES_PER_ROW = 0.6;
+static const double SAMPLES_PER_COLUMN = 0.6;
+
+/* Lane helpers for VF (mask type VI). Macros (statement expressions): GCC notes an ABI change
+ * for every function taking a 32-byte vector, even an always inlined one. */
+#define LLOAD(p) ({ VF l_; memcpy(&l_, (p), sizeof l_); l_; })
+#define LSTORE(p, v) do { __typeof__(v) s_ = (v); memcpy((p), &s_, sizeof s_); } while (0)
+#define LSEL(m, a, b) ({ VI m_ = (m); (VF)((m_ & (VI)(a)) | (~m_ & (VI)(b))); })
+#define LABS(x) ((VF)((VI)(x) & 0x7fffffff))
+#define LCLAMP1(t) LMIN(LMAX((t), (VF){} - 1.0f), (VF){} + 1.0f)
+/* eq_tent_cdf and eq_tent_moment without branches, for t clamped to [-1, 1]:
+ * T(t) = 1/2 + t - t |t| / 2, M(t) = t^2 (1/2 - |t| / 3) - 1/6 */
+#define LTENT(t) ({ VF u_ = LCLAMP1(t); 0.5f + u_ - 0.5f * u_ * LABS(u_); })
+#define LMOMENT(t) ({ VF u_ = LCLAMP1(t); \
+                      u_ * u_ * (0.5f - LABS(u_) * (1.0f / 3.0f)) - 1.0f / 6.0f; })
+/* atan2 from eq_atan_unit's polynomial (Abramowitz & Stegun 4.4.49) in float, without
+ * branches */
+#define LATAN2(y, x) ({ \
+    VF y_ = (y), x_ = (x), ax_ = LABS(x_), ay_ = LABS(y_); \
+    VI steep_ = ay_ > ax_; \
+    VF mn_ = LMIN(ax_, ay_), mx_ = LMAX(ax_, ay_); \
+    VF t_ = mn_ / LSEL(mx_ > 0.0f, mx_, (VF){} + 1.0f), t2_ = t_ * t_; \
+    VF r_ = t_ * (1.0f + t2_ * (-0.3333314528f + t2_ * (0.1999355085f + \
+            t2_ * (-0.1420889944f + t2_ * (0.1065626393f + t2_ * (-0.0752896400f + \
+            t2_ * (0.0429096138f + t2_ * (-0.0161657367f + t2_ * 0.0028662257f)))))))); \
+    r_ = LSEL(steep_, (float)(0.5 * IBL_PI) - r_, r_); \
+    r_ = LSEL(x_ < 0.0f, (float)IBL_PI - r_, r_); \
+    LSEL(y_ < 0.0f, -r_, r_); })
+
+/* The larger / smaller of finite a and b (as a select on a < b would give, in one
+ * instruction), and sqrt */
+#if LANES == 8
+#include <immintrin.h>
+#define LMAX(a, b) LAVX(_mm256_max_ps, (a), (b))
+#define LMIN(a, b) LAVX(_mm256_min_ps, (a), (b))
+#define LAVX(op, a, b) ({ __m256 p_, q_; VF a_ = (a), b_ = (b); memcpy(&p_, &a_, sizeof p_); \
+                          memcpy(&q_, &b_, sizeof q_); p_ = op(p_, q_); \
+                          memcpy(&a_, &p_, sizeof a_); a_; })
+#define LSQRT(x) ({ __m256 q_; VF r_ = (x); memcpy(&q_, &r_, sizeof q_); \
+                    q_ = _mm256_sqrt_ps(q_); memcpy(&r_, &q_, sizeof r_); r_; })
+/* two v4f side by side */
+#define LJOIN(lo, hi) __builtin_shufflevector((lo), (hi), 0, 1, 2, 3, 4, 5, 6, 7)
+#elif defined(__SSE__)
+#include <xmmintrin.h>
+#define LMAX(a, b) LSSE(_mm_max_ps, (a), (b))
+#define LMIN(a, b) LSSE(_mm_min_ps, (a), (b))
+#define LSSE(op, a, b) ({ __m128 p_, q_; VF a_ = (a), b_ = (b); memcpy(&p_, &a_, sizeof p_); \
+                           memcpy(&q_, &b_, sizeof q_); p_ = op(p_, q_); \
+                           memcpy(&a_, &p_, sizeof a_); a_; })
+#define LSQRT(x) ({ __m128 q_; VF r_ = (x); memcpy(&q_, &r_, sizeof q_); q_ = _mm_sqrt_ps(q_); \
+                    memcpy(&r_, &q_, sizeof r_); r_; })
+#else
+#define LSQRT(x) ({ VF r_ = (x); for (int l_ = 0; l_ < LANES; l_++) r_[l_] = sqrtf(r_[l_]); r_; })
+#define LMAX(a, b) ({ VF a_ = (a), b_ = (b); LSEL(a_ < b_, b_, a_); })
+#define LMIN(a, b) ({ VF a_ = (a), b_ = (b); LSEL(b_ < a_, b_, a_); })
+#endif
+
 /* The 4 x 4 tap weights of LANES tent windows, normalised: longitude tap k weighs
  * T(e - k) - T(da - k) (over their sum), latitude row k (T(ey - k) - T(dy - k)) (s_c + s_d (k -
  * dy - h / 2)) + s_d (M(ey - k) - M(dy - k)) (over their sum), with T(da - k) = T(da), da^2 / 2,
- * 0, 0 for da in [0, 1) (the same for M). slow_values uses the four-lane copy. */
-EQ_TARGET static void EQ_FN(tent_weights)(VF da, VF e, VF dy, VF ey, VF h, VF s_c, VF s_d, VF wy[4],
-                                          VF wx[4])
+ * 0, 0 for da in [0, 1) (the same for M). batch_double.c uses the four-lane copy. */
+LANE_TARGET static void lane_tent_weights(VF da, VF e, VF dy, VF ey, VF h, VF s_c, VF s_d,
+                                          VF wy[4], VF wx[4])
 {
     VF lo_t[2] = {0.5f + da - 0.5f * da * da, 0.5f * da * da};
     VF dm = dy - 1.0f;
@@ -46,10 +118,10 @@ EQ_TARGET static void EQ_FN(tent_weights)(VF da, VF e, VF dy, VF ey, VF h, VF s_
 }
 
 /* For lanes [0, n) of a batch (n a multiple of LANES): each sample's direction, weight dA / |d|^3
- * and window (as slow_values computes them), then, for the tent windows, the first row and
+ * and window (as batch_double.c computes them), then, for the tent windows, the first row and
  * column, the row count and the 4 x 4 tap weights; fast[i] says whether sample i took it.
  * Returns how many of the first n_real samples did. */
-EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, int n, int n_real)
+LANE_TARGET static int lane_windows(const eq_lane_face *ff, eq_batch *bt, int n, int n_real)
 {
     VI lane, fast_count = {0};
     for (int l = 0; l < LANES; l++) lane[l] = l;
@@ -104,7 +176,7 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
         py1 = LMAX(py1, py0);
         VF h = py1 - py0, s_d = k_rad * ct;
         VF s_c = st + s_d * (0.5f * (py0 + py1) - c);
-        /* tent rows, or constant bands next to a pole (as slow_values; windows under 1/16
+        /* tent rows, or constant bands next to a pole (as batch_double.c; windows under 1/16
          * pixel wide, or tall in tent rows, are left to it) */
         VI ok = (h >= 1e-6f) & (h <= 2.0f) & (w >= 1.0f / 16) & (w <= 2.0f);
         VI fast = narrow_ok & ok & (h >= 1.0f / 16) & (py0 - 0.5f >= row_lo) &
@@ -122,7 +194,7 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
         VI i0 = __builtin_convertvector(wa + 0.5f, VI) - 1; /* floor(wa - 1/2) */
         VF da = wa - (__builtin_convertvector(i0, VF) + 0.5f); /* in [0, 1) */
         VF e = da + w;
-        LSTORE(bt->fcol + i, i0); /* (columns i0 to i0 + 3, wrapped by batch_sum) */
+        LSTORE(bt->fcol + i, i0); /* (columns i0 to i0 + 3, wrapped by lane_accumulate) */
         /* latitude: row jt + k has centre py0 - dy + k */
         VI jt = __builtin_convertvector(py0 + 0.5f, VI) - 1; /* floor(py0 - 1/2) */
         VF dy = py0 - (__builtin_convertvector(jt, VF) + 0.5f), ey = dy + h;
@@ -131,11 +203,11 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
         fast_count -= fast & (lane + i < n_real);
         LSTORE(bt->fwt + i, wt);
         VF share[4], wx[4];
-        EQ_FN(tent_weights)(da, e, dy, ey, h, s_c, s_d, share, wx);
+        lane_tent_weights(da, e, dy, ey, h, s_c, s_d, share, wx);
         if (any_polar) {
             /* polar bands: row jp + k covers [jp + k, jp + k + 1]; the solid angle between
              * two latitudes from the centre's by the angle-sum formula and Taylor series (as
-             * slow_values) */
+             * batch_double.c) */
             VI jp = __builtin_convertvector(py0, VI);
             VF fjp = __builtin_convertvector(jp, VF);
             VF cut[4] = {py0, LSEL(py1 < fjp + 1.0f, py1, fjp + 1.0f),
@@ -173,9 +245,9 @@ EQ_TARGET static int EQ_FN(fast_windows)(const eq_fast_face *ff, eq_batch *bt, i
 
 /* The windows' values (the fast ones from their 4 x 4 taps, two columns to a vector) summed per
  * texel in the samples' order, in double; a texel is written when the next one starts. */
-EQ_TARGET static void EQ_FN(batch_sum)(const eq_job *job, eq_batch *bt, float *out)
+LANE_TARGET static void lane_accumulate(const eq_job *job, eq_batch *bt, float *out)
 {
-    const eq_slow *sl = bt->slow;
+    const eq_double_windows *sl = bt->slow;
     const float *pix = job->im->pixels;
     const size_t stride = (size_t)job->im->width * 4;
     int cur = bt->cur;
@@ -262,8 +334,8 @@ EQ_TARGET static void EQ_FN(batch_sum)(const eq_job *job, eq_batch *bt, float *o
 
 /* How many samples per axis each texel of a run takes (0: near a pole), from the texel's
  * extent in source rows and columns: SAMPLES_PER_ROW / _COLUMN per pixel it spans. LANES
- * texels at a time in float (n rounded up to 8; ks holds TEXEL_RUN). */
-EQ_TARGET static void EQ_FN(texel_ks)(const eq_fast_face *ff, int ty, int tx0, int n, int *ks)
+ * texels at a time in float (n rounded up to 8; ks holds EQ_TEXEL_RUN). */
+LANE_TARGET static void lane_sample_counts(const eq_lane_face *ff, int ty, int tx0, int n, int *ks)
 {
     const float *m = ff->m, *a = ff->a, *b = ff->b;
     const double cell = 2.0 / ff->N;
@@ -297,12 +369,4 @@ EQ_TARGET static void EQ_FN(texel_ks)(const eq_fast_face *ff, int ty, int tx0, i
     }
 }
 
-#undef VF
-#undef VI
-/* the includer's parameters, so that it can include this file again with others */
-#undef LANES
-#undef EQ_FN
-#undef EQ_TARGET
-#undef LSQRT
-#undef LMAX
-#undef LMIN
+const eq_lane_kernels LANE_KERNELS = {lane_windows, lane_accumulate, lane_sample_counts};

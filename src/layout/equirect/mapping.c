@@ -1,0 +1,39 @@
+/* The equirectangular (latitude-longitude) mapping itself: direction <-> picture coordinates,
+ * and the exact solid angle of a row of pixels. Everything else in this folder builds on these.
+ *
+ * Mapping (docs/CONVENTIONS.md): u in [0, 1] left to right, v in [0, 1] top to bottom,
+ *   phi = 2 pi (u - 1/2), theta = pi v (angle from +Y),
+ *   d = (sin theta sin phi, cos theta, -sin theta cos phi):
+ * the centre column looks toward -Z, u = 3/4 toward +X, u = 0 and 1 toward +Z, the top row is
+ * +Y.
+ *
+ * Solid angle: dOmega = sin(theta) dtheta dphi, so the band theta0 <= theta <= theta1 holds
+ * 2 pi (cos theta0 - cos theta1) (the area of a spherical zone, Archimedes' hat-box theorem),
+ * shared equally by the W pixels of a row. Summed over the rows the cosines telescope to
+ * 2 - (-2) = 4, so the weights add up to the whole sphere up to rounding. */
+#include "equirect_internal.h"
+
+#include <math.h>
+
+int ibl__equirect_dir(double u, double v, double d[3])
+{
+    double phi = 2.0 * IBL_PI * (u - 0.5), theta = IBL_PI * v;
+    double st = sin(theta);
+    d[0] = st * sin(phi);
+    d[1] = cos(theta);
+    d[2] = -st * cos(phi);
+    return 1;
+}
+
+void ibl__equirect_uv(const double d[3], double *u, double *v)
+{
+    double rho = sqrt(d[0] * d[0] + d[2] * d[2]);
+    *u = atan2(d[0], -d[2]) / (2.0 * IBL_PI) + 0.5;
+    *v = atan2(rho, d[1]) / IBL_PI;
+}
+
+double ibl__equirect_row_solid_angle(int width, int height, int row)
+{
+    double theta0 = IBL_PI * row / height, theta1 = IBL_PI * (row + 1) / height;
+    return 2.0 * IBL_PI / width * (cos(theta0) - cos(theta1));
+}
