@@ -891,6 +891,163 @@ static void no_aliasing(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* ---- the solid-angle-weighted mean of a picture ---- */
+
+/* 1 above the horizon, 0 below; 1/2 on it (the octahedral map's pixels whose centres are on
+ * the horizon are cut in half by it) */
+static void above_horizon_fn(const double d[3], float out[4])
+{
+    out[0] = out[1] = out[2] = fabs(d[1]) < 1e-6 ? 0.5f : d[1] > 0.0 ? 1.0f : 0.0f;
+    out[3] = 1.0f;
+}
+
+static void constant_fn(const double d[3], float out[4])
+{
+    (void)d;
+    out[0] = 0.3f;
+    out[1] = 0.6f;
+    out[2] = 1.25f;
+    out[3] = 1.0f;
+}
+
+/* The integral of sin(theta) over [a, b] by Simpson's rule (64 panels): the test's own
+ * solid angle of an equirect row, independent of the library's cosine difference. */
+static double simpson_sin(double a, double b)
+{
+    enum { PANELS = 64 };
+    double h = (b - a) / PANELS, sum = sin(a) + sin(b);
+    for (int i = 1; i < PANELS; i++) sum += (i & 1 ? 4.0 : 2.0) * sin(a + i * h);
+    return sum * h / 3.0;
+}
+
+/* The test's own solid angle of cube texel (x, y) of an n x n face: dA / (1 + s^2 + t^2)^(3/2)
+ * summed over 32 x 32 cells of the texel. */
+static double texel_solid_angle_brute(int n, int x, int y)
+{
+    enum { CELLS = 32 };
+    double step = 2.0 / n / CELLS, sum = 0.0;
+    for (int j = 0; j < CELLS; j++)
+        for (int i = 0; i < CELLS; i++) {
+            double s = -1.0 + 2.0 * x / n + (i + 0.5) * step;
+            double t = -1.0 + 2.0 * y / n + (j + 0.5) * step;
+            sum += step * step / pow(1.0 + s * s + t * t, 1.5);
+        }
+    return sum;
+}
+
+/* ibl_image_mean: an equirect against a float64 brute force with the test's own pixel solid
+ * angles (a noisy picture with a bright pixel next to the pole); a cross against one with the
+ * test's own texel solid angles. */
+static void image_mean_brute_force(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(2);
+    int W = 256, H = 128;
+    ibl_image im;
+    assert_int_equal(ibl_image_alloc(ctx, W, H, &im), IBL_OK);
+    unsigned state_lcg = 12345u;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            float *p = ibl_image_texel(&im, x, y);
+            for (int c = 0; c < 4; c++) {
+                state_lcg = state_lcg * 1664525u + 1013904223u;
+                p[c] = (float)(state_lcg >> 8) / (float)(1u << 23);
+            }
+        }
+    ibl_image_texel(&im, 40, 1)[0] = 1e4f;
+    double want[4] = {0, 0, 0, 0}, wsum = 0.0;
+    for (int y = 0; y < H; y++) {
+        double omega = 2.0 * PI / W * simpson_sin(PI * y / H, PI * (y + 1) / H);
+        for (int x = 0; x < W; x++) {
+            for (int c = 0; c < 4; c++) want[c] += omega * ibl_image_texel(&im, x, y)[c];
+            wsum += omega;
+        }
+    }
+    assert_near(wsum, 4.0 * PI, 1e-12);
+    double got[4];
+    assert_int_equal(ibl_image_mean(ctx, &im, IBL_LAYOUT_AUTO, got), IBL_OK);
+    for (int c = 0; c < 4; c++) assert_near(got[c], want[c] / wsum, 1e-12 * want[c] / wsum);
+    print_message("equirect mean %.9f (brute force %.9f)\n", got[0], want[0] / wsum);
+    ibl_image_free(ctx, &im);
+
+    /* a horizontal cross of a wavy environment: exact texel solid angles */
+    int n = 8;
+    ibl_cubemap cube;
+    make_cube(ctx, n, wavy_fn, &cube);
+    ibl_from_cube_desc fd = {0};
+    fd.layout = IBL_LAYOUT_HCROSS;
+    assert_int_equal(ibl_cubemap_to_image(ctx, &cube, &fd, &im), IBL_OK);
+    double cw[4] = {0, 0, 0, 0}, csum = 0.0;
+    for (int f = 0; f < 6; f++)
+        for (int y = 0; y < n; y++)
+            for (int x = 0; x < n; x++) {
+                double omega = texel_solid_angle_brute(n, x, y);
+                const float *p = ibl_cubemap_face(&cube, 0, f) + ((size_t)y * n + x) * 4;
+                for (int c = 0; c < 4; c++) cw[c] += omega * p[c];
+                csum += omega;
+            }
+    assert_near(csum, 4.0 * PI, 1e-4);
+    assert_int_equal(ibl_image_mean(ctx, &im, IBL_LAYOUT_HCROSS, got), IBL_OK);
+    for (int c = 0; c < 4; c++) assert_near(got[c], cw[c] / csum, 1e-5);
+    ibl_image_free(ctx, &im);
+    ibl_cubemap_free(ctx, &cube);
+    ibl_context_destroy(ctx);
+}
+
+/* ibl_image_mean, analytic cases: a constant picture gives the constant in every layout; one
+ * that is 1 above the horizon and 0 below gives 1/2 (exactly where the horizon is a pixel
+ * edge: the equirect and the cube layouts; within the resampling's blur for the angular and
+ * octahedral maps, whose horizon crosses pixels). Bad arguments are refused. */
+static void image_mean_analytic(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(2);
+    ibl_layout sphere[3] = {IBL_LAYOUT_EQUIRECT, IBL_LAYOUT_ANGULAR, IBL_LAYOUT_OCTAHEDRAL};
+    int widths[3] = {128, 128, 64};
+    double half_tol[3] = {1e-12, 1e-5, 1e-5};
+    double got[4];
+    for (int l = 0; l < 3; l++) {
+        int w = widths[l], h = sphere[l] == IBL_LAYOUT_EQUIRECT ? w / 2 : w;
+        ibl_image im = make_sphere_image(ctx, sphere[l], w, h, constant_fn);
+        assert_int_equal(ibl_image_mean(ctx, &im, sphere[l], got), IBL_OK);
+        assert_near(got[0], 0.3f, 1e-6);
+        assert_near(got[1], 0.6f, 1e-6);
+        assert_near(got[2], 1.25f, 1e-6);
+        ibl_image_free(ctx, &im);
+        im = make_sphere_image(ctx, sphere[l], w, h, above_horizon_fn);
+        assert_int_equal(ibl_image_mean(ctx, &im, sphere[l], got), IBL_OK);
+        print_message("%s: upper hemisphere mean %.12f\n", ibl_layout_name(sphere[l]), got[0]);
+        assert_near(got[0], 0.5, half_tol[l]);
+        ibl_image_free(ctx, &im);
+    }
+    ibl_layout cells[4] = {IBL_LAYOUT_HCROSS, IBL_LAYOUT_VCROSS, IBL_LAYOUT_HSTRIP,
+                           IBL_LAYOUT_VSTRIP};
+    for (int l = 0; l < 4; l++) {
+        ibl_cubemap cube;
+        make_cube(ctx, 16, above_horizon_fn, &cube);
+        ibl_from_cube_desc fd = {0};
+        fd.layout = cells[l];
+        ibl_image im;
+        assert_int_equal(ibl_cubemap_to_image(ctx, &cube, &fd, &im), IBL_OK);
+        assert_int_equal(ibl_image_mean(ctx, &im, IBL_LAYOUT_AUTO, got), IBL_OK);
+        assert_near(got[0], 0.5, 1e-12);
+        ibl_image_free(ctx, &im);
+        ibl_cubemap_free(ctx, &cube);
+    }
+    /* refusals: no output, a layout that is not one picture, a size that fits nothing */
+    ibl_image im;
+    assert_int_equal(ibl_image_alloc(ctx, 64, 32, &im), IBL_OK);
+    assert_int_equal(ibl_image_mean(ctx, &im, IBL_LAYOUT_EQUIRECT, NULL), IBL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(ibl_image_mean(ctx, &im, IBL_LAYOUT_FACES, got), IBL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(ibl_image_mean(ctx, &im, IBL_LAYOUT_HCROSS, got), IBL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(ibl_image_mean(ctx, NULL, IBL_LAYOUT_AUTO, got), IBL_ERR_INVALID_ARGUMENT);
+    ibl_image_free(ctx, &im);
+    assert_int_equal(ibl_image_alloc(ctx, 50, 37, &im), IBL_OK);
+    assert_int_equal(ibl_image_mean(ctx, &im, IBL_LAYOUT_AUTO, got), IBL_ERR_INVALID_ARGUMENT);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+}
+
 /* ---- determinism ---- */
 
 static void thread_count_independent(void **state)
@@ -939,6 +1096,8 @@ int main(void)
         cmocka_unit_test(equirect_footprint_reference),
         cmocka_unit_test(equirect_simd_paths_agree),
         cmocka_unit_test(no_aliasing),
+        cmocka_unit_test(image_mean_brute_force),
+        cmocka_unit_test(image_mean_analytic),
         cmocka_unit_test(thread_count_independent),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

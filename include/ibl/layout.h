@@ -85,6 +85,17 @@ ibl_status ibl_cubemap_to_image(ibl_context *ctx, const ibl_cubemap *cube,
 ibl_status ibl_cubemap_to_faces(ibl_context *ctx, const ibl_cubemap *cube, int level,
                                 ibl_image faces[6]);
 
+/* The solid-angle-weighted mean (RGBA) of a flat image in a layout (IBL_LAYOUT_AUTO: detected
+ * from the aspect ratio): the mean radiance over the sphere, what a white diffuse sphere lit
+ * by the image would average. An equirect's pixels are weighted by their exact solid angles,
+ * (2 pi / W) (cos theta0 - cos theta1) for a row spanning theta0..theta1 from +Y. The other
+ * layouts are converted by ibl_image_to_cubemap at their natural size and the cube texels
+ * weighted by their exact solid angles (ibl_cubemap_mean): exact for crosses and strips,
+ * whose cells are copied texel for texel; angular and octahedral maps are resampled first
+ * (each texel the solid-angle-weighted mean of its footprint). */
+ibl_status ibl_image_mean(ibl_context *ctx, const ibl_image *image, ibl_layout layout,
+                          double out[4]);
+
 /* Direction <-> normalised picture coordinates (u, v in [0, 1], v = 0 at the top) of the
  * sphere layouts (equirect, angular, octahedral); returns 0 where (u, v) is outside the map. */
 int ibl_layout_direction(ibl_layout layout, float u, float v, ibl_vec3 *dir);

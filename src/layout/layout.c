@@ -471,3 +471,27 @@ ibl_status ibl_cubemap_to_faces(ibl_context *ctx, const ibl_cubemap *cube, int l
     }
     return IBL_OK;
 }
+
+ibl_status ibl_image_mean(ibl_context *ctx, const ibl_image *image, ibl_layout layout,
+                          double out[4])
+{
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "mean: no output");
+    ibl_status st = check_image(ctx, "mean", image);
+    if (st != IBL_OK) return st;
+    if (layout == IBL_LAYOUT_AUTO) layout = ibl_layout_detect(image->width, image->height);
+    if (layout == IBL_LAYOUT_EQUIRECT && size_fits(layout, image->width, image->height)) {
+        ibl__equirect_mean(image, out);
+        return IBL_OK;
+    }
+    /* anything else (and every refusal: an unknown aspect, a size that does not fit, faces)
+     * goes through the conversion, which explains itself */
+    ibl_to_cube_desc d;
+    memset(&d, 0, sizeof d);
+    d.layout = layout;
+    ibl_cubemap cube;
+    st = ibl_image_to_cubemap(ctx, image, &d, &cube);
+    if (st != IBL_OK) return st;
+    ibl_cubemap_mean(&cube, 0, out);
+    ibl_cubemap_free(ctx, &cube);
+    return IBL_OK;
+}

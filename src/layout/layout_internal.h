@@ -46,8 +46,10 @@ int ibl__natural_cube_size(ibl_layout layout, int width, int height);
 
 /* equirect/: the exact solid angle of each pixel of row `row` (0 at the top) of a width x height
  * equirect, (2 pi / width) (cos theta0 - cos theta1) with theta0 = pi row / height and
- * theta1 = pi (row + 1) / height */
+ * theta1 = pi (row + 1) / height; the solid-angle-weighted mean of an equirect (RGBA) with
+ * those weights */
 double ibl__equirect_row_solid_angle(int width, int height, int row);
+void ibl__equirect_mean(const ibl_image *image, double out[4]);
 /* equirect/to_cube.c (out: a cube already allocated, level 0 written). The vector kernels
  * follow the context (ibl__cpu_has); every choice gives the same bits. */
 ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const ibl__frame *frame,

@@ -1,5 +1,6 @@
 /* The equirectangular (latitude-longitude) mapping itself: direction <-> picture coordinates,
- * and the exact solid angle of a row of pixels. Everything else in this folder builds on these.
+ * the exact solid angle of a row of pixels, and the exact solid-angle-weighted mean of a
+ * picture. Everything else in this folder builds on these.
  *
  * Mapping (docs/CONVENTIONS.md): u in [0, 1] left to right, v in [0, 1] top to bottom,
  *   phi = 2 pi (u - 1/2), theta = pi v (angle from +Y),
@@ -36,4 +37,20 @@ double ibl__equirect_row_solid_angle(int width, int height, int row)
 {
     double theta0 = IBL_PI * row / height, theta1 = IBL_PI * (row + 1) / height;
     return 2.0 * IBL_PI / width * (cos(theta0) - cos(theta1));
+}
+
+void ibl__equirect_mean(const ibl_image *image, double out[4])
+{
+    /* each row summed in double, then weighted by its pixels' solid angle */
+    double acc[4] = {0, 0, 0, 0}, wsum = 0.0;
+    for (int y = 0; y < image->height; y++) {
+        double w = ibl__equirect_row_solid_angle(image->width, image->height, y);
+        const float *p = image->pixels + (size_t)y * image->width * 4;
+        double row[4] = {0, 0, 0, 0};
+        for (int x = 0; x < image->width; x++, p += 4)
+            for (int c = 0; c < 4; c++) row[c] += p[c];
+        for (int c = 0; c < 4; c++) acc[c] += w * row[c];
+        wsum += w * image->width;
+    }
+    for (int c = 0; c < 4; c++) out[c] = acc[c] / wsum;
 }
