@@ -33,7 +33,7 @@ static void sample_windows(const eq_job *job, int face, eq_double_windows *dw)
 {
     int W = job->im->width, H = job->im->height, n = dw->n;
     const double *m = job->basis[face][0], *a = job->basis[face][1], *b = job->basis[face][2];
-    const double px_per_rad_u = W / (2.0 * IBL_PI), px_per_rad_v = H / IBL_PI;
+    const double px_per_rad_u = W / IBL_TWO_PI, px_per_rad_v = H / IBL_PI;
     double *x = dw->t0, *y = dw->t1, *z = dw->t2, *rho = dw->t3, *len = dw->t4;
     for (int i = 0; i < n; i++) {
         double sc = dw->sc[i], tc = dw->tc[i];

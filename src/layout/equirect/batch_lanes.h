@@ -52,7 +52,7 @@ static const double SAMPLES_PER_COLUMN = 0.6;
     VF r_ = t_ * (1.0f + t2_ * (-0.3333314528f + t2_ * (0.1999355085f + \
             t2_ * (-0.1420889944f + t2_ * (0.1065626393f + t2_ * (-0.0752896400f + \
             t2_ * (0.0429096138f + t2_ * (-0.0161657367f + t2_ * 0.0028662257f)))))))); \
-    r_ = LSEL(steep_, (float)(0.5 * IBL_PI) - r_, r_); \
+    r_ = LSEL(steep_, (float)IBL_HALF_PI - r_, r_); \
     r_ = LSEL(x_ < 0.0f, (float)IBL_PI - r_, r_); \
     LSEL(y_ < 0.0f, -r_, r_); })
 
@@ -128,7 +128,7 @@ LANE_TARGET static int lane_windows(const eq_lane_face *ff, eq_batch *bt, int n,
     const float *m = ff->m, *a = ff->a, *b = ff->b;
     const int Wi = ff->W;
     const float W = (float)ff->W, H = (float)ff->H;
-    const float px_per_rad_u = (float)(ff->W / (2.0 * IBL_PI)), px_per_rad_v = (float)(ff->H / IBL_PI);
+    const float px_per_rad_u = (float)(ff->W / IBL_TWO_PI), px_per_rad_v = (float)(ff->H / IBL_PI);
     const float k_rad = (float)(IBL_PI / ff->H), row_lo = (float)ff->R + 1.0f;
     const float row_hi = (float)(ff->H - ff->R - 1);
     const VI narrow_ok = (VI){} - (ff->narrow_ok != 0);
@@ -340,7 +340,7 @@ LANE_TARGET static void lane_sample_counts(const eq_lane_face *ff, int ty, int t
     const float *m = ff->m, *a = ff->a, *b = ff->b;
     const double cell = 2.0 / ff->N;
     const float rows_per = (float)(SAMPLES_PER_ROW * cell * ff->H / IBL_PI);
-    const float cols_per = (float)(SAMPLES_PER_COLUMN * cell * ff->W / (2.0 * IBL_PI));
+    const float cols_per = (float)(SAMPLES_PER_COLUMN * cell * ff->W / IBL_TWO_PI);
     const float fcell = (float)cell, tc = (float)(-1.0 + (ty + 0.5) * cell);
     for (int i = 0; i < n; i += LANES) {
         VF sc;

@@ -174,7 +174,7 @@ static inline double eq_atan2_branchless(double y, double x)
     double ax = fabs(x), ay = fabs(y);
     double mn = ax < ay ? ax : ay, mx = ax < ay ? ay : ax;
     double r = eq_atan_unit(mn / (mx > 0.0 ? mx : 1.0));
-    double r_steep = 0.5 * IBL_PI - r;
+    double r_steep = IBL_HALF_PI - r;
     r = ay > ax ? r_steep : r;
     double r_back = IBL_PI - r;
     r = x < 0.0 ? r_back : r;

@@ -18,7 +18,7 @@
 
 int ibl__equirect_dir(double u, double v, double d[3])
 {
-    double phi = 2.0 * IBL_PI * (u - 0.5), theta = IBL_PI * v;
+    double phi = IBL_TWO_PI * (u - 0.5), theta = IBL_PI * v;
     double st = sin(theta);
     d[0] = st * sin(phi);
     d[1] = cos(theta);
@@ -29,14 +29,14 @@ int ibl__equirect_dir(double u, double v, double d[3])
 void ibl__equirect_uv(const double d[3], double *u, double *v)
 {
     double rho = sqrt(d[0] * d[0] + d[2] * d[2]);
-    *u = atan2(d[0], -d[2]) / (2.0 * IBL_PI) + 0.5;
+    *u = atan2(d[0], -d[2]) / IBL_TWO_PI + 0.5;
     *v = atan2(rho, d[1]) / IBL_PI;
 }
 
 double ibl__equirect_row_solid_angle(int width, int height, int row)
 {
     double theta0 = IBL_PI * row / height, theta1 = IBL_PI * (row + 1) / height;
-    return 2.0 * IBL_PI / width * (cos(theta0) - cos(theta1));
+    return IBL_TWO_PI / width * (cos(theta0) - cos(theta1));
 }
 
 void ibl__equirect_mean(const ibl_image *image, double out[4])

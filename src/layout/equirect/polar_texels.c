@@ -26,8 +26,8 @@ typedef long long v2l __attribute__((vector_size(16)));
 
 static double wrap_angle(double a)
 {
-    if (a > IBL_PI) a -= 2.0 * IBL_PI;
-    else if (a < -IBL_PI) a += 2.0 * IBL_PI;
+    if (a > IBL_PI) a -= IBL_TWO_PI;
+    else if (a < -IBL_PI) a += IBL_TWO_PI;
     return a;
 }
 
@@ -103,7 +103,7 @@ static void polar_texel_extent(const eq_job *job, int face, int tx, int ty, pola
     int full = any_pole || fabs(winding) > IBL_PI;
     /* a texel only a few pixels across can lie between pixel corners: then every pixel of its
      * range is cut into cells, not only those its edges visibly cross */
-    e->thin = yhi - ylo < 4.0 || (!full && (hi - lo) / (2.0 * IBL_PI) * W < 4.0);
+    e->thin = yhi - ylo < 4.0 || (!full && (hi - lo) / IBL_TWO_PI * W < 4.0);
     /* the closest approach to the pole can lie inside an edge: widen by a row */
     ylo = fmax(0.0, floor(ylo) - 1.0);
     yhi = fmin((double)H, ceil(yhi) + 1.0);
@@ -113,8 +113,8 @@ static void polar_texel_extent(const eq_job *job, int face, int tx, int ty, pola
     }
     long c0 = 0, c1 = W;
     if (!full) {
-        c0 = (long)floor(((centre + lo) / (2.0 * IBL_PI) + 0.5) * W) - 1;
-        c1 = (long)ceil(((centre + hi) / (2.0 * IBL_PI) + 0.5) * W) + 1;
+        c0 = (long)floor(((centre + lo) / IBL_TWO_PI + 0.5) * W) - 1;
+        c1 = (long)ceil(((centre + hi) / IBL_TWO_PI + 0.5) * W) + 1;
         if (c1 - c0 > W) {
             c0 = 0;
             c1 = W;
@@ -253,13 +253,13 @@ void ibl__eq_polar_texel(const eq_job *job, int face, int tx, int ty, float out[
     texel_frame t = {job->basis[face][0], job->basis[face][1], job->basis[face][2], 0.5 * N,
                      tx, ty};
     column_walk walk;
-    walk.dphi = 2.0 * IBL_PI / W;
+    walk.dphi = IBL_TWO_PI / W;
     walk.cd = cos(walk.dphi);
     walk.sd = sin(walk.dphi);
     /* a parallel strays from the chord between two pixel corners by under dphi^2 / 8 radians,
      * at most 3 times that on the face plane: in texels, under this */
     walk.margin = N * walk.dphi * walk.dphi / 4.0 + 1e-9;
-    const double phi_start = 2.0 * IBL_PI * ((double)e.c0 / W - 0.5);
+    const double phi_start = IBL_TWO_PI * ((double)e.c0 / W - 0.5);
     walk.cos_start = cos(phi_start);
     walk.sin_start = sin(phi_start);
     double acc[4] = {0, 0, 0, 0}, wsum = 0;
@@ -269,7 +269,7 @@ void ibl__eq_polar_texel(const eq_job *job, int face, int tx, int ty, float out[
     } else {
         /* a texel smaller than any cell: the picture at its centre */
         double py = atan2(sqrt(e.cx * e.cx + e.cz * e.cz), e.cy) / IBL_PI * H;
-        double px = (e.centre / (2.0 * IBL_PI) + 0.5) * W;
+        double px = (e.centre / IBL_TWO_PI + 0.5) * W;
         ibl__eq_window_mean(job, px, px, py, py, 0.0, 1.0, out);
     }
 }
@@ -293,13 +293,13 @@ int ibl__eq_polar_columns(const eq_job *job, int face, int tx, int ty, eq_batch 
         lo = rel < lo ? rel : lo;
         hi = rel > hi ? rel : hi;
     }
-    if (!(hi - lo < 0.5 * IBL_PI)) return 0; /* not clear of the pole */
+    if (!(hi - lo < IBL_HALF_PI)) return 0; /* not clear of the pole */
     /* the columns whose centres phi_j = 2 pi ((j + 1/2) / W - 1/2) lie in the range */
-    double u_lo = ((centre + lo) / (2.0 * IBL_PI) + 0.5) * W - 0.5;
-    double u_hi = ((centre + hi) / (2.0 * IBL_PI) + 0.5) * W - 0.5;
+    double u_lo = ((centre + lo) / IBL_TWO_PI + 0.5) * W - 0.5;
+    double u_hi = ((centre + hi) / IBL_TWO_PI + 0.5) * W - 0.5;
     long j_lo = (long)ceil(u_lo), j_hi = (long)floor(u_hi);
     if (j_hi < j_lo) return 0;
-    const double my = m[1], dphi = 2.0 * IBL_PI / W;
+    const double my = m[1], dphi = IBL_TWO_PI / W;
     for (long j = j_lo; j <= j_hi; j++) {
         long jj = j % W;
         jj = jj < 0 ? jj + W : jj;

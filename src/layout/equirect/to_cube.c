@@ -195,7 +195,7 @@ static void lane_faces(eq_job *job)
     int W = job->im->width, H = job->im->height, N = job->out->size;
     /* The polar region: 3 texels, and at least POLE_ROWS source rows. */
     double cell = 2.0 / N;
-    double radius = fmin(fmax(atan(3.0 * cell), POLE_ROWS * IBL_PI / H), 0.5 * IBL_PI);
+    double radius = fmin(fmax(atan(3.0 * cell), POLE_ROWS * IBL_PI / H), IBL_HALF_PI);
     double pole_radius2 = sin(radius) * sin(radius);
     for (int f = 0; f < 6; f++) {
         eq_lane_face *lf = &job->lanes[f];
@@ -227,7 +227,7 @@ ibl_status ibl__equirect_to_cube(ibl_context *ctx, const ibl_image *image, const
         return ibl_context_status(ctx);
     }
     for (int j = 0; j < W; j++) {
-        double phi = 2.0 * IBL_PI * ((j + 0.5) / W - 0.5);
+        double phi = IBL_TWO_PI * ((j + 0.5) / W - 0.5);
         cs[j] = sin(phi);
         cs[W + j] = cos(phi);
     }
