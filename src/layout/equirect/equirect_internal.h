@@ -58,9 +58,12 @@ static inline void vstore(float *p, v4f v) { memcpy(p, &v, sizeof v); }
 
 /* A face's axes (in the picture's frame) and the picture's sizes, in float, for the lanes. */
 typedef struct eq_lane_face {
-    float m[3], a[3], b[3]; /* the face's centre, s axis, t axis */
-    int W, H, R, narrow_ok, N; /* picture width, height, polar box rows; W >= 8; cube size */
-    float pole_radius2;        /* sin^2 of the directly integrated polar region's radius  */
+    float m[3], a[3], b[3]; /* the face's centre, s axis, t axis                          */
+    int W, H;               /* the picture's size                                         */
+    int R;                  /* eq_polar_box_rows(H)                                       */
+    int narrow_ok;          /* W >= 8: windows may take the lanes' 4 x 4 taps              */
+    int N;                  /* the cube's size                                            */
+    float pole_radius2;     /* sin^2 of the directly integrated polar region's radius     */
 } eq_lane_face;
 
 struct eq_lane_kernels;
