@@ -337,7 +337,9 @@ LANE_TARGET static void lane_accumulate(const eq_job *job, eq_batch *bt, float *
  * texels at a time in float (n rounded up to 8; ks holds EQ_TEXEL_RUN). */
 LANE_TARGET static void lane_sample_counts(const eq_lane_face *ff, int ty, int tx0, int n, int *ks)
 {
-    const float *m = ff->m, *a = ff->a, *b = ff->b;
+    /* the axes in locals: stores to ks could otherwise alias them and force reloads */
+    const float m[3] = {ff->m[0], ff->m[1], ff->m[2]}, a[3] = {ff->a[0], ff->a[1], ff->a[2]},
+                b[3] = {ff->b[0], ff->b[1], ff->b[2]}, pole_radius2 = ff->pole_radius2;
     const double cell = 2.0 / ff->N;
     const float rows_per = (float)(SAMPLES_PER_ROW * cell * ff->H / IBL_PI);
     const float cols_per = (float)(SAMPLES_PER_COLUMN * cell * ff->W / IBL_TWO_PI);
@@ -364,7 +366,7 @@ LANE_TARGET static void lane_sample_counts(const eq_lane_face *ff, int ty, int t
         want = LSEL(want > 1.0f, want, (VF){} + 1.0f); /* (and no NaN) */
         VI k = __builtin_convertvector(want, VI);
         k -= __builtin_convertvector(k, VF) < want; /* ceil */
-        k &= ~(rho2 < ff->pole_radius2 * r2);
+        k &= ~(rho2 < pole_radius2 * r2);
         LSTORE(ks + i, k);
     }
 }
