@@ -1,9 +1,10 @@
 /* ibl info: what a file holds and what its pixels look like. */
 #include "input.h"
-#include "core/numeric.h"
 
+#include <jansson.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static const char usage[] =
@@ -14,49 +15,154 @@ static const char usage[] =
     "of NaN/infinite/negative pixels and the metadata of an image or texture.\n"
     "\n"
     "  --layout L   layout of a flat image (default: from the aspect ratio)\n"
-    "  --json       one JSON object on stdout\n";
+    "  --json       one JSON object on stdout\n"
+    "  -q, -j N, --max-memory MiB: see 'ibl --help' (infinite pixels are counted, not refused)\n";
 
+typedef struct file_stats {
+    double min[4], max[4], mean[4];
+    double radiance[3]; /* solid-angle weighted; NaN when the layout is unknown */
+    ibl_layout layout;
+} file_stats;
 
-/* Solid-angle-weighted mean of an equirect image: each row's pixels subtend
- * (2 pi / W) (cos theta0 - cos theta1). */
-static void equirect_mean(const ibl_image *im, double out[3])
+/* Per-channel statistics over level 0 (every face and slice) and the mean radiance. */
+static void measure(ibl_context *ctx, const ibl_texture *tex, ibl_layout asked, file_stats *s)
 {
-    double acc[3] = {0, 0, 0}, wsum = 0;
-    for (int y = 0; y < im->height; y++) {
-        double t0 = IBL_PI * y / im->height, t1 = IBL_PI * (y + 1) / im->height;
-        double w = 2.0 * IBL_PI / im->width * (cos(t0) - cos(t1));
-        const float *p = ibl_image_texel(im, 0, y);
-        double row[3] = {0, 0, 0};
-        for (int x = 0; x < im->width; x++, p += 4)
-            for (int c = 0; c < 3; c++) row[c] += p[c];
-        for (int c = 0; c < 3; c++) acc[c] += w * row[c];
-        wsum += w * im->width;
+    size_t texels = (size_t)tex->width * tex->height * (tex->kind == IBL_TEXTURE_3D ? tex->depth : 1) *
+                    (size_t)ibl_texture_faces(tex);
+    const float *p = ibl_texture_level(tex, 0, 0);
+    for (int c = 0; c < 4; c++) s->min[c] = INFINITY, s->max[c] = -INFINITY, s->mean[c] = 0;
+    for (size_t i = 0; i < texels; i++)
+        for (int c = 0; c < 4; c++) {
+            double v = p[i * 4 + c];
+            s->min[c] = v < s->min[c] ? v : s->min[c];
+            s->max[c] = v > s->max[c] ? v : s->max[c];
+            s->mean[c] += v;
+        }
+    for (int c = 0; c < 4; c++) s->mean[c] /= (double)texels;
+    s->radiance[0] = s->radiance[1] = s->radiance[2] = NAN;
+    s->layout = IBL_LAYOUT_AUTO;
+    double m[4];
+    if (tex->kind == IBL_TEXTURE_CUBE) {
+        ibl_cubemap view;
+        ibl_cubemap_from_texture(tex, &view);
+        ibl_cubemap_mean(&view, 0, m);
+        memcpy(s->radiance, m, sizeof s->radiance);
+        s->layout = IBL_LAYOUT_CUBE;
+    } else if (tex->kind == IBL_TEXTURE_2D) {
+        s->layout = asked ? asked : ibl_layout_detect(tex->width, tex->height);
+        ibl_image im = {tex->width, tex->height, ibl_texture_level(tex, 0, 0)};
+        if (s->layout != IBL_LAYOUT_AUTO && ibl_image_mean(ctx, &im, s->layout, m) == IBL_OK)
+            memcpy(s->radiance, m, sizeof s->radiance);
     }
-    for (int c = 0; c < 3; c++) out[c] = acc[c] / wsum;
 }
 
-static void json_string(const char *s)
+static const char *kind_name(const ibl_texture *tex)
 {
-    putchar('"');
-    for (; *s; s++) {
-        unsigned char ch = (unsigned char)*s;
-        if (ch == '"' || ch == '\\') printf("\\%c", ch);
-        else if (ch < 0x20) printf("\\u%04x", ch);
-        else putchar(ch);
-    }
-    putchar('"');
+    return tex->kind == IBL_TEXTURE_CUBE ? "cube" : tex->kind == IBL_TEXTURE_3D ? "3d" : "2d";
+}
+
+static const char *layout_name(ibl_layout layout)
+{
+    return layout == IBL_LAYOUT_AUTO ? "unknown" : ibl_layout_name(layout);
+}
+
+/* A JSON string of bytes that may not be UTF-8 (a path): as is when valid, else with every
+ * byte above 0x7F shown as '?'. */
+static json_t *any_string(const char *s)
+{
+    json_t *v = json_string(s);
+    if (v) return v;
+    char *copy = strdup(s);
+    if (!copy) return NULL;
+    for (char *p = copy; *p; p++)
+        if ((unsigned char)*p >= 0x80) *p = '?';
+    v = json_string(copy);
+    free(copy);
+    return v;
+}
+
+static json_t *numbers(const double *v, int n)
+{
+    json_t *a = json_array();
+    for (int i = 0; i < n; i++) json_array_append_new(a, isfinite(v[i]) ? json_real(v[i]) : json_null());
+    return a;
+}
+
+static void print_json(const char *path, const ibl_texture *tex, const ibl_file_info *info,
+                       const file_stats *s)
+{
+    json_t *o = json_object();
+    json_object_set_new(o, "file", any_string(path));
+    json_object_set_new(o, "type", json_string(ibl_file_type_name(info->type)));
+    json_object_set_new(o, "kind", json_string(kind_name(tex)));
+    json_object_set_new(o, "width", json_integer(tex->width));
+    json_object_set_new(o, "height", json_integer(tex->height));
+    json_object_set_new(o, "depth", json_integer(tex->depth));
+    json_object_set_new(o, "levels", json_integer(tex->levels));
+    json_object_set_new(o, "format", json_string(ibl_format_name(info->format)));
+    json_object_set_new(o, "layout", json_string(layout_name(s->layout)));
+    json_object_set_new(o, "min", numbers(s->min, 4));
+    json_object_set_new(o, "max", numbers(s->max, 4));
+    json_object_set_new(o, "mean", numbers(s->mean, 4));
+    int known = !isnan(s->radiance[0]);
+    double luminance = 0.2126 * s->radiance[0] + 0.7152 * s->radiance[1] + 0.0722 * s->radiance[2];
+    json_object_set_new(o, "mean_radiance", known ? numbers(s->radiance, 3) : json_null());
+    json_object_set_new(o, "mean_luminance", known ? json_real(luminance) : json_null());
+    json_object_set_new(o, "nan_texels", json_integer((json_int_t)info->pixels.nan_count));
+    json_object_set_new(o, "inf_texels", json_integer((json_int_t)info->pixels.inf_count));
+    json_object_set_new(o, "negative_texels", json_integer((json_int_t)info->pixels.negative_count));
+    json_t *meta = json_object();
+    for (int i = 0; i < tex->metadata_count; i++)
+        json_object_set_new(meta, tex->metadata[i].key, any_string(tex->metadata[i].value));
+    json_object_set_new(o, "metadata", meta);
+    char *text = json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(9));
+    if (text) puts(text);
+    free(text);
+    json_decref(o);
+}
+
+static void print_text(const char *path, const ibl_texture *tex, const ibl_file_info *info,
+                       const file_stats *s)
+{
+    printf("file:            %s\n", path);
+    printf("container:       %s\n", ibl_file_type_name(info->type));
+    printf("kind:            %s\n", kind_name(tex));
+    if (tex->kind == IBL_TEXTURE_3D) printf("size:            %dx%dx%d\n", tex->width, tex->height, tex->depth);
+    else printf("size:            %dx%d%s\n", tex->width, tex->height, tex->kind == IBL_TEXTURE_CUBE ? " per face" : "");
+    printf("layout:          %s\n", layout_name(s->layout));
+    printf("pixel format:    %s\n", ibl_format_name(info->format));
+    printf("mip levels:      %d\n", tex->levels);
+    printf("min (RGBA):      %.6g %.6g %.6g %.6g\n", s->min[0], s->min[1], s->min[2], s->min[3]);
+    printf("max (RGBA):      %.6g %.6g %.6g %.6g\n", s->max[0], s->max[1], s->max[2], s->max[3]);
+    printf("mean (RGBA):     %.6g %.6g %.6g %.6g   (per texel)\n", s->mean[0], s->mean[1], s->mean[2], s->mean[3]);
+    const double *r = s->radiance;
+    if (isnan(r[0])) printf("mean radiance:   n/a (layout unknown; use --layout)\n");
+    else printf("mean radiance:   %.6g %.6g %.6g   (solid-angle weighted; luminance %.6g)\n", r[0],
+                r[1], r[2], 0.2126 * r[0] + 0.7152 * r[1] + 0.0722 * r[2]);
+    printf("NaN texels:      %llu (read as 0)\n", (unsigned long long)info->pixels.nan_count);
+    printf("infinite texels: %llu%s\n", (unsigned long long)info->pixels.inf_count,
+           info->pixels.inf_count ? " (other commands refuse them without --clamp)" : "");
+    printf("negative texels: %llu (read as 0)\n", (unsigned long long)info->pixels.negative_count);
+    for (int i = 0; i < tex->metadata_count; i++)
+        printf("metadata:        %s = %s\n", tex->metadata[i].key, tex->metadata[i].value);
 }
 
 int cli_cmd_info(int argc, char **argv)
 {
     cli_args a = {argc, argv, 0, "info", usage, {0}, {0}, 0};
-    cli_input_options in = {0};
+    ibl_layout layout = IBL_LAYOUT_AUTO;
     int json = 0;
     const char *arg;
     while ((arg = cli_next(&a))) {
-        if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &in)) continue;
-        if (cli_is(&a, arg, "--json", NULL)) json = 1;
-        else cli_positional_or_unknown(&a, arg);
+        if (cli_common_option(&a, arg)) continue;
+        if (cli_is(&a, arg, "--layout", NULL)) {
+            const char *v = cli_value(&a, arg);
+            if (!ibl_layout_from_name(v, &layout)) cli_usage_error(&a, "unknown layout '%s'", v);
+        } else if (cli_flag(&a, arg, "--json", NULL)) {
+            json = 1;
+        } else {
+            cli_positional_or_unknown(&a, arg);
+        }
     }
     if (a.positional_count != 1) cli_usage_error(&a, "needs exactly one file");
     const char *path = a.positional[0];
@@ -66,101 +172,14 @@ int cli_cmd_info(int argc, char **argv)
     ibl_file_info info;
     ibl_status st = ibl_read_texture(ctx, path, &rd, &tex, &info);
     if (st != IBL_OK) {
-        cli_error("%s", ibl_context_message(ctx));
+        cli_report_failure(ctx, path, st);
         ibl_context_destroy(ctx);
         return CLI_EXIT_BAD_INPUT;
     }
-    /* per-channel statistics over level 0 (all faces and slices) */
-    size_t texels = (size_t)tex.width * tex.height * (tex.kind == IBL_TEXTURE_3D ? tex.depth : 1) *
-                    (size_t)ibl_texture_faces(&tex);
-    const float *p = ibl_texture_level(&tex, 0, 0);
-    double mn[4] = {INFINITY, INFINITY, INFINITY, INFINITY}, mx[4] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY}, mean[4] = {0, 0, 0, 0};
-    for (size_t i = 0; i < texels; i++)
-        for (int c = 0; c < 4; c++) {
-            double v = p[i * 4 + c];
-            if (v < mn[c]) mn[c] = v;
-            if (v > mx[c]) mx[c] = v;
-            mean[c] += v;
-        }
-    for (int c = 0; c < 4; c++) mean[c] /= (double)texels;
-
-    ibl_layout layout = IBL_LAYOUT_AUTO;
-    double radiance[3] = {NAN, NAN, NAN};
-    if (tex.kind == IBL_TEXTURE_CUBE) {
-        ibl_cubemap view;
-        ibl_cubemap_from_texture(&tex, &view);
-        double m[4];
-        ibl_cubemap_mean(&view, 0, m);
-        memcpy(radiance, m, sizeof radiance);
-        layout = IBL_LAYOUT_CUBE;
-    } else if (tex.kind == IBL_TEXTURE_2D) {
-        layout = in.layout ? in.layout : ibl_layout_detect(tex.width, tex.height);
-        ibl_image im = {tex.width, tex.height, ibl_texture_level(&tex, 0, 0)};
-        if (layout == IBL_LAYOUT_EQUIRECT) {
-            equirect_mean(&im, radiance);
-        } else if (layout != IBL_LAYOUT_AUTO) {
-            ibl_to_cube_desc d;
-            memset(&d, 0, sizeof d);
-            d.layout = layout;
-            ibl_cubemap cube;
-            if (ibl_image_to_cubemap(ctx, &im, &d, &cube) == IBL_OK) {
-                double m[4];
-                ibl_cubemap_mean(&cube, 0, m);
-                memcpy(radiance, m, sizeof radiance);
-                ibl_cubemap_free(ctx, &cube);
-            }
-        }
-    }
-    const char *kind = tex.kind == IBL_TEXTURE_CUBE ? "cube" : tex.kind == IBL_TEXTURE_3D ? "3d" : "2d";
-    const char *layout_name = layout == IBL_LAYOUT_AUTO ? "unknown" : ibl_layout_name(layout);
-    /* Rec.709 luminance of the mean radiance */
-    double luminance = 0.2126 * radiance[0] + 0.7152 * radiance[1] + 0.0722 * radiance[2];
-    if (json) {
-        printf("{\"file\": ");
-        json_string(path);
-        printf(", \"type\": \"%s\", \"kind\": \"%s\", \"width\": %d, \"height\": %d, \"depth\": %d, "
-               "\"levels\": %d, \"format\": \"%s\", \"layout\": \"%s\",\n",
-               ibl_file_type_name(info.type), kind, tex.width, tex.height, tex.depth, tex.levels,
-               ibl_format_name(info.format), layout_name);
-        printf(" \"min\": [%.9g, %.9g, %.9g, %.9g], \"max\": [%.9g, %.9g, %.9g, %.9g], "
-               "\"mean\": [%.9g, %.9g, %.9g, %.9g],\n",
-               mn[0], mn[1], mn[2], mn[3], mx[0], mx[1], mx[2], mx[3], mean[0], mean[1], mean[2], mean[3]);
-        if (isnan(radiance[0])) printf(" \"mean_radiance\": null, \"mean_luminance\": null,\n");
-        else printf(" \"mean_radiance\": [%.9g, %.9g, %.9g], \"mean_luminance\": %.9g,\n",
-                    radiance[0], radiance[1], radiance[2], luminance);
-        printf(" \"nan_texels\": %llu, \"inf_texels\": %llu, \"negative_texels\": %llu,\n",
-               (unsigned long long)info.pixels.nan_count, (unsigned long long)info.pixels.inf_count,
-               (unsigned long long)info.pixels.negative_count);
-        printf(" \"metadata\": {");
-        for (int i = 0; i < tex.metadata_count; i++) {
-            printf(i ? ", " : "");
-            json_string(tex.metadata[i].key);
-            printf(": ");
-            json_string(tex.metadata[i].value);
-        }
-        printf("}}\n");
-    } else {
-        printf("file:            %s\n", path);
-        printf("container:       %s\n", ibl_file_type_name(info.type));
-        printf("kind:            %s\n", kind);
-        if (tex.kind == IBL_TEXTURE_3D) printf("size:            %dx%dx%d\n", tex.width, tex.height, tex.depth);
-        else printf("size:            %dx%d%s\n", tex.width, tex.height, tex.kind == IBL_TEXTURE_CUBE ? " per face" : "");
-        printf("layout:          %s\n", layout_name);
-        printf("pixel format:    %s\n", ibl_format_name(info.format));
-        printf("mip levels:      %d\n", tex.levels);
-        printf("min (RGBA):      %.6g %.6g %.6g %.6g\n", mn[0], mn[1], mn[2], mn[3]);
-        printf("max (RGBA):      %.6g %.6g %.6g %.6g\n", mx[0], mx[1], mx[2], mx[3]);
-        printf("mean (RGBA):     %.6g %.6g %.6g %.6g   (per texel)\n", mean[0], mean[1], mean[2], mean[3]);
-        if (isnan(radiance[0])) printf("mean radiance:   n/a (layout unknown; use --layout)\n");
-        else printf("mean radiance:   %.6g %.6g %.6g   (solid-angle weighted; luminance %.6g)\n",
-                    radiance[0], radiance[1], radiance[2], luminance);
-        printf("NaN texels:      %llu (read as 0)\n", (unsigned long long)info.pixels.nan_count);
-        printf("infinite texels: %llu%s\n", (unsigned long long)info.pixels.inf_count,
-               info.pixels.inf_count ? " (other commands refuse them without --clamp)" : "");
-        printf("negative texels: %llu (read as 0)\n", (unsigned long long)info.pixels.negative_count);
-        for (int i = 0; i < tex.metadata_count; i++)
-            printf("metadata:        %s = %s\n", tex.metadata[i].key, tex.metadata[i].value);
-    }
+    file_stats s;
+    measure(ctx, &tex, layout, &s);
+    if (json) print_json(path, &tex, &info, &s);
+    else print_text(path, &tex, &info, &s);
     ibl_texture_free(ctx, &tex);
     ibl_context_destroy(ctx);
     return CLI_EXIT_OK;
