@@ -88,15 +88,6 @@ static double now_ms(void)
     return (double)ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
 }
 
-static char *copy_string(ibl_context *ctx, const char *s)
-{
-    if (!s) return NULL;
-    size_t n = strlen(s) + 1;
-    char *c = ibl_alloc(ctx, n);
-    if (c) memcpy(c, s, n);
-    return c;
-}
-
 /* Defaults resolved once: a zero field of desc becomes its documented value. */
 static ibl_bake_desc resolve_desc(const ibl_bake_desc *in)
 {
@@ -232,8 +223,8 @@ static ibl_status record_parameters(ibl_context *ctx, const ibl_cubemap *env,
         b->sky = model.desc;
     }
     const char *name = d->source.name ? d->source.name : d->source.sky ? "built-in sky" : "environment";
-    b->source_name = copy_string(ctx, name);
-    b->preset = copy_string(ctx, d->preset);
+    b->source_name = ibl__strdup(ctx, name);
+    b->preset = ibl__strdup(ctx, d->preset);
     if (!b->source_name || (d->preset && !b->preset)) return ibl_context_status(ctx);
     return IBL_OK;
 }

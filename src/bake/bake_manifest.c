@@ -468,15 +468,6 @@ static void read_source(ibl__json_reader *r, json_t *root, ibl_bake_data *b, con
     }
 }
 
-static char *copy_string(ibl_context *ctx, const char *s)
-{
-    if (!s) return NULL;
-    size_t n = strlen(s) + 1;
-    char *c = ibl_alloc(ctx, n);
-    if (c) memcpy(c, s, n);
-    return c;
-}
-
 ibl_status ibl__bake_manifest_parse(ibl_context *ctx, const void *bytes, size_t size,
                                     const char *name, ibl_bake_data *b,
                                     ibl__bake_manifest_files *files, void **root_out)
@@ -507,8 +498,8 @@ ibl_status ibl__bake_manifest_parse(ibl_context *ctx, const void *bytes, size_t 
     if (r.status == IBL_OK) read_sh(&r, root, b);
     if (r.status == IBL_OK) read_brdf(&r, root, b, files);
     if (r.status == IBL_OK) {
-        b->source_name = copy_string(ctx, source_name ? source_name : "unknown");
-        b->preset = copy_string(ctx, preset);
+        b->source_name = ibl__strdup(ctx, source_name ? source_name : "unknown");
+        b->preset = ibl__strdup(ctx, preset);
         if (!b->source_name || (preset && !b->preset))
             r.status = ibl__fail(ctx, IBL_ERR_OUT_OF_MEMORY, "%s: out of memory", name);
     }

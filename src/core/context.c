@@ -271,6 +271,15 @@ void *ibl_calloc(ibl_context *ctx, size_t count, size_t size)
     return p;
 }
 
+char *ibl__strdup(ibl_context *ctx, const char *s)
+{
+    if (!s) return NULL;
+    size_t n = strlen(s) + 1;
+    char *c = ibl_alloc(ctx, n);
+    if (c) memcpy(c, s, n);
+    return c;
+}
+
 void ibl_free(ibl_context *ctx, void *ptr)
 {
     if (!ptr) return;

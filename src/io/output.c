@@ -82,14 +82,6 @@ void ibl_output_set_destroy(ibl_output_set *set)
     ibl_free(ctx, set);
 }
 
-static char *dup_string(ibl_context *ctx, const char *s)
-{
-    size_t n = strlen(s) + 1;
-    char *d = ibl_alloc(ctx, n);
-    if (d) memcpy(d, s, n);
-    return d;
-}
-
 /* "dir/" of path (empty for a bare name) into a new string */
 static char *folder_of(ibl_context *ctx, const char *path)
 {
@@ -237,7 +229,7 @@ ibl_status ibl_output_set_add(ibl_output_set *set, const char *path, const void 
     memset(f, 0, sizeof *f);
     f->replaced = exists && S_ISREG(target.st_mode);
     f->mode = f->replaced ? target.st_mode & 07777 : 0;
-    f->path = dup_string(ctx, path);
+    f->path = ibl__strdup(ctx, path);
     char *folder = folder_of(ctx, path);
     if (!f->path || !folder) {
         ibl_free(ctx, f->path);
