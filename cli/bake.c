@@ -99,15 +99,8 @@ static int read_environment(ibl_context *ctx, const cli_args *a, bake_options *o
     sky->width = 4 * o->input.size;
     o->desc.source.sky = sky;
     o->desc.source.layout = IBL_LAYOUT_EQUIRECT;
-    ibl_image image;
-    ibl_status st = ibl_sky_render(ctx, sky, &image);
-    if (st == IBL_OK) {
-        ibl_to_cube_desc cd = {.layout = IBL_LAYOUT_EQUIRECT, .size = o->input.size};
-        st = ibl_image_to_cubemap(ctx, &image, &cd, env);
-        ibl_image_free(ctx, &image);
-    }
-    if (st != IBL_OK) cli_report_failure(ctx, "built-in sky", st);
-    return st == IBL_OK ? CLI_EXIT_OK : cli_exit_code(st);
+    o->desc.source.orientation = o->input.orientation;
+    return cli_read_sky(ctx, sky, &o->input, env);
 }
 
 static void print_summary(const cli_common *c, const char *dir, const ibl_bake_data *b)

@@ -98,6 +98,24 @@ int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
     return CLI_EXIT_OK;
 }
 
+int cli_read_sky(ibl_context *ctx, const ibl_sky_desc *desc, const cli_input_options *o,
+                 ibl_cubemap *out)
+{
+    int size = o->size > 0 ? o->size : 256;
+    ibl_sky_desc d = {0};
+    if (desc) d = *desc;
+    if (!d.width) d.width = 4 * size; /* two equirect pixels per cube texel along the equator */
+    ibl_image image;
+    ibl_status st = ibl_sky_render(ctx, &d, &image);
+    if (st == IBL_OK) {
+        ibl_to_cube_desc cd = {.layout = IBL_LAYOUT_EQUIRECT, .size = size, .orientation = o->orientation};
+        st = ibl_image_to_cubemap(ctx, &image, &cd, out);
+        ibl_image_free(ctx, &image);
+    }
+    if (st != IBL_OK) cli_report_failure(ctx, "built-in sky", st);
+    return cli_exit_code(st);
+}
+
 ibl_file_type cli_check_output(const cli_args *a, const char *output)
 {
     ibl_file_type type = ibl_file_type_from_path(output);

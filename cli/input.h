@@ -28,6 +28,11 @@ int cli_input_option(cli_args *a, const char *arg, cli_input_options *o);
 int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
                      const cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out);
 
+/* The built-in clear sky (desc may be NULL: the defaults) as a one-level cube of edge
+ * o->size (0: 256), oriented by o. Prints the error and returns the exit code. */
+int cli_read_sky(ibl_context *ctx, const ibl_sky_desc *desc, const cli_input_options *o,
+                 ibl_cubemap *out);
+
 /* Reads six face images (+X -X +Y -Y +Z -Z, square, one size) into a one-level cubemap.
  * Prints the error (naming the offending file) and returns the exit code. */
 int cli_read_cubemap_faces(ibl_context *ctx, const cli_common *c, const char *const paths[6],

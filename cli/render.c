@@ -231,15 +231,7 @@ static int read_environment(ibl_context *ctx, const cli_args *a, const render_op
                             const char *input, ibl_cubemap *env)
 {
     if (strcmp(input, "sky") != 0) return cli_read_cubemap(ctx, &a->common, input, &o->input, env, NULL);
-    ibl_image im;
-    ibl_status st = ibl_sky_render(ctx, NULL, &im);
-    if (st == IBL_OK) {
-        ibl_to_cube_desc cd = {.layout = IBL_LAYOUT_EQUIRECT, .orientation = o->input.orientation};
-        st = ibl_image_to_cubemap(ctx, &im, &cd, env);
-        ibl_image_free(ctx, &im);
-    }
-    if (st != IBL_OK) cli_report_failure(ctx, "sky", st);
-    return cli_exit_code(st);
+    return cli_read_sky(ctx, NULL, &o->input, env);
 }
 
 /* The bake the probe views: a folder, or made here from an environment (with a chain given
