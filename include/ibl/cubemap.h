@@ -55,8 +55,10 @@ ibl_status ibl_cubemap_build_mips(ibl_context *ctx, ibl_cubemap *cube);
 /* Solid-angle-weighted mean of a level (RGBA, double). */
 void ibl_cubemap_mean(const ibl_cubemap *cube, int level, double out[4]);
 
-/* Resamples a cube to another edge size (area-weighted box when shrinking by a power of two,
- * supersampled bilinear otherwise). Only level 0 of dst is written. */
+/* Resamples a cube to another edge size. Shrinking by an integer ratio gives each texel the
+ * exact solid-angle-weighted mean of the source texels it covers (a power-of-two ratio takes
+ * src's own area-correct mip level when it has one); any other size is a supersampled
+ * bilinear box. Only level 0 of dst is written. */
 ibl_status ibl_cubemap_resample(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst);
 
 #ifdef __cplusplus

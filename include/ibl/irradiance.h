@@ -50,11 +50,6 @@ typedef struct ibl_irradiance_desc {
 ibl_status ibl_irradiance_cubemap(ibl_context *ctx, const ibl_cubemap *src,
                                   const ibl_irradiance_desc *desc, ibl_cubemap *out);
 
-/* Area-correct reduction of level 0 of src to a cube of edge `size` (allocated into out):
- * the solid-angle-weighted mip chain when src->size is size * 2^k, ibl_cubemap_resample
- * otherwise. */
-ibl_status ibl_irradiance_reduce(ibl_context *ctx, const ibl_cubemap *src, int size,
-                                 ibl_cubemap *out);
 
 /* The dynamic path: plan once for (source edge, output edge, scale), then convolve a small
  * radiance cube every frame with no allocation and no threads (it is a few hundred

@@ -203,37 +203,13 @@ ibl_status ibl_irradiance_plan_run(const ibl_irradiance_plan *p, const ibl_cubem
 
 /* ---- reduction -------------------------------------------------------------------------------- */
 
-ibl_status ibl_irradiance_reduce(ibl_context *ctx, const ibl_cubemap *src, int size,
-                                 ibl_cubemap *out)
+/* Level 0 of src reduced area-correctly to a new cube of edge size (ibl_cubemap_resample). */
+static ibl_status reduce(ibl_context *ctx, const ibl_cubemap *src, int size, ibl_cubemap *out)
 {
     if (!src || !src->data || !out || size < 1)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "irradiance: bad source or size %d", size);
     ibl_status st = ibl_cubemap_alloc(ctx, size, 1, out);
-    if (st != IBL_OK) return st;
-    int k = 0;
-    while ((size << k) < src->size && k < 30) k++;
-    if ((size << k) == src->size) {
-        /* area-correct: the solid-angle-weighted 2x2 mip chain down to `size` */
-        size_t face0 = 6 * (size_t)src->size * src->size * 4;
-        if (k < src->levels) {
-            memcpy(out->data, ibl_cubemap_face(src, k, 0), 6 * (size_t)size * size * 4 * sizeof(float));
-            return IBL_OK;
-        }
-        ibl_cubemap chain;
-        st = ibl_cubemap_alloc(ctx, src->size, k + 1, &chain);
-        if (st == IBL_OK) {
-            memcpy(chain.data, src->data, face0 * sizeof(float));
-            st = ibl_cubemap_build_mips(ctx, &chain);
-            if (st == IBL_OK)
-                memcpy(out->data, ibl_cubemap_face(&chain, k, 0),
-                       6 * (size_t)size * size * 4 * sizeof(float));
-            ibl_cubemap_free(ctx, &chain);
-        }
-    } else {
-        ibl_cubemap level0 = *src;
-        level0.levels = 1;
-        st = ibl_cubemap_resample(ctx, &level0, out);
-    }
+    if (st == IBL_OK) st = ibl_cubemap_resample(ctx, src, out);
     if (st != IBL_OK) ibl_cubemap_free(ctx, out);
     return st;
 }
@@ -396,7 +372,7 @@ ibl_status ibl_irradiance_cubemap(ibl_context *ctx, const ibl_cubemap *src,
     default: return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "irradiance: unknown method");
     }
     ibl_cubemap small;
-    ibl_status st = ibl_irradiance_reduce(ctx, src, d.source_size, &small);
+    ibl_status st = reduce(ctx, src, d.source_size, &small);
     if (st != IBL_OK) return st;
     ibl_irradiance_plan *plan;
     ibl_irradiance_plan_desc pd = {.source_size = d.source_size, .size = d.size, .scale = d.scale};

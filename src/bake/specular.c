@@ -126,7 +126,8 @@ ibl_status ibl_specular_levels(ibl_context *ctx, const ibl_specular_desc *desc, 
 
 static int is_pow2(int n) { return n > 0 && (n & (n - 1)) == 0; }
 
-/* Mirror levels of the reference and the seed kernels: the source area-resampled. */
+/* A mirror level (the unfiltered source) of the reference and the box/Gaussian kernels: the
+ * source resampled to the level's edge, area-correct (ibl_cubemap_resample). */
 static ibl_status mirror_level(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst,
                                int level)
 {
@@ -135,36 +136,9 @@ static ibl_status mirror_level(ibl_context *ctx, const ibl_cubemap *src, ibl_cub
         memcpy(ibl_cubemap_face(dst, level, 0), src->data, (size_t)6 * n * n * 4 * sizeof(float));
         return IBL_OK;
     }
-    if (n < src->size && src->size % n == 0) {
-        /* exact area average of the r x r source texels under each output texel */
-        int r = src->size / n, m = src->size;
-        for (int f = 0; f < 6; f++) {
-            const float *sp = ibl_cubemap_face(src, 0, f);
-            float *dp = ibl_cubemap_face(dst, level, f);
-            for (int y = 0; y < n; y++)
-                for (int x = 0; x < n; x++) {
-                    double acc[4] = {0, 0, 0, 0}, w = 0;
-                    for (int j = 0; j < r; j++)
-                        for (int i = 0; i < r; i++) {
-                            int sx = x * r + i, sy = y * r + j;
-                            double o = ibl_cube_texel_solid_angle(m, sx, sy);
-                            const float *q = sp + ((size_t)sy * m + sx) * 4;
-                            for (int c = 0; c < 4; c++) acc[c] += o * q[c];
-                            w += o;
-                        }
-                    for (int c = 0; c < 4; c++) dp[((size_t)y * n + x) * 4 + c] = (float)(acc[c] / w);
-                }
-        }
-        return IBL_OK;
-    }
-    ibl_cubemap tmp;
-    ibl_status st = ibl_cubemap_alloc(ctx, n, 1, &tmp);
-    if (st != IBL_OK) return st;
-    st = ibl_cubemap_resample(ctx, src, &tmp);
-    if (st == IBL_OK)
-        memcpy(ibl_cubemap_face(dst, level, 0), tmp.data, (size_t)6 * n * n * 4 * sizeof(float));
-    ibl_cubemap_free(ctx, &tmp);
-    return st;
+    ibl_cubemap view; /* the level as a one-level cube: resampled in place */
+    ibl_status st = ibl_cubemap_wrap(n, 1, ibl_cubemap_face(dst, level, 0), &view);
+    return st == IBL_OK ? ibl_cubemap_resample(ctx, src, &view) : st;
 }
 
 ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,

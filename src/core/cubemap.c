@@ -300,6 +300,60 @@ void ibl_cubemap_mean(const ibl_cubemap *cube, int level, double out[4])
 
 /* ---- resampling ---- */
 
+/* When the source edge is an integer multiple r of the destination's: each texel is
+ * the exact area mean of the r x r source texels it covers, weighted by their solid angles
+ * (differences of the corner function atan(uv / sqrt(1 + u^2 + v^2)) on the source grid). */
+typedef struct block_job {
+    const ibl_cubemap *src;
+    ibl_cubemap *dst;
+    int ratio;
+    const double *corner; /* (m + 1)^2 corner values of the source grid, m = source edge */
+} block_job;
+
+static void block_row_task(void *arg, int index)
+{
+    const block_job *job = arg;
+    int n = job->dst->size, m = job->src->size, r = job->ratio;
+    int face = index / n, y = index % n;
+    const float *src = ibl_cubemap_face(job->src, 0, face);
+    float *row = ibl_cubemap_face(job->dst, 0, face) + (size_t)y * n * 4;
+    const double *c = job->corner;
+    size_t stride = (size_t)m + 1;
+    for (int x = 0; x < n; x++) {
+        double acc[4] = {0, 0, 0, 0}, wsum = 0;
+        for (int j = y * r; j < (y + 1) * r; j++) {
+            for (int i = x * r; i < (x + 1) * r; i++) {
+                double w = c[(j + 1) * stride + i + 1] - c[(j + 1) * stride + i] - c[j * stride + i + 1] +
+                           c[j * stride + i];
+                const float *p = src + ((size_t)j * m + i) * 4;
+                for (int k = 0; k < 4; k++) acc[k] += w * p[k];
+                wsum += w;
+            }
+        }
+        for (int k = 0; k < 4; k++) row[(size_t)x * 4 + k] = (float)(acc[k] / wsum);
+    }
+}
+
+static ibl_status block_mean(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst)
+{
+    int m = src->size, n = dst->size;
+    size_t stride = (size_t)m + 1;
+    double *corner = ibl_alloc(ctx, stride * stride * sizeof(double));
+    if (!corner) return ibl_context_status(ctx);
+    for (size_t j = 0; j < stride; j++) {
+        double v = 2.0 * (double)j / m - 1.0;
+        for (size_t i = 0; i < stride; i++) {
+            double u = 2.0 * (double)i / m - 1.0;
+            corner[j * stride + i] = atan2(u * v, sqrt(u * u + v * v + 1.0));
+        }
+    }
+    block_job job = {src, dst, m / n, corner};
+    ibl_parallel_for(ctx, 6 * n, block_row_task, &job);
+    ibl_free(ctx, corner);
+    return IBL_OK;
+}
+
+
 typedef struct resample_job {
     const ibl_cubemap *src;
     int src_level;
@@ -347,6 +401,8 @@ ibl_status ibl_cubemap_resample(ibl_context *ctx, const ibl_cubemap *src, ibl_cu
             return IBL_OK;
         }
     }
+    /* an integer ratio: the exact area mean of the covered level-0 texels */
+    if (src->size > n && src->size % n == 0) return block_mean(ctx, src, dst);
     /* otherwise: the finest level not more than 2x larger, then a supersampled box */
     int level = 0;
     while (level + 1 < src->levels && ibl_level_size(src->size, level + 1) >= n) level++;
