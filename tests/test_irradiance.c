@@ -306,8 +306,8 @@ static void threads_bit_identical(void **state)
     for (int m = 0; m < 3; m++) free(first[m]);
 }
 
-/* The reduction keeps the solid-angle-weighted mean: exactly (to float) on the mip-chain
- * path, to the resampler's accuracy otherwise (1e-3 on this smooth input). */
+/* The reduction keeps the solid-angle-weighted mean: exactly (to float) for an integer ratio
+ * (the block mean), to the resampler's accuracy otherwise (1e-3 on this smooth input). */
 static void reduction_keeps_mean(void **state)
 {
     (void)state;
