@@ -32,8 +32,11 @@ static void print_help(FILE *out)
             "  -q, --quiet        print only errors\n"
             "  -j, --threads N    worker threads (default: every core); output is identical for any N\n"
             "  --clamp            accept infinite pixels and clamp them (refused otherwise)\n"
-            "  --max-memory MiB   largest single allocation (default 4096)\n"
-            "\nexit status: 0 success, 1 bad input, 2 bad usage\n");
+            "  --max-memory MiB   the most memory the library may hold at once, all buffers\n"
+            "                     together (default: half of the physical memory, or of the\n"
+            "                     ulimit or container limit when lower; here %.0f MiB)\n"
+            "\nexit status: 0 success, 1 bad input, 2 bad usage\n",
+            (double)ibl_default_max_bytes() / 1048576.0);
 }
 
 int cli_cmd_version(int argc, char **argv)

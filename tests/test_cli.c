@@ -260,7 +260,7 @@ static void outputs_identical_across_threads(void **state)
     }
 }
 
-/* The memory limit refuses an input that would need more, with a clear message. */
+/* The memory budget refuses an input that would need more, with a clear message. */
 static void memory_limit(void **state)
 {
     (void)state;
@@ -269,7 +269,7 @@ static void memory_limit(void **state)
     int rc = test_run_cli(&text, "convert '%s' -o '%s' --max-memory 1", test_data("studio.exr"), out);
     assert_int_equal(rc, 1);
     assert_int_equal(count_lines(text), 1);
-    assert_non_null(strstr(text, "memory limit"));
+    assert_non_null(strstr(text, "memory budget"));
     assert_false(test_file_exists(out));
 }
 

@@ -72,11 +72,25 @@ typedef struct ibl_context_desc {
     ibl_parallel_for_fn parallel_for; /* zero: the built-in thread pool                          */
     void *parallel_host;             /* passed to parallel_for                                  */
     int threads;                     /* built-in pool size; 0: every online core; 1: no threads */
-    uint64_t max_bytes;              /* largest single image/texture allocation; 0: 4 GiB       */
+    uint64_t max_bytes;              /* the memory budget (below); 0: ibl_default_max_bytes()   */
     ibl_progress_fn progress;        /* optional                                                */
     void *progress_user;
     ibl_kernels kernels;             /* zero: IBL_KERNELS_AUTO                                  */
 } ibl_context_desc;
+
+/* The memory budget. max_bytes caps the total of the blocks the library holds at any one
+ * time: every allocation through the context (ibl_alloc, ibl_calloc; images, cubemaps,
+ * textures, file buffers, scratch memory of every stage, on every thread), plus an estimate of
+ * what the decoders it calls (OpenEXR, stb_image) allocate by themselves while they run. An
+ * allocation that would take the total over it fails with IBL_ERR_TOO_LARGE and a one-line
+ * message saying how much was asked, how much is in use and the budget; ibl_free gives the
+ * bytes back. Readers check an input's declared size against the budget before decoding it.
+ * Not counted: the context itself, its threads and their stacks, and the host's memory.
+ *
+ * The default (max_bytes = 0) is ibl_default_max_bytes(): half of the smallest of the
+ * machine's physical memory, the process's address-space and data limits (setrlimit
+ * RLIMIT_AS, RLIMIT_DATA) and its container's memory limit (Linux cgroup v2 memory.max or v1
+ * memory.limit_in_bytes). The other half is left to what the budget does not count. */
 
 typedef struct ibl_context ibl_context;
 
@@ -89,8 +103,17 @@ const char *ibl_context_message(const ibl_context *ctx);
 ibl_status ibl_context_status(const ibl_context *ctx);
 /* Number of threads the context runs work on (1 when a host parallel_for is used: unknown). */
 int ibl_context_threads(const ibl_context *ctx);
+/* The memory budget in bytes: desc.max_bytes, or the default it resolved to. */
+uint64_t ibl_context_max_bytes(const ibl_context *ctx);
+/* Bytes the budget counts now, and the most it has counted since the context was created. */
+uint64_t ibl_context_current_bytes(const ibl_context *ctx);
+uint64_t ibl_context_peak_bytes(const ibl_context *ctx);
+/* The budget a context gets when desc.max_bytes is 0, on this machine and in this process. */
+uint64_t ibl_default_max_bytes(void);
 
-/* Allocation through the context: checks the memory limit, records a message on failure. */
+/* Allocation through the context: counted against the memory budget, a message recorded on
+ * failure. Blocks are aligned as the allocator's, and must be freed with ibl_free (with the
+ * context that allocated them, or NULL for both). */
 void *ibl_alloc(ibl_context *ctx, size_t bytes);
 void *ibl_calloc(ibl_context *ctx, size_t count, size_t size);
 void ibl_free(ibl_context *ctx, void *ptr);

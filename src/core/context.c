@@ -1,16 +1,18 @@
-/* The context: allocator, memory limit, failure message, progress and the parallel-for hook
+/* The context: allocator, memory budget, failure message, progress and the parallel-for hook
  * with a default thread pool (workers pull indices from an atomic counter). */
 #define _POSIX_C_SOURCE 200809L
 #include "ibl/core.h"
 #include "core/cpu.h"
 #include "core/context_internal.h"
 
+#include <fcntl.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 enum { MAX_POOL_THREADS = 64, MESSAGE_BYTES = 512 };
@@ -32,10 +34,15 @@ typedef struct thread_pool {
 } thread_pool;
 
 struct ibl_context {
-    ibl_context_desc desc;
+    ibl_context_desc desc; /* desc.max_bytes: the budget in effect (never 0) */
     thread_pool *pool;
     int thread_count;
     unsigned cpu_features; /* what kernels may use (core/cpu.h) */
+    /* The budget's accounts: bytes of live blocks from ibl_alloc plus what decoders hold by
+     * ibl__budget_reserve, and the highest that sum has been. Worker threads allocate too. */
+    _Atomic uint64_t live_bytes;
+    _Atomic uint64_t peak_bytes;
+    atomic_flag message_lock; /* a failure on a worker thread may race one on another */
     ibl_status last_status;
     char message[MESSAGE_BYTES];
 };
@@ -63,6 +70,144 @@ static void *default_alloc(size_t bytes, void *user)
     if (bytes == 0) bytes = 1;
     if (posix_memalign(&p, 64, bytes) != 0) return NULL;
     return p;
+}
+
+/* ---- the memory budget --------------------------------------------------------------- */
+
+/* Every block from ibl_alloc starts with a header holding its size, so that ibl_free can give
+ * the bytes back to the budget. 64 bytes keep the caller's block at the allocator's alignment
+ * (64 with the default allocator: cache lines and AVX-512 loads). */
+enum { BLOCK_HEADER = 64 };
+
+typedef struct block_header {
+    size_t bytes; /* as asked for by the caller */
+} block_header;
+
+/* A decimal number from a one-line file such as a cgroup limit; 0 if absent or "max". */
+static uint64_t read_limit_file(const char *path)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return 0;
+    char text[32];
+    ssize_t n = read(fd, text, sizeof text - 1);
+    close(fd);
+    if (n <= 0) return 0;
+    text[n] = 0;
+    uint64_t v = 0;
+    for (const char *c = text; *c >= '0' && *c <= '9'; c++) {
+        if (v > (UINT64_MAX - 9) / 10) return 0;
+        v = v * 10 + (uint64_t)(*c - '0');
+    }
+    return v;
+}
+
+static uint64_t lower_limit(uint64_t limit, uint64_t other)
+{
+    return other != 0 && (limit == 0 || other < limit) ? other : limit;
+}
+
+/* Half of the memory this process may use: the smallest of the machine's physical memory,
+ * the process's address-space and data limits (ulimit -v, -d) and its container's memory
+ * limit (cgroup v2 memory.max or v1 memory.limit_in_bytes, as seen from inside it).
+ *
+ * Half, because the budget counts only what the library holds; everything else shares the
+ * other half: the decoders' internal buffers (reserved by estimate while they run, not to
+ * the byte), thread stacks, the page cache of the files being read, the host program and the
+ * rest of the machine. A run that would exceed it then fails with a message before the
+ * kernel's out-of-memory killer ends the process. Physical memory rather than what is free
+ * now (MemAvailable): the same machine gives the same budget on every run, so whether an
+ * input is accepted does not depend on what else happened to be running. */
+uint64_t ibl_default_max_bytes(void)
+{
+    uint64_t limit = 0;
+    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+    if (pages > 0 && page > 0) limit = (uint64_t)pages * (uint64_t)page;
+    struct rlimit rl;
+    if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY)
+        limit = lower_limit(limit, (uint64_t)rl.rlim_cur);
+#ifdef RLIMIT_DATA
+    if (getrlimit(RLIMIT_DATA, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY)
+        limit = lower_limit(limit, (uint64_t)rl.rlim_cur);
+#endif
+#ifdef __linux__
+    limit = lower_limit(limit, read_limit_file("/sys/fs/cgroup/memory.max"));
+    limit = lower_limit(limit, read_limit_file("/sys/fs/cgroup/memory/memory.limit_in_bytes"));
+#endif
+    if (limit == 0) limit = (uint64_t)4 << 30; /* nothing could be measured */
+    return limit / 2;
+}
+
+/* "512 bytes", "3.5 KiB", "2048.0 MiB": the units a reader of the message can act on. */
+static void format_bytes(char *out, size_t cap, uint64_t n)
+{
+    if (n < 1024) snprintf(out, cap, "%llu bytes", (unsigned long long)n);
+    else if (n < ((uint64_t)1 << 20)) snprintf(out, cap, "%.1f KiB", (double)n / 1024.0);
+    else snprintf(out, cap, "%.1f MiB", (double)n / 1048576.0);
+}
+
+static void raise_peak(ibl_context *ctx, uint64_t live)
+{
+    uint64_t peak = atomic_load_explicit(&ctx->peak_bytes, memory_order_relaxed);
+    while (live > peak &&
+           !atomic_compare_exchange_weak_explicit(&ctx->peak_bytes, &peak, live, memory_order_relaxed,
+                                                  memory_order_relaxed)) {
+    }
+}
+
+/* Adds bytes to the live total if the total stays within the budget. */
+static int budget_take(ibl_context *ctx, uint64_t bytes)
+{
+    uint64_t live = atomic_load_explicit(&ctx->live_bytes, memory_order_relaxed);
+    do {
+        if (bytes > ctx->desc.max_bytes || live > ctx->desc.max_bytes - bytes) return 0;
+    } while (!atomic_compare_exchange_weak_explicit(&ctx->live_bytes, &live, live + bytes,
+                                                    memory_order_relaxed, memory_order_relaxed));
+    raise_peak(ctx, live + bytes);
+    return 1;
+}
+
+static ibl_status budget_refuse(ibl_context *ctx, uint64_t bytes)
+{
+    char need[32], live[32], budget[32];
+    format_bytes(need, sizeof need, bytes);
+    format_bytes(live, sizeof live, atomic_load_explicit(&ctx->live_bytes, memory_order_relaxed));
+    format_bytes(budget, sizeof budget, ctx->desc.max_bytes);
+    return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "needs %s more with %s in use, over the memory budget of %s",
+                     need, live, budget);
+}
+
+ibl_status ibl__budget_reserve(ibl_context *ctx, uint64_t bytes)
+{
+    if (!ctx) return IBL_OK;
+    return budget_take(ctx, bytes) ? IBL_OK : budget_refuse(ctx, bytes);
+}
+
+void ibl__budget_release(ibl_context *ctx, uint64_t bytes)
+{
+    if (ctx) atomic_fetch_sub_explicit(&ctx->live_bytes, bytes, memory_order_relaxed);
+}
+
+ibl_status ibl__budget_check(ibl_context *ctx, uint64_t bytes)
+{
+    if (!ctx) return IBL_OK;
+    uint64_t live = atomic_load_explicit(&ctx->live_bytes, memory_order_relaxed);
+    if (bytes > ctx->desc.max_bytes || live > ctx->desc.max_bytes - bytes) return budget_refuse(ctx, bytes);
+    return IBL_OK;
+}
+
+uint64_t ibl_context_max_bytes(const ibl_context *ctx)
+{
+    return ctx ? ctx->desc.max_bytes : ibl_default_max_bytes();
+}
+
+uint64_t ibl_context_current_bytes(const ibl_context *ctx)
+{
+    return ctx ? atomic_load_explicit(&((ibl_context *)ctx)->live_bytes, memory_order_relaxed) : 0;
+}
+
+uint64_t ibl_context_peak_bytes(const ibl_context *ctx)
+{
+    return ctx ? atomic_load_explicit(&((ibl_context *)ctx)->peak_bytes, memory_order_relaxed) : 0;
 }
 
 static void default_free(void *ptr, void *user)
@@ -179,11 +324,14 @@ ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out)
         d.allocator.alloc = default_alloc;
         d.allocator.free = default_free;
     }
-    if (d.max_bytes == 0) d.max_bytes = (uint64_t)4 << 30;
+    if (d.max_bytes == 0) d.max_bytes = ibl_default_max_bytes();
     ibl_context *ctx = d.allocator.alloc(sizeof *ctx, d.allocator.user);
     if (!ctx) return IBL_ERR_OUT_OF_MEMORY;
     memset(ctx, 0, sizeof *ctx);
     ctx->desc = d;
+    atomic_init(&ctx->live_bytes, 0);
+    atomic_init(&ctx->peak_bytes, 0);
+    atomic_flag_clear(&ctx->message_lock);
     ctx->thread_count = 1;
     ctx->cpu_features = d.kernels == IBL_KERNELS_PORTABLE ? 0u : ibl__cpu_detect();
     if (!d.parallel_for) {
@@ -236,28 +384,50 @@ int ibl_context_threads(const ibl_context *ctx)
 
 ibl_status ibl__fail(ibl_context *ctx, ibl_status status, const char *fmt, ...)
 {
-    if (ctx) ctx->last_status = status;
-    if (ctx && fmt) {
+    if (!ctx) return status;
+    /* one writer at a time: allocations fail on worker threads as well */
+    while (atomic_flag_test_and_set_explicit(&ctx->message_lock, memory_order_acquire)) {
+    }
+    ctx->last_status = status;
+    if (fmt) {
+        /* formatted aside first: arguments may point into the message being replaced */
+        char text[MESSAGE_BYTES];
         va_list ap;
         va_start(ap, fmt);
-        vsnprintf(ctx->message, sizeof ctx->message, fmt, ap);
+        vsnprintf(text, sizeof text, fmt, ap);
         va_end(ap);
+        memcpy(ctx->message, text, sizeof text);
     }
+    atomic_flag_clear_explicit(&ctx->message_lock, memory_order_release);
     return status;
 }
 
 void *ibl_alloc(ibl_context *ctx, size_t bytes)
 {
-    if (!ctx) return default_alloc(bytes, NULL);
-    if ((uint64_t)bytes > ctx->desc.max_bytes) {
-        ibl__fail(ctx, IBL_ERR_TOO_LARGE,
-                 "needs %.1f MiB in one block, over the memory limit of %.1f MiB",
-                 (double)bytes / 1048576.0, (double)ctx->desc.max_bytes / 1048576.0);
+    if (bytes > SIZE_MAX - BLOCK_HEADER) {
+        ibl__fail(ctx, IBL_ERR_TOO_LARGE, "needs %zu bytes, more than the address space", bytes);
         return NULL;
     }
-    void *p = ctx->desc.allocator.alloc(bytes, ctx->desc.allocator.user);
-    if (!p) ibl__fail(ctx, IBL_ERR_OUT_OF_MEMORY, "out of memory allocating %zu bytes", bytes);
-    return p;
+    block_header *h;
+    if (!ctx) {
+        h = default_alloc(bytes + BLOCK_HEADER, NULL);
+    } else {
+        if (!budget_take(ctx, bytes)) {
+            budget_refuse(ctx, bytes);
+            return NULL;
+        }
+        h = ctx->desc.allocator.alloc(bytes + BLOCK_HEADER, ctx->desc.allocator.user);
+        if (!h) {
+            ibl__budget_release(ctx, bytes);
+            char need[32];
+            format_bytes(need, sizeof need, bytes);
+            ibl__fail(ctx, IBL_ERR_OUT_OF_MEMORY, "out of memory allocating %s", need);
+            return NULL;
+        }
+    }
+    if (!h) return NULL;
+    h->bytes = bytes;
+    return (char *)h + BLOCK_HEADER;
 }
 
 void *ibl_calloc(ibl_context *ctx, size_t count, size_t size)
@@ -283,8 +453,13 @@ char *ibl__strdup(ibl_context *ctx, const char *s)
 void ibl_free(ibl_context *ctx, void *ptr)
 {
     if (!ptr) return;
-    if (ctx) ctx->desc.allocator.free(ptr, ctx->desc.allocator.user);
-    else free(ptr);
+    block_header *h = (block_header *)(void *)((char *)ptr - BLOCK_HEADER);
+    if (!ctx) {
+        free(h);
+        return;
+    }
+    ibl__budget_release(ctx, h->bytes);
+    ctx->desc.allocator.free(h, ctx->desc.allocator.user);
 }
 
 void ibl_parallel_for(ibl_context *ctx, int count, ibl_task_fn task, void *task_arg)

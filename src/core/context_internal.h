@@ -16,4 +16,14 @@ char *ibl__strdup(ibl_context *ctx, const char *s);
 /* Reports progress; returns IBL_ERR_CANCELLED (with a message) if the host asked to stop. */
 ibl_status ibl__progress(ibl_context *ctx, const char *stage, double fraction);
 
+/* The memory budget (ibl_context_desc.max_bytes) for memory the library does not allocate
+ * itself: third-party decoders (stb_image, OpenEXR) allocate with malloc, so their estimated
+ * need is reserved while they run and released afterwards. Reserve fails with
+ * IBL_ERR_TOO_LARGE and the budget's message ("needs N more with M in use, over the memory
+ * budget of B") when the bytes do not fit. Check fails the same way without reserving: the
+ * early refusal of an input whose decoding would not fit. A NULL context has no budget. */
+ibl_status ibl__budget_reserve(ibl_context *ctx, uint64_t bytes);
+void ibl__budget_release(ibl_context *ctx, uint64_t bytes);
+ibl_status ibl__budget_check(ibl_context *ctx, uint64_t bytes);
+
 #endif
