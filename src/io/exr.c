@@ -7,7 +7,10 @@
  * part 0 of multi-part files. Channels: R,G,B(,A); else Y(,A) as grey; else Y,RY,BY
  * (luminance/chroma, converted by OpenEXR); else the alphabetically first layer that has
  * .R, .G and .B. Deep files are refused. The result covers the display window: pixels of the
- * data window outside it are cropped, display pixels without data are 0 (alpha 0).
+ * data window outside it are cropped, display pixels without data are 0 (alpha 0). Zeros are
+ * not data, so they are bounded: a display window larger than EXR_FREE_FILL texels must be at
+ * least 1/EXR_MAX_FILL_RATIO covered by the data window (a 335-byte file declaring a 1x1 data
+ * window in a 16000x8000 display window would otherwise cost 2 GiB of zeros).
  * Write: R,G,B(,A) as half or float, scanline, with the chosen lossless compression. */
 #include "io/exr_bridge.h"
 #include "core/context_internal.h"
@@ -46,6 +49,20 @@ typedef struct exr_shape {
 
 /* Scanlines per chunk of each compression (OpenEXR file layout). */
 static const int lines_per_chunk[10] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
+
+/* The most a chunk's pixels can outnumber its stored bytes, per compression, for the codecs
+ * where that is bounded (0: not bounded, left to the memory budget): NONE stores them;
+ * RLE codes at most 128 equal bytes in 2; ZIPS, ZIP are zlib (at most 1032 to 1, see
+ * DEFLATE_MAX_RATIO in stb.c); PXR24 is zlib over 24 of each float's 32 bits; B44 and B44A store
+ * a 4x4 block of halves (32 bytes) in at least 3 bytes and other channels as they are. PIZ
+ * (Huffman with run codes) and DWAA/DWAB (zlib over run-length codes) have no useful bound. */
+static const uint32_t max_expansion[10] = {1, 64, 1032, 1032, 0, 1376, 11, 11, 0, 0};
+
+/* Zeros that the display window may add around the data window: any amount up to
+ * EXR_FREE_FILL texels (16 MiB of floats), beyond that at most EXR_MAX_FILL_RATIO - 1 texels
+ * of zeros for each texel of data. */
+#define EXR_FREE_FILL ((uint64_t)1 << 20)
+enum { EXR_MAX_FILL_RATIO = 16 };
 
 static int32_t le32(const uint8_t *p)
 {
@@ -251,12 +268,15 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
         if (w * lpc * sh->pixel_bytes > EXR_MAX_BUFFER)
             return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR scanline blocks are too large", name);
     }
-    /* Every chunk of level 0 must exist: offset in the file, its header and data inside. */
+    /* Every chunk of level 0 must exist: offset in the file, its header and data inside, and
+     * enough stored bytes for its pixels at the compression's best ratio. */
     if (chunks > (size - pos) / 8)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated OpenEXR (offset table)", name);
     sh->table = pos;
     size_t table_end = pos + (size_t)chunks * 8;
     size_t chunk_header = (sh->multipart ? 4u : 0u) + (sh->tiled ? 16u : 4u);
+    uint64_t ratio = sh->subsampled ? 0 : max_expansion[sh->compression];
+    uint64_t across = sh->tiled ? (w + sh->tile_w - 1) / sh->tile_w : 1;
     for (uint64_t i = 0; i < chunks; i++) {
         uint64_t off = le64(b + pos + i * 8);
         if (off < table_end || off > size || size - off < chunk_header + 4)
@@ -268,8 +288,37 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
             return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: truncated OpenEXR (chunk %llu of %llu cut short)", name,
                             (unsigned long long)i, (unsigned long long)chunks);
+        if (!ratio) continue;
+        uint64_t cw, ch; /* the chunk's pixels: a tile, or a block of scanlines */
+        if (sh->tiled) {
+            uint64_t x0 = (i % across) * sh->tile_w, y0 = (i / across) * sh->tile_h;
+            cw = w - x0 < sh->tile_w ? w - x0 : sh->tile_w;
+            ch = h - y0 < sh->tile_h ? h - y0 : sh->tile_h;
+        } else {
+            uint64_t lpc = (uint64_t)lines_per_chunk[sh->compression], y0 = i * lpc;
+            cw = w;
+            ch = h - y0 < lpc ? h - y0 : lpc;
+        }
+        uint64_t raw = cw * ch * sh->pixel_bytes; /* <= EXR_MAX_BUFFER (checked above) */
+        if ((uint64_t)packed * ratio < raw)
+            return ibl__fail(ctx, IBL_ERR_FORMAT,
+                             "%s: OpenEXR chunk %llu of %llu stores %d bytes, too few for its "
+                             "%llux%llu pixels (truncated, or a forged size)",
+                             name, (unsigned long long)i, (unsigned long long)chunks, packed,
+                             (unsigned long long)cw, (unsigned long long)ch);
     }
     return IBL_OK;
+}
+
+/* Texels of the display window that the data window covers. */
+static uint64_t window_overlap(const exr_shape *sh)
+{
+    int64_t x0 = sh->data[0] > sh->display[0] ? sh->data[0] : sh->display[0];
+    int64_t x1 = sh->data[2] < sh->display[2] ? sh->data[2] : sh->display[2];
+    int64_t y0 = sh->data[1] > sh->display[1] ? sh->data[1] : sh->display[1];
+    int64_t y1 = sh->data[3] < sh->display[3] ? sh->data[3] : sh->display[3];
+    if (x1 < x0 || y1 < y0) return 0;
+    return (uint64_t)(x1 - x0 + 1) * (uint64_t)(y1 - y0 + 1);
 }
 
 /* ---- decode -------------------------------------------------------------------------- */
@@ -559,6 +608,20 @@ static int read_fast(ibl_context *ctx, const uint8_t *bytes, size_t size, const 
     return rc;
 }
 
+/* What OpenEXR allocates by itself to read the file: per reader (one, or one per band) about
+ * three buffers of a chunk (the stored bytes, the decompressed ones, the codec's scratch),
+ * where a chunk read through InputFile is a whole row of tiles; luminance/chroma files are
+ * first decoded into a whole data window of half RGBA. An estimate: it is reserved in the
+ * budget while OpenEXR runs. */
+static uint64_t openexr_bytes(const exr_shape *sh, const ibl__exr_header *hd, uint64_t readers)
+{
+    uint64_t w = (uint64_t)box_extent(sh->data, 0), h = (uint64_t)box_extent(sh->data, 1);
+    uint64_t lines = sh->tiled ? sh->tile_h : (uint64_t)lines_per_chunk[sh->compression];
+    uint64_t bytes = readers * 3 * w * lines * sh->pixel_bytes;
+    if (hd->layout == IBL__EXR_LUMA_CHROMA) bytes += w * h * 4 * 2;
+    return bytes;
+}
+
 static int read_pixels(ibl_context *ctx, const uint8_t *bytes, size_t size, const exr_shape *sh,
                        ibl__exr_reader *reader, const ibl__exr_header *hd, float *rgba, char *err,
                        size_t err_size)
@@ -568,26 +631,37 @@ static int read_pixels(ibl_context *ctx, const uint8_t *bytes, size_t size, cons
     uint64_t chunks = (h + lines - 1) / lines;
     uint64_t per_band = (chunks + EXR_MAX_BANDS - 1) / EXR_MAX_BANDS;
     if (read_fast(ctx, bytes, size, sh, hd, rgba)) return 0;
-    if (hd->layout == IBL__EXR_LUMA_CHROMA || chunks < 2 ||
-        w * lines * (sh->pixel_bytes > 16 ? sh->pixel_bytes : 16) > EXR_BAND_BUFFER)
-        return ibl__exr_read(reader, rgba, err, err_size);
-    exr_bands *b = ibl_alloc(ctx, sizeof *b);
-    if (!b) return ibl__exr_read(reader, rgba, err, err_size); /* one band, as before */
-    b->bytes = bytes;
-    b->size = size;
-    b->hd = hd;
-    b->rgba = rgba;
-    b->lines = (int)(per_band * lines);
-    b->count = (int)((h + per_band * lines - 1) / (per_band * lines));
-    ibl_parallel_for(ctx, b->count, band_task, b);
-    /* the first failing band's message: the one a reader going down the image meets first */
+    exr_bands *b = NULL;
+    if (hd->layout != IBL__EXR_LUMA_CHROMA && chunks >= 2 &&
+        w * lines * (sh->pixel_bytes > 16 ? sh->pixel_bytes : 16) <= EXR_BAND_BUFFER)
+        b = ibl_alloc(ctx, sizeof *b); /* if this fails: one band, as before */
+    int bands = b ? (int)((h + per_band * lines - 1) / (per_band * lines)) : 1;
+    uint64_t reserved = openexr_bytes(sh, hd, (uint64_t)bands);
+    if (ibl__budget_reserve(ctx, reserved) != IBL_OK) {
+        snprintf(err, err_size, "decoding: %s", ibl_context_message(ctx));
+        ibl_free(ctx, b);
+        return IBL_ERR_TOO_LARGE;
+    }
     int rc = 0;
-    for (int i = 0; i < b->count && !rc; i++)
-        if (b->rc[i]) {
-            rc = b->rc[i];
-            snprintf(err, err_size, "%s", b->err[i]);
-        }
-    ibl_free(ctx, b);
+    if (!b) {
+        rc = ibl__exr_read(reader, rgba, err, err_size);
+    } else {
+        b->bytes = bytes;
+        b->size = size;
+        b->hd = hd;
+        b->rgba = rgba;
+        b->lines = (int)(per_band * lines);
+        b->count = bands;
+        ibl_parallel_for(ctx, b->count, band_task, b);
+        /* the first failing band's message: the one a reader going down the image meets first */
+        for (int i = 0; i < b->count && !rc; i++)
+            if (b->rc[i]) {
+                rc = b->rc[i];
+                snprintf(err, err_size, "%s", b->err[i]);
+            }
+        ibl_free(ctx, b);
+    }
+    ibl__budget_release(ctx, reserved);
     return rc;
 }
 
@@ -613,6 +687,21 @@ ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     int dw = (int)box_extent(sh.data, 0), dh = (int)box_extent(sh.data, 1);
     int vw = (int)box_extent(sh.display, 0), vh = (int)box_extent(sh.display, 1);
     int same = memcmp(sh.data, sh.display, sizeof sh.data) == 0;
+    uint64_t display = (uint64_t)vw * (uint64_t)vh, covered = window_overlap(&sh);
+    if (display > EXR_FREE_FILL && covered < display / EXR_MAX_FILL_RATIO) {
+        ibl__exr_close(reader);
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
+                         "%s: the data window (%dx%d) covers %llu of the %dx%d texels of the "
+                         "display window; ibl fills at most %d/%d of an image with zeros",
+                         name, dw, dh, (unsigned long long)covered, vw, vh, EXR_MAX_FILL_RATIO - 1,
+                         EXR_MAX_FILL_RATIO);
+    }
+    uint64_t texel = 4 * sizeof(float);
+    s = ibl__budget_check(ctx, display * texel + (same ? 0 : (uint64_t)dw * (uint64_t)dh * texel));
+    if (s != IBL_OK) {
+        ibl__exr_close(reader);
+        return ibl__fail_named(ctx, s, name);
+    }
     if (same) {
         /* every texel is decoded into it: not zeroed first (a serial pass that would also
          * take all the page faults on one thread; the decoding bands take them instead) */

@@ -195,7 +195,83 @@ static ibl_status read_parallel(ibl_context *ctx, int fd, const char *path, uint
     return s;
 }
 
-ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_t *size)
+/* The message for bytes that are none of the supported formats. */
+static ibl_status unknown_type(ibl_context *ctx, const char *name, size_t size)
+{
+    return ibl__fail(ctx, IBL_ERR_FORMAT,
+                     "%s: not a supported image file (%s; expected Radiance HDR, OpenEXR, PFM, PNG, "
+                     "JPEG, KTX2, KTX or DDS)",
+                     name, size < 4 ? "too short to identify" : "unknown magic bytes");
+}
+
+/* Bytes that tell the formats apart (ibl_file_type_sniff reads at most 12). */
+enum { SNIFF_BYTES = 16 };
+
+/* Pipes and devices have no size: they are read in pieces, each twice the last up to
+ * STREAM_PIECE_MAX, then joined; and at most STREAM_READ_CAP bytes, so that an endless
+ * source (/dev/zero, `yes`) fails within seconds instead of filling the budget. The cap is
+ * above any environment a pipe is likely to carry (a 16384x8192 float EXR is 1.3 GB). */
+#define STREAM_PIECE_MIN ((size_t)64 << 10)
+#define STREAM_PIECE_MAX ((size_t)64 << 20)
+#define STREAM_READ_CAP ((uint64_t)2 << 30)
+enum { STREAM_MAX_PIECES = 64 };
+
+static ibl_status read_stream(ibl_context *ctx, int fd, const char *path, int sniff, uint8_t **out,
+                              size_t *out_size)
+{
+    uint8_t *piece[STREAM_MAX_PIECES];
+    size_t used[STREAM_MAX_PIECES];
+    int count = 0;
+    size_t total = 0, next = STREAM_PIECE_MIN;
+    ibl_status s = IBL_OK;
+    for (;;) {
+        if ((uint64_t)total >= STREAM_READ_CAP || count == STREAM_MAX_PIECES) {
+            s = ibl__fail(ctx, IBL_ERR_TOO_LARGE,
+                          "%s: more than %llu MiB from a pipe or device, the most ibl reads from "
+                          "anything but a regular file (save it to a file first)",
+                          path, (unsigned long long)(STREAM_READ_CAP >> 20));
+            break;
+        }
+        piece[count] = ibl_alloc(ctx, next);
+        if (!piece[count]) {
+            s = ibl__fail_named(ctx, ibl_context_status(ctx), path);
+            break;
+        }
+        s = read_all(ctx, fd, path, piece[count], next, &used[count]);
+        total += used[count++];
+        if (s != IBL_OK) break;
+        /* the first bytes say whether this can be an image at all: /dev/zero cannot */
+        if (sniff && count == 1 && ibl_file_type_sniff(piece[0], used[0]) == IBL_FILE_UNKNOWN) {
+            s = unknown_type(ctx, path, used[0]);
+            break;
+        }
+        if (used[count - 1] < next) break; /* end of stream */
+        if (next < STREAM_PIECE_MAX) next *= 2;
+    }
+    uint8_t *joined = NULL;
+    if (s == IBL_OK && count == 1) {
+        joined = piece[0]; /* small enough for one piece: no copy */
+        count = 0;
+    } else if (s == IBL_OK) {
+        joined = ibl_alloc(ctx, total ? total : 1);
+        if (!joined) s = ibl__fail_named(ctx, ibl_context_status(ctx), path);
+        if (joined) {
+            size_t at = 0;
+            for (int i = 0; i < count; i++) {
+                memcpy(joined + at, piece[i], used[i]);
+                at += used[i];
+            }
+        }
+    }
+    for (int i = 0; i < count; i++) ibl_free(ctx, piece[i]);
+    *out = joined;
+    *out_size = s == IBL_OK ? total : 0;
+    return s;
+}
+
+/* A regular file is read into one buffer of its size (which the budget may refuse); with
+ * `sniff`, its first bytes must look like an image before anything is allocated. */
+static ibl_status read_file(ibl_context *ctx, const char *path, int sniff, void **bytes, size_t *size)
 {
     if (!path || !bytes || !size)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_file: missing argument");
@@ -218,51 +294,48 @@ ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_
     ibl_status s = IBL_OK;
     uint8_t *buf = NULL;
     size_t used = 0;
-    if (S_ISREG(st.st_mode)) {
-        /* The size is known: one allocation, which the context's memory limit may refuse. */
-        if ((uint64_t)st.st_size > (uint64_t)SIZE_MAX) {
+    if (!S_ISREG(st.st_mode)) {
+        s = read_stream(ctx, fd, path, sniff, &buf, &used);
+        close(fd);
+        if (s != IBL_OK) return s;
+        *bytes = buf;
+        *size = used;
+        return IBL_OK;
+    }
+    if ((uint64_t)st.st_size > (uint64_t)SIZE_MAX) {
+        close(fd);
+        return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: file too large", path);
+    }
+    size_t want = (size_t)st.st_size;
+    if (sniff) {
+        uint8_t head[SNIFF_BYTES];
+        size_t n = 0;
+        ssize_t r;
+        do r = pread(fd, head, want < sizeof head ? want : sizeof head, 0);
+        while (r < 0 && errno == EINTR);
+        if (r < 0) {
+            int e = errno;
             close(fd);
-            return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: file too large", path);
+            return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot read: %s", path, strerror(e));
         }
-        size_t want = (size_t)st.st_size;
-        buf = ibl_alloc(ctx, want ? want : 1);
-        if (!buf) {
-            s = ibl__fail_named(ctx, ibl_context_status(ctx), path);
+        n = (size_t)r;
+        if (ibl_file_type_sniff(head, n) == IBL_FILE_UNKNOWN) {
             close(fd);
-            return s;
-        }
-        s = want >= 2 * (size_t)READ_CHUNK && ibl_context_threads(ctx) > 1
-                ? read_parallel(ctx, fd, path, buf, want, &used)
-                : read_all(ctx, fd, path, buf, want, &used);
-        if (s == IBL_OK && used != want)
-            s = ibl__fail(ctx, IBL_ERR_IO, "%s: file shrank while being read", path);
-    } else {
-        /* Pipes and devices: grow geometrically; the memory limit bounds the total. */
-        size_t cap = 0;
-        for (;;) {
-            if (used == cap) {
-                size_t ncap = cap ? cap * 2 : 65536;
-                if (ncap < cap) {
-                    s = ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: file too large", path);
-                    break;
-                }
-                uint8_t *grown = ibl_alloc(ctx, ncap);
-                if (!grown) {
-                    s = ibl__fail_named(ctx, ibl_context_status(ctx), path);
-                    break;
-                }
-                if (used) memcpy(grown, buf, used);
-                ibl_free(ctx, buf);
-                buf = grown;
-                cap = ncap;
-            }
-            size_t got = 0;
-            s = read_all(ctx, fd, path, buf + used, cap - used, &got);
-            if (s != IBL_OK) break;
-            used += got;
-            if (used < cap) break; /* end of stream */
+            return unknown_type(ctx, path, n);
         }
     }
+    /* The size is known: one allocation, which the context's memory budget may refuse. */
+    buf = ibl_alloc(ctx, want ? want : 1);
+    if (!buf) {
+        s = ibl__fail_named(ctx, ibl_context_status(ctx), path);
+        close(fd);
+        return s;
+    }
+    s = want >= 2 * (size_t)READ_CHUNK && ibl_context_threads(ctx) > 1
+            ? read_parallel(ctx, fd, path, buf, want, &used)
+            : read_all(ctx, fd, path, buf, want, &used);
+    if (s == IBL_OK && used != want)
+        s = ibl__fail(ctx, IBL_ERR_IO, "%s: file shrank while being read", path);
     close(fd);
     if (s != IBL_OK) {
         ibl_free(ctx, buf);
@@ -271,6 +344,11 @@ ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_
     *bytes = buf;
     *size = used;
     return IBL_OK;
+}
+
+ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_t *size)
+{
+    return read_file(ctx, path, 0, bytes, size);
 }
 
 /* ---- reading: dispatch and pixel policy ---------------------------------------------- */
@@ -351,11 +429,7 @@ ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, 
     case IBL_FILE_KTX2: s = ibl__ktx2_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_KTX1: s = ibl__ktx1_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_DDS: s = ibl__dds_decode(ctx, b, size, name, out, &fi); break;
-    default:
-        return ibl__fail(ctx, IBL_ERR_FORMAT,
-                        "%s: not a supported image file (%s; expected Radiance HDR, OpenEXR, "
-                        "PFM, PNG, JPEG, KTX2, KTX or DDS)",
-                        name, size < 4 ? "too short to identify" : "unknown magic bytes");
+    default: return unknown_type(ctx, name, size);
     }
     if (s != IBL_OK) {
         ibl_texture_free(ctx, out);
@@ -387,7 +461,7 @@ ibl_status ibl_read_texture(ibl_context *ctx, const char *path, const ibl_read_d
     memset(out, 0, sizeof *out);
     void *bytes = NULL;
     size_t size = 0;
-    ibl_status s = ibl_read_file(ctx, path, &bytes, &size);
+    ibl_status s = read_file(ctx, path, 1, &bytes, &size);
     if (s != IBL_OK) return s;
     s = ibl_decode_texture(ctx, bytes, size, path, desc, out, info);
     ibl_free(ctx, bytes);

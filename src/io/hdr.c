@@ -185,6 +185,15 @@ ibl_status ibl__hdr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     ibl_status s = parse_header(ctx, bytes, size, name, &lay);
     if (s != IBL_OK) return s;
     int w = lay.width, h = lay.height;
+    /* Before pass 1 reads the whole file: every scanline takes at least one 4-byte group (a
+     * pixel, a repeat record or a run-length header), and the image must fit the budget. */
+    if ((size - lay.data_offset) / 4 < (size_t)h)
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
+                         "%s: %zu bytes of pixel data cannot hold %d scanlines (truncated, or a "
+                         "forged size)",
+                         name, size - lay.data_offset, h);
+    s = ibl__budget_check(ctx, ((uint64_t)w * (uint64_t)h + (uint64_t)w) * 4 * sizeof(float));
+    if (s != IBL_OK) return ibl__fail_named(ctx, s, name);
     uint8_t *scan = ibl_alloc(ctx, (size_t)w * 4);
     if (!scan) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
     const uint8_t *end = bytes + size;

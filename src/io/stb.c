@@ -50,7 +50,9 @@ static double png_decoding_power(const uint8_t *b, size_t size)
     return 100000.0 / (double)gama;
 }
 
-/* Decoded samples (RGBA; 8-bit, or 16-bit big-endian as PNG stores them) to linear float. */
+/* Decoded samples (RGBA; 8-bit, or 16-bit big-endian as PNG stores them) to linear float.
+ * The samples may lie in the tail of dst itself (the PNG reader decodes there): texel i is
+ * read whole before it is written, and its float lands at or before samples not yet read. */
 static ibl_status samples_to_float(ibl_context *ctx, const uint8_t *pix, int is16, double power,
                                    size_t texels, float *dst, const char *name)
 {
@@ -64,9 +66,13 @@ static ibl_status samples_to_float(ibl_context *ctx, const uint8_t *pix, int is1
         }
         for (size_t i = 0; i < texels; i++) {
             const uint8_t *q = pix + i * 8;
+            float r = lut[q[0] << 8 | q[1]], g = lut[q[2] << 8 | q[3]], b = lut[q[4] << 8 | q[5]];
+            float a = (float)((q[6] << 8 | q[7]) / 65535.0);
             float *o = dst + i * 4;
-            for (int c = 0; c < 3; c++) o[c] = lut[q[2 * c] << 8 | q[2 * c + 1]];
-            o[3] = (float)((q[6] << 8 | q[7]) / 65535.0);
+            o[0] = r;
+            o[1] = g;
+            o[2] = b;
+            o[3] = a;
         }
         ibl_free(ctx, lut);
         return IBL_OK;
@@ -78,11 +84,12 @@ static ibl_status samples_to_float(ibl_context *ctx, const uint8_t *pix, int is1
     }
     for (size_t i = 0; i < texels; i++) {
         const uint8_t *q = pix + i * 4;
+        float r = lut[q[0]], g = lut[q[1]], b = lut[q[2]], a = (float)(q[3] / 255.0);
         float *o = dst + i * 4;
-        o[0] = lut[q[0]];
-        o[1] = lut[q[1]];
-        o[2] = lut[q[2]];
-        o[3] = (float)(q[3] / 255.0);
+        o[0] = r;
+        o[1] = g;
+        o[2] = b;
+        o[3] = a;
     }
     return IBL_OK;
 }
@@ -91,18 +98,41 @@ static ibl_status samples_to_float(ibl_context *ctx, const uint8_t *pix, int is1
 
 /* libpng rather than stb_image: it inflates straight into rows of the declared size, so a
  * zlib bomb or a chunk declaring gigabytes cannot make it allocate (stb_image grows its
- * buffers to whatever the stream holds; fuzzing found a 556-byte file asking for 1 GiB). */
+ * buffers to whatever the stream holds; fuzzing found a 556-byte file asking for 1 GiB).
+ * The rows are the tail of the float image itself (4 or 8 bytes of samples per texel of its
+ * 16), converted in place afterwards: the image is the only large buffer. */
 typedef struct png_read_state {
     ibl_context *ctx;
+    const char *name;
     const uint8_t *data;
     size_t size, pos;
     ibl_texture *out;
     int is16, has_alpha;
-    uint8_t *raw;    /* RGBA samples of the whole image */
+    uint8_t *raw;    /* RGBA samples of the whole image: the tail of out->data */
     png_bytep *rows; /* into raw */
     ibl_status status;
     char error[200];
 } png_read_state;
+
+/* Bytes of all IDAT chunks (the compressed image); the chunk walk stops at anything that does
+ * not fit in the file, where libpng will stop too. */
+static uint64_t png_idat_bytes(const uint8_t *b, size_t size)
+{
+    uint64_t total = 0;
+    size_t pos = 8;
+    while (size - pos >= 12) {
+        uint32_t len = be32(b + pos);
+        if (len > size - pos - 12) break;
+        if (memcmp(b + pos + 4, "IDAT", 4) == 0) total += len;
+        if (memcmp(b + pos + 4, "IEND", 4) == 0) break;
+        pos += 12 + (size_t)len;
+    }
+    return total;
+}
+
+/* Deflate codes a match of 258 bytes (its longest) in two bits at best (a one-bit length
+ * code and a one-bit distance code), so no zlib stream expands more than 1032 times. */
+enum { DEFLATE_MAX_RATIO = 1032 };
 
 static void png_on_read_error(png_structp png, png_const_charp msg)
 {
@@ -141,6 +171,19 @@ static int png_read_run(png_read_state *st)
     png_uint_32 w = 0, h = 0;
     int depth = 0, color = 0;
     png_get_IHDR(png, pinfo, &w, &h, &depth, &color, NULL, NULL, NULL);
+    /* A file too small to hold the declared image even at deflate's best ratio is refused
+     * before anything is allocated; one that can hold it (a large image of one colour
+     * compresses to almost nothing) is decoded if the budget allows. */
+    uint64_t stored_bits = (uint64_t)w * h * png_get_channels(png, pinfo) * (uint64_t)depth;
+    uint64_t least = stored_bits / 8 / DEFLATE_MAX_RATIO, idat = png_idat_bytes(st->data, st->size);
+    if (idat < least) {
+        st->status = ibl__fail(st->ctx, IBL_ERR_FORMAT,
+                               "%s: a %ux%u PNG needs at least %llu bytes of compressed data, the "
+                               "file has %llu (truncated, or a forged size)",
+                               st->name, (unsigned)w, (unsigned)h, (unsigned long long)least,
+                               (unsigned long long)idat);
+        png_error(png, "too little image data");
+    }
     st->has_alpha = (color & PNG_COLOR_MASK_ALPHA) || png_get_valid(png, pinfo, PNG_INFO_tRNS);
     st->is16 = depth == 16;
     png_set_expand(png); /* palette -> RGB, grey < 8 bits -> 8, tRNS -> alpha */
@@ -150,12 +193,12 @@ static int png_read_run(png_read_state *st)
     png_read_update_info(png, pinfo);
     size_t texel_bytes = st->is16 ? 8 : 4;
     if (png_get_rowbytes(png, pinfo) != (size_t)w * texel_bytes) png_error(png, "unexpected row layout");
-    /* Ours first: the memory limit refuses huge images before the samples are allocated. */
     st->status = ibl_texture_alloc(st->ctx, IBL_TEXTURE_2D, (int)w, (int)h, 1, 1, st->out);
     if (st->status != IBL_OK) png_error(png, "out of memory");
-    st->raw = ibl_alloc(st->ctx, (size_t)w * (size_t)h * texel_bytes);
+    size_t texels = (size_t)w * (size_t)h;
+    st->raw = (uint8_t *)st->out->data + texels * (4 * sizeof(float) - texel_bytes);
     st->rows = ibl_alloc(st->ctx, (size_t)h * sizeof *st->rows);
-    if (!st->raw || !st->rows) {
+    if (!st->rows) {
         st->status = ibl_context_status(st->ctx);
         png_error(png, "out of memory");
     }
@@ -172,6 +215,7 @@ static ibl_status png_decode(ibl_context *ctx, const uint8_t *bytes, size_t size
     png_read_state *st = ibl_calloc(ctx, 1, sizeof *st);
     if (!st) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
     st->ctx = ctx;
+    st->name = name;
     st->data = bytes;
     st->size = size;
     st->out = out;
@@ -179,14 +223,14 @@ static ibl_status png_decode(ibl_context *ctx, const uint8_t *bytes, size_t size
     ibl_free(ctx, st->rows);
     ibl_status s = IBL_OK;
     if (!ok) {
-        if (st->status != IBL_OK) s = ibl__fail_named(ctx, st->status, name);
+        if (st->status == IBL_ERR_FORMAT) s = st->status; /* its message names the file */
+        else if (st->status != IBL_OK) s = ibl__fail_named(ctx, st->status, name);
         else s = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: corrupt PNG (%s)", name, st->error);
     } else {
         size_t texels = (size_t)out->width * (size_t)out->height;
         s = samples_to_float(ctx, st->raw, st->is16, png_decoding_power(bytes, size), texels,
                              out->data, name);
     }
-    ibl_free(ctx, st->raw);
     if (s != IBL_OK) {
         ibl_texture_free(ctx, out);
     } else {
@@ -200,6 +244,90 @@ static ibl_status png_decode(ibl_context *ctx, const uint8_t *bytes, size_t size
 
 /* ---- JPEG reader (stb_image) --------------------------------------------------------- */
 
+/* What the frame header (SOFn) of a JPEG declares, and where it ends. */
+typedef struct jpeg_frame {
+    int huffman;                    /* SOF0, SOF1 or SOF2: the codings stb_image decodes */
+    int progressive;
+    uint32_t width, height;
+    int components;
+    int h[4], v[4];                 /* sampling factors of the first four components */
+    size_t end;                     /* offset of the first byte after the frame header */
+} jpeg_frame;
+
+/* Walks the marker segments from SOI to the first frame header; 0 if there is none. */
+static int jpeg_find_frame(const uint8_t *b, size_t size, jpeg_frame *f)
+{
+    memset(f, 0, sizeof *f);
+    size_t pos = 2; /* after SOI */
+    while (pos + 4 <= size) {
+        if (b[pos] != 0xFF) return 0;
+        uint8_t m = b[pos + 1];
+        if (m == 0xFF) { /* fill byte */
+            pos++;
+            continue;
+        }
+        if (m == 0x01 || (m >= 0xD0 && m <= 0xD8)) { /* markers without a length */
+            pos += 2;
+            continue;
+        }
+        if (m == 0xD9 || m == 0xDA) return 0; /* EOI or a scan before any frame */
+        size_t len = (size_t)b[pos + 2] << 8 | b[pos + 3];
+        if (len < 2 || len > size - pos - 2) return 0;
+        int sof = m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC;
+        if (sof) {
+            const uint8_t *p = b + pos + 4;
+            if (len < 8) return 0;
+            f->huffman = m <= 0xC2;
+            f->progressive = m == 0xC2;
+            f->height = (uint32_t)p[1] << 8 | p[2];
+            f->width = (uint32_t)p[3] << 8 | p[4];
+            f->components = p[5];
+            if (f->components < 1 || len < 8 + 3 * (size_t)f->components) return 0;
+            for (int c = 0; c < f->components && c < 4; c++) {
+                f->h[c] = p[6 + 3 * c + 1] >> 4;
+                f->v[c] = p[6 + 3 * c + 1] & 15;
+                if (f->h[c] < 1 || f->v[c] < 1) return 0;
+            }
+            f->end = pos + 2 + len;
+            return 1;
+        }
+        pos += 2 + len;
+    }
+    return 0;
+}
+
+/* The fewest bytes of entropy-coded data that can hold a frame: every 8x8 block of every
+ * component is coded, and a Huffman-coded block takes at least one bit (its DC difference's
+ * code; a baseline block also needs an end-of-block code). The component with the most blocks
+ * bounds it from below, whatever the other components hold. */
+static uint64_t jpeg_min_coded_bytes(const jpeg_frame *f)
+{
+    int hmax = 1, vmax = 1, n = f->components < 4 ? f->components : 4;
+    for (int c = 0; c < n; c++) {
+        if (f->h[c] > hmax) hmax = f->h[c];
+        if (f->v[c] > vmax) vmax = f->v[c];
+    }
+    uint64_t most = 0;
+    for (int c = 0; c < n; c++) {
+        uint64_t cw = ((uint64_t)f->width * (uint64_t)f->h[c] + (uint64_t)hmax - 1) / (uint64_t)hmax;
+        uint64_t ch = ((uint64_t)f->height * (uint64_t)f->v[c] + (uint64_t)vmax - 1) / (uint64_t)vmax;
+        uint64_t blocks = ((cw + 7) / 8) * ((ch + 7) / 8);
+        if (blocks > most) most = blocks;
+    }
+    return most / 8;
+}
+
+/* What stb_image allocates itself to decode a w x h JPEG to 4 channels, from its source
+ * (stbi__jpeg: one plane per component padded to whole MCUs of at most 32x32 pixels, the
+ * 16-bit coefficients of every block when progressive, the output), with the line buffers
+ * and tables rounded up into 1 MiB. */
+static uint64_t jpeg_stb_bytes(const jpeg_frame *f)
+{
+    uint64_t pw = ((uint64_t)f->width + 31) / 32 * 32, ph = ((uint64_t)f->height + 31) / 32 * 32;
+    uint64_t planes = pw * ph * (uint64_t)f->components;
+    return planes + (f->progressive ? 2 * planes : 0) + 4 * (uint64_t)f->width * f->height + ((uint64_t)1 << 20);
+}
+
 ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info)
 {
@@ -210,12 +338,33 @@ ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: bad JPEG header (%s)", name, stbi_failure_reason());
     if (w <= 0 || h <= 0 || w > IBL_MAX_DIMENSION || h > IBL_MAX_DIMENSION)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: absurd JPEG image size %dx%d", name, w, h);
-    /* Ours first: the memory limit refuses huge images before stb allocates its own. */
-    ibl_status s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, w, h, 1, 1, out);
+    /* stb_image decodes whatever the header declares and fills missing data with grey: a
+     * few kilobytes claiming 16000x8000 would cost gigabytes. The file must be able to hold
+     * the declared size, and the decoding must fit the budget, before anything is allocated. */
+    jpeg_frame frame;
+    if (!jpeg_find_frame(bytes, size, &frame) || frame.width != (uint32_t)w || frame.height != (uint32_t)h)
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: bad JPEG header (no frame header before the first scan)", name);
+    uint64_t coded = jpeg_min_coded_bytes(&frame);
+    if (frame.huffman && size - frame.end < coded)
+        return ibl__fail(ctx, IBL_ERR_FORMAT,
+                         "%s: a %dx%d JPEG needs at least %llu bytes of coded data, the file has %zu "
+                         "after its header (truncated, or a forged size)",
+                         name, w, h, (unsigned long long)coded, size - frame.end);
+    uint64_t stb_bytes = jpeg_stb_bytes(&frame);
+    ibl_status s = ibl__budget_check(ctx, stb_bytes + (uint64_t)w * (uint64_t)h * 4 * sizeof(float));
     if (s != IBL_OK) return ibl__fail_named(ctx, s, name);
+    s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, w, h, 1, 1, out);
+    if (s != IBL_OK) return ibl__fail_named(ctx, s, name);
+    s = ibl__budget_reserve(ctx, stb_bytes);
+    if (s != IBL_OK) {
+        ibl_texture_free(ctx, out);
+        return ibl__fail_named(ctx, s, name);
+    }
     int lw = 0, lh = 0, lc = 0;
     uint8_t *pix = stbi_load_from_memory(bytes, (int)size, &lw, &lh, &lc, 4);
+    ibl__budget_release(ctx, stb_bytes - 4 * (uint64_t)w * (uint64_t)h); /* its output remains */
     if (!pix || lw != w || lh != h) {
+        ibl__budget_release(ctx, 4 * (uint64_t)w * (uint64_t)h);
         if (pix) stbi_image_free(pix);
         ibl_texture_free(ctx, out);
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: corrupt JPEG data (%s)", name,
@@ -223,6 +372,7 @@ ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     }
     s = samples_to_float(ctx, pix, 0, 0.0, (size_t)w * (size_t)h, out->data, name);
     stbi_image_free(pix);
+    ibl__budget_release(ctx, 4 * (uint64_t)w * (uint64_t)h);
     if (s != IBL_OK) {
         ibl_texture_free(ctx, out);
         return s;
