@@ -21,6 +21,13 @@
  * cannot be reserved (strict overcommit) or is full, large blocks fall back to malloc too, as
  * they do in AddressSanitizer builds.
  *
+ * Kept, but not without end: freed arena memory whose pages are still there is counted, and
+ * beyond ARENA_KEEP bytes the largest such free blocks are given back to the kernel
+ * (madvise MADV_DONTNEED: the address range stays reserved, its pages are dropped at once, so
+ * the RSS falls; the next use faults in zeroed pages). ARENA_KEEP is above what the usual
+ * commands ever free (the 512 GGX chain peaks at 193 MB), so their reuse is untouched; a 16k
+ * input's 2 GiB image, freed once it is a cube, goes back.
+ *
  * Every block has a header: its size and whether it is in the arena. Free arena blocks form a
  * list sorted by address, so that neighbours merge. One mutex: the library allocates from its
  * worker threads as well, but rarely (a few hundred calls per command). */
@@ -29,11 +36,13 @@ enum { HEADER = 64 };
 #define ARENA_MIN ((size_t)64 << 10)
 #define ARENA_ALIGN ((size_t)2 << 20)
 #define ARENA_RESERVE ((size_t)64 << 30)
+#define ARENA_KEEP ((size_t)256 << 20)
 
 typedef struct block {
-    size_t size;  /* bytes, header included */
-    size_t arena; /* 1: in the arena */
+    size_t size;     /* bytes, header included */
+    size_t arena;    /* 1: in the arena */
     struct block *next; /* free list, by address */
+    size_t resident; /* free blocks: at most this many of its bytes still have pages */
 } block;
 
 static struct {
@@ -41,7 +50,8 @@ static struct {
     int tried;
     char *base, *top, *end; /* reserved [base, end), handed out [base, top) */
     block *free;
-} arena = {PTHREAD_MUTEX_INITIALIZER, 0, NULL, NULL, NULL, NULL};
+    size_t kept; /* the sum of the free blocks' resident bytes */
+} arena = {PTHREAD_MUTEX_INITIALIZER, 0, NULL, NULL, NULL, NULL, 0};
 
 /* AddressSanitizer sees overruns of malloc'd blocks only: its builds keep every block there */
 #if defined(__SANITIZE_ADDRESS__)
@@ -79,16 +89,22 @@ static block *arena_take(size_t size)
         if ((*b)->size >= size && (!best || (*b)->size < (*best)->size)) best = b;
     if (best) {
         block *b = *best;
+        /* where in a block its resident pages are is not known: the part taken is assumed to
+         * hold as many of them as fit, the rest keeps what remains */
+        size_t taken = b->resident < size ? b->resident : size;
         if (b->size - size >= ARENA_MIN) { /* the rest stays free, in place in the list */
             block *rest = (block *)((char *)b + size);
             rest->size = b->size - size;
             rest->arena = 1;
             rest->next = b->next;
+            rest->resident = b->resident - taken;
             *best = rest;
             b->size = size;
         } else {
             *best = b->next;
+            taken = b->resident;
         }
+        arena.kept -= taken;
         return b;
     }
     if ((size_t)(arena.end - arena.top) < size) return NULL;
@@ -99,23 +115,54 @@ static block *arena_take(size_t size)
     return b;
 }
 
+/* Drops the pages of a free block, all but the one holding its header. */
+static void arena_release(block *b)
+{
+    const uintptr_t page = 4096;
+    uintptr_t from = ((uintptr_t)b + HEADER + page - 1) & ~(page - 1);
+    uintptr_t to = ((uintptr_t)b + b->size) & ~(page - 1);
+    if (to > from && madvise((void *)from, to - from, MADV_DONTNEED) == 0) {
+        arena.kept -= b->resident;
+        b->resident = 0;
+    }
+}
+
+/* Gives back the free blocks with the most resident bytes until at most ARENA_KEEP are kept. */
+static void arena_trim(void)
+{
+    while (arena.kept > ARENA_KEEP) {
+        block *most = NULL;
+        for (block *b = arena.free; b; b = b->next)
+            if (b->resident && (!most || b->resident > most->resident)) most = b;
+        if (!most) break;
+        size_t before = arena.kept;
+        arena_release(most);
+        if (arena.kept == before) break; /* madvise refused: keep the pages */
+    }
+}
+
 static void arena_give(block *b)
 {
+    b->resident = b->size; /* it was in use: every page may have been touched */
+    arena.kept += b->size;
     block **at = &arena.free;
     while (*at && *at < b) at = &(*at)->next;
     b->next = *at;
     *at = b;
     if (b->next && (char *)b + b->size == (char *)b->next) { /* merge with the next */
         b->size += b->next->size;
+        b->resident += b->next->resident;
         b->next = b->next->next;
     }
     if (at != &arena.free) { /* merge with the previous: its next field is `at` */
         block *prev = (block *)((char *)at - offsetof(block, next));
         if ((char *)prev + prev->size == (char *)b) {
             prev->size += b->size;
+            prev->resident += b->resident;
             prev->next = b->next;
         }
     }
+    arena_trim();
 }
 
 void *cli_arena_alloc(size_t bytes, void *user)

@@ -1,5 +1,7 @@
 /* The CLI's allocator (cli/arena.c): blocks are usable, aligned and disjoint; freed arena
- * blocks are reused best-fit, split and merged; it is safe from several threads. */
+ * blocks are reused best-fit, split and merged; freed memory beyond 256 MiB goes back to the
+ * kernel; it is safe from several threads. */
+#define _DEFAULT_SOURCE /* mincore */
 #include "test_support.h"
 
 #include "arena.h"
@@ -8,6 +10,8 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 /* a byte every 4093 and the last one (when it is not one of those) */
 static void fill(unsigned char *p, size_t n, unsigned seed)
@@ -79,6 +83,65 @@ static void freed_blocks_are_reused(void **state)
 #endif
 }
 
+/* Bytes of [p, p + n) whose pages are in memory (mincore), whole pages inside the range. */
+static size_t resident_bytes(const unsigned char *p, size_t n)
+{
+    size_t page = (size_t)sysconf(_SC_PAGESIZE);
+    uintptr_t from = ((uintptr_t)p + page - 1) & ~(uintptr_t)(page - 1);
+    uintptr_t to = ((uintptr_t)p + n) & ~(uintptr_t)(page - 1);
+    if (to <= from) return 0;
+    size_t pages = (to - from) / page;
+    unsigned char *vec = malloc(pages);
+    assert_non_null(vec);
+    assert_int_equal(mincore((void *)from, to - from, vec), 0);
+    size_t count = 0;
+    for (size_t i = 0; i < pages; i++) count += vec[i] & 1;
+    free(vec);
+    return count * page;
+}
+
+/* Freed blocks keep their pages for reuse up to 256 MiB in all; beyond that the largest go
+ * back to the kernel, so the resident memory follows what is in use. */
+static void freed_memory_goes_back(void **state)
+{
+    (void)state;
+#if defined(__SANITIZE_ADDRESS__)
+    skip();
+#else
+    const size_t MB = (size_t)1 << 20, big = 96 * MB;
+    enum { N = 5 };
+    unsigned char *block[N], *fence[N];
+    for (int i = 0; i < N; i++) {
+        block[i] = cli_arena_alloc(big, NULL);
+        fence[i] = cli_arena_alloc(MB, NULL); /* keeps the freed blocks from merging */
+        assert_non_null(block[i]);
+        assert_non_null(fence[i]);
+        memset(block[i], 1 + i, big);
+    }
+    /* a small freed block keeps its pages: the next request of its size reuses them */
+    unsigned char *small = cli_arena_alloc(8 * MB, NULL);
+    memset(small, 7, 8 * MB);
+    cli_arena_free(small, NULL);
+    assert_true(resident_bytes(small, 8 * MB) >= 7 * MB);
+    unsigned char *again = cli_arena_alloc(8 * MB, NULL);
+    assert_ptr_equal(again, small);
+    cli_arena_free(again, NULL);
+    /* five freed 96 MiB blocks: two (or three) are kept, the rest dropped */
+    for (int i = 0; i < N; i++) cli_arena_free(block[i], NULL);
+    size_t kept = 0;
+    for (int i = 0; i < N; i++) kept += resident_bytes(block[i], big);
+    assert_true(kept <= 256 * MB);
+    assert_true(kept >= 2 * (big - MB));
+    /* a dropped block is usable again: its pages come back zeroed, not with the old bytes */
+    unsigned char *reused = cli_arena_alloc(big, NULL);
+    assert_non_null(reused);
+    memset(reused, 9, big);
+    assert_true(reused[big / 2] == 9 && reused[big - 1] == 9);
+    cli_arena_free(reused, NULL);
+    for (int i = 0; i < N; i++) cli_arena_free(fence[i], NULL);
+#endif
+}
+
 static void *churn(void *arg)
 {
     unsigned seed = (unsigned)(uintptr_t)arg;
@@ -116,6 +179,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(freed_blocks_are_reused), /* first: on a fresh arena, addresses are known */
         cmocka_unit_test(blocks_are_disjoint),
+        cmocka_unit_test(freed_memory_goes_back),
         cmocka_unit_test(threads_share_it),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
