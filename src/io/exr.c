@@ -608,11 +608,11 @@ static int read_fast(ibl_context *ctx, const uint8_t *bytes, size_t size, const 
     return rc;
 }
 
-/* What OpenEXR allocates by itself to read the file: per reader (one, or one per band) about
- * three buffers of a chunk (the stored bytes, the decompressed ones, the codec's scratch),
- * where a chunk read through InputFile is a whole row of tiles; luminance/chroma files are
- * first decoded into a whole data window of half RGBA. An estimate: it is reserved in the
- * budget while OpenEXR runs. */
+/* What OpenEXR allocates by itself to read the file: per reader (one, or one per band that
+ * runs at the same time) about three buffers of a chunk (the stored bytes, the decompressed
+ * ones, the codec's scratch), where a chunk read through InputFile is a whole row of tiles;
+ * luminance/chroma files are first decoded into a whole data window of half RGBA. An
+ * estimate: it is reserved in the budget while OpenEXR runs. */
 static uint64_t openexr_bytes(const exr_shape *sh, const ibl__exr_header *hd, uint64_t readers)
 {
     uint64_t w = (uint64_t)box_extent(sh->data, 0), h = (uint64_t)box_extent(sh->data, 1);
@@ -636,7 +636,8 @@ static int read_pixels(ibl_context *ctx, const uint8_t *bytes, size_t size, cons
         w * lines * (sh->pixel_bytes > 16 ? sh->pixel_bytes : 16) <= EXR_BAND_BUFFER)
         b = ibl_alloc(ctx, sizeof *b); /* if this fails: one band, as before */
     int bands = b ? (int)((h + per_band * lines - 1) / (per_band * lines)) : 1;
-    uint64_t reserved = openexr_bytes(sh, hd, (uint64_t)bands);
+    int threads = ibl_context_threads(ctx);
+    uint64_t reserved = openexr_bytes(sh, hd, (uint64_t)(bands < threads ? bands : threads));
     if (ibl__budget_reserve(ctx, reserved) != IBL_OK) {
         snprintf(err, err_size, "decoding: %s", ibl_context_message(ctx));
         ibl_free(ctx, b);

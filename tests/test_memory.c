@@ -1,0 +1,551 @@
+/* The memory budget (ibl_context_desc.max_bytes): a cap on the total the context holds, kept
+ * across threads, with a peak counter; inputs whose declared size the file cannot hold, or
+ * the budget cannot, refused before any large allocation with one line naming the file; and
+ * the CLI's --max-memory as that total. Every file here is generated and small. */
+#include "test_support.h"
+
+#include <errno.h>
+#include <png.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <pthread.h>
+
+static const uint64_t KiB = 1024, MiB = 1024 * 1024;
+
+static ibl_context *budget_context(uint64_t max_bytes, int threads)
+{
+    ibl_context_desc d = {0};
+    d.threads = threads;
+    d.max_bytes = max_bytes;
+    ibl_context *ctx = NULL;
+    assert_int_equal(ibl_context_create(&d, &ctx), IBL_OK);
+    return ctx;
+}
+
+static void spit(const char *path, const void *bytes, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(bytes, 1, n, f), n);
+    fclose(f);
+}
+
+static uint8_t *slurp(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    uint8_t *b = malloc((size_t)n);
+    assert_non_null(b);
+    assert_int_equal(fread(b, 1, (size_t)n, f), (size_t)n);
+    fclose(f);
+    *size = (size_t)n;
+    return b;
+}
+
+/* One line that starts with the file's name. */
+static void assert_names_file(ibl_context *ctx, const char *path)
+{
+    const char *m = ibl_context_message(ctx);
+    if (strncmp(m, path, strlen(path)) != 0 || strchr(m, '\n'))
+        fail_msg("message does not start with %s on one line: \"%s\"", path, m);
+}
+
+/* ---- the budget ---------------------------------------------------------------------- */
+
+static void budget_counts_the_total(void **state)
+{
+    (void)state;
+    ibl_context *ctx = budget_context(MiB, 1);
+    assert_int_equal(ibl_context_max_bytes(ctx), MiB);
+    void *a = ibl_alloc(ctx, 600 * KiB);
+    assert_non_null(a);
+    assert_int_equal(ibl_context_current_bytes(ctx), 600 * KiB);
+    /* each alone fits, together they do not */
+    assert_null(ibl_alloc(ctx, 500 * KiB));
+    assert_int_equal(ibl_context_status(ctx), IBL_ERR_TOO_LARGE);
+    assert_string_equal(ibl_context_message(ctx),
+                        "needs 500.0 KiB more with 600.0 KiB in use, over the memory budget of 1.0 MiB");
+    assert_null(ibl_calloc(ctx, 500, KiB));
+    assert_int_equal(ibl_context_current_bytes(ctx), 600 * KiB);
+    /* freeing gives the bytes back: the whole budget in one block, then nothing more */
+    ibl_free(ctx, a);
+    assert_int_equal(ibl_context_current_bytes(ctx), 0);
+    uint8_t *all = ibl_calloc(ctx, MiB, 1);
+    assert_non_null(all);
+    assert_int_equal(all[MiB - 1], 0);
+    assert_null(ibl_alloc(ctx, 1));
+    assert_int_equal(ibl_context_peak_bytes(ctx), MiB);
+    ibl_free(ctx, all);
+    assert_int_equal(ibl_context_current_bytes(ctx), 0);
+    assert_int_equal(ibl_context_peak_bytes(ctx), MiB); /* the peak stays */
+    /* sizes the address space cannot hold are refused too */
+    assert_null(ibl_alloc(ctx, SIZE_MAX - 8));
+    assert_int_equal(ibl_context_status(ctx), IBL_ERR_TOO_LARGE);
+    ibl_context_destroy(ctx);
+}
+
+static void budget_default(void **state)
+{
+    (void)state;
+    ibl_context *ctx = budget_context(0, 1);
+    uint64_t physical = (uint64_t)sysconf(_SC_PHYS_PAGES) * (uint64_t)sysconf(_SC_PAGESIZE);
+    assert_int_equal(ibl_context_max_bytes(ctx), ibl_default_max_bytes());
+    assert_true(ibl_default_max_bytes() > 0);
+    assert_true(ibl_default_max_bytes() <= physical / 2);
+    ibl_context_destroy(ctx);
+    /* blocks keep 64-byte alignment and free with a NULL context when allocated with one */
+    void *p = ibl_alloc(NULL, 100);
+    assert_non_null(p);
+    assert_int_equal((uintptr_t)p % 64, 0);
+    ibl_free(NULL, p);
+}
+
+/* Worker threads allocating at once never take the total over the budget, and every byte
+ * comes back. 64 tasks each try to hold 8 blocks of 1 MiB under a 20 MiB budget. */
+typedef struct churn_job {
+    ibl_context *ctx;
+    int refused[64];
+} churn_job;
+
+static void churn_task(void *arg, int index)
+{
+    churn_job *j = arg;
+    void *held[8];
+    for (int round = 0; round < 20; round++) {
+        for (int k = 0; k < 8; k++) {
+            held[k] = ibl_alloc(j->ctx, MiB);
+            if (!held[k]) j->refused[index]++;
+            else memset(held[k], index, 4096);
+        }
+        for (int k = 0; k < 8; k++) ibl_free(j->ctx, held[k]);
+    }
+}
+
+static void budget_across_threads(void **state)
+{
+    (void)state;
+    ibl_context *ctx = budget_context(20 * MiB, 4);
+    static churn_job job;
+    memset(&job, 0, sizeof job);
+    job.ctx = ctx;
+    ibl_parallel_for(ctx, 64, churn_task, &job);
+    assert_int_equal(ibl_context_current_bytes(ctx), 0);
+    assert_true(ibl_context_peak_bytes(ctx) <= 20 * MiB);
+    assert_true(ibl_context_peak_bytes(ctx) >= 8 * MiB);
+    int refused = 0;
+    for (int i = 0; i < 64; i++) refused += job.refused[i];
+    /* with four threads holding up to 32 MiB at once some were refused (unless the threads
+     * never overlapped, which one core can do) */
+    if (ibl_context_threads(ctx) == 1) assert_int_equal(refused, 0);
+    if (refused) assert_int_equal(ibl_context_status(ctx), IBL_ERR_TOO_LARGE);
+    ibl_context_destroy(ctx);
+}
+
+/* The peak of a real decode counts the image and the file, and freeing returns to zero. */
+static void peak_of_a_read(void **state)
+{
+    (void)state;
+    ibl_context *ctx = budget_context(0, 2);
+    ibl_image im;
+    assert_int_equal(ibl_read_image(ctx, test_data("city.exr"), NULL, &im, NULL), IBL_OK);
+    uint64_t image = (uint64_t)im.width * (uint64_t)im.height * 16;
+    assert_true(ibl_context_current_bytes(ctx) >= image);
+    assert_true(ibl_context_peak_bytes(ctx) >= image + 200 * KiB); /* + the 213 KB file */
+    ibl_image_free(ctx, &im);
+    assert_int_equal(ibl_context_current_bytes(ctx), 0);
+    ibl_context_destroy(ctx);
+}
+
+/* ---- bombs: declared sizes the file cannot hold -------------------------------------- */
+
+/* Reads path, expects `status`, a message naming the file, and no block near the size. */
+static void expect_refused(const char *path, ibl_status status)
+{
+    ibl_context *ctx = budget_context(0, 2);
+    ibl_texture t;
+    ibl_status s = ibl_read_texture(ctx, path, NULL, &t, NULL);
+    if (s == IBL_OK) {
+        ibl_texture_free(ctx, &t);
+        fail_msg("%s was accepted", path);
+    }
+    assert_int_equal(s, status);
+    assert_names_file(ctx, path);
+    if (ibl_context_peak_bytes(ctx) > MiB)
+        fail_msg("%s: %llu bytes held before refusing", path,
+                 (unsigned long long)ibl_context_peak_bytes(ctx));
+    assert_int_equal(ibl_context_current_bytes(ctx), 0);
+    ibl_context_destroy(ctx);
+}
+
+static uint32_t crc32_of(const uint8_t *p, size_t n)
+{
+    uint32_t c = 0xFFFFFFFFu;
+    for (size_t i = 0; i < n; i++) {
+        c ^= p[i];
+        for (int k = 0; k < 8; k++) c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    }
+    return ~c;
+}
+
+static size_t put_be32(uint8_t *p, uint32_t v)
+{
+    p[0] = (uint8_t)(v >> 24), p[1] = (uint8_t)(v >> 16), p[2] = (uint8_t)(v >> 8), p[3] = (uint8_t)v;
+    return 4;
+}
+
+static size_t png_chunk(uint8_t *out, const char *type, const uint8_t *data, uint32_t len)
+{
+    size_t n = put_be32(out, len);
+    memcpy(out + n, type, 4);
+    if (len) memcpy(out + n + 4, data, len);
+    n += 4 + len;
+    return n + put_be32(out + n, crc32_of(out + 4, 4 + (size_t)len));
+}
+
+/* A JPEG of 64x32 written by ibl whose frame header then claims 16000x8000: 3 KB. */
+static void jpeg_bomb(void **state)
+{
+    (void)state;
+    ibl_context *ctx = budget_context(0, 1);
+    ibl_image im;
+    assert_int_equal(ibl_image_alloc(ctx, 64, 32, &im), IBL_OK);
+    for (int i = 0; i < 64 * 32 * 4; i++) im.pixels[i] = (float)(i % 7) * 0.1f;
+    const char *small = test_path("small.jpg");
+    assert_int_equal(ibl_write_image(ctx, small, &im, NULL), IBL_OK);
+    ibl_image_free(ctx, &im);
+    ibl_context_destroy(ctx);
+    size_t n;
+    uint8_t *b = slurp(small, &n);
+    size_t pos = 2;
+    while (pos + 9 < n && !(b[pos] == 0xFF && b[pos + 1] >= 0xC0 && b[pos + 1] <= 0xC2))
+        pos += 2 + ((size_t)b[pos + 2] << 8 | b[pos + 3]);
+    assert_true(pos + 9 < n);
+    b[pos + 5] = 8000 >> 8, b[pos + 6] = 8000 & 255, b[pos + 7] = 16000 >> 8, b[pos + 8] = 16000 & 255;
+    const char *bomb = test_path("bomb.jpg");
+    spit(bomb, b, n);
+    free(b);
+    expect_refused(bomb, IBL_ERR_FORMAT);
+}
+
+/* A PNG header claiming 16000x8000 RGB with 1000 bytes of image data (it needs 372093). */
+static void png_bomb(void **state)
+{
+    (void)state;
+    static uint8_t b[2048];
+    static const uint8_t signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    uint8_t ihdr[13] = {0};
+    put_be32(ihdr, 16000);
+    put_be32(ihdr + 4, 8000);
+    ihdr[8] = 8, ihdr[9] = 2;
+    uint8_t idat[1000];
+    memset(idat, 0, sizeof idat);
+    idat[0] = 0x78, idat[1] = 0xDA;
+    size_t n = 8;
+    memcpy(b, signature, 8);
+    n += png_chunk(b + n, "IHDR", ihdr, 13);
+    n += png_chunk(b + n, "IDAT", idat, sizeof idat);
+    n += png_chunk(b + n, "IEND", NULL, 0);
+    const char *bomb = test_path("bomb.png");
+    spit(bomb, b, n);
+    expect_refused(bomb, IBL_ERR_FORMAT);
+}
+
+typedef struct mem_png {
+    uint8_t *b;
+    size_t n, cap;
+} mem_png;
+
+static void mem_png_write(png_structp png, png_bytep d, size_t n)
+{
+    mem_png *m = png_get_io_ptr(png);
+    if (m->n + n > m->cap) {
+        m->cap = (m->n + n) * 2;
+        m->b = realloc(m->b, m->cap);
+        assert_non_null(m->b);
+    }
+    memcpy(m->b + m->n, d, n);
+    m->n += n;
+}
+
+static void mem_png_flush(png_structp png)
+{
+    (void)png;
+}
+
+/* A legitimate PNG of zeros compresses about 1000 to 1: it loads within the budget, and a
+ * budget too small for it refuses it before decoding. */
+static void png_of_zeros(void **state)
+{
+    (void)state;
+    const int w = 4096, h = 2048;
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    png_infop info = png_create_info_struct(png);
+    mem_png m = {NULL, 0, 0};
+    png_set_write_fn(png, &m, mem_png_write, mem_png_flush);
+    png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_set_compression_level(png, 9);
+    png_write_info(png, info);
+    png_bytep row = calloc((size_t)w, 3);
+    for (int y = 0; y < h; y++) png_write_row(png, row);
+    png_write_end(png, info);
+    png_destroy_write_struct(&png, &info);
+    free(row);
+    assert_true(m.n < 64 * KiB); /* 25 MB of samples */
+    const char *path = test_path("zeros.png");
+    spit(path, m.b, m.n);
+    free(m.b);
+
+    ibl_context *ctx = budget_context(0, 2);
+    ibl_texture t;
+    assert_int_equal(ibl_read_texture(ctx, path, NULL, &t, NULL), IBL_OK);
+    assert_int_equal(t.width, w);
+    assert_true(t.data[0] == 0.0f && t.data[(size_t)w * h * 4 - 4] == 0.0f && t.data[3] == 1.0f);
+    /* the samples were decoded inside the float image: no second buffer of their size */
+    assert_true(ibl_context_peak_bytes(ctx) < (uint64_t)w * h * 16 + 2 * MiB);
+    ibl_texture_free(ctx, &t);
+    ibl_context_destroy(ctx);
+
+    ctx = budget_context(64 * MiB, 2);
+    assert_int_equal(ibl_read_texture(ctx, path, NULL, &t, NULL), IBL_ERR_TOO_LARGE);
+    assert_names_file(ctx, path);
+    assert_non_null(strstr(ibl_context_message(ctx), "over the memory budget of 64.0 MiB"));
+    assert_true(ibl_context_peak_bytes(ctx) < MiB);
+    ibl_context_destroy(ctx);
+}
+
+/* Uncompressed scanline OpenEXR (R, G, B float) with the given windows; each chunk stores
+ * `stored` bytes (its real size when 0). */
+static size_t exr_file(uint8_t *b, const int32_t data[4], const int32_t display[4], int32_t stored)
+{
+    size_t n = 0;
+#define PUT(p, len) (memcpy(b + n, (p), (len)), n += (len))
+    static const uint8_t magic[8] = {0x76, 0x2F, 0x31, 0x01, 2, 0, 0, 0};
+    PUT(magic, 8);
+    uint8_t ch[64];
+    size_t cn = 0;
+    for (int c = 0; c < 3; c++) {
+        ch[cn++] = (uint8_t)"BGR"[c];
+        ch[cn++] = 0;
+        const int32_t fields[4] = {2, 0, 1, 1};
+        memcpy(ch + cn, fields, 16), cn += 16;
+    }
+    ch[cn++] = 0;
+    const struct {
+        const char *name, *type;
+        const void *value;
+        int32_t len;
+    } attrs[] = {
+        {"channels", "chlist", ch, (int32_t)cn},
+        {"compression", "compression", "\0", 1},
+        {"dataWindow", "box2i", data, 16},
+        {"displayWindow", "box2i", display, 16},
+        {"lineOrder", "lineOrder", "\0", 1},
+        {"pixelAspectRatio", "float", (const float[]){1.0f}, 4},
+        {"screenWindowCenter", "v2f", (const float[]){0.0f, 0.0f}, 8},
+        {"screenWindowWidth", "float", (const float[]){1.0f}, 4},
+    };
+    for (size_t i = 0; i < sizeof attrs / sizeof attrs[0]; i++) {
+        PUT(attrs[i].name, strlen(attrs[i].name) + 1);
+        PUT(attrs[i].type, strlen(attrs[i].type) + 1);
+        PUT(&attrs[i].len, 4);
+        PUT(attrs[i].value, (size_t)attrs[i].len);
+    }
+    b[n++] = 0;
+    int32_t w = data[2] - data[0] + 1, h = data[3] - data[1] + 1;
+    int32_t line = stored ? stored : w * 12;
+    uint64_t at = n + (uint64_t)h * 8;
+    for (int32_t y = 0; y < h; y++, at += 8 + (uint64_t)line) PUT(&at, 8);
+    for (int32_t y = 0; y < h; y++) {
+        int32_t yy = data[1] + y;
+        PUT(&yy, 4);
+        PUT(&line, 4);
+        memset(b + n, 0, (size_t)line), n += (size_t)line;
+    }
+#undef PUT
+    return n;
+}
+
+static void exr_bombs(void **state)
+{
+    (void)state;
+    uint8_t *b = malloc(2 * MiB);
+    assert_non_null(b);
+    /* a 1x1 data window in a 16000x8000 display window: 2 GiB of zeros from 341 bytes */
+    const int32_t one[4] = {0, 0, 0, 0}, wide[4] = {0, 0, 15999, 7999};
+    size_t n = exr_file(b, one, wide, 0);
+    const char *path = test_path("window.exr");
+    spit(path, b, n);
+    expect_refused(path, IBL_ERR_UNSUPPORTED);
+    /* a data window covering 1/16 of a 2048x1024 display window is filled with zeros; one
+     * line less is refused */
+    const int32_t display[4] = {0, 0, 2047, 1023};
+    for (int32_t rows = 128; rows >= 127; rows--) {
+        const int32_t part[4] = {512, 300, 1535, 300 + rows - 1};
+        n = exr_file(b, part, display, 0);
+        ibl_context *ctx = budget_context(0, 1);
+        ibl_texture t;
+        ibl_status s = ibl_decode_texture(ctx, b, n, "part.exr", NULL, &t, NULL);
+        if (rows == 128) {
+            assert_int_equal(s, IBL_OK);
+            assert_int_equal(t.width, 2048);
+            assert_int_equal(t.height, 1024);
+            assert_true(t.data[3] == 0.0f);                                /* outside: 0 */
+            assert_true(t.data[((size_t)300 * 2048 + 512) * 4 + 3] == 1.0f); /* data: alpha 1 */
+            ibl_texture_free(ctx, &t);
+        } else {
+            assert_int_equal(s, IBL_ERR_UNSUPPORTED);
+            assert_names_file(ctx, "part.exr");
+        }
+        ibl_context_destroy(ctx);
+    }
+    /* scanlines 60001 texels wide whose chunks store 4 bytes each */
+    const int32_t lines[4] = {0, 0, 60000, 3};
+    n = exr_file(b, lines, lines, 4);
+    path = test_path("lines.exr");
+    spit(path, b, n);
+    expect_refused(path, IBL_ERR_FORMAT);
+    free(b);
+}
+
+static void hdr_bomb(void **state)
+{
+    (void)state;
+    static const char text[] = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 65536 +X 65536\n\x02\x02\x01\x00";
+    const char *path = test_path("bomb.hdr");
+    spit(path, text, sizeof text - 1);
+    expect_refused(path, IBL_ERR_FORMAT);
+}
+
+/* Devices and pipes are sniffed from their first bytes: /dev/zero is not an image. A pipe
+ * carrying a real file (longer than the first 64 KiB piece) reads whole. */
+typedef struct pipe_job {
+    const char *fifo;
+    const uint8_t *bytes;
+    size_t size;
+} pipe_job;
+
+static void *pipe_writer(void *arg)
+{
+    pipe_job *j = arg;
+    FILE *f = fopen(j->fifo, "wb");
+    if (!f) return (void *)1;
+    size_t done = fwrite(j->bytes, 1, j->size, f);
+    fclose(f);
+    return done == j->size ? NULL : (void *)1;
+}
+
+static void devices_and_pipes(void **state)
+{
+    (void)state;
+    expect_refused("/dev/zero", IBL_ERR_FORMAT);
+    const char *fifo = test_path("pipe.exr");
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    pipe_job job = {fifo, NULL, 0};
+    uint8_t *file = slurp(test_data("city.exr"), &job.size); /* 213 KB: four pieces */
+    job.bytes = file;
+    pthread_t writer;
+    assert_int_equal(pthread_create(&writer, NULL, pipe_writer, &job), 0);
+    ibl_context *ctx = budget_context(0, 2);
+    ibl_texture t;
+    assert_int_equal(ibl_read_texture(ctx, fifo, NULL, &t, NULL), IBL_OK);
+    void *r = NULL;
+    pthread_join(writer, &r);
+    assert_null(r);
+    ibl_texture direct;
+    assert_int_equal(ibl_read_texture(ctx, test_data("city.exr"), NULL, &direct, NULL), IBL_OK);
+    assert_int_equal(t.width, direct.width);
+    assert_memory_equal(t.data, direct.data, (size_t)t.width * t.height * 16);
+    ibl_texture_free(ctx, &t);
+    ibl_texture_free(ctx, &direct);
+    ibl_context_destroy(ctx);
+    free(file);
+}
+
+/* Every reader refuses an image the budget cannot hold before decoding it, naming the file. */
+static void every_reader_checks_the_budget(void **state)
+{
+    (void)state;
+    ibl_context *ctx = budget_context(0, 2);
+    ibl_image im;
+    assert_int_equal(ibl_image_alloc(ctx, 512, 256, &im), IBL_OK);
+    for (size_t i = 0; i < (size_t)512 * 256 * 4; i++) im.pixels[i] = (float)(i % 13) * 0.25f;
+    ibl_cubemap cube;
+    assert_int_equal(ibl_cubemap_alloc(ctx, 128, 1, &cube), IBL_OK);
+    test_fill_cube(&cube, 0.5f, 1.0f, 2.0f);
+    ibl_texture tex = ibl_texture_from_cubemap(&cube);
+    static const char *const flat[] = {"b.hdr", "b.exr", "b.pfm", "b.png", "b.jpg"};
+    static const char *const containers[] = {"b.ktx2", "b.ktx", "b.dds"};
+    for (int i = 0; i < 5; i++)
+        assert_int_equal(ibl_write_image(ctx, test_path(flat[i]), &im, NULL), IBL_OK);
+    for (int i = 0; i < 3; i++)
+        assert_int_equal(ibl_write_texture(ctx, test_path(containers[i]), &tex, NULL), IBL_OK);
+    ibl_image_free(ctx, &im);
+    ibl_cubemap_free(ctx, &cube);
+    ibl_context_destroy(ctx);
+    /* 2 MiB and 1.5 MiB of floats: a budget of 1 MiB holds neither */
+    for (int i = 0; i < 8; i++) {
+        const char *path = test_path(i < 5 ? flat[i] : containers[i - 5]);
+        ctx = budget_context(MiB, 2);
+        ibl_texture t;
+        ibl_status s = ibl_read_texture(ctx, path, NULL, &t, NULL);
+        if (s == IBL_OK) fail_msg("%s was read within 1 MiB", path);
+        assert_int_equal(s, IBL_ERR_TOO_LARGE);
+        assert_names_file(ctx, path);
+        assert_non_null(strstr(ibl_context_message(ctx), "over the memory budget of 1.0 MiB"));
+        assert_int_equal(ibl_context_current_bytes(ctx), 0);
+        ibl_context_destroy(ctx);
+    }
+}
+
+/* ---- the CLI ------------------------------------------------------------------------- */
+
+/* --max-memory caps the total: the 256 GGX chain of city.exr holds 61 MiB at its peak in
+ * blocks of at most 10 MiB (when --max-memory capped one block, 40 let it through), so 40
+ * refuses it (one line, exit 1, no output) and 200 does not. */
+static void cli_max_memory_is_a_total(void **state)
+{
+    (void)state;
+    const char *text;
+    const char *out = test_path("chain.ktx2");
+    int rc = test_run_cli(&text, "prefilter -q '%s' -o '%s' --size 256 --max-memory 40",
+                          test_data("city.exr"), out);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(text, "over the memory budget of 40.0 MiB"));
+    assert_int_equal(strchr(text, '\n') - text + 1, (long)strlen(text)); /* one line */
+    assert_false(test_file_exists(out));
+    rc = test_run_cli(&text, "prefilter -q '%s' -o '%s' --size 256 --max-memory 200",
+                      test_data("city.exr"), out);
+    assert_int_equal(rc, 0);
+    assert_true(test_file_exists(out));
+    /* a reader's refusal names the file */
+    rc = test_run_cli(&text, "info '%s' --max-memory 4", test_data("city.exr"));
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(text, "city.exr: "));
+    assert_non_null(strstr(text, "over the memory budget of 4.0 MiB"));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(budget_counts_the_total),
+        cmocka_unit_test(budget_default),
+        cmocka_unit_test(budget_across_threads),
+        cmocka_unit_test(peak_of_a_read),
+        cmocka_unit_test(jpeg_bomb),
+        cmocka_unit_test(png_bomb),
+        cmocka_unit_test(png_of_zeros),
+        cmocka_unit_test(exr_bombs),
+        cmocka_unit_test(hdr_bomb),
+        cmocka_unit_test(devices_and_pipes),
+        cmocka_unit_test(every_reader_checks_the_budget),
+        cmocka_unit_test(cli_max_memory_is_a_total),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
