@@ -83,6 +83,7 @@ static void freed_blocks_are_reused(void **state)
 #endif
 }
 
+#if !defined(__SANITIZE_ADDRESS__)
 /* Bytes of [p, p + n) whose pages are in memory (mincore), whole pages inside the range. */
 static size_t resident_bytes(const unsigned char *p, size_t n)
 {
@@ -99,6 +100,7 @@ static size_t resident_bytes(const unsigned char *p, size_t n)
     free(vec);
     return count * page;
 }
+#endif
 
 /* Freed blocks keep their pages for reuse up to 256 MiB in all; beyond that the largest go
  * back to the kernel, so the resident memory follows what is in use. */
