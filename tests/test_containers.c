@@ -611,8 +611,8 @@ static void expect_refused(ibl_context *ctx, const container *ct, const uint8_t 
     }
     assert_null(out.data);
     assert_message_named(ctx, ct->name);
-    /* refused before allocating: never a memory-limit failure */
-    assert_null(strstr(ibl_context_message(ctx), "memory limit"));
+    /* refused before allocating: never a failure of the memory budget */
+    assert_null(strstr(ibl_context_message(ctx), "memory budget"));
 }
 
 static void malformed_inputs(void **state)

@@ -32,7 +32,7 @@ typedef enum ibl_status {
     IBL_OK = 0,
     IBL_ERR_INVALID_ARGUMENT, /* the caller passed something the API does not accept        */
     IBL_ERR_OUT_OF_MEMORY,    /* an allocation failed                                       */
-    IBL_ERR_TOO_LARGE,        /* the request exceeds the context's memory limit or size_t   */
+    IBL_ERR_TOO_LARGE,        /* the request exceeds the memory budget or size_t            */
     IBL_ERR_IO,               /* the operating system refused a read, write or rename       */
     IBL_ERR_FORMAT,           /* the input is malformed, truncated or inconsistent          */
     IBL_ERR_UNSUPPORTED,      /* well-formed, but a feature this library does not handle    */
