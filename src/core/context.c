@@ -72,6 +72,12 @@ static void *default_alloc(size_t bytes, void *user)
     return p;
 }
 
+static void default_free(void *ptr, void *user)
+{
+    (void)user;
+    free(ptr);
+}
+
 /* ---- the memory budget --------------------------------------------------------------- */
 
 /* Every block from ibl_alloc starts with a header holding its size, so that ibl_free can give
@@ -208,12 +214,6 @@ uint64_t ibl_context_current_bytes(const ibl_context *ctx)
 uint64_t ibl_context_peak_bytes(const ibl_context *ctx)
 {
     return ctx ? atomic_load_explicit(&((ibl_context *)ctx)->peak_bytes, memory_order_relaxed) : 0;
-}
-
-static void default_free(void *ptr, void *user)
-{
-    (void)user;
-    free(ptr);
 }
 
 static void run_indices(thread_pool *pool)

@@ -260,7 +260,10 @@ static int jpeg_find_frame(const uint8_t *b, size_t size, jpeg_frame *f)
     memset(f, 0, sizeof *f);
     size_t pos = 2; /* after SOI */
     while (pos + 4 <= size) {
-        if (b[pos] != 0xFF) return 0;
+        if (b[pos] != 0xFF) { /* padding between segments, which stb_image skips too */
+            pos++;
+            continue;
+        }
         uint8_t m = b[pos + 1];
         if (m == 0xFF) { /* fill byte */
             pos++;
