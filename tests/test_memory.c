@@ -106,6 +106,24 @@ static void budget_default(void **state)
     ibl_free(NULL, p);
 }
 
+/* A block freed through another context (same allocator) is freed, and neither count wraps:
+ * the bytes stay counted where they were allocated. */
+static void freed_through_another_context(void **state)
+{
+    (void)state;
+    ibl_context *a = budget_context(MiB, 1), *b = budget_context(MiB, 1);
+    void *p = ibl_alloc(a, 100 * KiB), *q = ibl_alloc(b, 10 * KiB);
+    ibl_free(b, p);
+    assert_int_equal(ibl_context_current_bytes(b), 10 * KiB);
+    assert_int_equal(ibl_context_current_bytes(a), 100 * KiB);
+    assert_non_null(p = ibl_alloc(b, 1000 * KiB)); /* b's count did not wrap */
+    ibl_free(b, p);
+    ibl_free(b, q);
+    assert_int_equal(ibl_context_current_bytes(b), 0);
+    ibl_context_destroy(a);
+    ibl_context_destroy(b);
+}
+
 /* Worker threads allocating at once never take the total over the budget, and every byte
  * comes back. 64 tasks each try to hold 8 blocks of 1 MiB under a 20 MiB budget. */
 typedef struct churn_job {
@@ -536,6 +554,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(budget_counts_the_total),
         cmocka_unit_test(budget_default),
+        cmocka_unit_test(freed_through_another_context),
         cmocka_unit_test(budget_across_threads),
         cmocka_unit_test(peak_of_a_read),
         cmocka_unit_test(jpeg_bomb),

@@ -112,8 +112,9 @@ uint64_t ibl_context_peak_bytes(const ibl_context *ctx);
 uint64_t ibl_default_max_bytes(void);
 
 /* Allocation through the context: counted against the memory budget, a message recorded on
- * failure. Blocks are aligned as the allocator's, and must be freed with ibl_free (with the
- * context that allocated them, or NULL for both). */
+ * failure. Blocks are aligned as the allocator's, and are freed with ibl_free: through the
+ * context that allocated them, which gets the bytes back (through another context with the
+ * same allocator they are freed but stay counted in the first), or NULL for both. */
 void *ibl_alloc(ibl_context *ctx, size_t bytes);
 void *ibl_calloc(ibl_context *ctx, size_t count, size_t size);
 void ibl_free(ibl_context *ctx, void *ptr);

@@ -81,12 +81,15 @@ static void default_free(void *ptr, void *user)
 /* ---- the memory budget --------------------------------------------------------------- */
 
 /* Every block from ibl_alloc starts with a header holding its size, so that ibl_free can give
- * the bytes back to the budget. 64 bytes keep the caller's block at the allocator's alignment
- * (64 with the default allocator: cache lines and AVX-512 loads). */
+ * the bytes back to the budget, and the context that counted them: a block freed through
+ * another context (or none) is not subtracted from that one's count, which would wrap. 64
+ * bytes keep the caller's block at the allocator's alignment (64 with the default allocator:
+ * cache lines and AVX-512 loads). */
 enum { BLOCK_HEADER = 64 };
 
 typedef struct block_header {
-    size_t bytes; /* as asked for by the caller */
+    size_t bytes;    /* as asked for by the caller */
+    uintptr_t owner; /* the context whose budget counts them (0: none); only compared */
 } block_header;
 
 /* A decimal number from a one-line file such as a cgroup limit; 0 if absent or "max". */
@@ -427,6 +430,7 @@ void *ibl_alloc(ibl_context *ctx, size_t bytes)
     }
     if (!h) return NULL;
     h->bytes = bytes;
+    h->owner = (uintptr_t)ctx;
     return (char *)h + BLOCK_HEADER;
 }
 
@@ -458,7 +462,7 @@ void ibl_free(ibl_context *ctx, void *ptr)
         free(h);
         return;
     }
-    ibl__budget_release(ctx, h->bytes);
+    if (h->owner == (uintptr_t)ctx) ibl__budget_release(ctx, h->bytes);
     ctx->desc.allocator.free(h, ctx->desc.allocator.user);
 }
 
