@@ -278,9 +278,13 @@ static ibl_status read_file(ibl_context *ctx, const char *path, int sniff, void 
     *bytes = NULL;
     *size = 0;
     int fd;
-    do fd = open(path, O_RDONLY | O_CLOEXEC);
+    /* O_NONBLOCK: opening a FIFO that no process writes would otherwise wait forever; reads
+     * block again below, and a FIFO without a writer then reads as empty */
+    do fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
     while (fd < 0 && errno == EINTR);
     if (fd < 0) return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    int flags = fcntl(fd, F_GETFL);
+    if (flags >= 0) fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
     struct stat st;
     if (fstat(fd, &st) != 0) {
         int e = errno;
