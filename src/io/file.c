@@ -6,6 +6,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <poll.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -271,6 +272,24 @@ static ibl_status read_stream(ibl_context *ctx, int fd, const char *path, int sn
 
 /* A regular file is read into one buffer of its size (which the budget may refuse); with
  * `sniff`, its first bytes must look like an image before anything is allocated. */
+/* A named FIFO that nobody writes would be waited for forever: wait a while for a writer's
+ * first bytes, then say so. (Anonymous pipes, e.g. a shell's <(...), always have a writer.) */
+enum { FIFO_WAIT_MS = 10000 };
+
+static ibl_status wait_for_fifo_writer(ibl_context *ctx, int fd, const char *path)
+{
+    struct stat link;
+    if (lstat(path, &link) != 0 || !S_ISFIFO(link.st_mode)) return IBL_OK;
+    struct pollfd p = {fd, POLLIN, 0};
+    int r;
+    do r = poll(&p, 1, FIFO_WAIT_MS);
+    while (r < 0 && errno == EINTR);
+    if (r == 0)
+        return ibl__fail(ctx, IBL_ERR_IO, "%s: a FIFO that nothing wrote to in %d s", path,
+                         FIFO_WAIT_MS / 1000);
+    return IBL_OK;
+}
+
 static ibl_status read_file(ibl_context *ctx, const char *path, int sniff, void **bytes, size_t *size)
 {
     if (!path || !bytes || !size)
@@ -283,6 +302,11 @@ static ibl_status read_file(ibl_context *ctx, const char *path, int sniff, void 
     do fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
     while (fd < 0 && errno == EINTR);
     if (fd < 0) return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    ibl_status waited = wait_for_fifo_writer(ctx, fd, path);
+    if (waited != IBL_OK) {
+        close(fd);
+        return waited;
+    }
     int flags = fcntl(fd, F_GETFL);
     if (flags >= 0) fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
     struct stat st;
