@@ -33,10 +33,11 @@ hyperfine -w 1 -r 5 -N \
   "$BUILD/ibl lut -q -o $OUT/l.ktx2" \
   "$BUILD/ibl render -q $IN -o $OUT/r.png --specular-size 64"
 hyperfine -w 1 -r 5 -N "$BUILD/ibl prefilter -q $IN -o $OUT/p.ktx2 --size 256"
-# the 512-face case needs a 2048x1024 input: the same HDRI resampled up by ibl, written
-# as float RGB with OpenEXR's ZIP (the writer's default compression). --format rgb32f: the
-# resampled cube's alpha is 1 only to within float rounding (0.9999998..1.0000004), which would
-# otherwise make the writer keep a fourth channel that no real HDRI has.
+# the 512-face case (budget: 400 ms for the whole command) needs a 2048x1024 input: the same
+# HDRI resampled up by ibl, written as float RGB with OpenEXR's ZIP (the writer's default
+# compression). --format rgb32f: the resampled cube's alpha is 1 only to within float rounding
+# (0.9999998..1.0000004), which would otherwise make the writer keep a fourth channel that no
+# real HDRI has.
 "$BUILD/ibl" convert -q "$IN" -o "$OUT/cube512.ktx2" --size 512 --format rgba32f
 "$BUILD/ibl" convert -q "$OUT/cube512.ktx2" -o "$OUT/big.exr" --format rgb32f
 hyperfine -w 1 -r 3 -N "$BUILD/ibl prefilter -q $OUT/big.exr -o $OUT/p512.ktx2 --size 512"

@@ -637,8 +637,9 @@ static void equirect_energy_kept(void **state)
     ibl_image sun;
     assert_int_equal(ibl_image_alloc(ctx, W, H, &sun), IBL_OK);
     struct { int x, y; double tol; } spots[] = {
-        /* issue 2: within 0.5% at any cube size; (10, 30) straddles the edge of the directly
-         * integrated polar region at cube 16 (3 texels = 20 degrees) */
+        /* within 0.5%, the acceptance bound of a conversion, at any cube size; (10, 30)
+         * straddles the edge of the directly integrated polar region at cube 16 (3 texels =
+         * 20 degrees) */
         {256, 128, 0.005}, {0, 100, 0.005}, {300, 60, 0.005}, {77, 20, 0.005},
         {400, 1, 0.005},   {10, 7, 0.005},  {100, 254, 0.005}, {10, 30, 0.005},
     };

@@ -1,16 +1,16 @@
 /*
  * ibl/brdf.h - BRDF lookup tables for image-based lighting.
  *
- * 1. The split-sum GGX table (Karis 2013, "Real Shading in Unreal Engine 4"; seed 004
- *    IntegrateEnvBRDF): ambient specular = prefiltered(R, r) * (F0 * A + F90 * B), with
- *    A, B the directional albedo of the GGX specular lobe split by Schlick's Fresnel, over
+ * 1. The split-sum GGX table (Karis 2013, "Real Shading in Unreal Engine 4"; the JAGE 2015
+ *    article's IntegrateEnvBRDF): ambient specular = prefiltered(R, r) * (F0 * A + F90 * B),
+ *    with A, B the directional albedo of the GGX specular lobe split by Schlick's Fresnel, over
  *    x = n.v and y = perceptual roughness r (alpha = r^2). Optional extra channels: the
  *    directional albedo E = A + B and its cosine-weighted average E_avg for multiple-scattering
  *    energy compensation, and the Charlie sheen albedo (Estevez & Kulla 2017 distribution,
  *    Neubelt & Pettineo 2013 visibility).
  *
- * 2. The tri-Ace AmbientBRDF (seed 000 "Implement Ambient BRDF"): a 3D table over
- *    U = n.v, V = shininess, W = F0 of the directional albedo of the seed's normalised
+ * 2. The tri-Ace AmbientBRDF (the tri-Ace talk's "Implement Ambient BRDF"): a 3D table over
+ *    U = n.v, V = shininess, W = F0 of the directional albedo of tri-Ace's normalised
  *    Blinn-Phong specular (c1 s + c2) F(w.h) (n.h)^s / max(n.w', n.w), to be multiplied by a
  *    prefiltered map normalised by its lobe weights; and the compact 2D two-channel form
  *    (Schlick is affine in F0: value = F0 * X + Y).
@@ -87,7 +87,7 @@ typedef enum ibl_shininess_spacing {
 } ibl_shininess_spacing;
 
 typedef enum ibl_blinn_normalization {
-    IBL_BLINN_TRIACE_FIT = 0, /* the seed's linear fit 0.0397436 s + 0.0856832                       */
+    IBL_BLINN_TRIACE_FIT = 0, /* tri-Ace's linear fit 0.0397436 s + 0.0856832                        */
     IBL_BLINN_EXACT     /* (s + 2)(s + 4) / (8 pi (2^(-s/2) + s)): albedo 1 at n.v = 1, F = 1 */
 } ibl_blinn_normalization;
 
@@ -105,19 +105,19 @@ typedef struct ibl_ambient_brdf_desc {
 /* Shininess at the centre of row j, (j + 0.5) / size_shininess along the spacing. A shader
  * maps shininess s back to v = log(s / min) / log(max / min) (log spacing). */
 double ibl_ambient_brdf_row_shininess(const ibl_ambient_brdf_desc *desc, int j);
-/* The normalisation factor of the seed's specular term at shininess s. */
+/* The normalisation factor of the tri-Ace specular term at shininess s. */
 double ibl_blinn_normalization_factor(ibl_blinn_normalization normalization, double s);
 
 /* The 3D volume: width U = n.v, height V = shininess, depth W = F0 (slice k at
  * F0 = (k + 0.5) / size_f0). R = the AmbientBRDF (directional albedo of the specular term),
- * G = the exact diffuse factor of the seed's BRDF, 1 - F0 (the diffuse term
+ * G = the exact diffuse factor of the tri-Ace BRDF, 1 - F0 (the diffuse term
  * Rd/pi (1 - F0) integrates to Rd (1 - F0) IEM; see docs/BRDF.md), B = 0, A = 1. */
 ibl_status ibl_ambient_brdf_volume(ibl_context *ctx, const ibl_ambient_brdf_desc *desc,
                                    ibl_texture *out);
 /* The compact 2D form: width U, height V; R = X, G = Y with AmbientBRDF = F0 * X + Y. */
 ibl_status ibl_ambient_brdf_table(ibl_context *ctx, const ibl_ambient_brdf_desc *desc,
                                   ibl_image *out);
-/* One value in float64: directional albedo of the seed's specular term. */
+/* One value in float64: directional albedo of the tri-Ace specular term. */
 double ibl_ambient_brdf(double nv, double shininess, double f0,
                         ibl_blinn_normalization normalization, int order);
 

@@ -1,6 +1,6 @@
 /*
  * ibl/edge_fixup.h - cube edge fixups for hardware without seamless cube filtering
- * (tri-Ace seeds 000/001 "Edge overlapping" (1)-(2), "Bent Phong filter kernel"; the
+ * (the tri-Ace talk's "Edge overlapping" (1)-(2), "Bent Phong filter kernel"; the
  * NVTT/cmft "warp" with its shader-side lookup). docs/EDGE_FIXUP.md has the shader code.
  *
  * Two kinds of fixup:

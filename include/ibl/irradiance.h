@@ -7,7 +7,7 @@
  * (IBL_IRRADIANCE_SCALE_FULL). Alpha is 1. docs/DIFFUSE.md has the design and measured errors.
  *
  * Methods:
- *  - CONVOLVE (default; the seed's "Generate IEM (2)"): the radiance is reduced area-correctly
+ *  - CONVOLVE (default; tri-Ace 2010 "Generate IEM (2)"): the radiance is reduced area-correctly
  *    to a small cube (8x8x6 by default) and convolved directly with exact texel solid angles.
  *    Each output texel's weights are normalised to sum to 1 (times pi for FULL), so a constant
  *    environment gives exactly that constant.

@@ -61,7 +61,7 @@ ibl_status ibl_sh_project_equirect(ibl_context *ctx, const ibl_image *image, int
 ibl_status ibl_sh_project_samples(int bands, size_t count, const double *dirs,
                                   const double *weights, const float *rgb, size_t stride,
                                   ibl_sh *out);
-/* The seed's cheap dynamic path: SH from six values only, the face-centre samples of one level
+/* tri-Ace's cheap dynamic path: SH from six values only, the face-centre samples of one level
  * (bilinear at each face centre). On a 1x1 level they are the face means, on larger levels
  * point values at the axes; either way each band is corrected so that a radiance in
  * span{Y00, Y1m, Y20, Y22} is recovered exactly. The xy, yz, xz terms and bands >= 3 cannot

@@ -7,15 +7,15 @@
  *                coefficients) and the BRDF tables, all plain data (see docs/SHADING.md);
  *                bake.h makes and loads bakes and gives their probes. No file I/O here.
  *   ibl_shade    ambient diffuse + specular radiance at a surface point for a glTF
- *                metal/roughness (GGX) or the seed's normalised Blinn-Phong material, with
- *                specular occlusion and the seed's ambient-specular compositions.
+ *                metal/roughness (GGX) or tri-Ace's normalised Blinn-Phong material, with
+ *                specular occlusion and tri-Ace's ambient-specular compositions.
  *   volumes      local probes: influence volumes with priority blending, parallax correction,
  *                the IBL offset, the shininess hack, the two-environment switch, tiled culling.
- *   atlas        the seed-003 2D mip atlas of a prefiltered chain and material channel packing.
+ *   atlas        Daqi 2016's 2D mip atlas of a prefiltered chain and material channel packing.
  *
  * Conventions: world frame right-handed, +Y up (docs/CONVENTIONS.md). V points from the
  * surface toward the eye; N is unit length. Roughness is the perceptual (glTF) roughness r,
- * alpha = r^2. Shininess is the Blinn-Phong exponent of the seed's BRDF (tri-Ace 2010).
+ * alpha = r^2. Shininess is the exponent of tri-Ace 2010's normalised Blinn-Phong BRDF.
  * Radiances are linear RGB. The hot-path functions take validated data and never fail.
  */
 #ifndef IBL_SHADE_H
@@ -50,7 +50,7 @@ typedef struct ibl_splitsum_view {
     ibl_table_axis n_dot_v, roughness;
 } ibl_splitsum_view;
 
-/* The seed's AmbientBRDF volume (tri-Ace 2010, "AmbientBRDF texture usage"): the integral of
+/* The AmbientBRDF volume (tri-Ace 2010, "AmbientBRDF texture usage"): the integral of
  * the normalised Blinn-Phong specular lobe times n.l for (n.v, shininess, F0). Laid out
  * [f0][shininess][n_dot_v][channel]; channel 0 is used. */
 typedef struct ibl_ambient_brdf_view {
@@ -88,7 +88,7 @@ typedef struct ibl_level_mapping {
     float shininess[IBL_MAX_LEVELS]; /* shininess of level k, decreasing; an all-zero table
                                          is derived from roughness[]                          */
     ibl_lod_fn lod_from_roughness;   /* optional: overrides the table (e.g. a bake's formula) */
-    ibl_lod_fn lod_from_shininess;   /* optional, likewise; e.g. the seed's a - 0.5 log2 n    */
+    ibl_lod_fn lod_from_shininess;   /* optional, likewise; e.g. tri-Ace's a - 0.5 log2 n     */
     void *user;                      /* passed to the two functions                           */
 } ibl_level_mapping;
 
@@ -131,7 +131,7 @@ float ibl_probe_lod_from_shininess(const ibl_probe *probe, float shininess);
 /* Prefiltered radiance along dir at a fractional lod: trilinear between the two levels;
  * lod in [-1, 0) blends level 0 with the mirror when one is present. RGB. */
 void ibl_probe_sample_specular(const ibl_probe *probe, float lod, ibl_vec3 dir, float out[3]);
-/* The seed's IEM: E(n)/pi, the radiance a white Lambertian surface reflects. RGB. */
+/* The IEM (tri-Ace 2010): E(n)/pi, the radiance a white Lambertian surface reflects. RGB. */
 void ibl_probe_irradiance(const ibl_probe *probe, ibl_vec3 n, float out[3]);
 /* Irradiance E(n) from 9 SH coefficients of a kind (RGB). */
 void ibl_sh9_eval_irradiance(const float sh[9][3], ibl_sh_kind kind, ibl_vec3 n, float out[3]);
@@ -170,7 +170,7 @@ typedef enum ibl_so_formula {
     IBL_SO_COUNT
 } ibl_so_formula;
 
-/* The seed's ways of putting ambient specular, ambient diffuse and direct specular together
+/* tri-Ace's ways of putting ambient specular, ambient diffuse and direct specular together
  * (tri-Ace 2010 "Ambient specular term computation", "AS term computation (1)-(4)",
  * "Applying to the entire specular term"). s_d is the direct specular. */
 typedef enum ibl_ambient_mix {
@@ -190,7 +190,7 @@ typedef enum ibl_energy_compensation {
 } ibl_energy_compensation;
 
 typedef enum ibl_bp_diffuse {
-    IBL_BP_DIFFUSE_AMBIENT_BRDF = 0, /* Rd (1 - AmbientBRDF): the seed's optimisation                 */
+    IBL_BP_DIFFUSE_AMBIENT_BRDF = 0, /* Rd (1 - AmbientBRDF): tri-Ace's optimisation                  */
     IBL_BP_DIFFUSE_F0        /* Rd (1 - F0): the BRDF's own diffuse weight                    */
 } ibl_bp_diffuse;
 
@@ -208,8 +208,8 @@ float ibl_specular_occlusion(ibl_so_formula f, float n_dot_e, float ao, float ro
 /* Horizon fade of reflections that point below the geometric surface (Russell 2015,
  * "Horizon occlusion for normal mapped reflections", Marmoset): saturate(1 + k R.Ng)^2. */
 float ibl_horizon_occlusion(ibl_vec3 r, ibl_vec3 geometric_normal, float k);
-/* The seed's compositions, per channel. Returns the specular total (what "final" is in
- * the seed); the diffuse term (diffuse_ambient * albedo * AO) is added by the caller. */
+/* tri-Ace's compositions, per channel. Returns the specular total (what "final" is in
+ * the talk); the diffuse term (diffuse_ambient * albedo * AO) is added by the caller. */
 void ibl_ambient_mix_apply(ibl_ambient_mix mix, const float s_d[3], const float diffuse_ambient[3],
                            const float specular_ambient[3], const float albedo[3], float ao,
                            float so, float out[3]);
@@ -267,7 +267,7 @@ float ibl_fresnel_schlick(float f0, float v_dot_h);
 float ibl_ggx_d(float alpha, float n_dot_h);
 /* Height-correlated Smith visibility V = G / (4 n.l n.v) (Heitz 2014). */
 float ibl_smith_ggx_v(float alpha, float n_dot_v, float n_dot_l);
-/* The seed's normalisation (0.0397436 n + 0.0856832) (tri-Ace 2010). */
+/* The tri-Ace normalisation, 0.0397436 n + 0.0856832 (tri-Ace 2010). */
 float ibl_blinn_phong_norm(float shininess);
 
 /* ------------------------------------------------------------------------------------------ */
@@ -288,33 +288,34 @@ typedef struct ibl_volume {
 float ibl_volume_size(const ibl_volume *v); /* its volume (for the priority order) */
 float ibl_volume_weight(const ibl_volume *v, ibl_vec3 p);
 
-/* Priority blending (seed 004 "Influence Volume"): in the order given (smallest volume
- * first, from ibl_volume_sort) each volume takes weight_i * (1 - sum of the weights before
- * it). weights[i] receives the final weight of volumes[i]; their sum is <= 1 and the rest,
- * returned, belongs to the global (sky) probe. */
+/* Priority blending (the JAGE 2015 article's "Influence Volume"): in the order given
+ * (smallest volume first, from ibl_volume_sort) each volume takes
+ * weight_i * (1 - sum of the weights before it). weights[i] receives the final weight of
+ * volumes[i]; their sum is <= 1 and the rest, returned, belongs to the global (sky) probe. */
 float ibl_volume_blend(const ibl_volume *volumes, const int *order, int count, ibl_vec3 p,
                        float *weights);
-/* Sorts indices by increasing volume size, ties by index (insertion sort, as the seed). */
+/* Sorts indices by increasing volume size, ties by index (insertion sort, as the JAGE 2015
+ * article does). */
 void ibl_volume_sort(const ibl_volume *volumes, int count, int *order);
 
-/* Parallax correction (Lagarde 2012; seed 004): intersect the ray p + t r with the proxy
- * (box or sphere, p inside it) and return the normalised direction from the probe's capture
- * position to the hit. Returns r unchanged when p is outside the proxy. */
+/* Parallax correction (Lagarde 2012; the JAGE 2015 article): intersect the ray p + t r with
+ * the proxy (box or sphere, p inside it) and return the normalised direction from the probe's
+ * capture position to the hit. Returns r unchanged when p is outside the proxy. */
 ibl_vec3 ibl_parallax_correct(const ibl_volume *proxy, ibl_vec3 probe_position, ibl_vec3 p,
                               ibl_vec3 r);
-/* The seed's IBL offset: R' = normalize(c (P_obj - P_IBL) + R) (tri-Ace 2010). */
+/* The IBL offset: R' = normalize(c (P_obj - P_IBL) + R) (tri-Ace 2010). */
 ibl_vec3 ibl_offset_reflection(ibl_vec3 r, ibl_vec3 p_obj, ibl_vec3 p_ibl, float c);
-/* The seed's shininess hack for punctual lights:
+/* The shininess hack for punctual lights:
  * shininess' = shininess * saturate(60 / light_size * (1 - attenuation))^2 (tri-Ace 2010). */
 float ibl_shininess_hack(float shininess, float light_size, float attenuation);
 
-/* The seed-003 environment switch: weight of the NEW environment for an object of extent
+/* The environment switch (Daqi 2016): weight of the NEW environment for an object of extent
  * `size` centred at `position` crossing the border at `border`, all projected on the line
  * perpendicular to the border and measured toward the new environment:
  * saturate((position - border) / size + 0.5). */
 float ibl_environment_switch(float position, float border, float size);
 
-/* Tiled probe culling (seed 004 "Tiled Probe Culling"), on the CPU. */
+/* Tiled probe culling (the JAGE 2015 article's "Tiled Probe Culling"), on the CPU. */
 typedef struct ibl_screen_rect {
     int x0, y0, x1, y1; /* pixels [x0, x1) x [y0, y1); empty if x0 >= x1 or y0 >= y1 */
 } ibl_screen_rect;
@@ -339,13 +340,13 @@ ibl_status ibl_tile_probes(ibl_context *ctx, const ibl_screen_rect *rects, const
 void ibl_tile_lists_free(ibl_context *ctx, ibl_tile_lists *lists);
 
 /* ------------------------------------------------------------------------------------------ */
-/* The seed-003 mip atlas (src/shade/atlas.c)                                                 */
+/* The mip atlas of Daqi 2016 (src/shade/atlas.c)                                             */
 
 /* A prefiltered chain in one 2D image: every level as a 3x2 grid of its faces
  * (+X -X +Y / -Y +Z -Z), each face cell with a gutter of `gutter` texels filled from the
  * neighbouring faces; level 0 on top, level 1 below it on the left, and every level >= 2
  * kept at level 2's face size in slots to the right of level 1 and then in rows below
- * (seed 003 6.1: no level smaller than level 2, so UVs never fall outside a tiny level). */
+ * (Daqi 2016, 6.1: no level smaller than level 2, so UVs never fall outside a tiny level). */
 typedef struct ibl_atlas_layout {
     int width, height;
     int levels;
@@ -377,7 +378,7 @@ void ibl_atlas_uv(const ibl_atlas_layout *layout, int level, ibl_vec3 dir, float
 void ibl_atlas_sample(const ibl_image *atlas, const ibl_atlas_layout *layout, float lod,
                       ibl_vec3 dir, float out[4]);
 
-/* Seed-003 channel packing: metalness R, roughness G, AO B, transmittance A. Missing inputs
+/* Channel packing (Daqi 2016): metalness R, roughness G, AO B, transmittance A. Missing inputs
  * (NULL) give 0, 1, 1, 0 respectively; present inputs must share one size and their channel 0
  * (red) is used. */
 ibl_status ibl_pack_material_channels(ibl_context *ctx, const ibl_image *metalness,

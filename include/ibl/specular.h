@@ -9,14 +9,15 @@
  *   ibl_cubemap out; ibl_specular_info info;
  *   ibl_specular_prefilter(ctx, &src, &d, &out, &info);   // out: 6 faces x levels
  *
- * Kernels (seeds 000/001 "Generate REM" .. "Spherical Phong kernel", 004 "Cubemap Convolution"):
+ * Kernels (tri-Ace 2010 "Generate REM" .. "Spherical Phong kernel"; the JAGE 2015 article's
+ * "Cubemap Convolution"):
  *   phong: P(R) = int L(l) max(R.l,0)^n dl / int max(R.l,0)^n dl, n = shininess of the level;
- *   blinn: the Blinn lobe (n.h)^s through the seed's fit cos^n(t) ~ cos^(f n)(t/2): Phong with
+ *   blinn: the Blinn lobe (n.h)^s through tri-Ace's fit cos^n(t) ~ cos^(f n)(t/2): Phong with
  *          n = s / f (f = blinn_factor, default 4.2; cmft and CubeMapGen use 4);
  *   ggx:   P(n) = int L(l) D(h) max(n.l,0) dl / int D(h) max(n.l,0) dl, v = n, h = norm(n+l),
  *          alpha = roughness^2 (the split-sum prefilter without sampling noise);
- *   box:   the plain area-weighted mip chain (the seed's fastest dynamic profile);
- *   gauss: a 2D Gaussian blur per face (the seed's second dynamic profile).
+ *   box:   the plain area-weighted mip chain (tri-Ace's fastest dynamic profile);
+ *   gauss: a 2D Gaussian blur per face (tri-Ace's second dynamic profile).
  *
  * Methods: IBL_METHOD_FAST (default; deterministic multilevel summation over the source's
  * moment pyramid, see docs/SPECULAR.md) and IBL_METHOD_REFERENCE (the exact integral of the
@@ -50,8 +51,8 @@ typedef enum ibl_specular_method {
 
 /* How a level is tied to a roughness (GGX) or a shininess (Phong family). */
 typedef enum ibl_specular_mapping {
-    IBL_MAPPING_DEFAULT = 0, /* GGX: linear; phong/blinn/box/gauss: seed                      */
-    IBL_MAPPING_TRIACE,        /* seeds 000/001: lod = a - 0.5 log2(shininess), a = 0.5 log2(max) */
+    IBL_MAPPING_DEFAULT = 0, /* GGX: linear; phong/blinn/box/gauss: triace                    */
+    IBL_MAPPING_TRIACE,        /* tri-Ace 2010: lod = a - 0.5 log2(shininess), a = 0.5 log2(max) */
     IBL_MAPPING_LINEAR,      /* glTF IBL-Sampler: roughness = lod / (levels - 1)             */
     IBL_MAPPING_FILAMENT,    /* Filament: lod/(levels-1) = r (2 - r)                          */
     IBL_MAPPING_UNREAL,      /* UE4: mip = levels - 1 - (1 - 1.2 log2 r)                      */
@@ -68,8 +69,8 @@ typedef struct ibl_specular_desc {
     int levels;                  /* 0: full chain down to 1x1                                    */
     ibl_specular_mapping mapping;
     float shininess_min;         /* Phong family range; 0: 1                                     */
-    float shininess_max;         /* 0: 1000 (the seed's 32x32 configurations)                    */
-    float blinn_factor;          /* 0: 4.2 (seed fit); cmft/CubeMapGen use 4                      */
+    float shininess_max;         /* 0: 1000 (tri-Ace's 32x32 configurations)                     */
+    float blinn_factor;          /* 0: 4.2 (tri-Ace's fit); cmft/CubeMapGen use 4                */
     const float *table;          /* IBL_MAPPING_TABLE: roughness (GGX) or shininess per level   */
     int table_count;             /* must equal the number of levels                              */
     int mirror;                  /* level 0 is the unfiltered source (see docs/SPECULAR.md)      */
@@ -97,10 +98,10 @@ typedef struct ibl_specular_info {
 
 const char *ibl_specular_filter_name(ibl_specular_filter filter);   /* "ggx", "phong", ...   */
 int ibl_specular_filter_from_name(const char *name, ibl_specular_filter *out); /* 0: unknown */
-const char *ibl_specular_mapping_name(ibl_specular_mapping mapping); /* "seed", "linear", ... */
+const char *ibl_specular_mapping_name(ibl_specular_mapping mapping); /* "triace", "linear", ... */
 int ibl_specular_mapping_from_name(const char *name, ibl_specular_mapping *out);
 
-/* The seed's configurations and the modern presets: "dynamic-box16", "dynamic-gauss32",
+/* tri-Ace's configurations and the modern presets: "dynamic-box16", "dynamic-gauss32",
  * "dynamic-phong16", "dynamic-phong32", "static-phong32", "static-phong64", "gltf",
  * "filament", "unreal", "unity". Fills *desc (other fields zero); 0 for an unknown name. */
 int ibl_specular_preset(const char *name, ibl_specular_desc *desc);

@@ -1,5 +1,5 @@
-/* The tri-Ace AmbientBRDF (seed 000 "Decompose integral", "Implement Ambient BRDF",
- * "AmbientBRDF texture usage"): the directional albedo of the seed's normalised Blinn-Phong
+/* The tri-Ace AmbientBRDF (tri-Ace 2010 "Decompose integral", "Implement Ambient BRDF",
+ * "AmbientBRDF texture usage"): the directional albedo of the talk's normalised Blinn-Phong
  * specular term over (n.v, shininess, F0), by the quadrature of brdf_common.c. The table is
  * the albedo of the whole term, (n.h)^s included; the prefiltered map it multiplies is
  * normalised by its lobe weights (docs/BRDF.md explains why the literal reading fails). */
@@ -19,7 +19,7 @@ double ibl_blinn_normalization_factor(ibl_blinn_normalization normalization, dou
     if (normalization == IBL_BLINN_EXACT)
         /* Gotanda 2010: makes the F = 1 albedo exactly 1 at n.v = 1 (derived in docs/BRDF.md). */
         return (s + 2.0) * (s + 4.0) / (8.0 * IBL_PI * (exp2(-0.5 * s) + s));
-    /* Seed 000 "Equations": the linear fit. */
+    /* tri-Ace 2010 "Equations": the linear fit. */
     return 0.0397436 * s + 0.0856832;
 }
 

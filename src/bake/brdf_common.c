@@ -170,7 +170,7 @@ static void evaluate(const ibl__lobe_params *p, double mu, double sv, double ch,
         }
         break;
     default:
-        /* Seed 000: norm (n.h)^s F / max(n.l, n.v), with (n.h)^s dh the measure. */
+        /* tri-Ace 2010: norm (n.h)^s F / max(n.l, n.v), with (n.h)^s dh the measure. */
         for (int j = 0; j < n; j++) {
             double nl = nlv[j], m = nl > mu ? nl : mu;
             wgt[j] *= 4.0 * p->norm * nl * vhv[j] / m;

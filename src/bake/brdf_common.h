@@ -3,7 +3,7 @@
  *     E(mu) = integral over the hemisphere of f(l, v) (n.l) dl,   n.v = mu,
  * computed in half-vector coordinates (theta_h, phi) with the lobe's exact importance map
  * u -> theta_h, Gauss-Legendre in u and in phi, and the integration domain cut exactly where
- * the integrand has kinks (n.l = 0, and n.l = n.v for the seed's max(n.l, n.v)) so that each
+ * the integrand has kinks (n.l = 0, and n.l = n.v for tri-Ace's max(n.l, n.v)) so that each
  * piece is smooth and Gauss-Legendre converges fast. docs/BRDF.md has the derivation. */
 #ifndef IBL_BRDF_COMMON_H
 #define IBL_BRDF_COMMON_H
@@ -39,7 +39,7 @@ typedef enum ibl__lobe {
     IBL__LOBE_GGX_CORRELATED, /* GGX D, height-correlated Smith G2                     */
     IBL__LOBE_GGX_SEPARABLE,  /* GGX D, Schlick-GGX G1(l) G1(v) with k = alpha / 2        */
     IBL__LOBE_CHARLIE,        /* Charlie D (Estevez-Kulla), Neubelt-Pettineo visibility */
-    IBL__LOBE_BLINN           /* the seed's (c1 s + c2) (n.h)^s / max(n.l, n.v)          */
+    IBL__LOBE_BLINN           /* tri-Ace's (c1 s + c2) (n.h)^s / max(n.l, n.v)           */
 } ibl__lobe;
 
 typedef struct ibl__lobe_params {

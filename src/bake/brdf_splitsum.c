@@ -1,5 +1,5 @@
-/* The split-sum GGX table (Karis 2013; seed 004 IntegrateEnvBRDF) with optional
- * multiple-scattering (Kulla & Conty 2017: E and E_avg) and Charlie sheen channels
+/* The split-sum GGX table (Karis 2013; the JAGE 2015 article's IntegrateEnvBRDF) with
+ * optional multiple-scattering (Kulla & Conty 2017: E and E_avg) and Charlie sheen channels
  * (Estevez & Kulla 2017 distribution, Neubelt & Pettineo 2013 visibility), by the
  * deterministic quadrature of brdf_common.c. */
 #include "ibl/brdf.h"

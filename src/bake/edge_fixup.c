@@ -1,6 +1,6 @@
 /* Cube edge fixups for hardware without seamless cube filtering.
- * tri-Ace, "Real-time Physically Based Rendering - Implementation" (seeds 000/001): "Edge
- * overlapping" (1)-(2) and "Bent Phong filter kernel"; the warp of NVTT's CubeSurface as
+ * Gotanda and Shoji (tri-Ace), "Real-time Physically Based Rendering - Implementation", 2010:
+ * "Edge overlapping" (1)-(2) and "Bent Phong filter kernel"; the warp of NVTT's CubeSurface as
  * used by cmft (texel centre coordinate u -> u + a*u^3, a = n^2/(n-1)^3) with its lookup
  * re-derived here as the exact inverse. docs/EDGE_FIXUP.md defines every method precisely
  * and gives the shader code each one needs. */
@@ -70,7 +70,7 @@ static double centre_coord(int i, int n) { return (2.0 * i + 1.0) / n - 1.0; }
 /* ---- bent: tri-Ace "Bent Phong filter kernel" ---- */
 
 /* Fraction of the target angle used: linear in the blur radius from the small-radius
- * fraction at 0 to the large-radius fraction at large_radius (seed: 50% small, 100% large). */
+ * fraction at 0 to the large-radius fraction at large_radius (tri-Ace: 50% small, 100% large). */
 static double bent_fraction(const ibl_bent_desc *desc, float blur_radius)
 {
     double small = 0.5, large = 1.0, at = 0.5;

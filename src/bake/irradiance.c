@@ -1,5 +1,5 @@
 /* Irradiance environment maps: direct convolution of a reduced cube with exact texel solid
- * angles (seed 000, "Generate IEM (2)"), the full-resolution double reference and the SH
+ * angles (tri-Ace 2010, "Generate IEM (2)"), the full-resolution double reference and the SH
  * method. Normalisation and measured errors: docs/DIFFUSE.md. */
 #include "ibl/irradiance.h"
 #include "core/context_internal.h"
@@ -97,9 +97,9 @@ ibl_status ibl_irradiance_plan_create(ibl_context *ctx, const ibl_irradiance_pla
         goto done;
     }
     /* second pass: weights dOmega * cos, normalised so each output texel's weights sum to 1
-     * (the seed stores this normalising coefficient in its texture): a constant environment
-     * stays exactly constant, and the discretisation error of the cosine lobe's integral,
-     * which should be pi, does not show up as a brightness error */
+     * (the tri-Ace talk stores this normalising coefficient in its texture): a constant
+     * environment stays exactly constant, and the discretisation error of the cosine lobe's
+     * integral, which should be pi, does not show up as a brightness error */
     double target = scale == IBL_IRRADIANCE_SCALE_FULL ? IBL_PI : 1.0;
     for (size_t i = 0; i < nd; i++) {
         const double *n = ddir + 3 * i;

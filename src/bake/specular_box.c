@@ -1,5 +1,5 @@
-/* The seed's fastest dynamic profile: a plain box-filtered mip chain (tri-Ace seed 000/001
- * "Generate PMREM (1)"), with the level <-> shininess table the seed fits for it ("Mipmap
+/* tri-Ace's fastest dynamic profile: a plain box-filtered mip chain (tri-Ace 2010
+ * "Generate PMREM (1)"), with the level <-> shininess table the talk fits for it ("Mipmap
  * LOD": lod = a - 0.5 log2(shininess), "fitted for both Box Filter Kernel and Phong").
  *
  * The fit (docs/EDGE_FIXUP.md, "Box chain shininess"): a texel of level l is the exact

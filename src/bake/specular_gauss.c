@@ -1,6 +1,6 @@
-/* The seed's second dynamic profile: a 2D Gaussian blur of each face (tri-Ace seed 000/001
+/* tri-Ace's second dynamic profile: a 2D Gaussian blur of each face (tri-Ace 2010
  * "Generate PMREM (2)"). Not physically based on purpose: it works in texel space, ignores
- * the texels' solid angles, and never filters across a face edge (the seed's point: edges
+ * the texels' solid angles, and never filters across a face edge (the talk's point: edges
  * band; pair it with an edge fixup). Each level starts from the area-correct box chain.
  *
  * Sigma (docs/EDGE_FIXUP.md, "Gaussian sigma"): a normalised Phong lobe cos^s(theta) has

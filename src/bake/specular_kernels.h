@@ -14,7 +14,7 @@
 ibl_status ibl__specular_box(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst);
 
 /* A 2D Gaussian blur within each face of every level of the box chain (no filtering across
- * face edges, as in the seed), with sigma from the level's shininess (ibl__gauss_sigma). */
+ * face edges, as in the tri-Ace talk), with sigma from the level's shininess (ibl__gauss_sigma). */
 ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst,
                                const float *shininess_per_level);
 
@@ -23,7 +23,7 @@ ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cub
  * (area-mean texels read back with seamless bilinear filtering). */
 float ibl__box_level_shininess(int size, int level);
 
-/* The seed's lod = a - 0.5 * log2(shininess) for the box chain: a fitted by least squares
+/* tri-Ace's lod = a - 0.5 * log2(shininess) for the box chain: a fitted by least squares
  * over the levels whose fitted shininess lies in [shininess_min, shininess_max] (a bound
  * <= 0 means none; all levels if no level lies in the range). */
 float ibl__box_lod_offset(int size, int levels, float shininess_min, float shininess_max);

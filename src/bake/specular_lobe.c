@@ -1,7 +1,7 @@
 /* The lobes of the Phong family and of GGX as functions of x = cos(angle to the lobe axis),
  * with the derivatives the fast method's second-order leaves need and the log slope the
- * reference uses to split texels. Phong: Phong 1975 / seeds 000/001 "Spherical Phong kernel";
- * Blinn through the seeds' fit cos^n(t) ~ cos^(4.2 n)(t/2); GGX: Walter et al. 2007 with v = n
+ * reference uses to split texels. Phong: Phong 1975 / tri-Ace 2010 "Spherical Phong kernel";
+ * Blinn through tri-Ace's fit cos^n(t) ~ cos^(4.2 n)(t/2); GGX: Walter et al. 2007 with v = n
  * (Karis 2013 split sum). */
 #include "specular_internal.h"
 #include "core/numeric.h"

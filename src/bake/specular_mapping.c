@@ -113,8 +113,8 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
                                 "prefilter: mapping table value %d (%g) is not a finite value >= 0",
                                 l, desc->table[l]);
     }
-    /* --mirror: level 0 is the unfiltered source. The seed's shininess chain then starts at
-     * level 1 (the seeds' "mirror reflection option" adds the sharp end); the roughness
+    /* --mirror: level 0 is the unfiltered source. The tri-Ace shininess chain then starts at
+     * level 1 (the talk's "mirror reflection option" adds the sharp end); the roughness
      * mappings keep their levels and only level 0 becomes the mirror (most already put
      * roughness 0 there). */
     int first = info->mirror ? 1 : 0;

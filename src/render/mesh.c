@@ -1,7 +1,7 @@
 /* The preview's optional mesh: a small OBJ reader (positions, optional vertex colours as AO,
  * polygons fanned into triangles, smooth normals from the faces), a bounding volume
  * hierarchy for ray casting, and per-vertex ambient occlusion by cosine-weighted ray casting
- * when the file has none (the AO the seed's specular occlusion formulas take). */
+ * when the file has none (the AO tri-Ace's specular occlusion formulas take). */
 #include "render_internal.h"
 #include "core/context_internal.h"
 

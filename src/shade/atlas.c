@@ -1,7 +1,7 @@
-/* Seed 003 (Daqi 2016, "[PBR Series - 6] Improvement of PBR", 6.1 "Re-arrangement of
+/* Daqi 2016 ("[PBR Series - 6] Improvement of PBR", 6.1 "Re-arrangement of
  * Textures"): a prefiltered chain laid out in one 2D image, the small levels kept at level 2's
  * size in the otherwise unused space so UVs never fall outside a tiny level, and the
- * metalness/roughness/AO/transmittance channel packing of the same section. The seed's
+ * metalness/roughness/AO/transmittance channel packing of the same section. The article's
  * figure is not available; the arrangement below is ours and is described in shade.h. */
 #include "ibl/shade.h"
 #include "core/context_internal.h"

@@ -1,6 +1,6 @@
 /* Specular occlusion and the ways ambient specular, ambient diffuse and direct specular are
  * put together. Sources: tri-Ace 2010 (Gotanda & Shoji, "Real-time Physically Based
- * Rendering - Implementation", seeds 000/001), Lagarde & de Rousiers 2014 ("Moving Frostbite
+ * Rendering - Implementation"), Lagarde & de Rousiers 2014 ("Moving Frostbite
  * to PBR", section 4.10.2), Jimenez et al. 2016 ("Practical Realtime Strategies for Accurate
  * Indirect Occlusion", section 6), Russell 2015 ("Horizon Occlusion for Normal Mapped
  * Reflections"). docs/SHADING.md discusses each. */
@@ -78,7 +78,7 @@ static float cap_intersection(float r1, float r2, float d)
 
 /* Jimenez et al. 2016 (section 6): specular occlusion is the fraction of the specular cone
  * inside the visibility cone. The visibility cone has the aperture whose cosine-weighted
- * fraction is AO (AO = sin^2 of the half-angle, the seed's isotropic occlusion); the
+ * fraction is AO (AO = sin^2 of the half-angle, tri-Ace's isotropic occlusion); the
  * specular cone is where the equivalent Phong lobe cos^n falls to half (our choice, stated
  * in docs/SHADING.md). Both cones are centred on their axes: n and R. */
 static float cone_so(float n_dot_e, float ao, float roughness)

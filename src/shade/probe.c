@@ -95,7 +95,7 @@ float ibl_probe_lod_from_roughness(const ibl_probe *p, float roughness)
     return span > 0.0f ? (float)k + (roughness - m->roughness[k]) / span : (float)k;
 }
 
-/* Linear in log2(shininess) between levels: the seed's lod = a - 0.5 log2(n) is of this form,
+/* Linear in log2(shininess) between levels: tri-Ace's lod = a - 0.5 log2(n) is of this form,
  * so a Phong-kernel bake is reproduced exactly and any other is followed level by level. */
 float ibl_probe_lod_from_shininess(const ibl_probe *p, float shininess)
 {

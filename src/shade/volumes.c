@@ -1,9 +1,10 @@
-/* Local probes: influence volumes and their priority blend, parallax correction, the seed's
+/* Local probes: influence volumes and their priority blend, parallax correction, tri-Ace's
  * IBL offset and shininess hack, the two-environment switch, and tiled probe culling.
- * Sources: seed 004 (JAGE 2015, "Image Based Lighting": influence volumes, smallest first,
- * box/sphere parallax proxies, tiled culling with sorted per-tile lists), Lagarde 2012
- * ("Image-based Lighting approaches and parallax-corrected cubemap"), tri-Ace 2010 (seeds
- * 000/001: "IBL Offset", "Shininess hack"), seed 003 (Daqi 2016, "Environment Switch"). */
+ * Sources: the JAGE 2015 article ("Image Based Lighting", Just Another Game Engine blog:
+ * influence volumes, smallest first, box/sphere parallax proxies, tiled culling with sorted
+ * per-tile lists), Lagarde 2012 ("Image-based Lighting approaches and parallax-corrected
+ * cubemap"), tri-Ace 2010 ("IBL Offset", "Shininess hack"), Daqi 2016 ("[PBR Series - 6]
+ * Improvement of PBR": "Environment Switch"). */
 #include "ibl/shade.h"
 #include "core/context_internal.h"
 #include "core/numeric.h"
@@ -43,7 +44,8 @@ float ibl_volume_weight(const ibl_volume *v, ibl_vec3 p)
 void ibl_volume_sort(const ibl_volume *volumes, int count, int *order)
 {
     for (int i = 0; i < count; i++) order[i] = i;
-    /* insertion sort, as the seed does on the CPU: stable, so equal sizes keep index order */
+    /* insertion sort, as the JAGE 2015 article does on the CPU: stable, so equal sizes keep
+     * index order */
     for (int i = 1; i < count; i++) {
         int key = order[i];
         float ks = ibl_volume_size(&volumes[key]);
@@ -120,7 +122,7 @@ float ibl_shininess_hack(float shininess, float light_size, float attenuation)
     return shininess * s * s;
 }
 
-/* The seed gives its formula as a picture; it uses "the position of the adjacent border and
+/* Daqi 2016 gives the formula as a picture; it uses "the position of the adjacent border and
  * the scale and position of the shaded object", projected on the border's normal. We read it
  * as the fraction of the object's extent that has crossed the border. */
 float ibl_environment_switch(float position, float border, float size)
