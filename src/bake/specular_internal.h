@@ -1,6 +1,7 @@
 /* Internal contract of the specular prefilter: the lobe math shared by the reference and the
- * fast method, the plan (the fast method's precomputed quadrature), and the seed kernels
- * (box, gauss) implemented in specular_box.c / specular_gauss.c. */
+ * fast method, what the fast method's plan (src/bake/specular/, its own types in
+ * specular/fast_internal.h) shows the rest of the library and the tests, and the box and
+ * Gaussian kernels implemented in specular_box.c / specular_gauss.c. */
 #ifndef IBL_SPECULAR_INTERNAL_H
 #define IBL_SPECULAR_INTERNAL_H
 
@@ -65,10 +66,6 @@ ibl_status ibl__specular_reference(ibl_context *ctx, const ibl_cubemap *src,
 /* The direction the kernel of texel (x, y) is centred on (edge fixups bend it). */
 void ibl__output_direction(const ibl_specular_desc *desc, const ibl__lobe *lobe, int face, int n,
                            int x, int y, double dir[3]);
-
-/* Tests: make a (static) plan use the portable sums even where AVX2 is available (its
- * normalisers are re-summed the same way). */
-void ibl__specular_plan_set_portable(ibl_specular_plan *plan, int portable);
 
 /* What a static plan does (tests: which paths a configuration exercises); the block counts are
  * those of the last run. */

@@ -1,0 +1,402 @@
+/* The shared types of the fast prefilter (src/bake/specular/): the plan and what it is made
+ * of, the layout of texel records, and the functions one file of the method calls in another.
+ *
+ * The method in one paragraph (docs/SPECULAR.md "The fast method" has it in full): the lobe
+ * f(u), u = 1 - R.l, is cut by a smooth partition of unity into a *core* and dyadic *rings*
+ * (pieces.c). Each piece is summed over one level of a moment pyramid of the source
+ * (geometry.c, pyramid.c), where a texel contributes the second-order Taylor expansion of the
+ * piece about its centroid (the *leaf*, leaf_sums.c and the kernels). A piece whose leaves use
+ * geometric moments only has weights fixed by the cube's geometry: they are computed once per
+ * plan for one quadrant of face 0 (precomputed.c) and a run is a product of those weights with
+ * the source (products.c). Texels whose light is far from uniform, and bright texels next to
+ * coarse grids, are gathered and summed leaf by leaf (gathering.c). The pieces are evaluated
+ * on cube grids, interpolated and divided by their normaliser into the output (combine.c).
+ * Roughness-0 levels are the source itself (mirror.c). plan.c holds the public plan object and
+ * the order of a run; tuning.h every tuning constant.
+ *
+ * Words used throughout: a *block* is 4 x 2 texels of one face (one 8-wide vector per field);
+ * a *record* holds a texel's fields; a *cone* bounds a block's directions; *bright apart*
+ * means a ring's bright texels are summed at the output texels instead of on its grid; the
+ * *normaliser* is the sum of the same weights over geometry alone (the denominator). */
+#ifndef IBL_SPECULAR_FAST_INTERNAL_H
+#define IBL_SPECULAR_FAST_INTERNAL_H
+
+#include "bake/specular_internal.h"
+#include "bake/specular/tuning.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* ---- texel records ---- */
+
+enum { BLOCK_W = 4, BLOCK_H = 2, BLOCK_TEXELS = BLOCK_W * BLOCK_H };
+
+/* The fields of a texel record, each BLOCK_TEXELS floats from the next within its block. First
+ * the geometric moments of the directions the texel covers: */
+enum {
+    FIELD_MEAN = 0,        /* 3: mean direction m (|m| < 1)                              */
+    FIELD_SPREAD = 3,      /* e = (1 - |m|^2) / 2 = E|l - m|^2 / 2                        */
+    FIELD_COVARIANCE = 4,  /* 6: C, as xx yy zz xy xz yz                                  */
+    FIELD_SOLID_ANGLE = 10,
+    GEOMETRY_FIELDS = 11
+};
+/* then, on level 0 (the source texels, or their sub-texels), the radiance: */
+enum { FIELD_RADIANCE = GEOMETRY_FIELDS, LEVEL0_FIELDS = GEOMETRY_FIELDS + 3 };
+/* and on coarser levels the same moments weighted by luminance (a sun inside the texel sits at
+ * their centroid), the texel's power per channel, and its power when it is not bright (0 for
+ * a bright texel, which is gathered and summed apart): */
+enum {
+    FIELD_LUM_MEAN = GEOMETRY_FIELDS,
+    FIELD_LUM_SPREAD = FIELD_LUM_MEAN + 3,
+    FIELD_LUM_COVARIANCE = FIELD_LUM_MEAN + 4,
+    FIELD_POWER = FIELD_LUM_MEAN + 10,
+    FIELD_POWER_NOT_BRIGHT = FIELD_POWER + 3,
+    COARSE_FIELDS = FIELD_POWER_NOT_BRIGHT + 3
+};
+/* The bounding cone of a block: its centre direction (unit), angular radius r, cos r, sin r. */
+enum { CONE_FLOATS = 6 };
+
+/* Cone slots for `blocks` gathered blocks: one per block, then one per SUPER_CONE_BLOCKS. */
+static inline size_t cone_slots(int blocks)
+{
+    return (size_t)blocks + ((size_t)blocks + SUPER_CONE_BLOCKS - 1) / SUPER_CONE_BLOCKS;
+}
+
+/* Rec. 709 luminance: the radiance centroids and the bright and correction bars weigh light by
+ * it. */
+#define LUMINANCE_R 0.2126
+#define LUMINANCE_G 0.7152
+#define LUMINANCE_B 0.0722
+static inline double luminance(double r, double g, double b)
+{
+    return LUMINANCE_R * r + LUMINANCE_G * g + LUMINANCE_B * b;
+}
+
+static inline int is_power_of_two(int n) { return n > 0 && (n & (n - 1)) == 0; }
+
+/* The mean angular size of a texel of a face of edge n, sqrt(4 pi / 6) / n (the texels at a face
+ * centre are 1.38 times wider, those at its corners 1.7 times narrower). */
+static inline double texel_angle(int n) { return 1.4472025 / n; }
+
+/* ---- the moment pyramid (geometry.c, pyramid.c) ---- */
+
+/* One level of the pyramid: the source (level 0) or a mip of it, as records in blocks. */
+typedef struct source_level {
+    int edge;              /* texels per face edge                                            */
+    int blocks_x, blocks_y; /* blocks per face row and column                                 */
+    int fields;            /* floats per texel record: LEVEL0_FIELDS or COARSE_FIELDS          */
+    float *records;        /* 6 blocks_y blocks_x blocks x fields x BLOCK_TEXELS               */
+    float *cones;          /* per block: its bounding cone                                     */
+    /* run, coarse levels: the luminance power of each task's block row (6 blocks_y), and their
+     * sum in order (the bright and correction bars are relative to the mean radiance) */
+    double *row_power, power;
+    /* run, levels read by precomputed pieces: each texel as uniform light, its power over its
+     * solid angle (rgb and a pad float, a cube face's layout), and the same without the power
+     * of its bright texels; the padded sources are copied from these */
+    float *uniform, *uniform_not_bright;
+    /* bright texels (levels read by rings whose bright texels go apart), gathered in blocks */
+    double bright_scale;   /* the bar's constant per unit of mean radiance (0: no bright texels) */
+    int bright_capacity, bright_block_count;
+    float *bright_records, *bright_cones;
+    uint64_t *bright_keys; /* bright_capacity BLOCK_TEXELS: scratch of the gathering           */
+} source_level;
+
+static inline size_t source_block_count(const source_level *s)
+{
+    return (size_t)6 * s->blocks_y * s->blocks_x;
+}
+
+/* Where field `field` of texel (x, y) of face `face` is in s->records. */
+static inline size_t record_index(const source_level *s, int face, int x, int y, int field)
+{
+    size_t b = ((size_t)face * s->blocks_y + y / BLOCK_H) * s->blocks_x + x / BLOCK_W;
+    return (b * s->fields + field) * BLOCK_TEXELS + (y % BLOCK_H) * BLOCK_W + x % BLOCK_W;
+}
+
+/* Writes moments given in a face's local (s, t, axis) coordinates in world coordinates, through
+ * the face's signed permutation (see ibl_specular_plan.face_axis), as floats `stride` apart:
+ * the mean at out[0..2], the spread at out[3], the covariance (xx yy zz xy xz yz) at
+ * out[4..9]. Moving and negating components is exact. */
+static inline void moments_to_world(const int axis[3], const float sign[3], const double mean[3],
+                                    double spread, const double covariance[6], float *out,
+                                    size_t stride)
+{
+    static const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    const double local[3][3] = {{covariance[0], covariance[3], covariance[4]},
+                                {covariance[3], covariance[1], covariance[5]},
+                                {covariance[4], covariance[5], covariance[2]}};
+    for (int c = 0; c < 3; c++) out[c * stride] = (float)(sign[c] * mean[axis[c]]);
+    out[3 * stride] = (float)spread;
+    for (int c = 0; c < 6; c++) {
+        int i = pair[c][0], k = pair[c][1];
+        out[(4 + c) * stride] = (float)(sign[i] * sign[k] * local[axis[i]][axis[k]]);
+    }
+}
+
+/* The moments of a set of directions, in double (geometry.c). */
+typedef struct texel_moments {
+    double mean[3], spread, covariance[6], solid_angle; /* covariance: xx yy zz xy xz yz */
+} texel_moments;
+
+/* ---- the pieces of a lobe and the grids they are evaluated on (pieces.c) ---- */
+
+/* One step of the partition in closed form: psi = 1 - smootherstep(s), s = clamp(u scale -
+ * offset, 0, 1), ds/du = slope. Scale 0 encodes an absent step: offset 1 keeps s at 0 (psi = 1:
+ * the last ring has no outer step), offset -2 keeps it at 1 (psi = 0: the core has no inner
+ * step). */
+typedef struct psi_step {
+    float scale, offset, slope;
+} psi_step;
+
+typedef struct precomputed_piece precomputed_piece;
+
+/* The lobe times one function of the partition of unity: the core (no inner step) or a ring. */
+typedef struct lobe_piece {
+    int grid;              /* the grid it is evaluated on (index into level_plan.grids)        */
+    int source_level;      /* the pyramid level it is summed over                              */
+    double u_lo, u_hi;     /* its support in u = 1 - R.l                                       */
+    double angle_in, angle_out; /* the same as angles from the lobe's axis                     */
+    /* g and g'' tabulated in u (PIECE_TABLE_STEPS + 2 pairs, the last zero) */
+    float table_u0, table_scale;
+    float *table;
+    /* in closed form for the AVX2 kernels: GGX f = (1 - u) alpha4 / T^2, T = alpha2 + slope u */
+    float ggx_alpha2, ggx_slope, ggx_alpha4;
+    float phong_n;         /* Phong exponent                                                   */
+    int is_ggx;
+    psi_step outer, inner;
+    int bright_apart;      /* a ring on a coarse grid whose bright texels are summed apart      */
+    int bright_grid;       /* ... on this grid                                                 */
+    precomputed_piece *precomputed; /* its weights, when precomputed (NULL: summed by leaves) */
+} lobe_piece;
+
+/* The points one or more pieces are evaluated at: the output level's own texels (at_output,
+ * where edge fixups may bend the directions) or a coarser cube grid, interpolated. */
+typedef struct sum_grid {
+    int edge, at_output;
+    int tiles;             /* TILE_EDGE tiles per face edge                                    */
+    float *sums;           /* 6 edge^2 x 4: sum g P (rgb), sum g Omega (the normaliser)         */
+    float *bordered;       /* coarse grids: 6 (edge + 2)^2 x 4, the sums with a one-texel
+                            * border across the face edges (corner: the mean of its three
+                            * texels), as the seamless bilinear sampler reads them            */
+} sum_grid;
+
+typedef struct level_plan {
+    ibl__lobe lobe;
+    int piece_count, grid_count, task_count;
+    lobe_piece pieces[MAX_PIECES];
+    sum_grid grids[MAX_PIECES];
+    int task_begin[MAX_PIECES + 1]; /* the first leaf-sum task of each grid                    */
+} level_plan;
+
+/* ---- precomputed weights (precomputed.c, products.c) ---- */
+
+/* A piece whose weights depend on geometry alone, stored for the base texels of one quadrant of
+ * face 0 as rows over the padded face (the face with a `border` of texels unfolded from its four
+ * neighbours). See precomputed.c. */
+struct precomputed_piece {
+    int source_level;      /* the pyramid level it sums (0: the source texels)                  */
+    int at_output;         /* on the output texels                                            */
+    int without_bright;    /* over the texels' power without their bright texels               */
+    int source_edge;       /* texels per face edge of that level                               */
+    int border;            /* texels unfolded beyond each face edge                            */
+    int padded_edge;       /* source_edge + 2 border + 16: a vector of slack on either side     */
+    int origin;            /* padded cell of face texel (0, 0): border + 8                      */
+    int grid_edge;         /* points per face edge of the grid                                 */
+    int base_edge;         /* base texels per quadrant edge, (grid_edge + 1) / 2               */
+    int32_t *cell_texel;   /* padded_edge^2: face 0's source texel under each cell, or -1       */
+    int face_carry[6][6][7]; /* face F: where face 0's cell texels on face g go (products.c)    */
+    /* base texels below the diagonal (a > b) have no weights of their own: base (a, b) takes
+     * (b, a)'s, applied to the transposed padded source (the reflection x <-> y) */
+    uint32_t *first_row;   /* base_edge^2 + 1: each base texel's first row                      */
+    size_t *first_weight;  /* base_edge^2 + 1: each base texel's first weight                   */
+    int32_t *rows;         /* per row: y, x (padded coordinates minus origin), length (x 8)     */
+    /* per 8 weights: the padded cell (x, y) of the first; one loop over a base's vectors has a
+     * steady trip count, where the rows' short loops (3-5 vectors) mispredicted their exits */
+    uint16_t *vector_cells;
+    uint16_t *weights;     /* half floats, divided by weight_scale                              */
+    float weight_scale;
+    double *normaliser;    /* base_edge^2: sum of the weights as stored                         */
+    /* centroid corrections (a coarse level's texels are summed as uniform light): a texel's
+     * moment leaf differs from its uniform leaf by at most P (mean |dm| + spread |de| +
+     * covariance |dC|) per unit of the normaliser (gathering.c) */
+    double bound_mean, bound_spread, bound_covariance;
+    int correction_capacity, correction_block_count;
+    float *correction_records; /* run: in the plan's correction pool                           */
+    float *correction_cones;
+    uint64_t *correction_keys; /* correction_capacity BLOCK_TEXELS: scratch of the gathering    */
+    float *texel_bound;    /* run: each texel's bound (block order)                             */
+    float correction_threshold; /* run: texels over it are left out of the padded source and
+                                 * summed as leaves                                            */
+};
+
+/* ---- the kernels (kernels_portable.c, kernels_avx2.c) ---- */
+
+/* What a leaf sum accumulates: the normaliser (geometric moments, at plan time), or the
+ * numerator from level 0 (texel radiance, geometric moments) or from a coarse level
+ * (luminance-weighted moments and power). */
+enum leaf_mode { LEAF_NORMALISER = 0, LEAF_LEVEL0, LEAF_COARSE };
+
+/* A block that may matter for a tile: only where cos_out <= R.centre <= cos_in. */
+typedef struct leaf_candidate {
+    uint32_t block;
+    float cos_out, cos_in;
+} leaf_candidate;
+
+/* A batch of candidate blocks of one piece over one set of records. */
+typedef struct leaf_batch {
+    int mode;
+    const source_level *level; /* records and cones (gathered texels: a view of them)          */
+    const lobe_piece *piece;
+    const leaf_candidate *candidates;
+    int count;
+    int without_bright;    /* read the power without the bright texels                         */
+} leaf_batch;
+
+/* The record of candidate `index` if it can matter for direction R (NULL if it is culled). */
+static inline const float *candidate_record(const leaf_batch *batch, int index, const float R[3])
+{
+    const leaf_candidate *cd = &batch->candidates[index];
+    const float *bc = batch->level->cones + (size_t)cd->block * CONE_FLOATS;
+    float dd = R[0] * bc[0] + R[1] * bc[1] + R[2] * bc[2];
+    if (dd < cd->cos_out || dd > cd->cos_in) return NULL;
+    return batch->level->records + (size_t)cd->block * batch->level->fields * BLOCK_TEXELS;
+}
+
+/* The four inner loops of the method, chosen once per plan: AVX2 + FMA + F16C where the
+ * context allows them, the portable C versions otherwise. R is a unit direction, RR its
+ * quadratic terms (xx, yy, zz, 2xy, 2xz, 2yz) that turn a covariance into R^T C R. */
+typedef struct fast_kernels {
+    /* sum over the batch's leaves for direction R, added to out (rgb, normaliser) */
+    void (*sum_leaves)(const leaf_batch *batch, const float R[3], const float RR[6], double out[4]);
+    /* a base texel's weights over its rows of the padded geometry (GEOMETRY_FIELDS planes
+     * `plane` apart), divided by the weight scale (inv_scale), stored as halves; the stored
+     * halves summed per lane into lanes */
+    void (*base_weights)(const lobe_piece *piece, const float R[3], const float RR[6],
+                         const float *geometry, size_t plane, int padded_edge, int origin,
+                         const int32_t *rows, int row_count, float inv_scale, uint16_t *weights,
+                         float lanes[8]);
+    /* first and last of n cells within reach of R (m.R >= cos_reach, a texel there); -1 none */
+    void (*row_extent)(const float *geometry, size_t plane, int n, const float R[3],
+                       float cos_reach, int *first, int *last);
+    /* base texel `base`'s weights times an image of the padded source (rgb planes), flipped by
+     * flip_x / flip_y */
+    void (*product)(const precomputed_piece *c, size_t base, const float *planes, int flip_x,
+                    int flip_y, double out[3]);
+} fast_kernels;
+
+extern const fast_kernels ibl__fast_kernels_portable;
+extern const fast_kernels ibl__fast_kernels_avx2; /* only where IBL_HAVE_X86_KERNELS */
+
+/* ---- the plan ---- */
+
+struct ibl_specular_plan {
+    ibl_context *ctx;
+    ibl_specular_desc desc;
+    ibl_specular_info info;
+    const fast_kernels *kernels;
+    int source_edge;       /* face edge of the cubes a run gets                                 */
+    int subtexel_split;    /* level 0 of the pyramid splits each source texel k x k             */
+    int pyramid_levels;    /* from source_edge subtexel_split texels down to 1                  */
+    int output_edge, output_levels;
+    source_level pyramid[IBL_MAX_LEVELS];
+    level_plan levels[IBL_MAX_LEVELS];
+    float face_basis[6][3][3]; /* per face: axis, s tangent, t tangent                         */
+    /* the signed permutation from face f's local (s, t, axis) coordinates to world ones:
+     * world[i] = face_sign[f][i] local[face_axis[f][i]] */
+    int face_axis[6][3];
+    float face_sign[6][3];
+    ibl__dynamic *dynamic; /* desc.dynamic: the precomputed operator instead of the pieces      */
+    /* level 0's geometric moments, once, face-local (GEOMETRY_FIELDS floats per texel of face
+     * 0): the other faces by the signed permutations. Level 0's records exist only when some
+     * piece sums level 0 leaf by leaf (has_level0_records). */
+    float *level0_geometry;
+    int has_level0_records;
+    /* run: the padded source of the precomputed piece being summed and its transpose
+     * (2 x 3 planes of padded_edge^2) */
+    float *padded_source;
+    /* run: the gathered corrections of every precomputed piece, one after the other (only the
+     * part a run uses is touched) */
+    float *correction_pool;
+    size_t correction_pool_blocks;
+};
+
+/* Roughness 0 (or no shininess): the level is the source itself (mirror.c), with no pieces,
+ * grids or weights. Every loop over the filtered levels asks this. */
+static inline int level_is_mirror(const ibl_specular_plan *p, int level)
+{
+    return p->levels[level].lobe.kind == IBL__LOBE_MIRROR;
+}
+
+/* desc.accuracy relative to the default: scales every width and bar of the method */
+static inline double accuracy_scale(const ibl_specular_plan *p)
+{
+    return p->desc.accuracy > 0 ? p->desc.accuracy / ACCURACY_DEFAULT : 1.0;
+}
+
+/* Whether the output directions are the texel centres (no edge fixup bends them). */
+static inline int centred_directions(const ibl_specular_plan *p)
+{
+    return p->desc.edge_fixup != IBL_EDGE_FIXUP_BENT && p->desc.edge_fixup != IBL_EDGE_FIXUP_WARP;
+}
+
+/* Whether a grid's directions are symmetric under the square's eight symmetries on a face
+ * (edge fixups that bend directions are not assumed to be). */
+static inline int grid_symmetric(const ibl_specular_plan *p, const sum_grid *g)
+{
+    return !g->at_output || centred_directions(p);
+}
+
+/* Whether texel (x, y) of face f of the piece's level gets a centroid correction. */
+static inline int texel_corrected(const precomputed_piece *c, const source_level *s, int f, int x,
+                                  int y)
+{
+    size_t b = ((size_t)f * s->blocks_y + y / BLOCK_H) * s->blocks_x + x / BLOCK_W;
+    return c->texel_bound[b * BLOCK_TEXELS + (y % BLOCK_H) * BLOCK_W + x % BLOCK_W] >
+           c->correction_threshold;
+}
+
+/* ---- geometry.c ---- */
+void ibl__fast_face_frames(ibl_specular_plan *p);
+int32_t ibl__fast_unfolded_texel(const ibl_specular_plan *p, int edge, int face, int x, int y);
+void ibl__fast_combine_moments(const texel_moments *const *parts, const double *weights,
+                               int count, texel_moments *out);
+void ibl__fast_level0_moments(const ibl_specular_plan *p, int face, int x, int y,
+                              float out[GEOMETRY_FIELDS]);
+ibl_status ibl__fast_build_moments(ibl_specular_plan *p);
+ibl_status ibl__fast_level0_records(ibl_specular_plan *p);
+
+/* ---- pyramid.c ---- */
+void ibl__fast_pyramid_level0(ibl_specular_plan *p, const ibl_cubemap *src);
+void ibl__fast_pyramid_level(ibl_specular_plan *p, const ibl_cubemap *src, int level);
+void ibl__fast_uniform_level(ibl_specular_plan *p, int level);
+
+/* ---- pieces.c ---- */
+ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level);
+double ibl__fast_piece_peak(const lobe_piece *piece);
+
+/* ---- leaf_sums.c ---- */
+void ibl__fast_normalisers(ibl_specular_plan *p, int level);
+void ibl__fast_leaf_sums(ibl_specular_plan *p, int level);
+
+/* ---- precomputed.c ---- */
+ibl_status ibl__fast_precompute_level(ibl_specular_plan *p, int level);
+void ibl__fast_precomputed_normalisers(const precomputed_piece *c, float *sums);
+void ibl__fast_precomputed_destroy(ibl_context *ctx, precomputed_piece *c);
+
+/* ---- products.c ---- */
+void ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src);
+
+/* ---- gathering.c ---- */
+ibl_status ibl__fast_plan_bars(ibl_specular_plan *p, int level);
+ibl_status ibl__fast_gathering_buffers(ibl_specular_plan *p);
+void ibl__fast_select_bright(ibl_specular_plan *p, int level);
+void ibl__fast_select_corrections(ibl_specular_plan *p, precomputed_piece *c);
+
+/* ---- combine.c ---- */
+void ibl__fast_combine(ibl_specular_plan *p, ibl_cubemap *dst, int level);
+
+/* ---- mirror.c ---- */
+void ibl__fast_mirror_level(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cubemap *dst,
+                            int level);
+
+#endif

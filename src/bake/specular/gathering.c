@@ -1,0 +1,332 @@
+/* Gathering: the texels that the cheap paths would get wrong, picked at every run and summed
+ * leaf by leaf at the output texels.
+ *
+ * Bright texels. A ring summed from a coarse level on a coarse grid is interpolated bilinearly
+ * to the output texels; a bright texel (a sun) next to such a grid would be smeared over a grid
+ * cell. So a texel whose largest contribution to an output exceeds BRIGHT_BAR of the mean
+ * radiance is left out of the ring's grid (its power without it is FIELD_POWER_NOT_BRIGHT) and
+ * summed on a grid fine enough for it (pieces.c) -- the ring's grid may then be 3x coarser.
+ *
+ * Centroid corrections. A precomputed piece over a coarse level (precomputed.c) reads each
+ * texel as uniform light over its area; a texel whose light is far from uniform (a sun in one
+ * corner) has a moment leaf far from that. The difference is bounded per texel by the piece's
+ * slopes (plan time) times how far the luminance moments are from the geometric ones (run
+ * time); texels over CORRECTION_BAR of the mean radiance are left out of the padded source and
+ * summed as leaves at their luminance moments instead.
+ *
+ * Both bars are raised until the texels fit a fixed number of blocks, so the direct sums stay
+ * bounded. Picked texels are gathered eight to a block in Morton order (face, then interleaved
+ * x and y bits), so that a gathered block holds neighbours and its cone is small; blocks are
+ * also grouped SUPER_CONE_BLOCKS at a time under one cone, tested first. */
+#include "bake/specular/fast_internal.h"
+#include "core/numeric.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* ---- plan time: the bars' constants ---- */
+
+/* The piece's bound constants of a centroid correction, per unit of the level's mean normaliser
+ * `den`: a leaf moves by at most |g'| sqrt(2u) |dm| + |g'| |de| + 3 |g''| |dC| / 2 (g' by
+ * differences of the table). */
+static void correction_bounds(const lobe_piece *pc, double den, precomputed_piece *c)
+{
+    double step = (pc->u_hi - pc->u_lo) / PIECE_TABLE_STEPS, d1 = 0, d1e = 0, d2 = 0;
+    const float *tab = pc->table;
+    for (int i = 0; i < PIECE_TABLE_STEPS; i++) {
+        double u = pc->u_lo + (i + 0.5) * step;
+        double g1 = fabs(tab[2 * i + 2] - tab[2 * i]) / step;
+        double g2 = fabs(tab[2 * i + 1]) > fabs(tab[2 * i + 3]) ? fabs(tab[2 * i + 1])
+                                                                : fabs(tab[2 * i + 3]);
+        d1 = g1 * sqrt(2.0 * u) > d1 ? g1 * sqrt(2.0 * u) : d1;
+        d1e = g1 > d1e ? g1 : d1e;
+        d2 = 1.5 * g2 > d2 ? 1.5 * g2 : d2;
+    }
+    c->bound_mean = d1 / den, c->bound_spread = d1e / den, c->bound_covariance = d2 / den;
+}
+
+/* A texel of power P adds at most P peak / den to an output of a ring whose bright texels go
+ * apart (peak: the piece's largest value, den: the level's mean normaliser), so the bright test
+ * is P > BRIGHT_BAR mean_radiance den / peak; a source level keeps the strictest of its rings'
+ * constants. Precomputed pieces over coarse levels get their correction bounds and buffers. */
+ibl_status ibl__fast_plan_bars(ibl_specular_plan *p, int level)
+{
+    level_plan *lv = &p->levels[level];
+    const sum_grid *core_grid = &lv->grids[lv->pieces[0].grid];
+    size_t face = (size_t)core_grid->edge * core_grid->edge;
+    double den = 0;
+    for (size_t i = 0; i < face; i++) den += core_grid->sums[4 * i + 3];
+    den /= (double)face;
+    for (int k = 0; k < lv->piece_count; k++) {
+        const lobe_piece *pc = &lv->pieces[k];
+        precomputed_piece *c = pc->precomputed;
+        if (!c || c->source_level == 0 || !(den > 0)) continue;
+        correction_bounds(pc, den, c);
+        c->correction_capacity = CORRECTION_BLOCKS;
+        p->correction_pool_blocks += (size_t)c->correction_capacity;
+        c->correction_cones = ibl_alloc(p->ctx, cone_slots(c->correction_capacity) * CONE_FLOATS * sizeof(float));
+        c->correction_keys = ibl_alloc(p->ctx, (size_t)c->correction_capacity * BLOCK_TEXELS * sizeof(uint64_t));
+        c->texel_bound = ibl_alloc(p->ctx, source_block_count(&p->pyramid[c->source_level]) *
+                                               BLOCK_TEXELS * sizeof(float));
+        if (!c->correction_cones || !c->correction_keys || !c->texel_bound)
+            return ibl_context_status(p->ctx);
+    }
+    for (int k = 0; k < lv->piece_count; k++) {
+        const lobe_piece *pc = &lv->pieces[k];
+        if (!pc->bright_apart) continue;
+        double peak = ibl__fast_piece_peak(pc);
+        if (!(peak > 0)) continue;
+        double scale = den / peak;
+        source_level *s = &p->pyramid[pc->source_level];
+        if (s->bright_scale == 0 || scale < s->bright_scale) s->bright_scale = scale;
+    }
+    return IBL_OK;
+}
+
+ibl_status ibl__fast_gathering_buffers(ibl_specular_plan *p)
+{
+    ibl_context *ctx = p->ctx;
+    if (p->correction_pool_blocks &&
+        !(p->correction_pool = ibl_alloc(ctx, p->correction_pool_blocks * COARSE_FIELDS * BLOCK_TEXELS * sizeof(float))))
+        return ibl_context_status(ctx);
+    for (int l = 0; l < p->pyramid_levels; l++) {
+        source_level *s = &p->pyramid[l];
+        if (s->bright_scale == 0) continue;
+        s->bright_capacity = BRIGHT_BLOCKS;
+        s->bright_records = ibl_alloc(ctx, (size_t)s->bright_capacity * COARSE_FIELDS * BLOCK_TEXELS * sizeof(float));
+        s->bright_cones = ibl_alloc(ctx, cone_slots(s->bright_capacity) * CONE_FLOATS * sizeof(float));
+        s->bright_keys = ibl_alloc(ctx, (size_t)s->bright_capacity * BLOCK_TEXELS * sizeof(uint64_t));
+        if (!s->bright_records || !s->bright_cones || !s->bright_keys) return ibl_context_status(ctx);
+    }
+    return IBL_OK;
+}
+
+/* ---- gathering texels in Morton order ---- */
+
+/* A texel's place in the order texels are gathered in: its face, then the Morton order of its
+ * (x, y). (In block order a gathered block could span a face row, and every tile's reach test
+ * would take it: at 512, level 1's corrections cost 3x more that way.) */
+static uint64_t texel_key(const source_level *s, size_t b, int t)
+{
+    size_t per_face = (size_t)s->blocks_y * s->blocks_x;
+    int f = (int)(b / per_face), r = (int)(b % per_face);
+    uint32_t x = (uint32_t)((r % s->blocks_x) * BLOCK_W + t % BLOCK_W);
+    uint32_t y = (uint32_t)((r / s->blocks_x) * BLOCK_H + t / BLOCK_W);
+    uint64_t key = 0;
+    for (int i = 0; i < 16; i++)
+        key |= (uint64_t)((x >> i) & 1) << (2 * i) | (uint64_t)((y >> i) & 1) << (2 * i + 1);
+    return (uint64_t)f << 32 | key;
+}
+
+/* The block and lane of a texel_key. */
+static void texel_of_key(const source_level *s, uint64_t key, size_t *b, int *t)
+{
+    int f = (int)(key >> 32);
+    uint32_t x = 0, y = 0;
+    for (int i = 0; i < 16; i++) {
+        x |= (uint32_t)((key >> (2 * i)) & 1) << i;
+        y |= (uint32_t)((key >> (2 * i + 1)) & 1) << i;
+    }
+    *b = ((size_t)f * s->blocks_y + y / BLOCK_H) * s->blocks_x + x / BLOCK_W;
+    *t = (int)(y % BLOCK_H) * BLOCK_W + (int)(x % BLOCK_W);
+}
+
+static int key_order(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The cones of `count` texels gathered in blocks (records): around the mean of each block's
+ * texel directions, out to the farthest one plus `texel_radius`. */
+static void gathered_cones(const float *records, float *cones, int count, double texel_radius)
+{
+    for (int b = 0; b < (count + BLOCK_TEXELS - 1) / BLOCK_TEXELS; b++) {
+        const float *rec = records + (size_t)b * COARSE_FIELDS * BLOCK_TEXELS;
+        int n = count - b * BLOCK_TEXELS < BLOCK_TEXELS ? count - b * BLOCK_TEXELS : BLOCK_TEXELS;
+        double d[BLOCK_TEXELS][3], c[3] = {0, 0, 0}, r = 0;
+        for (int t = 0; t < n; t++) {
+            for (int i = 0; i < 3; i++) d[t][i] = rec[(FIELD_MEAN + i) * BLOCK_TEXELS + t];
+            ibl__normalize_d(d[t]);
+            for (int i = 0; i < 3; i++) c[i] += d[t][i];
+        }
+        ibl__normalize_d(c);
+        for (int t = 0; t < n; t++) {
+            double a = acos(ibl__clampd(ibl__dot_d(c, d[t]), -1, 1));
+            r = a > r ? a : r;
+        }
+        r += texel_radius + 1e-6;
+        float *bc = cones + (size_t)b * CONE_FLOATS;
+        for (int i = 0; i < 3; i++) bc[i] = (float)c[i];
+        bc[3] = (float)r, bc[4] = (float)cos(r), bc[5] = (float)sin(r);
+    }
+}
+
+/* The cones around each SUPER_CONE_BLOCKS consecutive cones of `count` (gathered in Morton
+ * order, they are neighbours): around the mean of their centres, out to the farthest one's
+ * edge. */
+static void super_cones(const float *cones, int count, float *supers)
+{
+    for (int g = 0; g * SUPER_CONE_BLOCKS < count; g++) {
+        int n = count - g * SUPER_CONE_BLOCKS < SUPER_CONE_BLOCKS ? count - g * SUPER_CONE_BLOCKS
+                                                                  : SUPER_CONE_BLOCKS;
+        const float *bc = cones + (size_t)g * SUPER_CONE_BLOCKS * CONE_FLOATS;
+        double c[3] = {0, 0, 0}, r = 0;
+        for (int k = 0; k < n; k++)
+            for (int i = 0; i < 3; i++) c[i] += bc[k * CONE_FLOATS + i];
+        double len = sqrt(ibl__dot_d(c, c));
+        for (int i = 0; i < 3; i++) c[i] = len > 0 ? c[i] / len : (i == 0);
+        for (int k = 0; k < n; k++) {
+            const float *q = bc + k * CONE_FLOATS;
+            double d = c[0] * q[0] + c[1] * q[1] + c[2] * q[2];
+            double a = acos(ibl__clampd(d, -1, 1)) + q[3];
+            r = a > r ? a : r;
+        }
+        r += 1e-6;
+        float *o = supers + (size_t)g * CONE_FLOATS;
+        for (int i = 0; i < 3; i++) o[i] = (float)c[i];
+        o[3] = (float)r, o[4] = (float)cos(r), o[5] = (float)sin(r);
+    }
+}
+
+/* Gathers the `count` texels of `keys` in key order, eight to a block of records with their
+ * power from field power_field, then their cones (one per block, then one per
+ * SUPER_CONE_BLOCKS blocks after `capacity` cones); the number of blocks. */
+static int gather_texels(const source_level *s, uint64_t *keys, int count, int power_field,
+                         float *records, float *cones, int capacity)
+{
+    const int B = BLOCK_TEXELS;
+    qsort(keys, (size_t)count, sizeof *keys, key_order);
+    for (int k = 0; k < count; k++) {
+        size_t b;
+        int t;
+        texel_of_key(s, keys[k], &b, &t);
+        const float *rec = s->records + b * s->fields * B;
+        float *dst = records + (size_t)(k / B) * COARSE_FIELDS * B + k % B;
+        for (int field = 0; field < COARSE_FIELDS; field++) dst[field * B] = rec[field * B + t];
+        for (int c = 0; c < 3; c++) dst[(FIELD_POWER + c) * B] = rec[(power_field + c) * B + t];
+    }
+    for (int i = count; i < (count + B - 1) / B * B; i++) { /* the rest of the last block: nothing */
+        float *dst = records + (size_t)(i / B) * COARSE_FIELDS * B + i % B;
+        for (int field = 0; field < COARSE_FIELDS; field++) dst[field * B] = 0.0f;
+        dst[FIELD_LUM_SPREAD * B] = 0.5f;
+    }
+    gathered_cones(records, cones, count, 1.5 / s->edge);
+    int blocks = (count + B - 1) / B;
+    super_cones(cones, blocks, cones + (size_t)capacity * CONE_FLOATS);
+    return blocks;
+}
+
+/* ---- run time: picking the texels ---- */
+
+void ibl__fast_select_bright(ibl_specular_plan *p, int level)
+{
+    source_level *s = &p->pyramid[level];
+    const int B = BLOCK_TEXELS;
+    size_t blocks = source_block_count(s);
+    double bar = BRIGHT_BAR * accuracy_scale(p) * s->power / (4.0 * IBL_PI) * s->bright_scale;
+    for (;;) { /* raise the bar until the brightest fit (a bounded direct sum) */
+        int count = 0;
+        for (size_t b = 0; b < blocks; b++) {
+            const float *P = s->records + (b * s->fields + FIELD_POWER) * B;
+            for (int t = 0; t < B; t++) count += luminance(P[t], P[B + t], P[2 * B + t]) > bar;
+        }
+        if (count <= s->bright_capacity * B) break;
+        bar *= 2.0;
+    }
+    int k = 0;
+    for (size_t b = 0; b < blocks; b++) {
+        float *rec = s->records + b * s->fields * B;
+        for (int t = 0; t < B; t++) {
+            const float *P = rec + FIELD_POWER * B;
+            int is_bright = luminance(P[t], P[B + t], P[2 * B + t]) > bar;
+            for (int c = 0; c < 3; c++)
+                rec[(FIELD_POWER_NOT_BRIGHT + c) * B + t] = is_bright ? 0.0f : P[c * B + t];
+            if (is_bright) s->bright_keys[k++] = texel_key(s, b, t);
+        }
+    }
+    s->bright_block_count = gather_texels(s, s->bright_keys, k, FIELD_POWER, s->bright_records,
+                                          s->bright_cones, s->bright_capacity);
+}
+
+typedef struct bound_job {
+    const ibl_specular_plan *p;
+    precomputed_piece *c;
+} bound_job;
+
+/* How far each texel's moment leaf can be from its uniform leaf, per unit of the normaliser:
+ * in float, lane by lane. */
+static void bound_task(void *arg, int index)
+{
+    const bound_job *j = arg;
+    const precomputed_piece *c = j->c;
+    const source_level *s = &j->p->pyramid[c->source_level];
+    const int B = BLOCK_TEXELS;
+    size_t b0 = (size_t)index * BOUND_BLOCKS_PER_TASK, b1 = b0 + BOUND_BLOCKS_PER_TASK;
+    size_t blocks = source_block_count(s);
+    const float a1 = (float)c->bound_mean, a2 = (float)c->bound_spread, a3 = (float)c->bound_covariance;
+    const float l0 = (float)LUMINANCE_R, l1 = (float)LUMINANCE_G, l2 = (float)LUMINANCE_B;
+    for (size_t b = b0; b < b1 && b < blocks; b++) {
+        const float *rec = s->records + b * s->fields * B;
+        float *out = c->texel_bound + b * B;
+        for (int t = 0; t < B; t++) {
+            float P = l0 * rec[FIELD_POWER * B + t] + l1 * rec[(FIELD_POWER + 1) * B + t] +
+                      l2 * rec[(FIELD_POWER + 2) * B + t];
+            float dm = 0, dc = 0;
+            for (int k = 0; k < 3; k++) {
+                float d = rec[(FIELD_LUM_MEAN + k) * B + t] - rec[(FIELD_MEAN + k) * B + t];
+                dm += d * d;
+            }
+            for (int k = 0; k < 6; k++) {
+                float d = fabsf(rec[(FIELD_LUM_COVARIANCE + k) * B + t] - rec[(FIELD_COVARIANCE + k) * B + t]);
+                dc = d > dc ? d : dc;
+            }
+            float de = fabsf(rec[FIELD_LUM_SPREAD * B + t] - rec[FIELD_SPREAD * B + t]);
+            out[t] = P > 0 ? P * (a1 * sqrtf(dm) + a2 * de + a3 * dc) : 0.0f;
+        }
+    }
+}
+
+/* Gathers each texel over the threshold with its luminance moments and its power from
+ * power_field (FIELD_POWER, or FIELD_POWER_NOT_BRIGHT for a piece without bright texels):
+ * summed as a leaf while the padded source leaves it out (products.c), it turns the texel's
+ * uniform share into its moment leaf. */
+static int gather_corrections(precomputed_piece *c, const source_level *s, double threshold,
+                              int power_field)
+{
+    const int B = BLOCK_TEXELS;
+    size_t blocks = source_block_count(s);
+    int k = 0;
+    for (size_t b = 0; b < blocks; b++) {
+        const float *rec = s->records + b * s->fields * B;
+        for (int t = 0; t < B; t++) {
+            if (!(c->texel_bound[b * B + t] > threshold)) continue;
+            if (rec[power_field * B + t] == 0 && rec[(power_field + 1) * B + t] == 0 &&
+                rec[(power_field + 2) * B + t] == 0)
+                continue;
+            c->correction_keys[k++] = texel_key(s, b, t);
+        }
+    }
+    return gather_texels(s, c->correction_keys, k, power_field, c->correction_records,
+                         c->correction_cones, c->correction_capacity);
+}
+
+void ibl__fast_select_corrections(ibl_specular_plan *p, precomputed_piece *c)
+{
+    const source_level *s = &p->pyramid[c->source_level];
+    size_t blocks = source_block_count(s);
+    int power_field = c->without_bright ? FIELD_POWER_NOT_BRIGHT : FIELD_POWER;
+    bound_job job = {p, c};
+    ibl_parallel_for(p->ctx, (int)((blocks + BOUND_BLOCKS_PER_TASK - 1) / BOUND_BLOCKS_PER_TASK),
+                     bound_task, &job);
+    double bar = CORRECTION_BAR * accuracy_scale(p) * s->power / (4.0 * IBL_PI);
+    int capacity = c->correction_capacity * BLOCK_TEXELS;
+    for (;;) {
+        int count = 0;
+        for (size_t i = 0; i < blocks * BLOCK_TEXELS; i++) count += c->texel_bound[i] > bar;
+        if (count <= capacity) break;
+        bar *= 2.0;
+    }
+    c->correction_threshold = (float)bar; /* the padded source and the gathering compare the same floats */
+    c->correction_block_count = gather_corrections(c, s, c->correction_threshold, power_field);
+}

@@ -1,0 +1,236 @@
+/* The pieces of a lobe: a smooth partition of unity in u = 1 - R.l, and where each piece is
+ * summed.
+ *
+ * The lobe f(u) is cut into a core f psi(u / U0) and dyadic rings f (psi(u / Uj) -
+ * psi(u / Uj-1)), Uj = 4^j U0, where psi is 1 for t <= 1, 0 for t >= 4 and the quintic
+ * smootherstep between (C2, so the second-order leaves of leaf_sums.c see a smooth g''). The
+ * pieces add up to f exactly. This is the splitting of multilevel summation (Brandt & Lubrecht
+ * 1990; Skeel, Tezcan & Hardy 2002) on the sphere: a ring whose inner radius is b varies on the
+ * scale of b, so it can be summed from a mip whose texels are a fixed fraction of b wide and
+ * evaluated on a cube grid spaced a fixed fraction of b, then interpolated. The cost per output texel is then set by
+ * those fractions, not by the source size: GGX's long tail is summed from coarse mips on coarse
+ * grids. The core, where the lobe is narrow, is summed at every output texel over the finest
+ * level it needs.
+ *
+ * Each piece is tabulated (g and g'' in u) for the portable kernels and for the bars of
+ * gathering.c, and described in closed form (GGX's alpha, Phong's n, the two steps) for the
+ * AVX2 kernels. The fractions are in tuning.h. */
+#include "bake/specular/fast_internal.h"
+#include "core/numeric.h"
+
+#include <math.h>
+#include <string.h>
+
+/* psi(t) and its first two derivatives in u, where t = u / scale. */
+static void psi_derivatives(double t, double scale, double out[3])
+{
+    double s = (t - 1.0) / 3.0;
+    if (s <= 0.0) {
+        out[0] = 1.0, out[1] = out[2] = 0.0;
+        return;
+    }
+    if (s >= 1.0) {
+        out[0] = out[1] = out[2] = 0.0;
+        return;
+    }
+    double step = s * s * s * (10.0 + s * (-15.0 + 6.0 * s));
+    double step1 = 30.0 * s * s * (1.0 - s) * (1.0 - s);
+    double step2 = 60.0 * s * (1.0 - s) * (1.0 - 2.0 * s);
+    double ds_du = 1.0 / (3.0 * scale);
+    out[0] = 1.0 - step;
+    out[1] = -step1 * ds_du;
+    out[2] = -step2 * ds_du * ds_du;
+}
+
+/* g = f (psi(u / outer) - psi(u / inner)) and g'' in u (inner 0: the core; outer 0: no outer
+ * step, the last ring). */
+static void piece_value(const ibl__lobe *lobe, double inner, double outer, double u, double out[2])
+{
+    double f[3];
+    ibl__lobe_f012(lobe, 1.0 - u, f);
+    /* derivatives in u = 1 - x: f_u = -f_x, f_uu = f_xx */
+    double f0 = f[0], f1 = -f[1], f2 = f[2];
+    double psi_out[3] = {1, 0, 0}, psi_in[3] = {0, 0, 0};
+    if (outer > 0) psi_derivatives(u / outer, outer, psi_out);
+    if (inner > 0) psi_derivatives(u / inner, inner, psi_in);
+    double p0 = psi_out[0] - psi_in[0], p1 = psi_out[1] - psi_in[1], p2 = psi_out[2] - psi_in[2];
+    out[0] = f0 * p0;
+    out[1] = f2 * p0 + 2.0 * f1 * p1 + f0 * p2;
+}
+
+/* Tabulates the piece over [u_lo, u_hi] and fills its closed-form description. */
+static ibl_status piece_describe(ibl_context *ctx, const ibl__lobe *lobe, double inner,
+                                 double outer, lobe_piece *pc)
+{
+    pc->table = ibl_alloc(ctx, (size_t)(PIECE_TABLE_STEPS + 2) * 2 * sizeof(float));
+    if (!pc->table) return ibl_context_status(ctx);
+    double step = (pc->u_hi - pc->u_lo) / PIECE_TABLE_STEPS;
+    for (int i = 0; i <= PIECE_TABLE_STEPS; i++) {
+        double g[2];
+        piece_value(lobe, inner, outer, pc->u_lo + i * step, g);
+        pc->table[2 * i] = (float)g[0];
+        pc->table[2 * i + 1] = (float)g[1];
+    }
+    pc->table[2 * PIECE_TABLE_STEPS + 2] = pc->table[2 * PIECE_TABLE_STEPS + 3] = 0.0f;
+    pc->table_u0 = (float)pc->u_lo;
+    pc->table_scale = (float)(PIECE_TABLE_STEPS / (pc->u_hi - pc->u_lo));
+    pc->is_ggx = lobe->kind == IBL__LOBE_GGX;
+    pc->phong_n = (float)lobe->n;
+    double alpha2 = lobe->alpha * lobe->alpha;
+    pc->ggx_alpha2 = (float)alpha2;
+    pc->ggx_slope = (float)(0.5 * (1.0 - alpha2));
+    pc->ggx_alpha4 = (float)(alpha2 * alpha2);
+    /* see psi_step for the encoding of an absent step */
+    pc->outer.scale = outer > 0 ? (float)(1.0 / (3.0 * outer)) : 0.0f;
+    pc->outer.offset = outer > 0 ? (float)(1.0 / 3.0) : 1.0f;
+    pc->outer.slope = pc->outer.scale;
+    pc->inner.scale = inner > 0 ? (float)(1.0 / (3.0 * inner)) : 0.0f;
+    pc->inner.offset = inner > 0 ? (float)(1.0 / 3.0) : -2.0f;
+    pc->inner.slope = pc->inner.scale;
+    return IBL_OK;
+}
+
+double ibl__fast_piece_peak(const lobe_piece *pc)
+{
+    double peak = 0;
+    for (int i = 0; i <= PIECE_TABLE_STEPS; i++)
+        peak = fabs(pc->table[2 * i]) > peak ? fabs(pc->table[2 * i]) : peak;
+    return peak;
+}
+
+/* The coarsest pyramid level whose texels are at most `width` wide (0 if none is) and whose
+ * faces are at least MIN_SOURCE_EDGE texels. */
+static int source_level_for(const ibl_specular_plan *p, double width)
+{
+    int best = 0;
+    for (int l = 0; l < p->pyramid_levels; l++)
+        if (texel_angle(p->pyramid[l].edge) <= width && p->pyramid[l].edge >= MIN_SOURCE_EDGE)
+            best = l;
+    return best;
+}
+
+/* The level's grid of `edge` points a face edge (at_output: the output texels), added if new. */
+static int grid_index(level_plan *lv, int edge, int at_output)
+{
+    for (int g = 0; g < lv->grid_count; g++)
+        if (lv->grids[g].edge == edge && lv->grids[g].at_output == at_output) return g;
+    sum_grid *g = &lv->grids[lv->grid_count];
+    g->edge = edge;
+    g->at_output = at_output;
+    g->tiles = (edge + TILE_EDGE - 1) / TILE_EDGE;
+    return lv->grid_count++;
+}
+
+/* Where a ring of inner radius angle_in is summed: over texels a fixed fraction of its radius
+ * wide, on a grid a fixed fraction of it apart; a ring from a coarse level on a coarse grid
+ * sends its bright texels to a finer grid (gathering.c) so that its own grid may be coarser. */
+static void place_ring(const ibl_specular_plan *p, level_plan *lv, int output_edge, double acc,
+                       lobe_piece *pc)
+{
+    const double ring_texel = RING_SOURCE_TEXEL * acc;
+    const double spacing = RING_GRID_SPACING * acc;
+    const double spacing_bright_apart = RING_GRID_SPACING_BRIGHT_APART * acc;
+    double b = pc->angle_in;
+    int finer = centred_directions(p) &&
+                acos(1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0)) < RING_PRECOMPUTED_MAX_ANGLE;
+    pc->source_level =
+        source_level_for(p, (finer ? RING_SOURCE_TEXEL_PRECOMPUTED * acc : ring_texel) * b);
+    int bright_apart = pc->source_level > 0;
+    int edge = 1;
+    while (texel_angle(edge) > (bright_apart ? spacing_bright_apart : spacing) * b) edge *= 2;
+    if (edge < MIN_GRID_EDGE) edge = MIN_GRID_EDGE;
+    if (edge >= output_edge) {
+        pc->grid = grid_index(lv, output_edge, 1);
+        return;
+    }
+    pc->grid = grid_index(lv, edge, 0);
+    pc->bright_apart = bright_apart;
+    int bright_edge = MIN_GRID_EDGE;
+    while (bright_edge < output_edge && texel_angle(bright_edge) > BRIGHT_GRID_SPACING * acc * b)
+        bright_edge *= 2;
+    pc->bright_grid = bright_edge >= output_edge ? grid_index(lv, output_edge, 1)
+                                                 : grid_index(lv, bright_edge, 0);
+}
+
+/* Every grid's leaf-sum tasks (6 faces of tiles) and its sums. */
+static ibl_status allocate_grids(ibl_specular_plan *p, level_plan *lv)
+{
+    lv->task_count = 0;
+    for (int g = 0; g < lv->grid_count; g++) {
+        sum_grid *gr = &lv->grids[g];
+        lv->task_begin[g] = lv->task_count;
+        lv->task_count += 6 * gr->tiles * gr->tiles;
+        gr->sums = ibl_alloc(p->ctx, (size_t)6 * gr->edge * gr->edge * 4 * sizeof(float));
+        if (!gr->sums) return ibl_context_status(p->ctx);
+        if (!gr->at_output) {
+            gr->bordered = ibl_alloc(p->ctx, (size_t)6 * (gr->edge + 2) * (gr->edge + 2) * 4 *
+                                                 sizeof(float));
+            if (!gr->bordered) return ibl_context_status(p->ctx);
+        }
+    }
+    lv->task_begin[lv->grid_count] = lv->task_count;
+    return IBL_OK;
+}
+
+ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level)
+{
+    level_plan *lv = &p->levels[level];
+    const ibl__lobe *lobe = &lv->lobe;
+    int n = ibl_level_size(p->output_edge, level);
+    double acc = accuracy_scale(p);
+    const double core_texels = CORE_TEXELS_PER_HALF_WIDTH / acc;
+    const double cull = lobe->kind == IBL__LOBE_PHONG ? PHONG_CULL : 0.0;
+
+    int core_level = source_level_for(p, lobe->half_angle / core_texels);
+    double core_end = CORE_END_HALF_WIDTHS * lobe->half_angle;
+    double min_core_end = CORE_END_MIN_TEXELS * texel_angle(p->pyramid[core_level].edge);
+    if (core_end < min_core_end) core_end = min_core_end;
+    /* the scale of psi's step: psi(u / U) starts at u = U and ends at 4 U */
+    double U = 1.0 - cos(core_end < IBL_PI ? core_end : IBL_PI);
+    lv->grid_count = 0;
+    lv->piece_count = 0;
+    double previous_U = 0.0, inner[MAX_PIECES]; /* each piece's inner step scale (0: none) */
+    for (int j = 0; j < MAX_PIECES; j++) {
+        lobe_piece *pc = &lv->pieces[lv->piece_count];
+        memset(pc, 0, sizeof *pc);
+        double outer_U = U;
+        int last = (outer_U >= 1.0) || j == MAX_PIECES - 1;
+        pc->u_lo = previous_U;
+        pc->u_hi = last ? 2.0 : 4.0 * outer_U;
+        if (pc->u_hi > 2.0) pc->u_hi = 2.0;
+        pc->angle_in = acos(1.0 - pc->u_lo);
+        pc->angle_out = acos(1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0));
+        /* a Phong tail far below the peak is dropped (its weight is below `cull`) */
+        if (cull > 0 && j > 0 && ibl__lobe_f(lobe, 1.0 - pc->u_lo) < cull) break;
+        if (j == 0) {
+            pc->source_level = core_level;
+            pc->grid = grid_index(lv, n, 1);
+        } else {
+            place_ring(p, lv, n, acc, pc);
+        }
+        /* a ring over the same source level and grid as the ring before it (the far rings,
+         * once both reach the coarsest level) joins it: their sum is one piece, the lobe
+         * between the first one's inner step and this one's outer step, summed once */
+        lobe_piece *prev = lv->piece_count > 1 ? pc - 1 : NULL;
+        if (prev && prev->source_level == pc->source_level && prev->grid == pc->grid &&
+            prev->bright_apart == pc->bright_apart) {
+            prev->u_hi = pc->u_hi;
+            prev->angle_out = pc->angle_out;
+            ibl_free(p->ctx, prev->table);
+            prev->table = NULL;
+            ibl_status st = piece_describe(p->ctx, lobe, inner[lv->piece_count - 1],
+                                           last ? 0.0 : outer_U, prev);
+            if (st != IBL_OK) return st;
+        } else {
+            inner[lv->piece_count] = j == 0 ? 0.0 : previous_U;
+            ibl_status st =
+                piece_describe(p->ctx, lobe, inner[lv->piece_count], last ? 0.0 : outer_U, pc);
+            if (st != IBL_OK) return st;
+            lv->piece_count++;
+        }
+        if (last) break;
+        previous_U = U;
+        U *= 4.0;
+    }
+    return allocate_grids(p, lv);
+}

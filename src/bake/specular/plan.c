@@ -1,0 +1,253 @@
+/* The public plan object of the specular prefilter (ibl_specular_plan_create / _run / _info /
+ * _destroy, include/ibl/specular.h) and the order in which the fast method's mechanisms run.
+ *
+ * A plan fixes everything that depends on the sizes and the lobes only: the geometry of the
+ * moment pyramid, the pieces of every level and their grids, the precomputed weights and the
+ * normalisers, and every buffer a run needs; a run allocates nothing. With desc.dynamic the plan
+ * is instead the per-frame sparse operator of specular_dynamic.c. The fast method itself is
+ * described in fast_internal.h and docs/SPECULAR.md "The fast method".
+ *
+ * Plan:  face frames -> sub-texel split -> moments of every pyramid level (geometry.c) ->
+ *        per level: pieces and grids (pieces.c), precomputed weights (precomputed.c) ->
+ *        run buffers -> level 0's records if a leaf sum reads them -> per level: normalisers
+ *        (leaf_sums.c) and the bars of the gathered texels (gathering.c).
+ * Run:   radiance pyramid (pyramid.c) with each level's bright texels (gathering.c) ->
+ *        centroid corrections of every precomputed coarse piece (gathering.c) -> per level:
+ *        the mirror (mirror.c), or leaf sums (leaf_sums.c), products (products.c) and the
+ *        combination of the grids (combine.c) -> edge fixup. */
+#include "bake/specular/fast_internal.h"
+#include "core/context_internal.h"
+#include "core/cpu.h"
+
+#include <string.h>
+
+void ibl_specular_plan_destroy(ibl_specular_plan *p)
+{
+    if (!p) return;
+    ibl_context *ctx = p->ctx;
+    ibl__dynamic_destroy(p->dynamic);
+    ibl_free(ctx, p->level0_geometry);
+    ibl_free(ctx, p->padded_source);
+    ibl_free(ctx, p->correction_pool);
+    for (int l = 0; l < IBL_MAX_LEVELS; l++) {
+        source_level *s = &p->pyramid[l];
+        ibl_free(ctx, s->records);
+        ibl_free(ctx, s->cones);
+        ibl_free(ctx, s->row_power);
+        ibl_free(ctx, s->uniform);
+        ibl_free(ctx, s->uniform_not_bright);
+        ibl_free(ctx, s->bright_records);
+        ibl_free(ctx, s->bright_keys);
+        ibl_free(ctx, s->bright_cones);
+        level_plan *lv = &p->levels[l];
+        for (int k = 0; k < lv->piece_count; k++) {
+            ibl_free(ctx, lv->pieces[k].table);
+            ibl__fast_precomputed_destroy(ctx, lv->pieces[k].precomputed);
+        }
+        for (int g = 0; g < lv->grid_count; g++) {
+            ibl_free(ctx, lv->grids[g].sums);
+            ibl_free(ctx, lv->grids[g].bordered);
+        }
+    }
+    ibl_free(ctx, p);
+}
+
+const ibl_specular_info *ibl_specular_plan_info(const ibl_specular_plan *plan)
+{
+    return plan ? &plan->info : NULL;
+}
+
+/* A lobe narrower than SUBTEXEL_BELOW_TEXELS source texels is summed over k x k sub-texels of
+ * level 0 (each with its parent's radiance), as the reference splits such texels. */
+static void choose_subtexel_split(ibl_specular_plan *p)
+{
+    int S = p->source_edge;
+    p->subtexel_split = 1;
+    for (int l = 0; l < p->output_levels; l++) {
+        if (level_is_mirror(p, l)) continue;
+        const ibl__lobe *lobe = &p->levels[l].lobe;
+        while (p->subtexel_split < SUBTEXEL_MAX_SPLIT && (long)S * p->subtexel_split < SUBTEXEL_MAX_EDGE &&
+               lobe->half_angle < SUBTEXEL_BELOW_TEXELS * texel_angle(S * p->subtexel_split))
+            p->subtexel_split *= 2;
+    }
+}
+
+/* What a run needs besides the levels' own buffers: one padded face and its transpose for the
+ * precomputed pieces (which run one after the other, face by face), and the uniform images of
+ * the coarse levels they read. */
+static ibl_status run_buffers(ibl_specular_plan *p)
+{
+    ibl_context *ctx = p->ctx;
+    size_t padded = 0;
+    for (int l = 0; l < p->output_levels; l++)
+        for (int k = 0; k < p->levels[l].piece_count; k++) {
+            const precomputed_piece *c = p->levels[l].pieces[k].precomputed;
+            if (!c) continue;
+            if ((size_t)6 * c->padded_edge * c->padded_edge > padded)
+                padded = (size_t)6 * c->padded_edge * c->padded_edge;
+            if (c->source_level == 0) continue;
+            source_level *s = &p->pyramid[c->source_level];
+            float **image = c->without_bright ? &s->uniform_not_bright : &s->uniform;
+            if (!*image && !(*image = ibl_alloc(ctx, (size_t)6 * s->edge * s->edge * 4 * sizeof(float))))
+                return ibl_context_status(ctx);
+        }
+    if (padded && !(p->padded_source = ibl_alloc(ctx, padded * sizeof(float))))
+        return ibl_context_status(ctx);
+    return IBL_OK;
+}
+
+/* Level 0's records exist only for pieces that sum it leaf by leaf (sub-texels, or a level-0
+ * piece that could not be precomputed). */
+static int needs_level0_records(const ibl_specular_plan *p)
+{
+    if (p->subtexel_split > 1) return 1;
+    for (int l = 0; l < p->output_levels; l++)
+        for (int k = 0; k < p->levels[l].piece_count; k++)
+            if (!level_is_mirror(p, l) && p->levels[l].pieces[k].source_level == 0 &&
+                !p->levels[l].pieces[k].precomputed)
+                return 1;
+    return 0;
+}
+
+/* Everything of the fast method's plan after the checks and the mapping. */
+static ibl_status plan_fast(ibl_specular_plan *p)
+{
+    for (int l = 0; l < p->output_levels; l++) p->levels[l].lobe = ibl__lobe_for_level(&p->info, l);
+    choose_subtexel_split(p);
+    p->pyramid_levels = ibl_full_mip_count(p->source_edge * p->subtexel_split);
+    ibl_status st = ibl__fast_build_moments(p);
+    for (int l = 0; st == IBL_OK && l < p->output_levels; l++) {
+        if (level_is_mirror(p, l)) continue;
+        st = ibl__fast_plan_pieces(p, l);
+        if (st == IBL_OK) st = ibl__fast_precompute_level(p, l);
+    }
+    if (st == IBL_OK) st = run_buffers(p);
+    if (st == IBL_OK && needs_level0_records(p)) st = ibl__fast_level0_records(p);
+    for (int l = 0; st == IBL_OK && l < p->output_levels; l++) {
+        if (level_is_mirror(p, l)) continue;
+        ibl__fast_normalisers(p, l);
+        st = ibl__fast_plan_bars(p, l);
+    }
+    if (st == IBL_OK) st = ibl__fast_gathering_buffers(p);
+    return st;
+}
+
+ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *desc,
+                                    ibl_specular_plan **out)
+{
+    if (!ctx || !desc || !out) return IBL_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (desc->size < 1 || desc->size > 16384)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "specular plan: size %d out of range",
+                         desc->size);
+    if (desc->filter == IBL_FILTER_BOX || desc->filter == IBL_FILTER_GAUSS)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "specular plan: the %s filter has no plan (use ibl_specular_prefilter)",
+                         ibl_specular_filter_name(desc->filter));
+    int S = desc->source_size > 0 ? desc->source_size : desc->size;
+    if (!is_power_of_two(S) || S > 16384)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "specular plan: source size %d is not a power of two", S);
+    ibl_specular_plan *p = ibl_calloc(ctx, 1, sizeof *p);
+    if (!p) return ibl_context_status(ctx);
+    p->ctx = ctx;
+    p->desc = *desc;
+    p->source_edge = S;
+    p->output_edge = desc->size;
+    int full = ibl_full_mip_count(p->output_edge);
+    p->output_levels = desc->levels > 0 && desc->levels < full ? desc->levels : full;
+    p->desc.levels = p->output_levels;
+#if IBL_HAVE_X86_KERNELS
+    p->kernels = ibl__cpu_has(ctx, IBL__CPU_AVX2_FMA | IBL__CPU_F16C) ? &ibl__fast_kernels_avx2
+                                                                        : &ibl__fast_kernels_portable;
+#else
+    p->kernels = &ibl__fast_kernels_portable;
+#endif
+    ibl_status st = ibl__specular_mapping(ctx, &p->desc, p->output_edge, p->output_levels, &p->info);
+    if (st == IBL_OK) ibl__fast_face_frames(p);
+    if (st == IBL_OK && desc->dynamic) st = ibl__dynamic_create(ctx, &p->desc, &p->info, S, &p->dynamic);
+    else if (st == IBL_OK) st = plan_fast(p);
+    if (st != IBL_OK) {
+        ibl_specular_plan_destroy(p);
+        return st;
+    }
+    *out = p;
+    return IBL_OK;
+}
+
+/* The per-frame path: the sparse operator over box mips. */
+static ibl_status run_dynamic(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cubemap *dst)
+{
+    ibl__dynamic_mips(p->dynamic, src);
+    for (int l = 0; l < p->output_levels; l++) {
+        ibl__dynamic_level(p->dynamic, dst, l);
+        ibl_status st = ibl_edge_fixup_apply(p->ctx, p->desc.edge_fixup, dst, l);
+        if (st != IBL_OK) return st;
+    }
+    return ibl__progress(p->ctx, "prefilter", 1.0);
+}
+
+/* The radiance pyramid and what is gathered from it: every level's bright texels, then the
+ * centroid corrections of every precomputed piece over a coarse level, one after the other in
+ * the correction pool. */
+static void run_pyramid(ibl_specular_plan *p, const ibl_cubemap *src)
+{
+    if (p->has_level0_records) ibl__fast_pyramid_level0(p, src);
+    for (int l = 1; l < p->pyramid_levels; l++) {
+        ibl__fast_pyramid_level(p, src, l);
+        if (p->pyramid[l].bright_scale > 0) ibl__fast_select_bright(p, l);
+        ibl__fast_uniform_level(p, l);
+    }
+    size_t pool_used = 0; /* blocks of the correction pool taken */
+    for (int l = 0; l < p->output_levels; l++)
+        for (int k = 0; k < p->levels[l].piece_count; k++) {
+            precomputed_piece *c = p->levels[l].pieces[k].precomputed;
+            if (!c || c->correction_capacity == 0) continue;
+            c->correction_records = p->correction_pool + pool_used * COARSE_FIELDS * BLOCK_TEXELS;
+            ibl__fast_select_corrections(p, c);
+            pool_used += (size_t)c->correction_block_count;
+        }
+}
+
+ibl_status ibl_specular_plan_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cubemap *dst)
+{
+    if (!p || !src || !dst || !src->data || !dst->data) return IBL_ERR_INVALID_ARGUMENT;
+    ibl_context *ctx = p->ctx;
+    if (src->size != p->source_edge || dst->size != p->output_edge || dst->levels != p->output_levels)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "specular run: planned source %d -> %d x %d levels, got %d -> %d x %d",
+                         p->source_edge, p->output_edge, p->output_levels, src->size, dst->size,
+                         dst->levels);
+    if (p->dynamic) return run_dynamic(p, src, dst);
+    run_pyramid(p, src);
+    for (int l = 0; l < p->output_levels; l++) {
+        if (level_is_mirror(p, l)) {
+            ibl__fast_mirror_level(p, src, dst, l);
+        } else {
+            ibl__fast_leaf_sums(p, l);
+            ibl__fast_products(p, l, src);
+            ibl__fast_combine(p, dst, l);
+        }
+        ibl_status st = ibl_edge_fixup_apply(ctx, p->desc.edge_fixup, dst, l);
+        if (st != IBL_OK) return st;
+        st = ibl__progress(ctx, "prefilter", (l + 1.0) / p->output_levels);
+        if (st != IBL_OK) return st;
+    }
+    return IBL_OK;
+}
+
+void ibl__specular_plan_stats(const ibl_specular_plan *p, ibl__specular_stats *out)
+{
+    memset(out, 0, sizeof *out);
+    for (int l = 0; l < p->output_levels; l++)
+        for (int k = 0; k < p->levels[l].piece_count; k++) {
+            const lobe_piece *pc = &p->levels[l].pieces[k];
+            out->pieces++;
+            out->split += pc->bright_apart;
+            if (!pc->precomputed) continue;
+            out->precomputed++;
+            out->precomputed_coarse += pc->precomputed->source_level > 0;
+            out->correction_blocks += pc->precomputed->correction_block_count;
+        }
+    for (int l = 0; l < p->pyramid_levels; l++) out->bright_blocks += p->pyramid[l].bright_block_count;
+}

@@ -1,0 +1,204 @@
+/* The radiance pyramid, rebuilt at every run: what the source's light adds to the geometric
+ * moments of geometry.c.
+ *
+ * A source texel is uniform light, so its moments are the geometric ones and only its radiance
+ * is new. A coarser texel carries its power per channel and the moments of its directions
+ * weighted by the luminance of its children's power (the same parallel-axis rule as the
+ * geometric moments): a sun inside a coarse texel then sits exactly at that texel's luminance
+ * centroid, and the texel's spread is the spread of its light, not of its area. A texel without
+ * light keeps its geometric moments. Levels read by precomputed pieces also get an image of
+ * their texels as uniform light (power over solid angle), which the products copy into the
+ * padded source. Each task takes whole block rows; the luminance power of each block row is
+ * kept and summed in order, so the level's total does not depend on the threads. */
+#include "bake/specular/fast_internal.h"
+
+#include <string.h>
+
+typedef struct pyramid_job {
+    ibl_specular_plan *p;
+    const ibl_cubemap *src;
+    int level;
+} pyramid_job;
+
+/* Level 0's radiance (each sub-texel its source texel's), one block row of one face. */
+static void level0_task(void *arg, int index)
+{
+    const pyramid_job *job = arg;
+    source_level *s = &job->p->pyramid[0];
+    int M = s->edge, K = job->p->subtexel_split;
+    int f = index / s->blocks_y, block_row = index % s->blocks_y;
+    for (int y = block_row * BLOCK_H; y < (block_row + 1) * BLOCK_H && y < M; y++) {
+        const float *row = ibl_cubemap_face(job->src, 0, f) + (size_t)(y / K) * (M / K) * 4;
+        for (int x = 0; x < M; x++)
+            for (int c = 0; c < 3; c++)
+                s->records[record_index(s, f, x, y, FIELD_RADIANCE + c)] = row[(x / K) * 4 + c];
+    }
+}
+
+void ibl__fast_pyramid_level0(ibl_specular_plan *p, const ibl_cubemap *src)
+{
+    pyramid_job job = {p, src, 0};
+    ibl_parallel_for(p->ctx, 6 * p->pyramid[0].blocks_y, level0_task, &job);
+}
+
+/* Row y of face f of level 1 straight from the source texels (no sub-texels, no level-0
+ * records): the four children are uniform texels whose geometric moments are face 0's
+ * face-local ones (level0_geometry, the same on every face), so they are combined in face-local
+ * coordinates and the result is turned to face f's world coordinates once. */
+static void level1_row_from_source(const pyramid_job *job, int f, int y)
+{
+    static const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    const ibl_specular_plan *p = job->p;
+    source_level *s = &job->p->pyramid[1];
+    int M = s->edge, S = p->pyramid[0].edge;
+    const float *face = ibl_cubemap_face(job->src, 0, f);
+    for (int x = 0; x < M; x++) {
+        const float *g[4];
+        double w[4], W = 0, m[3] = {0, 0, 0}, P[3] = {0, 0, 0};
+        for (int k = 0; k < 4; k++) {
+            int cx = 2 * x + (k & 1), cy = 2 * y + (k >> 1);
+            g[k] = p->level0_geometry + ((size_t)cy * S + cx) * GEOMETRY_FIELDS;
+            const float *L = face + ((size_t)cy * S + cx) * 4;
+            double om = g[k][FIELD_SOLID_ANGLE], pw[3] = {om * L[0], om * L[1], om * L[2]};
+            for (int c = 0; c < 3; c++) P[c] += pw[c];
+            double lum = luminance(pw[0], pw[1], pw[2]);
+            w[k] = lum > 0 ? lum : 0;
+            W += w[k];
+            for (int c = 0; c < 3; c++) m[c] += w[k] * g[k][FIELD_MEAN + c];
+        }
+        float *o = s->records + record_index(s, f, x, y, 0);
+        if (W > 0) {
+            double C[6] = {0, 0, 0, 0, 0, 0}, e = 0;
+            for (int c = 0; c < 3; c++) m[c] /= W;
+            for (int k = 0; k < 4; k++) {
+                const float *q = g[k];
+                double a = w[k] / W;
+                double d[3] = {q[FIELD_MEAN] - m[0], q[FIELD_MEAN + 1] - m[1], q[FIELD_MEAN + 2] - m[2]};
+                for (int c = 0; c < 6; c++)
+                    C[c] += a * (q[FIELD_COVARIANCE + c] + d[pair[c][0]] * d[pair[c][1]]);
+                e += a * (q[FIELD_SPREAD] + 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+            }
+            moments_to_world(p->face_axis[f], p->face_sign[f], m, e, C,
+                             o + FIELD_LUM_MEAN * BLOCK_TEXELS, BLOCK_TEXELS);
+        } else { /* no light: the geometric moments */
+            for (int k = 0; k < 10; k++)
+                o[(FIELD_LUM_MEAN + k) * BLOCK_TEXELS] = o[(FIELD_MEAN + k) * BLOCK_TEXELS];
+        }
+        for (int c = 0; c < 3; c++) o[(FIELD_POWER + c) * BLOCK_TEXELS] = (float)P[c];
+    }
+}
+
+/* The moments and power of one child texel (level 1 from level 0's records, else from the
+ * level below's luminance moments). */
+static void child_moments(const source_level *lo, int level, int f, int x, int y, texel_moments *g,
+                          double power[3])
+{
+    const float *q = lo->records + record_index(lo, f, x, y, 0);
+    const int B = BLOCK_TEXELS;
+    if (level == 1) {
+        double om = q[FIELD_SOLID_ANGLE * B];
+        for (int c = 0; c < 3; c++) power[c] = om * q[(FIELD_RADIANCE + c) * B];
+        for (int c = 0; c < 3; c++) g->mean[c] = q[(FIELD_MEAN + c) * B];
+        g->spread = q[FIELD_SPREAD * B];
+        for (int c = 0; c < 6; c++) g->covariance[c] = q[(FIELD_COVARIANCE + c) * B];
+    } else {
+        for (int c = 0; c < 3; c++) power[c] = q[(FIELD_POWER + c) * B];
+        for (int c = 0; c < 3; c++) g->mean[c] = q[(FIELD_LUM_MEAN + c) * B];
+        g->spread = q[FIELD_LUM_SPREAD * B];
+        for (int c = 0; c < 6; c++) g->covariance[c] = q[(FIELD_LUM_COVARIANCE + c) * B];
+    }
+}
+
+/* Row y of face f of a coarse level from the records of the level below. */
+static void level_row(const pyramid_job *job, int f, int y)
+{
+    const source_level *lo = &job->p->pyramid[job->level - 1];
+    source_level *s = &job->p->pyramid[job->level];
+    const int B = BLOCK_TEXELS;
+    for (int x = 0; x < s->edge; x++) {
+        texel_moments parts[4], out;
+        const texel_moments *pp[4];
+        double w[4], P[3] = {0, 0, 0};
+        for (int k = 0; k < 4; k++) {
+            double pw[3];
+            child_moments(lo, job->level, f, 2 * x + (k & 1), 2 * y + (k >> 1), &parts[k], pw);
+            w[k] = luminance(pw[0], pw[1], pw[2]);
+            if (!(w[k] > 0)) w[k] = 0;
+            for (int c = 0; c < 3; c++) P[c] += pw[c];
+            pp[k] = &parts[k];
+        }
+        float *o = s->records + record_index(s, f, x, y, 0);
+        if (w[0] + w[1] + w[2] + w[3] > 0) {
+            ibl__fast_combine_moments(pp, w, 4, &out);
+        } else { /* no light: the geometric moments */
+            for (int c = 0; c < 3; c++) out.mean[c] = o[(FIELD_MEAN + c) * B];
+            out.spread = o[FIELD_SPREAD * B];
+            for (int c = 0; c < 6; c++) out.covariance[c] = o[(FIELD_COVARIANCE + c) * B];
+        }
+        for (int c = 0; c < 3; c++) o[(FIELD_LUM_MEAN + c) * B] = (float)out.mean[c];
+        o[FIELD_LUM_SPREAD * B] = (float)out.spread;
+        for (int c = 0; c < 6; c++) o[(FIELD_LUM_COVARIANCE + c) * B] = (float)out.covariance[c];
+        for (int c = 0; c < 3; c++) o[(FIELD_POWER + c) * B] = (float)P[c];
+    }
+}
+
+/* One block row of one face of a coarse level, and its luminance power. */
+static void level_task(void *arg, int index)
+{
+    const pyramid_job *job = arg;
+    source_level *s = &job->p->pyramid[job->level];
+    int f = index / s->blocks_y, block_row = index % s->blocks_y;
+    int from_source = job->level == 1 && !job->p->has_level0_records;
+    for (int y = block_row * BLOCK_H; y < (block_row + 1) * BLOCK_H && y < s->edge; y++) {
+        if (from_source) level1_row_from_source(job, f, y);
+        else level_row(job, f, y);
+    }
+    double power = 0;
+    for (int bx = 0; bx < s->blocks_x; bx++) {
+        const float *P = s->records +
+                         (((size_t)f * s->blocks_y + block_row) * s->blocks_x + bx) * s->fields * BLOCK_TEXELS +
+                         FIELD_POWER * BLOCK_TEXELS;
+        for (int t = 0; t < BLOCK_TEXELS; t++)
+            power += luminance(P[t], P[BLOCK_TEXELS + t], P[2 * BLOCK_TEXELS + t]);
+    }
+    s->row_power[index] = power;
+}
+
+void ibl__fast_pyramid_level(ibl_specular_plan *p, const ibl_cubemap *src, int level)
+{
+    source_level *s = &p->pyramid[level];
+    pyramid_job job = {p, src, level};
+    ibl_parallel_for(p->ctx, 6 * s->blocks_y, level_task, &job);
+    s->power = 0;
+    for (int i = 0; i < 6 * s->blocks_y; i++) s->power += s->row_power[i];
+}
+
+/* Row `index` (face edge + y) of the level's uniform images. */
+static void uniform_task(void *arg, int index)
+{
+    const pyramid_job *job = arg;
+    const source_level *s = &job->p->pyramid[job->level];
+    int M = s->edge, f = index / M, y = index % M;
+    for (int x = 0; x < M; x++) {
+        const float *rec = s->records + record_index(s, f, x, y, 0);
+        float om = rec[FIELD_SOLID_ANGLE * BLOCK_TEXELS], inv = om > 0 ? 1.0f / om : 0.0f;
+        size_t o = (((size_t)f * M + y) * M + x) * 4;
+        if (s->uniform) {
+            for (int c = 0; c < 3; c++) s->uniform[o + c] = rec[(FIELD_POWER + c) * BLOCK_TEXELS] * inv;
+            s->uniform[o + 3] = 0.0f;
+        }
+        if (s->uniform_not_bright) {
+            for (int c = 0; c < 3; c++)
+                s->uniform_not_bright[o + c] = rec[(FIELD_POWER_NOT_BRIGHT + c) * BLOCK_TEXELS] * inv;
+            s->uniform_not_bright[o + 3] = 0.0f;
+        }
+    }
+}
+
+void ibl__fast_uniform_level(ibl_specular_plan *p, int level)
+{
+    const source_level *s = &p->pyramid[level];
+    if (!s->uniform && !s->uniform_not_bright) return;
+    pyramid_job job = {p, NULL, level};
+    ibl_parallel_for(p->ctx, 6 * s->edge, uniform_task, &job);
+}

@@ -1,0 +1,120 @@
+/* Every tuning constant of the fast prefilter, in one table: what each one decides and why it
+ * has its value. The accuracy constants were chosen by measuring the six test HDRIs at 128
+ * and 256 against the reference (docs/SPECULAR.md "Accuracy"): with them every level of ggx,
+ * phong and blinn stays within 0.44% RMS and 3.2% max, and docs/SPECULAR.md lists the coarser
+ * settings that failed that bar. The capacities and chunk sizes were chosen by timing the 256
+ * and 512 chains (docs/SPECULAR.md "Known limits" has the alternatives that lost).
+ *
+ * Widths are angles in radians; "b" is a ring's inner radius. ibl_specular_desc.accuracy
+ * scales every width and bar below by accuracy / ACCURACY_DEFAULT. */
+#ifndef IBL_SPECULAR_TUNING_H
+#define IBL_SPECULAR_TUNING_H
+
+/* ---- the accuracy knob ---- */
+
+/* desc.accuracy = 0 means this value; the widths and bars below are the ones it gives */
+#define ACCURACY_DEFAULT 0.35
+
+/* ---- where the lobe's pieces are summed (pieces.c) ---- */
+
+/* The core is summed over the coarsest source level whose texels are at most 1/2.5 of the
+ * lobe's half width: 1.4 texels per half width gave 0.89% RMS at level 1 of interior, 1.7 gave
+ * 0.53% RMS; 2.5 keeps the worst level under 0.44%. */
+#define CORE_TEXELS_PER_HALF_WIDTH 2.5
+/* The core's step (the partition's first psi) starts at 2 half widths: ending it at 1.5 made
+ * blinn level 0 of night 5.5% max. */
+#define CORE_END_HALF_WIDTHS 2.0
+/* ... and never inside 2 mean texels of the core's level: a core narrower than that would be
+ * a handful of texels whose second-order leaves cannot follow the step. */
+#define CORE_END_MIN_TEXELS 2.0
+/* Neither a core nor a ring reads a level of fewer than 16 texels a face edge: coarse texels
+ * that straddle the horizon, where the lobe has a kink, are what a Taylor leaf gets wrong
+ * (cores from 8-texel faces: 8.6% max on night, blinn level 5). */
+#define MIN_SOURCE_EDGE 16
+
+/* A ring is smooth on the scale of b, so it is summed over texels at most 0.6 b wide ... */
+#define RING_SOURCE_TEXEL 0.6
+/* ... or 0.45 b when its weights are precomputed: a finer level has fewer centroid corrections
+ * but more weights; 0.3 b made the 512 chain 1.2x slower, 0.6 b gave level 1 of 256 fifteen
+ * times the corrections. */
+#define RING_SOURCE_TEXEL_PRECOMPUTED 0.45
+/* ... for rings whose outer edge is inside 1.1 radians (and centred output directions): a ring
+ * reaching further may pass PRECOMPUTED_MAX_REACH once a texel is added and be summed by
+ * leaves, which the finer level would only make slower. */
+#define RING_PRECOMPUTED_MAX_ANGLE 1.1
+/* A ring is evaluated on a cube grid spaced at most 0.2 b, then bilinearly interpolated: a grid
+ * of 0.4 b with every texel in it gave 8.5% max at level 1 of night. */
+#define RING_GRID_SPACING 0.2
+/* ... or 0.6 b when its bright texels are summed apart (gathering.c): the smooth remainder
+ * interpolates well; without the bright texels apart, 0.6 b gave 1.6% RMS and 23% max (night). */
+#define RING_GRID_SPACING_BRIGHT_APART 0.6
+/* The bright texels of such a ring are summed at the output texels, or on a grid spaced at most
+ * 0.08 b when that is coarser: the bilinear error, ~(0.08 / 0.6)^2 of the 20-35% it removes. */
+#define BRIGHT_GRID_SPACING 0.08
+/* No grid is coarser than 8 texels a face edge (a coarser one would not see a face's curve). */
+#define MIN_GRID_EDGE 8
+/* Phong rings stop where the lobe falls below 1e-9 of its peak (x^n dies fast; GGX's long tail
+ * goes to the horizon). */
+#define PHONG_CULL 1e-9
+/* Steps of the tabulated piece (portable kernels and the bars): the portable and AVX2 sums then
+ * differ by ~1e-4 of a value. */
+#define PIECE_TABLE_STEPS 2048
+/* At most one core and 23 rings per level: dyadic rings (4x in u) from the narrowest core reach
+ * the horizon in fewer. */
+#define MAX_PIECES 24
+
+/* ---- sub-texels (plan.c) ---- */
+
+/* A lobe narrower than 1.5 source texels is summed over k x k sub-texels of the source (each with
+ * its parent's radiance), as the reference splits such texels; k at most 8, and the split
+ * source at most 4096 texels a face edge. */
+#define SUBTEXEL_BELOW_TEXELS 1.5
+#define SUBTEXEL_MAX_SPLIT 8
+#define SUBTEXEL_MAX_EDGE 4096
+
+/* ---- leaf sums (leaf_sums.c) ---- */
+
+/* Output points are summed in tiles of 8 x 8: one reach test per tile and block. */
+#define TILE_EDGE 8
+/* Candidate blocks gathered per tile before they are summed (a stack array). */
+#define CANDIDATE_BATCH 1024
+
+/* ---- precomputed weights (precomputed.c, products.c) ---- */
+
+/* A piece reaching beyond 1.2 radians is summed by leaves: the opposite face could be in reach,
+ * and the padded face holds only the four neighbours. */
+#define PRECOMPUTED_MAX_REACH 1.2
+/* ... and so is one whose weights would pass 2^25 (128 MiB of half floats; the 1024 chain's
+ * level 1). */
+#define PRECOMPUTED_MAX_WEIGHTS ((size_t)1 << 25)
+/* The window scanned for a base texel's rows: 1.3 times its reach in local texels, plus 2 (the
+ * whole border when something lies on the window's edge). */
+#define PRECOMPUTED_WINDOW_MARGIN 1.3
+/* Weights are stored as half floats divided by twice the piece's peak times the largest texel
+ * (the second-order term can add a little to the peak): stored values are then at most ~1,
+ * where half floats keep 11 bits. */
+#define WEIGHT_BOUND_FACTOR 2.0
+/* Rows of the padded source transposed per task (the transposed copy serves the mirror bases). */
+#define TRANSPOSE_ROWS 16
+
+/* ---- bright texels and centroid corrections (gathering.c) ---- */
+
+/* A texel is bright for a ring whose bright texels go apart when its largest contribution to an
+ * output exceeds 2% of the mean radiance. */
+#define BRIGHT_BAR 0.02
+/* At most 256 blocks of 8 bright texels per level: the bar is raised until they fit, so the
+ * direct sum stays bounded. */
+#define BRIGHT_BLOCKS 256
+/* A precomputed piece over a coarse level reads its texels as uniform; a texel whose moment leaf
+ * may differ from that by more than 1e-2 of the mean radiance is corrected leaf by leaf (5e-2
+ * gave 0.61% RMS on interior's phong level 2; no corrections, 5.1% RMS on night). */
+#define CORRECTION_BAR 1e-2
+/* At most 2048 blocks of corrected texels per precomputed piece (the bar is raised to fit). */
+#define CORRECTION_BLOCKS 2048
+/* Gathered blocks are tested 16 at a time first, by a cone around the 16: one reach test per
+ * tile against every gathered block was most of level 1's corrections at 512. */
+#define SUPER_CONE_BLOCKS 16
+/* Blocks per task of the correction bounds. */
+#define BOUND_BLOCKS_PER_TASK 256
+
+#endif
