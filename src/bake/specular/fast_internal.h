@@ -16,8 +16,9 @@
  *
  * Words used throughout: a *block* is 4 x 2 texels of one face (one 8-wide vector per field);
  * a *record* holds a texel's fields; a *cone* bounds a block's directions; *bright apart*
- * means a ring's bright texels are summed at the output texels instead of on its grid; the
- * *normaliser* is the sum of the same weights over geometry alone (the denominator). */
+ * means a ring's bright texels are summed on a finer grid (or at the output texels) instead of
+ * on its own; the *normaliser* is the sum of the same weights over geometry alone (the
+ * denominator). */
 #ifndef IBL_SPECULAR_FAST_INTERNAL_H
 #define IBL_SPECULAR_FAST_INTERNAL_H
 
