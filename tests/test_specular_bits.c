@@ -9,13 +9,13 @@
  *
  * The hashes hold on x86-64 with glibc (the portable path reads libm's powf, the AVX2 path
  * needs AVX2, FMA and F16C); elsewhere the test is skipped. The chains of size 32 also run on
- * one thread (same hash), the others on two only, to keep the test under a few seconds. The chains cover every mechanism of
- * the method: precomputed pieces over the source texels and over coarse levels with centroid
- * corrections, rings whose bright texels go apart, sub-texels (a narrow Phong lobe at 32),
- * bent and warped output directions (leaf sums at the output texels), mirror levels, and the
- * dynamic plan. The sources are the test HDRIs converted to cubes by the library; their hashes
- * are pinned too, so that a change of the reader or the conversion is told apart from a change
- * of the prefilter. */
+ * one thread (same hash), the others on two only, to keep the test under a few seconds. The
+ * chains cover every mechanism of the method: precomputed pieces over the source texels and
+ * over coarse levels with centroid corrections, rings whose bright texels go apart, sub-texels
+ * (a narrow Phong lobe at 32), bent and warped output directions (leaf sums at the output
+ * texels), mirror levels, and the dynamic plan. The sources are the test HDRIs converted to
+ * cubes by the library; their hashes are pinned too, so that a change of the reader or the
+ * conversion is told apart from a change of the prefilter. */
 #include "test_support.h"
 #include "bake/specular_internal.h"
 #include "core/cpu.h"

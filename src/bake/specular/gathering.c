@@ -15,9 +15,9 @@
  * summed as leaves at their luminance moments instead.
  *
  * Both bars are raised until the texels fit a fixed number of blocks, so the direct sums stay
- * bounded. Picked texels are gathered eight to a block in Morton order (face, then interleaved
- * x and y bits), so that a gathered block holds neighbours and its cone is small; blocks are
- * also grouped SUPER_CONE_BLOCKS at a time under one cone, tested first. */
+ * bounded. Picked texels are gathered eight to a block in Morton order (Morton 1966: face,
+ * then interleaved x and y bits), so that a gathered block holds neighbours and its cone is
+ * small; blocks are also grouped SUPER_CONE_BLOCKS at a time under one cone, tested first. */
 #include "bake/specular/fast_internal.h"
 #include "core/numeric.h"
 
@@ -64,8 +64,10 @@ ibl_status ibl__fast_plan_bars(ibl_specular_plan *p, int level)
         correction_bounds(pc, den, c);
         c->correction_capacity = CORRECTION_BLOCKS;
         p->correction_pool_blocks += (size_t)c->correction_capacity;
-        c->correction_cones = ibl_alloc(p->ctx, cone_slots(c->correction_capacity) * CONE_FLOATS * sizeof(float));
-        c->correction_keys = ibl_alloc(p->ctx, (size_t)c->correction_capacity * BLOCK_TEXELS * sizeof(uint64_t));
+        c->correction_cones =
+            ibl_alloc(p->ctx, cone_slots(c->correction_capacity) * CONE_FLOATS * sizeof(float));
+        c->correction_keys =
+            ibl_alloc(p->ctx, (size_t)c->correction_capacity * BLOCK_TEXELS * sizeof(uint64_t));
         c->texel_bound = ibl_alloc(p->ctx, source_block_count(&p->pyramid[c->source_level]) *
                                                BLOCK_TEXELS * sizeof(float));
         if (!c->correction_cones || !c->correction_keys || !c->texel_bound)
@@ -86,14 +88,15 @@ ibl_status ibl__fast_plan_bars(ibl_specular_plan *p, int level)
 ibl_status ibl__fast_gathering_buffers(ibl_specular_plan *p)
 {
     ibl_context *ctx = p->ctx;
+    size_t record_bytes = (size_t)COARSE_FIELDS * BLOCK_TEXELS * sizeof(float);
     if (p->correction_pool_blocks &&
-        !(p->correction_pool = ibl_alloc(ctx, p->correction_pool_blocks * COARSE_FIELDS * BLOCK_TEXELS * sizeof(float))))
+        !(p->correction_pool = ibl_alloc(ctx, p->correction_pool_blocks * record_bytes)))
         return ibl_context_status(ctx);
     for (int l = 0; l < p->pyramid_levels; l++) {
         source_level *s = &p->pyramid[l];
         if (s->bright_scale == 0) continue;
         s->bright_capacity = BRIGHT_BLOCKS;
-        s->bright_records = ibl_alloc(ctx, (size_t)s->bright_capacity * COARSE_FIELDS * BLOCK_TEXELS * sizeof(float));
+        s->bright_records = ibl_alloc(ctx, (size_t)s->bright_capacity * record_bytes);
         s->bright_cones = ibl_alloc(ctx, cone_slots(s->bright_capacity) * CONE_FLOATS * sizeof(float));
         s->bright_keys = ibl_alloc(ctx, (size_t)s->bright_capacity * BLOCK_TEXELS * sizeof(uint64_t));
         if (!s->bright_records || !s->bright_cones || !s->bright_keys) return ibl_context_status(ctx);
@@ -278,7 +281,8 @@ static void bound_task(void *arg, int index)
                 dm += d * d;
             }
             for (int k = 0; k < 6; k++) {
-                float d = fabsf(rec[(FIELD_LUM_COVARIANCE + k) * B + t] - rec[(FIELD_COVARIANCE + k) * B + t]);
+                float d = fabsf(rec[(FIELD_LUM_COVARIANCE + k) * B + t] -
+                                rec[(FIELD_COVARIANCE + k) * B + t]);
                 dc = d > dc ? d : dc;
             }
             float de = fabsf(rec[FIELD_LUM_SPREAD * B + t] - rec[FIELD_SPREAD * B + t]);
@@ -327,6 +331,7 @@ void ibl__fast_select_corrections(ibl_specular_plan *p, precomputed_piece *c)
         if (count <= capacity) break;
         bar *= 2.0;
     }
-    c->correction_threshold = (float)bar; /* the padded source and the gathering compare the same floats */
+    /* the padded source and the gathering compare the same floats */
+    c->correction_threshold = (float)bar;
     c->correction_block_count = gather_corrections(c, s, c->correction_threshold, power_field);
 }

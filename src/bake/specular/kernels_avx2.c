@@ -4,10 +4,11 @@
  *
  * The leaf evaluates the piece in closed form rather than from its table: GGX's
  * D(h) (n.l) / D(n) in u = 1 - R.l (Walter et al. 2007, with v = n as in the split-sum
- * prefilter, Karis 2013), Phong's x^n through a vector log and exp, and the partition's two
- * quintic steps. Phong texels whose spread reaches the horizon take the closed-form mean of
- * x^n over the spread. The products convert eight half-float weights at a time (F16C) and keep
- * two sets of accumulators, so that the loads bound them rather than the FMA latency. */
+ * prefilter, Karis 2013), Phong's x^n (Phong 1975) through a vector log and exp, and the two
+ * quintic steps of the partition. Phong texels whose spread reaches the horizon take the
+ * closed-form mean of x^n over the spread. The products convert eight half-float weights at a
+ * time (F16C) and keep two sets of accumulators, so that the loads bound them rather than the
+ * FMA latency. */
 #include "bake/specular/fast_internal.h"
 #include "core/cpu.h"
 

@@ -3,14 +3,14 @@
  *
  * The lobe f(u) is cut into a core f psi(u / U0) and dyadic rings f (psi(u / Uj) -
  * psi(u / Uj-1)), Uj = 4^j U0, where psi is 1 for t <= 1, 0 for t >= 4 and the quintic
- * smootherstep between (C2, so the second-order leaves of leaf_sums.c see a smooth g''). The
- * pieces add up to f exactly. This is the splitting of multilevel summation (Brandt & Lubrecht
- * 1990; Skeel, Tezcan & Hardy 2002) on the sphere: a ring whose inner radius is b varies on the
- * scale of b, so it can be summed from a mip whose texels are a fixed fraction of b wide and
- * evaluated on a cube grid spaced a fixed fraction of b, then interpolated. The cost per output texel is then set by
- * those fractions, not by the source size: GGX's long tail is summed from coarse mips on coarse
- * grids. The core, where the lobe is narrow, is summed at every output texel over the finest
- * level it needs.
+ * smootherstep 6s^5 - 15s^4 + 10s^3 between (Perlin 2002; C2, so the second-order leaves of
+ * leaf_sums.c see a smooth g''). The pieces add up to f exactly. This is the splitting of
+ * multilevel summation (Brandt & Lubrecht 1990; Skeel, Tezcan & Hardy 2002) on the sphere: a
+ * ring whose inner radius is b varies on the scale of b, so it can be summed from a mip whose
+ * texels are a fixed fraction of b wide and evaluated on a cube grid spaced a fixed fraction of
+ * b, then interpolated. The cost per output texel is then set by those fractions, not by the
+ * source size: GGX's long tail is summed from coarse mips on coarse grids. The core, where the
+ * lobe is narrow, is summed at every output texel over the finest level it needs.
  *
  * Each piece is tabulated (g and g'' in u) for the portable kernels and for the bars of
  * gathering.c, and described in closed form (GGX's alpha, Phong's n, the two steps) for the
