@@ -1,5 +1,5 @@
 /* Specular prefilter benchmark: the fast method's error against the reference on real HDRIs
- * (issue 7's acceptance measurement: per level, solid-angle weighted relative RMS per channel
+ * (the accuracy bar's measurement, docs/SPECULAR.md "Accuracy": per level, solid-angle weighted relative RMS per channel
  * and the largest texel error relative to max(reference, level mean), on a deterministic
  * sample of texels), the fast method's filtering time, and the dynamic plan's refilter time.
  *
@@ -79,7 +79,7 @@ static void reference_samples(ibl_context *ctx, const char *cache_dir, const cha
 
 static void dynamic_bench(void)
 {
-    /* the seed's dynamic 32x32x6 Phong chain (1-1000) refiltered from a 64-face cube, one core */
+    /* tri-Ace 2010's dynamic 32x32x6 Phong chain (1-1000) refiltered from a 64-face cube, one core */
     ibl_context_desc cd = {0};
     cd.threads = 1;
     ibl_context *ctx;

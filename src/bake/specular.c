@@ -1,6 +1,6 @@
-/* The specular prefilter's front: names, presets, the dispatcher (fast / reference / seed
- * kernels, mirror level, edge fixups) and what is written beside the result (KTX2 metadata,
- * manifest.json). Design: docs/SPECULAR.md. */
+/* The specular prefilter's front: names, presets, the dispatcher (fast / reference / tri-Ace
+ * kernels, mirror level, edge fixups) and the chain's description in KTX2 metadata. Design:
+ * docs/SPECULAR.md; the bake folder's manifest is the bake module's (src/bake/bake*.c). */
 #include "specular_internal.h"
 #include "core/defaults.h"
 #include "core/context_internal.h"
@@ -44,7 +44,7 @@ int ibl_specular_mapping_from_name(const char *name, ibl_specular_mapping *out)
     return 0;
 }
 
-/* seeds 000/001 "Implemented configurations", then the engines' defaults */
+/* tri-Ace 2010's "Implemented configurations", then the engines' defaults */
 static const char *const preset_names[] = {
     "dynamic-box16", "dynamic-gauss32", "dynamic-phong16", "dynamic-phong32", "static-phong32",
     "static-phong64", "gltf", "filament", "unreal", "unity", NULL};

@@ -1,6 +1,6 @@
 /* The dynamic (per-frame) prefilter: the chain as one sparse linear operator, built once.
  *
- * Seeds 000/001 "Dynamic configuration" refilter a freshly rendered small cube every frame.
+ * tri-Ace 2010's dynamic configurations refilter a freshly rendered small cube every frame.
  * Each output texel becomes a row of weights over the texels of one box mip of the source
  * (the level whose texels are at most half the lobe's half width, so the lobe is resolved),
  * each weight the lobe integrated over that texel (k x k sub-points, k from the lobe's width),

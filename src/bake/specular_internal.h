@@ -8,7 +8,7 @@
 #include "ibl/specular.h"
 #include "bake/specular_kernels.h"
 
-/* The seed kernels (box, gauss) and the box chain's fitted shininess live in specular_box.c /
+/* The box and Gaussian kernels and the box chain's fitted shininess live in specular_box.c /
  * specular_gauss.c and are declared once, in specular_kernels.h. */
 
 /* A radially symmetric lobe f(x) of x = cos(angle between the lobe axis and l), normalised to
