@@ -365,6 +365,18 @@ static void folder_transaction(void **state)
     assert_int_equal(ibl_bake_load(ctx, dir, NULL, &b), IBL_OK);
     assert_int_equal(b.specular_info.filter, IBL_FILTER_PHONG);
     ibl_bake_free(ctx, &b);
+    /* through a symbolic link: the linked folder is replaced, the link stays a link */
+    snprintf(other, sizeof other, "%s/link", root);
+    assert_int_equal(symlink("bake", other), 0);
+    d.specular.filter = IBL_FILTER_GGX;
+    assert_int_equal(ibl_bake(ctx, &env, &d, other, NULL), IBL_OK);
+    struct stat ls;
+    assert_int_equal(lstat(other, &ls), 0);
+    assert_true(S_ISLNK(ls.st_mode));
+    assert_int_equal(ibl_bake_load(ctx, dir, NULL, &b), IBL_OK);
+    assert_int_equal(b.specular_info.filter, IBL_FILTER_GGX);
+    ibl_bake_free(ctx, &b);
+    assert_int_equal(count_entries(root, "\\.bake\\."), 0);
     ibl_cubemap_free(ctx, &env);
     ibl_context_destroy(ctx);
 }

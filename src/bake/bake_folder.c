@@ -86,6 +86,17 @@ static ibl_status target_init(ibl_context *ctx, const char *dir, target_folder *
     if (!t->path) return ibl__fail(ctx, ibl_context_status(ctx), "%s: out of memory", dir);
     memcpy(t->path, dir, n);
     t->path[n] = 0;
+    /* a symbolic link to the folder: the swap must happen where the folder really is, or it
+     * would replace the link by a folder and treat the linked folder as the old bake */
+    struct stat ls;
+    if (lstat(t->path, &ls) == 0 && S_ISLNK(ls.st_mode)) {
+        char *real = realpath(t->path, NULL);
+        if (!real) return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot follow the link: %s", dir, strerror(errno));
+        ibl_free(ctx, t->path);
+        t->path = ibl__strdup(ctx, real);
+        free(real);
+        if (!t->path) return ibl__fail(ctx, ibl_context_status(ctx), "%s: out of memory", dir);
+    }
     const char *slash = strrchr(t->path, '/');
     const char *base = slash ? slash + 1 : t->path;
     if (!base[0] || strcmp(base, ".") == 0 || strcmp(base, "..") == 0)
