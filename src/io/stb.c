@@ -331,11 +331,56 @@ static uint64_t jpeg_stb_bytes(const jpeg_frame *f)
     return planes + (f->progressive ? 2 * planes : 0) + 4 * (uint64_t)f->width * f->height + ((uint64_t)1 << 20);
 }
 
+/* What stb_image reads as a DHT segment at b[p] (0xFF 0xC4): its length, then tables of a
+ * class/id byte, 16 code counts and that many symbols until the length is used up, reading
+ * zeros past the end of the data. 0 if a table has more than 256 codes: Debian's stb_image
+ * (2022-09-08) does not check, and writes them past its 257-entry size table and 256-entry
+ * symbol table (fuzzing found a 656-byte file doing so). */
+static int jpeg_dht_ok(const uint8_t *b, size_t size, size_t p)
+{
+    size_t q = p + 4;
+    long left = p + 3 < size ? (long)(b[p + 2] << 8 | b[p + 3]) - 2 : 0;
+    while (left > 0) {
+        long n = 0;
+        for (size_t i = 1; i <= 16; i++) n += q + i < size ? b[q + i] : 0;
+        if (n > 256) return 0;
+        q += 17 + (size_t)n;
+        left -= 17 + n;
+    }
+    return 1;
+}
+
+/* 0 if stb_image could meet a Huffman table with more than 256 codes in this file. Up to the
+ * first scan, segments are followed by their lengths as stb_image does; after it, entropy-
+ * coded data and segments alternate, so every 0xFF 0xC4 is checked as a possible table. */
+static int jpeg_huffman_tables_ok(const uint8_t *b, size_t size)
+{
+    size_t pos = 2;
+    while (pos + 1 < size && b[pos] == 0xFF) {
+        uint8_t m = b[pos + 1];
+        if (m == 0xFF) { /* fill byte */
+            pos++;
+            continue;
+        }
+        if (m == 0xC4 && !jpeg_dht_ok(b, size, pos)) return 0;
+        if (m == 0xDA || m == 0xD9 || pos + 3 >= size) break;
+        pos += 2 + (size_t)(b[pos + 2] << 8 | b[pos + 3]);
+    }
+    for (; pos + 1 < size; pos++)
+        if (b[pos] == 0xFF && b[pos + 1] == 0xC4 && !jpeg_dht_ok(b, size, pos)) return 0;
+    return 1;
+}
+
 ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info)
 {
     if (size >= 8 && bytes[0] == 0x89 && bytes[1] == 'P') return png_decode(ctx, bytes, size, name, out, info);
+    /* only JPEG reaches stb_image (it would also take GIF, TGA, PSD... without a signature) */
+    if (size < 3 || bytes[0] != 0xFF || bytes[1] != 0xD8 || bytes[2] != 0xFF)
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a PNG or JPEG file", name);
     if (size > INT_MAX) return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: JPEG file too large", name);
+    if (!jpeg_huffman_tables_ok(bytes, size))
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: corrupt JPEG (Huffman table of more than 256 codes)", name);
     int w = 0, h = 0, comp = 0;
     if (!stbi_info_from_memory(bytes, (int)size, &w, &h, &comp))
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: bad JPEG header (%s)", name, stbi_failure_reason());
