@@ -13,8 +13,33 @@
 #include <limits.h>
 #include <math.h>
 #include <png.h>
-#include <stb_image.h>
+#include <stdlib.h>
 #include <stb_image_write.h>
+
+/* stb_image's JPEG decoder, compiled here from Debian's header (v2.27) rather than taken
+ * from libstb.a: its other decoders (GIF, TGA, PSD...) are left out, and its allocations
+ * are zeroed, since v2.27 reads fields of its decoder state (Huffman and quantisation tables)
+ * that a corrupt file never defines: the pixels then depended on the heap's old contents
+ * (fuzzing found a 677-byte file decoding differently from one run to the next). */
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_ONLY_JPEG
+#define STBI_NO_STDIO
+#define STBI_MALLOC(size) calloc(1, size)
+#define STBI_REALLOC(p, size) realloc(p, size)
+#define STBI_FREE(p) free(p)
+#if defined(__GNUC__)
+/* for the whole file: GCC checks static declarations left unused at its end */
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wsign-compare"
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
+#endif
+#include <stb_image.h>
+#if defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
 #include <stdio.h>
 #include <string.h>
 
@@ -209,9 +234,25 @@ static int png_read_run(png_read_state *st)
     return 1;
 }
 
+/* 0 if a chunk before the image data runs past the end of the file. libpng allocates a
+ * chunk's declared length before reading it, and a length over its limit is only a warning
+ * (a benign error): fuzzing found an 81-byte file whose tEXt chunk asked for 1 GiB. */
+static int png_chunks_inside(const uint8_t *b, size_t size)
+{
+    size_t pos = 8;
+    while (size - pos >= 8 && memcmp(b + pos + 4, "IDAT", 4) != 0) {
+        uint32_t len = be32(b + pos);
+        if (len > size - pos - 8 || size - pos - 8 - len < 4) return 0; /* data and CRC */
+        pos += 12 + (size_t)len;
+    }
+    return 1;
+}
+
 static ibl_status png_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                              ibl_texture *out, ibl_file_info *info)
 {
+    if (!png_chunks_inside(bytes, size))
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated PNG (a chunk runs past the end of the file)", name);
     png_read_state *st = ibl_calloc(ctx, 1, sizeof *st);
     if (!st) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
     st->ctx = ctx;
@@ -351,18 +392,20 @@ static int jpeg_dht_ok(const uint8_t *b, size_t size, size_t p)
 }
 
 /* 0 if stb_image could meet a Huffman table with more than 256 codes in this file. Up to the
- * first scan, segments are followed by their lengths as stb_image does; after it, entropy-
- * coded data and segments alternate, so every 0xFF 0xC4 is checked as a possible table. */
+ * first scan, markers (0xFF, fill bytes 0xFF, the code) and segments are followed by their
+ * lengths as stb_image reads them; from where that walk stops, entropy-coded data and
+ * segments alternate, so every 0xFF 0xC4 is checked as a possible table. */
 static int jpeg_huffman_tables_ok(const uint8_t *b, size_t size)
 {
-    size_t pos = 2;
+    size_t pos = 0;
     while (pos + 1 < size && b[pos] == 0xFF) {
+        while (pos + 2 < size && b[pos + 1] == 0xFF) pos++; /* fill bytes */
         uint8_t m = b[pos + 1];
-        if (m == 0xFF) { /* fill byte */
-            pos++;
+        if (m == 0xC4 && !jpeg_dht_ok(b, size, pos)) return 0;
+        if (m == 0xD8) { /* SOI: no length */
+            pos += 2;
             continue;
         }
-        if (m == 0xC4 && !jpeg_dht_ok(b, size, pos)) return 0;
         if (m == 0xDA || m == 0xD9 || pos + 3 >= size) break;
         pos += 2 + (size_t)(b[pos + 2] << 8 | b[pos + 3]);
     }
@@ -375,9 +418,6 @@ ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
                            ibl_texture *out, ibl_file_info *info)
 {
     if (size >= 8 && bytes[0] == 0x89 && bytes[1] == 'P') return png_decode(ctx, bytes, size, name, out, info);
-    /* only JPEG reaches stb_image (it would also take GIF, TGA, PSD... without a signature) */
-    if (size < 3 || bytes[0] != 0xFF || bytes[1] != 0xD8 || bytes[2] != 0xFF)
-        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a PNG or JPEG file", name);
     if (size > INT_MAX) return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: JPEG file too large", name);
     if (!jpeg_huffman_tables_ok(bytes, size))
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: corrupt JPEG (Huffman table of more than 256 codes)", name);
