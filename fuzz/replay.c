@@ -1,4 +1,4 @@
-/* Replays fuzz inputs (the seed corpus and every crash ever found) through a fuzz target
+/* Replays fuzz inputs (the starting corpus and every crash ever found) through a fuzz target
  * without libFuzzer, so `make test` checks them with the regular and sanitizer builds. */
 #include <dirent.h>
 #include <stdint.h>
