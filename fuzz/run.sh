@@ -27,7 +27,7 @@ cmake --build build-fuzz -j 2 --target fuzz_all -- --no-print-directory >/dev/nu
 
 # The instrumented libraries must be the ones linked: no Debian copy may be loaded.
 for t in build-fuzz/fuzz/fuzz_*; do
-  if ldd "$t" | grep -E "lib(png|z|deflate|OpenEXR|Imath|Iex|IlmThread)[^ ]*\.so" >&2; then
+  if ldd "$t" | grep -E "lib(png16|z|deflate)\.so|lib(OpenEXR|Imath|Iex|IlmThread)[-.]" >&2; then
     echo "fuzz/run.sh: $t loads uninstrumented decoding libraries" >&2
     exit 1
   fi
