@@ -1,7 +1,7 @@
 /* PNG and JPEG. PNG goes through libpng both ways (8-bit and 16-bit; stb_image_write cannot
  * write 16-bit, and stb_image's reader is unbounded on hostile input, see png_decode). JPEG
- * goes through the system stb_image and stb_image_write (libstb, which already holds their
- * implementation): baseline and progressive, written for previews.
+ * goes through stb_image (its JPEG decoder compiled below) and stb_image_write (libstb):
+ * baseline and progressive, written for previews.
  *
  * Transfer functions on read: JPEG is sRGB. A PNG with an sRGB chunk is sRGB; one with only
  * a gAMA chunk uses that power law (gAMA 1.0 = linear, which is how the 16-bit tables are
