@@ -32,7 +32,9 @@ hyperfine -w 1 -r 5 -N \
   "$BUILD/ibl irradiance -q $IN -o $OUT/i.ktx2" \
   "$BUILD/ibl lut -q -o $OUT/l.ktx2" \
   "$BUILD/ibl render -q $IN -o $OUT/r.png --specular-size 64"
-hyperfine -w 1 -r 5 -N "$BUILD/ibl prefilter -q $IN -o $OUT/p.ktx2 --size 256"
+hyperfine -w 1 -r 5 -N "$BUILD/ibl prefilter -q $IN -o $OUT/p.ktx2 --size 256" \
+  "$BUILD/ibl bake -q $IN -o $OUT/bake"
+hyperfine -w 1 -r 5 -N "$BUILD/ibl render -q $OUT/bake -o $OUT/rb.png"
 # the 512-face case (budget: 400 ms for the whole command) needs a 2048x1024 input: the same
 # HDRI resampled up by ibl, written as float RGB with OpenEXR's ZIP (the writer's default
 # compression). --format rgb32f: the resampled cube's alpha is 1 only to within float rounding
