@@ -62,8 +62,8 @@ typedef struct ibl_bake_desc {
     ibl_sh_window sh_window;    /* windowing of the SH (sh.h)                               */
     double sh_window_width;
     int lut_size;               /* split-sum and multiple-scattering tables; 0: 128        */
-    int ambient_brdf;           /* the tri-Ace AmbientBRDF volume: 0 for Phong-family chains
-                                   only, 1 always, -1 never                                */
+    int ambient_brdf;           /* the tri-Ace AmbientBRDF volume (Blinn-Phong materials read
+                                   it on any chain): 0 or 1 written, -1 not                */
     ibl_ambient_brdf_desc ambient; /* its sizes, normalisation and material shininess axis
                                    (brdf.h; a zero axis: the chain's range for the Phong
                                    family, 1..100000 for GGX)                              */

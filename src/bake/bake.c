@@ -167,8 +167,7 @@ static ibl_status stage_brdf(ibl_context *ctx, const ibl_bake_desc *d, ibl_bake_
     ld.channels[2] = IBL_BRDF_SHEEN;
     ld.channels[3] = IBL_BRDF_SHEEN_AVG;
     st = ibl_brdf_lut(ctx, &ld, &b->brdf_extra);
-    int wanted = d->ambient_brdf > 0 || (d->ambient_brdf == 0 && b->specular_info.filter != IBL_FILTER_GGX);
-    if (st != IBL_OK || !wanted) return st;
+    if (st != IBL_OK || d->ambient_brdf < 0) return st;
     double lo, hi;
     ambient_range(d, b, &lo, &hi);
     ibl_ambient_brdf_desc ad = d->ambient;
