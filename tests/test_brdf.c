@@ -280,7 +280,7 @@ static int images_equal(const ibl_image *a, const ibl_image *b)
            memcmp(a->pixels, b->pixels, (size_t)a->width * a->height * 16) == 0;
 }
 
-static void bit_identical_threads(void **state)
+static void identical_at_any_thread_count(void **state)
 {
     (void)state;
     ibl_brdf_lut_desc d = {.size = 20,
@@ -423,7 +423,7 @@ int main(void)
         cmocka_unit_test(sheen_average),
         cmocka_unit_test(convergence_by_doubling),
         cmocka_unit_test(lut_layout_and_channels),
-        cmocka_unit_test(bit_identical_threads),
+        cmocka_unit_test(identical_at_any_thread_count),
         cmocka_unit_test(ambient_albedo),
         cmocka_unit_test(ambient_volume_vs_table),
         cmocka_unit_test(ambient_constant_environment),

@@ -222,7 +222,7 @@ static int files_equal(const char *a, const char *b)
 }
 
 /* Every command's output is bit-identical at any thread count. */
-static void outputs_identical_across_threads(void **state)
+static void identical_at_any_thread_count(void **state)
 {
     (void)state;
     const char *text;
@@ -340,7 +340,7 @@ int main(void)
         cmocka_unit_test(existing_output_kept),
         cmocka_unit_test(conversion_keeps_mean_radiance),
         cmocka_unit_test(sky_and_round_trips),
-        cmocka_unit_test(outputs_identical_across_threads),
+        cmocka_unit_test(identical_at_any_thread_count),
         cmocka_unit_test(memory_limit),
         cmocka_unit_test(interrupt_leaves_nothing),
         cmocka_unit_test(six_faces),

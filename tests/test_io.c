@@ -631,7 +631,7 @@ static void exr_scanline_exact(void **state)
 
 /* Real files through every decoding path (DWAB float, the test HDRIs; the samples of every
  * compression) give the same pixels at 1, 2 and 8 threads. */
-static void exr_threads_identical(void **state)
+static void exr_identical_at_any_thread_count(void **state)
 {
     (void)state;
     const char *files[] = {"city.exr", "forest_128x64.exr", "exr_zip.exr", "exr_zips.exr",
@@ -1263,7 +1263,7 @@ static int count_entries(const char *dir)
 /* The pixel policy runs in chunks on several threads and large files are read in pieces:
  * at 1, 2 and 8 threads the same pixels and counts come back, the counts those planted
  * (the image is over two chunks of 65,536 texels; the file over two pieces of 4 MiB). */
-static void large_inputs_threads(void **state)
+static void large_inputs_identical_at_any_thread_count(void **state)
 {
     (void)state;
     enum { W = 1000, H = 800 };
@@ -1462,13 +1462,13 @@ int main(void)
         cmocka_unit_test(pfm_grey_big_endian), cmocka_unit_test(exr_float_round_trip),
         cmocka_unit_test(exr_half_round_trip), cmocka_unit_test(exr_real_dwab),
         cmocka_unit_test(exr_windows_tiles_grey), cmocka_unit_test(exr_every_compression),
-        cmocka_unit_test(exr_scanline_exact), cmocka_unit_test(exr_threads_identical), cmocka_unit_test(hdr_uffizi),         cmocka_unit_test(hdr_round_trip),
+        cmocka_unit_test(exr_scanline_exact), cmocka_unit_test(exr_identical_at_any_thread_count), cmocka_unit_test(hdr_uffizi),         cmocka_unit_test(hdr_round_trip),
         cmocka_unit_test(hdr_orientations),   cmocka_unit_test(png16_round_trip),
         cmocka_unit_test(png8_round_trip),    cmocka_unit_test(png8_exposure_filmic),
         cmocka_unit_test(jpeg_round_trip),    cmocka_unit_test(png_layouts),    cmocka_unit_test(truncated_files),
         cmocka_unit_test(wrong_magic),        cmocka_unit_test(absurd_dimensions),
         cmocka_unit_test(non_finite_pixels),  cmocka_unit_test(atomic_write),
-        cmocka_unit_test(large_inputs_threads),
+        cmocka_unit_test(large_inputs_identical_at_any_thread_count),
         cmocka_unit_test(read_file_errors),   cmocka_unit_test(api_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -274,7 +274,7 @@ static void plan_runs_without_allocation(void **state)
     ibl_context_destroy(ctx);
 }
 
-static void threads_bit_identical(void **state)
+static void identical_at_any_thread_count(void **state)
 {
     (void)state;
     static const int threads[] = {1, 2, 8};
@@ -402,7 +402,7 @@ int main(void)
         cmocka_unit_test(fast_vs_reference),
         cmocka_unit_test(fast_vs_reference_hdri),
         cmocka_unit_test(plan_runs_without_allocation),
-        cmocka_unit_test(threads_bit_identical),
+        cmocka_unit_test(identical_at_any_thread_count),
         cmocka_unit_test(reduction_keeps_mean),
         cmocka_unit_test(bad_arguments),
         cmocka_unit_test(cli_irradiance),

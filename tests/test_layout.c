@@ -1051,7 +1051,7 @@ static void image_mean_analytic(void **state)
 
 /* ---- determinism ---- */
 
-static void thread_count_independent(void **state)
+static void identical_at_any_thread_count(void **state)
 {
     (void)state;
     int threads[3] = {1, 2, 8};
@@ -1099,7 +1099,7 @@ int main(void)
         cmocka_unit_test(no_aliasing),
         cmocka_unit_test(image_mean_brute_force),
         cmocka_unit_test(image_mean_analytic),
-        cmocka_unit_test(thread_count_independent),
+        cmocka_unit_test(identical_at_any_thread_count),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -250,7 +250,7 @@ static void equirect_projection_matches_brute_force(void **state)
 }
 
 /* Results must not depend on the thread count: compare bytes. */
-static void threads_bit_identical(void **state)
+static void identical_at_any_thread_count(void **state)
 {
     (void)state;
     ibl_sh first_cube, first_eq;
@@ -625,7 +625,7 @@ int main(void)
         cmocka_unit_test(constant_radiance),
         cmocka_unit_test(cube_projection_matches_brute_force),
         cmocka_unit_test(equirect_projection_matches_brute_force),
-        cmocka_unit_test(threads_bit_identical),
+        cmocka_unit_test(identical_at_any_thread_count),
         cmocka_unit_test(delta_light),
         cmocka_unit_test(band_limited_z2),
         cmocka_unit_test(polynomial_form),

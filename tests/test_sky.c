@@ -275,7 +275,7 @@ static void illuminance_and_ground(void **state)
     ibl_context_destroy(ctx);
 }
 
-static void thread_count_independent(void **state)
+static void identical_at_any_thread_count(void **state)
 {
     (void)state;
     ibl_image a, b;
@@ -330,7 +330,7 @@ int main(void)
         cmocka_unit_test(zenith_matches_preetham),
         cmocka_unit_test(disk_energy),
         cmocka_unit_test(illuminance_and_ground),
-        cmocka_unit_test(thread_count_independent),
+        cmocka_unit_test(identical_at_any_thread_count),
         cmocka_unit_test(model_radiance_matches_render),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -358,7 +358,7 @@ static void gauss_arguments(void **state)
     ibl_context_destroy(ctx);
 }
 
-static void threads_bit_identical(void **state)
+static void identical_at_any_thread_count(void **state)
 {
     (void)state;
     int threads[3] = {1, 2, 8};
@@ -405,7 +405,7 @@ int main(void)
         cmocka_unit_test(gauss_delta_spread),
         cmocka_unit_test(gauss_stays_in_face),
         cmocka_unit_test(gauss_arguments),
-        cmocka_unit_test(threads_bit_identical),
+        cmocka_unit_test(identical_at_any_thread_count),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
