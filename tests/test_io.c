@@ -975,26 +975,6 @@ static void jpeg_round_trip(void **state)
 /* PNG layouts our writer never makes, written here with libpng itself (gAMA 1.0, so the
  * expected value of a sample is simply sample / max): 1-bit grey, grey+alpha, 4-bit palette
  * with transparency, 16-bit grey and Adam7-interlaced 16-bit RGB. Exact up to float rounding. */
-typedef struct mem_png {
-    uint8_t *b;
-    size_t n, cap;
-} mem_png;
-
-static void mem_png_write(png_structp png, png_bytep d, size_t n)
-{
-    mem_png *m = png_get_io_ptr(png);
-    if (m->n + n > m->cap) {
-        m->cap = (m->n + n) * 2;
-        m->b = realloc(m->b, m->cap);
-    }
-    memcpy(m->b + m->n, d, n);
-    m->n += n;
-}
-
-static void mem_png_flush(png_structp png)
-{
-    (void)png;
-}
 
 /* sample(x, y, c) in [0, 2^depth) for the file's channels; palette files index pal. */
 static unsigned png_sample(int x, int y, int c, int depth)
@@ -1009,9 +989,9 @@ static void png_variant(ibl_context *ctx, int color, int depth, int interlace)
            : color == PNG_COLOR_TYPE_PALETTE ? 1 : color == PNG_COLOR_TYPE_RGB ? 3 : 4;
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
     png_infop info = png_create_info_struct(png);
-    mem_png m = {0};
+    test_bytes m = {NULL, 0, 0};
     assert_int_equal(setjmp(png_jmpbuf(png)), 0);
-    png_set_write_fn(png, &m, mem_png_write, mem_png_flush);
+    test_png_write_to_memory(png, &m);
     png_set_IHDR(png, info, w, h, depth, color, interlace, PNG_COMPRESSION_TYPE_DEFAULT,
                  PNG_FILTER_TYPE_DEFAULT);
     png_set_gAMA(png, info, 1.0);

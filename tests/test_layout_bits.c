@@ -23,17 +23,6 @@
 #include <stdio.h>
 #include <string.h>
 
-static uint64_t fnv1a(const void *data, size_t bytes)
-{
-    const unsigned char *p = data;
-    uint64_t h = 1469598103934665603ull;
-    for (size_t i = 0; i < bytes; i++) {
-        h ^= p[i];
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-
 #if defined(__x86_64__) && defined(__GLIBC__)
 #define PINNED 1
 #else
@@ -129,7 +118,7 @@ static void equirect_bits_pinned(void **state)
                              IBL_OK);
             snprintf(what, sizeof what, "case %zu: picture %d -> cube %d, %s", i, c->picture,
                      c->size, ctx_names[k]);
-            check(what, fnv1a(cube.data, (size_t)6 * c->size * c->size * 4 * sizeof(float)),
+            check(what, test_fnv1a(cube.data, (size_t)6 * c->size * c->size * 4 * sizeof(float)),
                   c->want);
             if (i == 0 && k == 0) {
                 int widths[2] = {0, 32};
@@ -142,7 +131,7 @@ static void equirect_bits_pinned(void **state)
                     assert_int_equal(ibl_cubemap_to_image(ctxs[0], &cube, &fd, &back), IBL_OK);
                     snprintf(what, sizeof what, "case 0's cube -> equirect %dx%d", back.width,
                              back.height);
-                    check(what, fnv1a(back.pixels, (size_t)back.width * back.height * 4 *
+                    check(what, test_fnv1a(back.pixels, (size_t)back.width * back.height * 4 *
                                                        sizeof(float)),
                           want[w]);
                     ibl_image_free(NULL, &back);
@@ -155,7 +144,7 @@ static void equirect_bits_pinned(void **state)
         ibl_sh sh;
         assert_int_equal(ibl_sh_project_equirect(ctxs[0], &pictures[p], 3, &sh), IBL_OK);
         snprintf(what, sizeof what, "SH of picture %d", p);
-        check(what, fnv1a(sh.c, sizeof sh.c), SH_WANT[p]);
+        check(what, test_fnv1a(sh.c, sizeof sh.c), SH_WANT[p]);
     }
     for (int k = 0; k < 3; k++) ibl_context_destroy(ctxs[k]);
     for (int p = 0; p < 3; p++) ibl_image_free(NULL, &pictures[p]);

@@ -274,27 +274,6 @@ static void png_bomb(void **state)
     expect_refused(bomb, IBL_ERR_FORMAT);
 }
 
-typedef struct mem_png {
-    uint8_t *b;
-    size_t n, cap;
-} mem_png;
-
-static void mem_png_write(png_structp png, png_bytep d, size_t n)
-{
-    mem_png *m = png_get_io_ptr(png);
-    if (m->n + n > m->cap) {
-        m->cap = (m->n + n) * 2;
-        m->b = realloc(m->b, m->cap);
-        assert_non_null(m->b);
-    }
-    memcpy(m->b + m->n, d, n);
-    m->n += n;
-}
-
-static void mem_png_flush(png_structp png)
-{
-    (void)png;
-}
 
 /* A legitimate PNG of zeros compresses about 1000 to 1: it loads within the budget, and a
  * budget too small for it refuses it before decoding. */
@@ -304,8 +283,8 @@ static void png_of_zeros(void **state)
     const int w = 4096, h = 2048;
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
     png_infop info = png_create_info_struct(png);
-    mem_png m = {NULL, 0, 0};
-    png_set_write_fn(png, &m, mem_png_write, mem_png_flush);
+    test_bytes m = {NULL, 0, 0};
+    test_png_write_to_memory(png, &m);
     png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                  PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     png_set_compression_level(png, 9);

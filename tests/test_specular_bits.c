@@ -24,17 +24,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static uint64_t fnv1a64(const void *data, size_t bytes)
-{
-    const unsigned char *b = data;
-    uint64_t h = 1469598103934665603ull;
-    for (size_t i = 0; i < bytes; i++) {
-        h ^= b[i];
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-
 typedef struct pinned_chain {
     const char *file;
     ibl_specular_filter filter;
@@ -89,7 +78,7 @@ static uint64_t chain_hash(const pinned_chain *c, const ibl_cubemap *src, int th
     } else {
         assert_int_equal(ibl_specular_prefilter(ctx, src, &d, &out, NULL), IBL_OK);
     }
-    uint64_t h = fnv1a64(out.data, ibl_cubemap_floats(c->size, out.levels) * sizeof(float));
+    uint64_t h = test_fnv1a(out.data, ibl_cubemap_floats(c->size, out.levels) * sizeof(float));
     ibl_cubemap_free(ctx, &out);
     ibl_context_destroy(ctx);
     return h;
@@ -122,7 +111,7 @@ static void pinned_outputs(void **state)
         ibl_cubemap src;
         int source_size = c->dynamic ? 2 * c->size : c->size;
         assert_int_equal(ibl_image_to_cubemap(ctx, &image, &(ibl_to_cube_desc){.size = source_size}, &src), IBL_OK);
-        check("source", c, fnv1a64(src.data, ibl_cubemap_floats(source_size, 1) * sizeof(float)), c->source, verbose);
+        check("source", c, test_fnv1a(src.data, ibl_cubemap_floats(source_size, 1) * sizeof(float)), c->source, verbose);
         for (int threads = c->one_thread_too ? 1 : 2; threads <= 2; threads++) {
             if (avx2) check("avx2", c, chain_hash(c, &src, threads, IBL_KERNELS_AUTO), c->avx2, verbose);
             if (!c->dynamic || !avx2)

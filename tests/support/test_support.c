@@ -1,5 +1,7 @@
 #include "test_support.h"
 
+#include <png.h>
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -138,3 +140,37 @@ void test_fill_smooth(ibl_cubemap *cube)
             }
     }
 }
+
+uint64_t test_fnv1a(const void *data, size_t bytes)
+{
+    const unsigned char *p = data;
+    uint64_t h = 1469598103934665603ull;
+    for (size_t i = 0; i < bytes; i++) {
+        h ^= p[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+static void png_sink_write(png_structp png, png_bytep data, size_t n)
+{
+    test_bytes *m = png_get_io_ptr(png);
+    if (m->n + n > m->cap) {
+        m->cap = (m->n + n) * 2;
+        m->b = realloc(m->b, m->cap);
+        assert_non_null(m->b);
+    }
+    memcpy(m->b + m->n, data, n);
+    m->n += n;
+}
+
+static void png_sink_flush(png_structp png)
+{
+    (void)png;
+}
+
+void test_png_write_to_memory(void *png_write_struct, test_bytes *out)
+{
+    png_set_write_fn((png_structp)png_write_struct, out, png_sink_write, png_sink_flush);
+}
+

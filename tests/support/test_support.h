@@ -25,6 +25,17 @@ int test_file_exists(const char *path);
 /* Asserts |a - b| <= tol with a readable message. */
 #define assert_near(a, b, tol) test_assert_near((double)(a), (double)(b), (double)(tol), #a, __FILE__, __LINE__)
 void test_assert_near(double a, double b, double tol, const char *expr, const char *file, int line);
+/* FNV-1a 64 of bytes: the tests that pin output bits hash them with it. */
+uint64_t test_fnv1a(const void *data, size_t bytes);
+
+/* A growing buffer in memory (free b when done). */
+typedef struct test_bytes {
+    uint8_t *b;
+    size_t n, cap;
+} test_bytes;
+/* Makes a libpng write struct (png_structp) write into out. */
+void test_png_write_to_memory(void *png_write_struct, test_bytes *out);
+
 /* Fills a cube with a constant colour. */
 void test_fill_cube(ibl_cubemap *cube, float r, float g, float b);
 /* Fills level 0 with a smooth colour field of the texel direction (1 + x, 2 + y z, e^(3 z)). */
