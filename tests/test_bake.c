@@ -72,7 +72,8 @@ static void assert_same_bake(ibl_context *ctx, const ibl_bake_data *a, const ibl
 }
 
 /* Units: a Phong-family level k serves the material of shininess blinn_factor x its kernel's
- * exponent (a blinn chain is in material units already), the probe finds level k at that
+ * exponent (a phong chain's levels are kernel exponents; blinn, box and gauss chains' are the
+ * material's shininess already), the probe finds level k at that
  * shininess, and the AmbientBRDF lookup at a row's shininess is that row's exact albedo
  * (float64 ibl_ambient_brdf, through half storage): the axis is the material's. */
 static void assert_units(ibl_context *ctx, const ibl_bake_data *b, const ibl_bake_desc *d)
@@ -88,7 +89,7 @@ static void assert_units(ibl_context *ctx, const ibl_bake_data *b, const ibl_bak
     }
     for (int l = 0; l < info->levels; l++) {
         if (!(info->shininess[l] > 0)) continue; /* the mirror level */
-        float s = info->filter == IBL_FILTER_BLINN ? info->shininess[l] : info->shininess[l] * info->blinn_factor;
+        float s = info->filter == IBL_FILTER_PHONG ? info->shininess[l] * info->blinn_factor : info->shininess[l];
         assert_true(p.mapping.shininess[l] == s);
         if (l == 0 || p.mapping.shininess[l] < p.mapping.shininess[l - 1])
             assert_near(ibl_probe_lod_from_shininess(&p, s), l, 1e-4);

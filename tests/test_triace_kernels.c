@@ -202,26 +202,27 @@ static void box_shininess_fit(void **state)
     }
 }
 
-/* a = mean(l + 0.5 log2 s_l) over the levels whose shininess lies in the range. */
+/* The box chain's tri-Ace mapping: level l's material shininess is blinn_factor times the
+ * fitted kernel exponent, and lod_offset is the least-squares a of lod = a - 0.5 log2 s over
+ * the levels, a = mean(l + 0.5 log2 s_l), which puts every level above 2x2 back within 0.1. */
 static void box_lod_offset(void **state)
 {
     (void)state;
-    int size = 16, levels = 5;
-    double s[5];
-    for (int l = 0; l < levels; l++) s[l] = ibl__box_level_shininess(size, l);
-    double lo = 1.0, hi = 500.0, sum = 0;
-    int count = 0;
-    for (int l = 0; l < levels; l++)
-        if (s[l] >= lo && s[l] <= hi) sum += l + 0.5 * log2(s[l]), count++;
-    assert_true(count >= 3);
-    assert_near(ibl__box_lod_offset(size, levels, (float)lo, (float)hi), sum / count, 1e-5);
-    /* with the offset, lod = a - 0.5 log2 s recovers every level above 2x2 within 0.1 */
-    float a = ibl__box_lod_offset(size, levels, 0, 0);
-    for (int l = 0; l < levels - 2; l++) assert_near(a - 0.5 * log2(s[l]), l, 0.1);
-    /* a range no level falls in: every level */
-    sum = 0;
-    for (int l = 0; l < levels; l++) sum += l + 0.5 * log2(s[l]);
-    assert_near(ibl__box_lod_offset(size, levels, 1e9f, 2e9f), sum / levels, 1e-5);
+    ibl_context *ctx = test_context(1);
+    ibl_specular_desc desc = {.filter = IBL_FILTER_BOX, .size = 16, .levels = 5};
+    ibl_specular_info info;
+    assert_int_equal(ibl_specular_levels(ctx, &desc, 16, &info), IBL_OK);
+    assert_int_equal(info.mapping, IBL_MAPPING_TRIACE);
+    double sum = 0;
+    for (int l = 0; l < 5; l++) {
+        double s = 4.2 * ibl__box_level_shininess(16, l);
+        assert_near(info.shininess[l], s, 1e-4 * s);
+        assert_near(ibl_specular_level_phong_exponent(&info, l), s / 4.2, 1e-4 * s);
+        sum += l + 0.5 * log2(s);
+    }
+    assert_near(info.lod_offset, sum / 5, 1e-5);
+    for (int l = 0; l < 3; l++) assert_near(info.lod_offset - 0.5 * log2(info.shininess[l]), l, 0.1);
+    ibl_context_destroy(ctx);
 }
 
 static void gauss_constant(void **state)

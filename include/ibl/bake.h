@@ -20,7 +20,8 @@
  * material that reads it (the exponent of the tri-Ace 2010 normalised Blinn-Phong BRDF, what
  * ibl_material.shininess holds); the Phong kernel the level was filtered with has exponent
  * shininess / blinn_factor (the tri-Ace fit cos^n(t) ~ cos^(4.2 n)(t/2)). The manifest
- * records both per level.
+ * records both per level, whatever units the chain was specified in (a phong chain's
+ * range is kernel exponents; specular.h).
  */
 #ifndef IBL_BAKE_H
 #define IBL_BAKE_H

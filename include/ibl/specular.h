@@ -11,13 +11,18 @@
  *
  * Kernels (tri-Ace 2010 "Generate REM" .. "Spherical Phong kernel"; the JAGE 2015 article's
  * "Cubemap Convolution"):
- *   phong: P(R) = int L(l) max(R.l,0)^n dl / int max(R.l,0)^n dl, n = shininess of the level;
+ *   phong: P(R) = int L(l) max(R.l,0)^n dl / int max(R.l,0)^n dl, n = the level's value;
  *   blinn: the Blinn lobe (n.h)^s through tri-Ace's fit cos^n(t) ~ cos^(f n)(t/2): Phong with
  *          n = s / f (f = blinn_factor, default 4.2; cmft and CubeMapGen use 4);
  *   ggx:   P(n) = int L(l) D(h) max(n.l,0) dl / int D(h) max(n.l,0) dl, v = n, h = norm(n+l),
  *          alpha = roughness^2 (the split-sum prefilter without sampling noise);
- *   box:   the plain area-weighted mip chain (tri-Ace's fastest dynamic profile);
- *   gauss: a 2D Gaussian blur per face (tri-Ace's second dynamic profile).
+ *   box:   the plain area-weighted mip chain (tri-Ace's fastest dynamic profile); a level's
+ *          value is the material shininess f n of the Phong lobe n fitted to its kernel;
+ *   gauss: a 2D Gaussian blur per face (tri-Ace's second dynamic profile), sigma from the
+ *          Phong kernel n = s / f of the level's material shininess s.
+ * Units: a phong chain's values are kernel exponents; blinn, box and gauss chains' values
+ * are the shininess of the tri-Ace normalised Blinn-Phong material that reads the level
+ * (ibl_specular_level_shininess / _phong_exponent convert; docs/SPECULAR.md "Units").
  *
  * Methods: IBL_METHOD_FAST (default; deterministic multilevel summation over the source's
  * moment pyramid, see docs/SPECULAR.md) and IBL_METHOD_REFERENCE (the exact integral of the
@@ -93,7 +98,7 @@ typedef struct ibl_specular_info {
     float shininess_min, shininess_max;
     float lod_offset;                     /* IBL_MAPPING_TRIACE: the fitted a                        */
     float roughness[IBL_MAX_LEVELS];  /* GGX: perceptual roughness per level (alpha = r^2)     */
-    float shininess[IBL_MAX_LEVELS];  /* Phong family: shininess per level (Blinn: Blinn's s)  */
+    float shininess[IBL_MAX_LEVELS];  /* Phong family, in the chain's units (see the top)      */
 } ibl_specular_info;
 
 const char *ibl_specular_filter_name(ibl_specular_filter filter);   /* "ggx", "phong", ...   */
@@ -130,6 +135,14 @@ ibl_status ibl_specular_reference_create(ibl_context *ctx, const ibl_cubemap *sr
 void ibl_specular_reference_eval(const ibl_specular_reference *ref, const ibl_specular_info *info,
                                  int level, ibl_vec3 dir, double out[4]);
 void ibl_specular_reference_destroy(ibl_specular_reference *ref);
+
+/* The two units of a Phong-family level (docs/SPECULAR.md "Units"): the shininess of the
+ * tri-Ace normalised Blinn-Phong material that reads it, and the exponent of the Phong kernel
+ * it was filtered with, material = blinn_factor x kernel (tri-Ace 2010's fit). A phong chain's
+ * levels and range are kernel exponents (the Phong material's own, as cmft's phong); blinn,
+ * box and gauss chains speak the material's shininess. 0 for a mirror level and for GGX. */
+float ibl_specular_level_shininess(const ibl_specular_info *info, int level);
+float ibl_specular_level_phong_exponent(const ibl_specular_info *info, int level);
 
 /* Describes the chain in a texture's KTX2 key/values, "ibl.specular.*": filter, mapping,
  * mirror, blinn_factor, lod_offset (tri-Ace mapping), and per level (space-separated,

@@ -68,17 +68,6 @@ int ibl_bake_files(const ibl_bake_data *b, const char **names, int max)
     return n;
 }
 
-/* ---- units -------------------------------------------------------------------------------- */
-
-float ibl__bake_material_shininess(const ibl_specular_info *info, int level)
-{
-    float s = info->shininess[level];
-    if (!(s > 0.0f)) return 0.0f; /* a mirror level */
-    /* a Phong-kernel level of exponent n serves the material of Blinn-Phong exponent
-     * blinn_factor * n (tri-Ace 2010's fit); a blinn chain is already in material units */
-    return info->filter == IBL_FILTER_BLINN ? s : s * info->blinn_factor;
-}
-
 /* ---- compute ------------------------------------------------------------------------------ */
 
 static double now_ms(void)
@@ -130,7 +119,7 @@ static void ambient_range(const ibl_bake_desc *d, const ibl_bake_data *b, double
     double smin = 0, smax = 0;
     if (info->filter != IBL_FILTER_GGX) {
         for (int l = 0; l < info->levels; l++) {
-            double s = ibl__bake_material_shininess(info, l);
+            double s = ibl_specular_level_shininess(info, l);
             if (!(s > 0)) continue;
             if (smin == 0 || s < smin) smin = s;
             if (s > smax) smax = s;
@@ -304,7 +293,7 @@ ibl_status ibl_bake_probe(ibl_context *ctx, const ibl_bake_data *b, ibl_probe *p
         if (info->filter == IBL_FILTER_GGX) {
             p->mapping.roughness[k] = info->roughness[k];
         } else {
-            float s = ibl__bake_material_shininess(info, k);
+            float s = ibl_specular_level_shininess(info, k);
             p->mapping.shininess[k] = s > 0.0f ? s : IBL_MIRROR_SHININESS;
         }
     }

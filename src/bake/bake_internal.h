@@ -48,8 +48,4 @@ ibl_status ibl__bake_manifest_parse(ibl_context *ctx, const void *bytes, size_t 
                                     ibl__bake_manifest_files *files, void **root);
 void ibl__bake_manifest_release(void *root);
 
-/* The material shininess a level of a Phong-family chain stands for (bake.h "Units"), and
- * the reverse. */
-float ibl__bake_material_shininess(const ibl_specular_info *info, int level);
-
 #endif

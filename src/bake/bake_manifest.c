@@ -80,15 +80,14 @@ static json_t *level_json(const ibl_specular_info *info, int l)
         if (!(info->roughness[l] > 0)) ibl__json_set(o, "mirror", ibl__json_bool(1));
         return o;
     }
-    float s = ibl__bake_material_shininess(info, l);
+    float s = ibl_specular_level_shininess(info, l);
     if (!(s > 0)) {
         ibl__json_set(o, "mirror", ibl__json_bool(1));
         return o;
     }
     ibl__json_set(o, "shininess", ibl__json_float(s));
     /* the kernel the level was filtered with (for blinn: the Phong fit of the Blinn lobe) */
-    float n = info->filter == IBL_FILTER_BLINN ? s / info->blinn_factor : info->shininess[l];
-    ibl__json_set(o, "phong_exponent", ibl__json_float(n));
+    ibl__json_set(o, "phong_exponent", ibl__json_float(ibl_specular_level_phong_exponent(info, l)));
     return o;
 }
 
@@ -109,8 +108,8 @@ static json_t *specular_json(const ibl_specular_info *info, ibl_edge_fixup edge_
     json_t *range = json_object();
     ibl__json_set(range, "min", ibl__json_float(info->shininess_min));
     ibl__json_set(range, "max", ibl__json_float(info->shininess_max));
-    ibl__json_set(range, "unit", ibl__json_string(info->filter == IBL_FILTER_BLINN ? "shininess"
-                                                                                  : "phong_exponent"));
+    ibl__json_set(range, "unit", ibl__json_string(info->filter == IBL_FILTER_PHONG ? "phong_exponent"
+                                                                                  : "shininess"));
     ibl__json_set(o, "mapping_range", range);
     if (info->mapping == IBL_MAPPING_TRIACE) {
         ibl__json_set(o, "lod_offset", ibl__json_float(info->lod_offset));
@@ -381,8 +380,9 @@ static void read_specular(ibl__json_reader *r, json_t *root, ibl_bake_data *b,
                 ibl__json_fail(r, here, "roughness", "must lie in [0, 1]");
             info->roughness[k] = (float)rough;
         } else if (!mirror) {
-            /* the chain's own units (specular.h): Blinn exponents for blinn, Phong else */
-            const char *key = info->filter == IBL_FILTER_BLINN ? "shininess" : "phong_exponent";
+            /* the chain's own units (ibl_specular_level_shininess): kernel exponents for
+             * phong, the material's Blinn-Phong shininess for blinn, box and gauss */
+            const char *key = info->filter == IBL_FILTER_PHONG ? "phong_exponent" : "shininess";
             double s = ibl__json_get_number(r, lv, here, key);
             if (r->status == IBL_OK && !(s > 0 && s < 1e9))
                 ibl__json_fail(r, here, key, "must be a positive number");

@@ -62,10 +62,12 @@ int ibl_specular_preset(const char *name, ibl_specular_desc *d)
     } table[] = {
         {IBL_FILTER_BOX, 16, 500, IBL_EDGE_FIXUP_OVERLAP, IBL_MAPPING_TRIACE},
         {IBL_FILTER_GAUSS, 32, 1000, IBL_EDGE_FIXUP_OVERLAP, IBL_MAPPING_TRIACE},
-        {IBL_FILTER_PHONG, 16, 250, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
-        {IBL_FILTER_PHONG, 32, 1000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
-        {IBL_FILTER_PHONG, 32, 1000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
-        {IBL_FILTER_PHONG, 64, 2000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
+        /* the talk's ranges are the material's shininess, so its "Phong" chains are the
+         * blinn filter (the Phong kernel of the Blinn-to-Phong fit, in material units) */
+        {IBL_FILTER_BLINN, 16, 250, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
+        {IBL_FILTER_BLINN, 32, 1000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
+        {IBL_FILTER_BLINN, 32, 1000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
+        {IBL_FILTER_BLINN, 64, 2000, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_TRIACE},
         {IBL_FILTER_GGX, 256, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_LINEAR},
         {IBL_FILTER_GGX, 256, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_FILAMENT},
         {IBL_FILTER_GGX, 128, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_UNREAL},
@@ -180,8 +182,10 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
     if (st != IBL_OK) goto done;
 
     if (desc.filter == IBL_FILTER_BOX || desc.filter == IBL_FILTER_GAUSS) {
+        float kernel_exponents[IBL_MAX_LEVELS];
+        for (int l = 0; l < L; l++) kernel_exponents[l] = ibl_specular_level_phong_exponent(&info, l);
         st = desc.filter == IBL_FILTER_BOX ? ibl__specular_box(ctx, s, out)
-                                           : ibl__specular_gauss(ctx, s, out, info.shininess);
+                                           : ibl__specular_gauss(ctx, s, out, kernel_exponents);
         if (st == IBL_OK && info.mirror) st = mirror_level(ctx, s, out, 0);
         for (int l = 0; st == IBL_OK && l < L; l++)
             st = ibl_edge_fixup_apply(ctx, desc.edge_fixup, out, l);
@@ -228,19 +232,14 @@ done:
 
 static int is_phong_family(const ibl_specular_info *info) { return info->filter != IBL_FILTER_GGX; }
 
-/* the material shininess of a Phong-family level (bake.h "Units"); 0 for a mirror level */
 static double material_shininess(const ibl_specular_info *info, int l)
 {
-    double s = info->shininess[l];
-    if (!(s > 0)) return 0;
-    return info->filter == IBL_FILTER_BLINN ? s : s * info->blinn_factor;
+    return ibl_specular_level_shininess(info, l);
 }
 
 static double kernel_exponent(const ibl_specular_info *info, int l)
 {
-    double s = info->shininess[l];
-    if (!(s > 0)) return 0;
-    return info->filter == IBL_FILTER_BLINN ? s / info->blinn_factor : s;
+    return ibl_specular_level_phong_exponent(info, l);
 }
 
 typedef double (*level_value_fn)(const ibl_specular_info *info, int l);
@@ -323,9 +322,10 @@ ibl_status ibl_specular_info_from_metadata(ibl_context *ctx, const ibl_texture *
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: ibl.specular.blinn_factor: not a positive number", name);
     const char *a = ibl_texture_get_metadata(tex, "ibl.specular.lod_offset");
     if (a) info->lod_offset = strtof(a, NULL);
+    /* the chain's own units (ibl_specular_level_shininess) */
     const char *key = info->filter == IBL_FILTER_GGX     ? "ibl.specular.roughness"
-                      : info->filter == IBL_FILTER_BLINN ? "ibl.specular.shininess"
-                                                          : "ibl.specular.phong_exponent";
+                      : info->filter == IBL_FILTER_PHONG ? "ibl.specular.phong_exponent"
+                                                          : "ibl.specular.shininess";
     const char *list = ibl_texture_get_metadata(tex, key);
     float *values = info->filter == IBL_FILTER_GGX ? info->roughness : info->shininess;
     int n = list ? parse_level_list(list, values) : -1;

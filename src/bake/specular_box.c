@@ -197,23 +197,3 @@ float ibl__box_level_shininess(int size, int level)
     if (size < 1 || level < 0) return 0.0f;
     return (float)fit_shininess(ibl_level_size(size, level));
 }
-
-/* Least squares of lod_l = a - 0.5 log2 s_l over the chosen levels: a = mean(l + 0.5 log2 s_l). */
-float ibl__box_lod_offset(int size, int levels, float shininess_min, float shininess_max)
-{
-    if (size < 1 || levels < 1) return 0.0f;
-    double s[IBL_MAX_LEVELS];
-    if (levels > IBL_MAX_LEVELS) levels = IBL_MAX_LEVELS;
-    for (int l = 0; l < levels; l++) s[l] = ibl__box_level_shininess(size, l);
-    for (int pass = 0; pass < 2; pass++) {
-        double sum = 0;
-        int count = 0;
-        for (int l = 0; l < levels; l++) {
-            int in = (shininess_min <= 0 || s[l] >= shininess_min) &&
-                     (shininess_max <= 0 || s[l] <= shininess_max);
-            if (pass == 1 || in) sum += l + 0.5 * log2(s[l]), count++;
-        }
-        if (count > 0) return (float)(sum / count);
-    }
-    return 0.0f;
-}

@@ -63,15 +63,15 @@ static void rows_task(void *arg, int index) { blur_line(arg, index, 0); }
 static void columns_task(void *arg, int index) { blur_line(arg, index, 1); }
 
 ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst,
-                               const float *shininess_per_level)
+                               const float *phong_exponent_per_level)
 {
-    if (!shininess_per_level)
+    if (!phong_exponent_per_level)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "gauss prefilter: no shininess per level");
     for (int l = 0; dst && l < dst->levels; l++)
-        if (!(shininess_per_level[l] >= 0))
+        if (!(phong_exponent_per_level[l] >= 0))
             return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                             "gauss prefilter: shininess of level %d is %g", l,
-                            (double)shininess_per_level[l]);
+                            (double)phong_exponent_per_level[l]);
     ibl_status st = ibl__specular_box(ctx, src, dst);
     if (st != IBL_OK) return st;
     size_t n0 = (size_t)dst->size;
@@ -80,7 +80,7 @@ ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cub
     if (!scratch) return ibl_context_status(ctx);
     for (int level = 0; level < dst->levels; level++) {
         int n = ibl_level_size(dst->size, level);
-        double sigma = ibl__gauss_sigma(shininess_per_level[level], n);
+        double sigma = ibl__gauss_sigma(phong_exponent_per_level[level], n);
         if (sigma < 1e-3 || n < 2) continue;
         /* 4 sigma keeps the cut tail below 1e-4 of the weight; beyond n - 1 nothing is read */
         double reach = ceil(4.0 * sigma);

@@ -88,6 +88,8 @@ void ibl__dynamic_destroy(ibl__dynamic *d);
 
 /* The most levels desc's mapping can make distinct (IBL_MAX_LEVELS when unbounded). */
 int ibl__mapping_distinct_levels(const ibl_specular_desc *desc);
+/* ibl_specular_level_phong_exponent in double, the exponent the Phong-family lobes filter with */
+double ibl__level_phong_exponent(const ibl_specular_info *info, int level);
 /* Fills info from desc for a chain of the given output size and levels. */
 ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc, int size,
                                  int levels, ibl_specular_info *info);

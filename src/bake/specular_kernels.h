@@ -14,22 +14,18 @@
 ibl_status ibl__specular_box(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst);
 
 /* A 2D Gaussian blur within each face of every level of the box chain (no filtering across
- * face edges, as in the tri-Ace talk), with sigma from the level's shininess (ibl__gauss_sigma). */
+ * face edges, as in the tri-Ace talk), with sigma from the level's Phong kernel exponent
+ * (ibl__gauss_sigma; 0 = a mirror level, left as the box chain has it). */
 ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cubemap *dst,
-                               const float *shininess_per_level);
+                               const float *phong_exponent_per_level);
 
-/* The Phong shininess whose normalised lobe best matches, in least squares over the sphere,
+/* The Phong kernel exponent whose normalised lobe best matches, in least squares over the sphere,
  * the box chain's effective kernel at `level` of a chain whose level 0 has edge `size`
  * (area-mean texels read back with seamless bilinear filtering). */
 float ibl__box_level_shininess(int size, int level);
 
-/* tri-Ace's lod = a - 0.5 * log2(shininess) for the box chain: a fitted by least squares
- * over the levels whose fitted shininess lies in [shininess_min, shininess_max] (a bound
- * <= 0 means none; all levels if no level lies in the range). */
-float ibl__box_lod_offset(int size, int levels, float shininess_min, float shininess_max);
-
 /* The Gaussian profile's per-axis sigma, in texels of a face of edge n, for a Phong lobe of
- * the given shininess: sqrt(max(0, (n / 2)^2 / (shininess + 3) - 1/12)). */
+ * the given exponent: sqrt(max(0, (n / 2)^2 / (shininess + 3) - 1/12)). */
 double ibl__gauss_sigma(float shininess, int n);
 
 #endif

@@ -135,12 +135,9 @@ ibl__lobe ibl__lobe_for_level(const ibl_specular_info *info, int level)
         if (!(r > 1e-3)) return mirror;
         return make_ggx(r > 1.0 ? 1.0 : r);
     }
-    double s = info->shininess[level];
-    if (!(s > 0.0) || isinf(s)) return mirror;
-    if (info->filter == IBL_FILTER_BLINN)
-        s /= info->blinn_factor > 0 ? info->blinn_factor : IBL_DEFAULT_BLINN_FACTOR;
-    if (s > 1e7) return mirror;
-    return make_phong(s);
+    double n = ibl__level_phong_exponent(info, level);
+    if (!(n > 0.0) || isinf(n) || n > 1e7) return mirror;
+    return make_phong(n);
 }
 
 double ibl__rect_radius(int face, double u0, double v0, double u1, double v1, double centre[3])

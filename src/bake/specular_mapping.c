@@ -56,6 +56,40 @@ static double triace_shininess(int l, double smin, double smax)
     return s < smin ? smin : s;
 }
 
+/* ---- units ---- */
+
+static int kernel_units(ibl_specular_filter filter) { return filter == IBL_FILTER_PHONG; }
+
+static double factor_of(const ibl_specular_info *info)
+{
+    return info->blinn_factor > 0 ? info->blinn_factor : IBL_DEFAULT_BLINN_FACTOR;
+}
+
+static int phong_level(const ibl_specular_info *info, int level)
+{
+    return info && info->filter != IBL_FILTER_GGX && level >= 0 && level < info->levels &&
+           info->shininess[level] > 0.0f;
+}
+
+double ibl__level_phong_exponent(const ibl_specular_info *info, int level)
+{
+    if (!phong_level(info, level)) return 0.0;
+    double s = info->shininess[level];
+    return kernel_units(info->filter) ? s : s / factor_of(info);
+}
+
+float ibl_specular_level_shininess(const ibl_specular_info *info, int level)
+{
+    if (!phong_level(info, level)) return 0.0f;
+    double s = info->shininess[level];
+    return (float)(kernel_units(info->filter) ? s * factor_of(info) : s);
+}
+
+float ibl_specular_level_phong_exponent(const ibl_specular_info *info, int level)
+{
+    return (float)ibl__level_phong_exponent(info, level);
+}
+
 int ibl__mapping_distinct_levels(const ibl_specular_desc *desc)
 {
     ibl_specular_mapping m = desc->mapping;
@@ -69,6 +103,20 @@ int ibl__mapping_distinct_levels(const ibl_specular_desc *desc)
     int n = 1;
     while (n < IBL_MAX_LEVELS && smax / pow(4.0, n - 1) > smin) n++;
     return n + (desc->mirror ? 1 : 0);
+}
+
+/* a of tri-Ace 2010's lod = a - 0.5 log2(s), s in the chain's units. For the levels the
+ * mapping makes it is exact: a = 0.5 log2(max), one more when a mirror level comes first. The
+ * box chain's levels are fitted rather than chosen, so its a is the least-squares fit over
+ * its levels, a = mean(l + 0.5 log2 s_l), as the talk fits a per size and kernel. */
+static float triace_lod_offset(const ibl_specular_info *info, int shift)
+{
+    if (info->filter != IBL_FILTER_BOX) return (float)(0.5 * log2(info->shininess_max) + shift);
+    double sum = 0;
+    int count = 0;
+    for (int l = 0; l < info->levels; l++)
+        if (info->shininess[l] > 0) sum += l + 0.5 * log2(info->shininess[l]), count++;
+    return count ? (float)(sum / count) : 0.0f;
 }
 
 ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc, int size,
@@ -94,7 +142,6 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: unknown mapping %d", m);
     if (m == IBL_MAPPING_DEFAULT) m = desc->filter == IBL_FILTER_GGX ? IBL_MAPPING_LINEAR : IBL_MAPPING_TRIACE;
     info->mapping = m;
-    info->lod_offset = (float)(0.5 * log2(info->shininess_max));
     int distinct = ibl__mapping_distinct_levels(desc);
     if (levels > distinct)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
@@ -134,9 +181,9 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
             continue;
         }
         if (desc->filter == IBL_FILTER_BOX && m == IBL_MAPPING_TRIACE) {
-            /* box: the chain's own fitted shininess (specular_box.c, least-squares fit of
-             * the box-plus-bilinear kernel to a Phong lobe), what the level really holds */
-            info->shininess[l] = ibl__box_level_shininess(size, l);
+            /* box: what the level really holds, the Phong lobe fitted by least squares to the
+             * box-plus-bilinear kernel (specular_box.c), as the material's shininess */
+            info->shininess[l] = info->blinn_factor * ibl__box_level_shininess(size, l);
             continue;
         }
         if (m == IBL_MAPPING_TRIACE) {
@@ -150,11 +197,15 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
             info->roughness[l] = (float)r;
         } else {
             /* roughness presets for the Phong family: the Blinn-Phong exponent equivalent to
-             * Beckmann/GGX alpha, s = 2 / alpha^2 - 2 (Walter et al. 2007, eq. 33) */
+             * Beckmann/GGX alpha, s = 2 / alpha^2 - 2 (Walter et al. 2007, eq. 33), in the
+             * chain's units (a phong chain's are kernel exponents, s / blinn_factor) */
             double a = r * r;
-            info->shininess[l] = a > 0 ? (float)(2.0 / (a * a) - 2.0) : 0.0f;
+            double sh = a > 0 ? 2.0 / (a * a) - 2.0 : 0.0;
+            if (kernel_units(desc->filter)) sh /= info->blinn_factor;
+            info->shininess[l] = a > 0 ? (float)sh : 0.0f;
             if (a > 0 && info->shininess[l] < 1e-3f) info->shininess[l] = 1e-3f;
         }
     }
+    if (m == IBL_MAPPING_TRIACE) info->lod_offset = triace_lod_offset(info, shift);
     return IBL_OK;
 }
