@@ -43,6 +43,9 @@ static const char usage[] =
     "  --mirror-direction    look up rough reflections along R, not the lobe's dominant\n"
     "                        direction (shows the split sum's error at high roughness)\n"
     "  --sphere-ao MIN       synthetic AO on the spheres from MIN (bottom) to 1 (top)\n"
+    "  --environment FILE    the unfiltered environment for the background and the\n"
+    "                        reference (default: INPUT's; a bake folder's is its chain's\n"
+    "                        level 0): give a bake its source to measure it\n"
     "  --reference           Monte Carlo reference of the same scene (no split sum)\n"
     "  --samples N           reference iterations per pixel, 3 directions each (default 256)\n"
     "  --supersample N       N x N rays per pixel for the runtime shading (default 1; the\n"
@@ -144,7 +147,7 @@ static void report_errors(const ibl_image *fast, const ibl_image *ref, const int
 
 /* What the command line asked for besides the variants. */
 typedef struct render_options {
-    const char *output, *scene, *cmp[2];
+    const char *output, *scene, *environment, *cmp[2];
     double exposure;
     int exposure_given, specular_size, report;
     cli_input_options input;
@@ -192,6 +195,7 @@ static void parse(cli_args *a, render_options *o)
             continue;
         if (cli_is(a, arg, "--output", "-o")) o->output = cli_value(a, arg);
         else if (cli_is(a, arg, "--scene", NULL)) o->scene = cli_value(a, arg);
+        else if (cli_is(a, arg, "--environment", NULL)) o->environment = cli_value(a, arg);
         else if (cli_is(a, arg, "--exposure", NULL)) {
             o->exposure = cli_double(a, arg, -40, 40);
             o->exposure_given = 1;
@@ -332,8 +336,13 @@ int cli_cmd_render(int argc, char **argv)
     ibl_bake_data bake = {0};
     ibl_probe probe;
     ibl_mesh mesh = {0};
+    ibl_cubemap environment = {0};
     double t0 = cli_seconds();
     int rc = make_bake(ctx, &a, &o, &bake);
+    if (rc == CLI_EXIT_OK && o.environment) {
+        rc = read_environment(ctx, &a, &o, o.environment, &environment);
+        o.base.environment = &environment;
+    }
     ibl_status st = IBL_OK;
     if (rc == CLI_EXIT_OK) {
         st = ibl_bake_probe(ctx, &bake, &probe);
@@ -344,6 +353,7 @@ int cli_cmd_render(int argc, char **argv)
         if (st != IBL_OK) cli_report_failure(ctx, a.positional[0], st), rc = CLI_EXIT_BAD_INPUT;
     }
     ibl_mesh_free(ctx, &mesh);
+    ibl_cubemap_free(ctx, &environment);
     ibl_bake_free(ctx, &bake);
     ibl_context_destroy(ctx);
     return rc;
