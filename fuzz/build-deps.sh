@@ -1,11 +1,11 @@
 #!/bin/sh
 # make fuzz, step 2: builds the libraries behind the decoders (zlib, libdeflate, libpng,
-# Imath, OpenEXR) from the Debian source packages that `scripts/install-deps.sh --fuzz`
-# fetched into build-fuzz/deps/src, with clang and the fuzzer's instrumentation
-# (-fsanitize=fuzzer-no-link,address,undefined), as static libraries in build-fuzz/deps/prefix.
-# The fuzz build links them instead of Debian's shared libraries, so libFuzzer sees their
-# edges and ASan sees every access they make. Each library is built once per source version
-# (a stamp in the prefix); nothing is downloaded here.
+# libjpeg-turbo, Imath, OpenEXR) from the Debian source packages that
+# `scripts/install-deps.sh --fuzz` fetched into build-fuzz/deps/src, with clang and the
+# fuzzer's instrumentation (-fsanitize=fuzzer-no-link,address,undefined), as static libraries
+# in build-fuzz/deps/prefix. The fuzz build links them instead of Debian's shared libraries,
+# so libFuzzer sees their edges and ASan sees every access they make. Each library is built
+# once per source version (a stamp in the prefix); nothing is downloaded here.
 set -eu
 ROOT=$(pwd)
 DEPS=$ROOT/build-fuzz/deps
@@ -84,6 +84,15 @@ cmake_static() {
   cmake --install "$bin"
 }
 
+# libjpeg-turbo without its SIMD code: that is assembly (it would need nasm), which neither
+# the coverage counters nor ASan see into, and the C code it replaces gives the same pixels.
+# The libjpeg API only (no TurboJPEG), no shared objects. Its GNUInstallDirs takes a relative
+# library folder from the command line as relative to the current folder: it is given whole.
+build_libjpeg() {
+  cmake_static "$1" "$WORK/libjpeg" -DCMAKE_INSTALL_LIBDIR="$PREFIX/lib" -DENABLE_SHARED=OFF \
+    -DENABLE_STATIC=ON -DWITH_SIMD=OFF -DWITH_TURBOJPEG=OFF -DWITH_JAVA=OFF
+}
+
 build_imath() {
   cmake_static "$1" "$WORK/imath" -DPYTHON=OFF -DDOCS=OFF
 }
@@ -103,5 +112,6 @@ build_openexr() {
 build zlib zlib
 build libdeflate libdeflate
 build libpng libpng1.6
+build libjpeg libjpeg-turbo
 build imath imath
 build openexr openexr

@@ -6,7 +6,7 @@
 # `make test` replays them forever after.
 #   FUZZ_SECONDS  seconds per target (default 60)
 #   FUZZ_RUNS     stop a target after this many executions instead (whichever comes first)
-#   FUZZ_TARGETS  names to run (default: every target), e.g. "stb exr"
+#   FUZZ_TARGETS  names to run (default: every target), e.g. "jpeg exr"
 # Each run's whole log is build-fuzz/logs/NAME.log; one summary line per target is printed.
 set -eu
 SECONDS_PER_TARGET=${FUZZ_SECONDS:-60}
@@ -27,7 +27,7 @@ cmake --build build-fuzz -j 2 --target fuzz_all -- --no-print-directory >/dev/nu
 
 # The instrumented libraries must be the ones linked: no Debian copy may be loaded.
 for t in build-fuzz/fuzz/fuzz_*; do
-  if ldd "$t" | grep -E "lib(png16|z|deflate)\.so|lib(OpenEXR|Imath|Iex|IlmThread)[-.]" >&2; then
+  if ldd "$t" | grep -E "lib(png16|jpeg|z|deflate)\.so|lib(OpenEXR|Imath|Iex|IlmThread)[-.]" >&2; then
     echo "fuzz/run.sh: $t loads uninstrumented decoding libraries" >&2
     exit 1
   fi

@@ -3,8 +3,8 @@
 # This list is the single source of truth for dependencies (README.md repeats it).
 #   build:     cmake make gcc g++ pkg-config
 #   libraries: libopenexr-dev (OpenEXR 3.1, every compression incl. DWAA/DWAB; brings Imath)
-#              libstb-dev (stb_image / stb_image_write: PNG and JPEG reading, JPEG writing)
-#              libpng-dev (PNG writing, 8-bit sRGB and 16-bit linear)
+#              libpng-dev (PNG reading; writing 8-bit sRGB and 16-bit linear)
+#              libjpeg-dev (libjpeg-turbo: JPEG reading and writing)
 #              libdeflate-dev (EXR ZIP/ZIPS chunks: 2-3x faster whole-buffer inflate than zlib)
 #              libjansson-dev (JSON: the bake manifest, sh.json, --json outputs)
 #   tests:     libcmocka-dev (test framework; CTest drives it)
@@ -20,10 +20,10 @@
 # components and keyring) in /etc/apt/sources.list.d/ibl-deb-src.sources. Nothing else is
 # ever downloaded: every byte comes through apt from the machine's configured Debian archive.
 set -eu
-PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libstb-dev libpng-dev libdeflate-dev libjansson-dev libcmocka-dev"
+PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libpng-dev libjpeg-dev libdeflate-dev libjansson-dev libcmocka-dev"
 # Source package:binary package whose installed version is fetched (headers and instrumented
 # libraries then match exactly). Built in this order by fuzz/build-deps.sh.
-FUZZ_SOURCES="zlib:zlib1g-dev libdeflate:libdeflate-dev libpng1.6:libpng-dev imath:libimath-dev openexr:libopenexr-dev"
+FUZZ_SOURCES="zlib:zlib1g-dev libdeflate:libdeflate-dev libpng1.6:libpng-dev libjpeg-turbo:libjpeg62-turbo-dev imath:libimath-dev openexr:libopenexr-dev"
 FUZZ_SRC_DIR=${FUZZ_SRC_DIR:-build-fuzz/deps/src}
 case "$FUZZ_SRC_DIR" in /*) ;; *) FUZZ_SRC_DIR="$(pwd)/$FUZZ_SRC_DIR" ;; esac
 mode=${1:-}

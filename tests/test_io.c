@@ -1067,14 +1067,15 @@ static void png_layouts(void **state)
 
 /* ---- bad input ----------------------------------------------------------------------- */
 
-/* Every proper prefix of a valid file is refused with a message naming it, never crashes. */
+/* Every proper prefix of a valid file is refused with a message naming it, never crashes
+ * (a JPEG must end with its end marker; a PNG may lack its IEND chunk). */
 static void truncated_files(void **state)
 {
     (void)state;
     ibl_context *ctx = test_context(1);
     ibl_image im = make_image(ctx, 20, 10);
     for (size_t i = 0; i < 20 * 10 * 4; i++) im.pixels[i] = frand() * 4;
-    const char *names[] = {"t.hdr", "tf.hdr", "t.pfm", "t.exr", "tp.exr", "t.png"};
+    const char *names[] = {"t.hdr", "tf.hdr", "t.pfm", "t.exr", "tp.exr", "t.png", "t.jpg"};
     for (size_t k = 0; k < sizeof names / sizeof names[0]; k++) {
         ibl_write_desc wd = {0};
         wd.hdr_no_rle = k == 1;

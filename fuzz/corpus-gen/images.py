@@ -3,8 +3,8 @@
 type, palette with and without transparency, Adam7 interlacing, gAMA / sRGB / iCCP / cHRM
 chunks, every filter type, split IDAT, 1-pixel and odd sizes), Radiance HDR (new-style
 per-channel RLE, old-style repeats, flat, each orientation), PFM (colour and grey, both byte
-orders), JPEG through cjpeg (baseline and progressive, grey, 4:4:4 / 4:2:2 / 4:4:0 / 4:2:0,
-restart markers, optimised tables, arithmetic coding), and DDS files with the legacy float
+orders), JPEG through cjpeg (baseline and progressive, grey, RGB, 4:4:4 / 4:2:2 / 4:4:0 / 4:2:0,
+one sequential scan per component, restart markers, optimised tables, arithmetic coding), and DDS files with the legacy float
 FourCCs made from ibl's DX10 files. Usage: images.py OUT_DIR (writes OUT_DIR/NAME/...)."""
 import math
 import os
@@ -142,32 +142,32 @@ PHYS = chunk(b"pHYs", struct.pack(">IIB", 2835, 2835, 1))
 
 def pngs():
     for depth in (1, 2, 4, 8, 16):
-        write("stb", "grey%d_7x5.png" % depth, png(7, 5, depth, 0))
+        write("png", "grey%d_7x5.png" % depth, png(7, 5, depth, 0))
     for depth in (8, 16):
-        write("stb", "greyalpha%d_5x4.png" % depth, png(5, 4, depth, 4))
-        write("stb", "rgb%d_6x3.png" % depth, png(6, 3, depth, 2))
-        write("stb", "rgba%d_3x6.png" % depth, png(3, 6, depth, 6))
+        write("png", "greyalpha%d_5x4.png" % depth, png(5, 4, depth, 4))
+        write("png", "rgb%d_6x3.png" % depth, png(6, 3, depth, 2))
+        write("png", "rgba%d_3x6.png" % depth, png(3, 6, depth, 6))
     pal = [(i * 37 % 256, i * 91 % 256, i * 53 % 256) for i in range(13)]
     for depth in (1, 2, 4, 8):
         n = min(len(pal), 1 << depth)
-        write("stb", "palette%d_9x4.png" % depth, png(9, 4, depth, 3, palette=pal[:n]))
-    write("stb", "palette8_trns_5x5.png", png(5, 5, 8, 3, palette=pal, trns=bytes([0, 128, 255, 7])))
-    write("stb", "grey8_trns_4x4.png", png(4, 4, 8, 0, trns=struct.pack(">H", 100)))
-    write("stb", "rgb16_trns_4x4.png", png(4, 4, 16, 2, trns=struct.pack(">HHH", 1, 2, 3)))
-    write("stb", "interlaced_rgba8_11x9.png", png(11, 9, 8, 6, interlace=True))
-    write("stb", "interlaced_grey2_13x7.png", png(13, 7, 2, 0, interlace=True))
-    write("stb", "interlaced_palette4_3x3.png", png(3, 3, 4, 3, interlace=True, palette=pal[:16 if len(pal) >= 16 else len(pal)]))
-    write("stb", "interlaced_rgb16_1x1.png", png(1, 1, 16, 2, interlace=True))
-    write("stb", "pixel_rgb8_1x1.png", png(1, 1, 8, 2))
-    write("stb", "gama_linear_rgb16_5x3.png", png(5, 3, 16, 2, extra=GAMA_LINEAR))
-    write("stb", "gama22_rgb8_5x3.png", png(5, 3, 8, 2, extra=GAMA_22 + CHRM))
-    write("stb", "srgb_rgba8_4x4.png", png(4, 4, 8, 6, extra=SRGB + GAMA_22 + CHRM))
-    write("stb", "iccp_rgb8_4x4.png", png(4, 4, 8, 2, extra=iccp(b"RGB ")))
-    write("stb", "iccp_grey8_4x4.png", png(4, 4, 8, 0, extra=iccp(b"GRAY")))
-    write("stb", "text_phys_rgb8_6x2.png", png(6, 2, 8, 2, extra=TEXT + PHYS))
-    write("stb", "split_idat_rgba16_9x9.png", png(9, 9, 16, 6, idat_split=7))
+        write("png", "palette%d_9x4.png" % depth, png(9, 4, depth, 3, palette=pal[:n]))
+    write("png", "palette8_trns_5x5.png", png(5, 5, 8, 3, palette=pal, trns=bytes([0, 128, 255, 7])))
+    write("png", "grey8_trns_4x4.png", png(4, 4, 8, 0, trns=struct.pack(">H", 100)))
+    write("png", "rgb16_trns_4x4.png", png(4, 4, 16, 2, trns=struct.pack(">HHH", 1, 2, 3)))
+    write("png", "interlaced_rgba8_11x9.png", png(11, 9, 8, 6, interlace=True))
+    write("png", "interlaced_grey2_13x7.png", png(13, 7, 2, 0, interlace=True))
+    write("png", "interlaced_palette4_3x3.png", png(3, 3, 4, 3, interlace=True, palette=pal[:16 if len(pal) >= 16 else len(pal)]))
+    write("png", "interlaced_rgb16_1x1.png", png(1, 1, 16, 2, interlace=True))
+    write("png", "pixel_rgb8_1x1.png", png(1, 1, 8, 2))
+    write("png", "gama_linear_rgb16_5x3.png", png(5, 3, 16, 2, extra=GAMA_LINEAR))
+    write("png", "gama22_rgb8_5x3.png", png(5, 3, 8, 2, extra=GAMA_22 + CHRM))
+    write("png", "srgb_rgba8_4x4.png", png(4, 4, 8, 6, extra=SRGB + GAMA_22 + CHRM))
+    write("png", "iccp_rgb8_4x4.png", png(4, 4, 8, 2, extra=iccp(b"RGB ")))
+    write("png", "iccp_grey8_4x4.png", png(4, 4, 8, 0, extra=iccp(b"GRAY")))
+    write("png", "text_phys_rgb8_6x2.png", png(6, 2, 8, 2, extra=TEXT + PHYS))
+    write("png", "split_idat_rgba16_9x9.png", png(9, 9, 16, 6, idat_split=7))
     for f in range(5):
-        write("stb", "filter%d_rgb8_8x6.png" % f, png(8, 6, 8, 2, filters=(f,)))
+        write("png", "filter%d_rgb8_8x6.png" % f, png(8, 6, 8, 2, filters=(f,)))
     write("any", "grey16_9x5.png", png(9, 5, 16, 0, extra=GAMA_LINEAR))
     write("any", "interlaced_palette8_7x7.png", png(7, 7, 8, 3, interlace=True, palette=pal, trns=b"\x00\x80"))
 
@@ -197,15 +197,23 @@ def jpegs():
         ("float_dct_q98_6x6.jpg", 6, 6, False, ["-dct", "float", "-quality", "98"]),
         ("pixel_1x1.jpg", 1, 1, False, []),
         ("arithmetic_8x8.jpg", 8, 8, False, ["-arithmetic"]),
+        ("rgb_9x7.jpg", 9, 7, False, ["-rgb"]),
+        ("sequential_scans_12x10.jpg", 12, 10, False, ["-scans", "SCANS"]),
+        ("progressive_restart_18x9.jpg", 18, 9, False, ["-progressive", "-restart", "1B"]),
     ]
     with tempfile.TemporaryDirectory() as tmp:
+        # one sequential scan per component (non-interleaved), as some encoders write
+        scans = os.path.join(tmp, "scans.txt")
+        with open(scans, "w") as f:
+            f.write("0;\n1;\n2;\n")
         for name, w, h, grey, args in variants:
+            args = [scans if a == "SCANS" else a for a in args]
             src = os.path.join(tmp, "in.pnm")
             with open(src, "wb") as f:
                 f.write(pnm(w, h, grey))
             opts = (["-grayscale"] if grey else []) + args
             data = subprocess.run(["cjpeg"] + opts + [src], check=True, capture_output=True).stdout
-            write("stb", name, data)
+            write("jpeg", name, data)
             if name in ("progressive_420_19x12.jpg", "grey_15x7.jpg"):
                 write("any", name, data)
 

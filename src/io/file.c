@@ -1,6 +1,7 @@
 /* Files and dispatch: type detection, whole-file reads, atomic writes, the readers'
  * pixel policy and the writers' choice of container. The per-format code lives in
- * hdr.c, exr.c, pfm.c, stb.c and the container files; see io_internal.h for the contract. */
+ * hdr.c, exr.c, pfm.c, png.c, jpeg.c and the container files; see io_internal.h for the
+ * contract. */
 #include "io/io_internal.h"
 #include "core/context_internal.h"
 
@@ -452,8 +453,8 @@ ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, 
     case IBL_FILE_HDR: s = ibl__hdr_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_EXR: s = ibl__exr_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_PFM: s = ibl__pfm_decode(ctx, b, size, name, out, &fi); break;
-    case IBL_FILE_PNG:
-    case IBL_FILE_JPEG: s = ibl__stb_decode(ctx, b, size, name, out, &fi); break;
+    case IBL_FILE_PNG: s = ibl__png_decode(ctx, b, size, name, out, &fi); break;
+    case IBL_FILE_JPEG: s = ibl__jpeg_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_KTX2: s = ibl__ktx2_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_KTX1: s = ibl__ktx1_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_DDS: s = ibl__dds_decode(ctx, b, size, name, out, &fi); break;

@@ -17,14 +17,51 @@ ibl_status ibl__pfm_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
                            ibl_texture *out, ibl_file_info *info);
 ibl_status ibl__pfm_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size);
-/* PNG (libpng) and JPEG (stb_image): 8/16-bit, sRGB decoded to linear. */
-ibl_status ibl__stb_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+/* PNG (src/io/png.c, libpng): 8/16-bit read, sRGB or gAMA decoded to linear; written as
+ * 8-bit sRGB with exposure and tone map, or 16-bit linear (IBL_FORMAT_RGBA16_UNORM). */
+ibl_status ibl__png_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info);
-/* PNG: 8-bit sRGB with exposure and tone map, or 16-bit linear (IBL_FORMAT_RGBA16_UNORM). */
 ibl_status ibl__png_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size);
+/* JPEG (src/io/jpeg.c, libjpeg-turbo): 8-bit grey, YCbCr or RGB, baseline or progressive,
+ * read as sRGB; written as 8-bit sRGB previews like PNG's. */
+ibl_status ibl__jpeg_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                            ibl_texture *out, ibl_file_info *info);
 ibl_status ibl__jpeg_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
                             const char *name, void **bytes, size_t *size);
+
+/* Shared by the PNG and JPEG readers (png.c): RGBA samples (8-bit, or 16-bit big-endian as
+ * PNG stores them) to linear float, through the sRGB curve (power 0) or the power law
+ * v^power (1 = linear). The samples may lie in the tail of dst itself (both readers decode
+ * there): texel i is read whole before it is written, and its float lands at or before
+ * samples not yet read. Fails only when the 16-bit table cannot be allocated. */
+ibl_status ibl__rgba_samples_to_linear(ibl_context *ctx, const uint8_t *samples, int is16,
+                                      double power, size_t texels, float *dst, const char *name);
+
+/* The 8-bit display encoding shared by the PNG and JPEG writers (initialised in png.c):
+ * exposure, tone map (IBL_TONEMAP_DEFAULT = filmic) and sRGB encoding to the nearest code,
+ * without a pow per channel. The code is the number of decision levels (the linear values
+ * whose sRGB encoding is k + 0.5 codes) at or below the value, i.e. round(oetf(t) * 255). A
+ * 4096-bucket table gives the count at each bucket's lower edge; levels are at least
+ * 1 / (255 * 12.92) = 3.0e-4 apart (the steepest, linear part of the curve) and buckets
+ * 2.4e-4 wide, so at most one more level can lie inside a bucket: one comparison finishes. */
+enum { IBL_DISPLAY_BUCKETS = 4096 };
+
+typedef struct ibl__display_encoder {
+    float scale;
+    ibl_tonemap tonemap;
+    float level[256];                       /* level[k]: smallest value encoding to k + 1 */
+    uint8_t base[IBL_DISPLAY_BUCKETS + 1];  /* levels <= bucket / IBL_DISPLAY_BUCKETS */
+} ibl__display_encoder;
+
+void ibl__display_encoder_init(ibl__display_encoder *d, const ibl_write_desc *desc);
+
+static inline uint8_t ibl__display_code(const ibl__display_encoder *d, float linear)
+{
+    float t = ibl_tonemap_apply(d->tonemap, linear * d->scale); /* in [0, 1] */
+    int code = d->base[(int)(t * IBL_DISPLAY_BUCKETS)];
+    return (uint8_t)(code + (d->level[code] <= t));
+}
 /* OpenEXR (src/io/exr.c, with the C++ part in src/io/exr_cpp.cpp). */
 ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info);
