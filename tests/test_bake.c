@@ -96,6 +96,12 @@ static void assert_units(ibl_context *ctx, const ibl_bake_data *b, const ibl_bak
     }
     assert_non_null(p.ambient_brdf.data);
     const ibl_ambient_brdf_view *ab = &p.ambient_brdf;
+    /* whatever the chain's range, the rows' centres span every material: 1 to 100000 unless
+     * the desc says otherwise (a shininess-1 material on a box chain still reads its albedo) */
+    double lo = d->ambient.shininess_min > 0 ? d->ambient.shininess_min : 1.0;
+    double hi = d->ambient.shininess_max > lo ? d->ambient.shininess_max : 100000.0;
+    assert_near(ibl_table_axis_value(&ab->shininess, 0), lo, 1e-4 * lo);
+    assert_near(ibl_table_axis_value(&ab->shininess, ab->shininess.count - 1), hi, 1e-4 * hi);
     for (int j = 0; j < ab->shininess.count; j++) {
         float s = ibl_table_axis_value(&ab->shininess, j);
         for (int i = 0; i < ab->n_dot_v.count; i++) {

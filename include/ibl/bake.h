@@ -65,9 +65,9 @@ typedef struct ibl_bake_desc {
     int lut_size;               /* split-sum and multiple-scattering tables; 0: 128        */
     int ambient_brdf;           /* the tri-Ace AmbientBRDF volume (Blinn-Phong materials read
                                    it on any chain): 0 or 1 written, -1 not                */
-    ibl_ambient_brdf_desc ambient; /* its sizes, normalisation and material shininess axis
-                                   (brdf.h; a zero axis: the chain's range for the Phong
-                                   family, 1..100000 for GGX)                              */
+    ibl_ambient_brdf_desc ambient; /* its sizes, normalisation and the materials' shininess
+                                   range (brdf.h; zero: 1..100000, any chain); the first and
+                                   last rows are centred on the range's ends               */
     ibl_format format;          /* storage of the cube textures; 0: rgba16f                 */
     unsigned containers;        /* IBL_BAKE_KTX2 | IBL_BAKE_DDS; 0: both                    */
     int preview_width;          /* environment.png (equirect) width; 0: 1024; -1: none      */

@@ -224,8 +224,8 @@ typedef struct ibl_shade_desc {
     int no_mirror;        /* never use the mirror cube                                 */
     int nearest_level;    /* round the lod (no trilinear): to see the level steps      */
     int mirror_direction; /* ibl_shade: look up along R itself instead of the lobe's
-                                   dominant direction, which leans from R toward N with
-                                   roughness (Lagarde & de Rousiers 2014; the default)        */
+                                   dominant direction, which leans from R toward N as the
+                                   lobe widens (ibl_dominant_direction_lean; the default)      */
 } ibl_shade_desc;
 
 typedef struct ibl_surface {
@@ -243,6 +243,12 @@ typedef struct ibl_shade_result {
     float lod;         /* level sampled                                                */
     ibl_vec3 r;        /* reflection direction sampled                                 */
 } ibl_shade_result;
+
+/* How far the lookup direction leans from N toward R, t in [0, 1] for lerp(N, R, t): the
+ * lobe's dominant direction, which the n = v = r prefilter cannot express. GGX: Lagarde & de
+ * Rousiers 2014, (1 - r)(sqrt(1 - r) + r); tri-Ace's normalised Blinn-Phong: the lobe's
+ * centroid, t = g / (1 + g), g = 0.1785 s^0.9805 (docs/SHADING.md "Dominant direction"). */
+float ibl_dominant_direction_lean(const ibl_material *material);
 
 /* Ambient lighting of one surface point. desc may be NULL (defaults). The reflection vector
  * is R = 2 (n.v) n - v; pass a corrected direction through ibl_shade_dir for local probes. */

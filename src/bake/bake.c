@@ -108,26 +108,26 @@ static ibl_status stage_diffuse(ibl_context *ctx, const ibl_cubemap *env, const 
     return st;
 }
 
-/* The material shininess range of the chain (for the AmbientBRDF's axis): its levels'
- * extremes for the Phong family, the documented wide range otherwise. */
-static void ambient_range(const ibl_bake_desc *d, const ibl_bake_data *b, double *lo, double *hi)
+/* The AmbientBRDF's shininess axis [lo, hi] as the volume is computed: the materials it
+ * serves are those of the caller's range, or 1..100000 (every Blinn-Phong material, whatever
+ * the chain: a material of shininess 1 on a box chain whose widest level is 4 still needs the
+ * albedo at 1). The range is widened by half a row at each end so that the first and last
+ * row centres (where a lookup stops interpolating) fall on the materials' extremes. */
+static void ambient_range(const ibl_bake_desc *d, int rows, double *lo, double *hi)
 {
-    *lo = d->ambient.shininess_min;
-    *hi = d->ambient.shininess_max;
-    if (*lo > 0 && *hi > *lo) return;
-    const ibl_specular_info *info = &b->specular_info;
-    double smin = 0, smax = 0;
-    if (info->filter != IBL_FILTER_GGX) {
-        for (int l = 0; l < info->levels; l++) {
-            double s = ibl_specular_level_shininess(info, l);
-            if (!(s > 0)) continue;
-            if (smin == 0 || s < smin) smin = s;
-            if (s > smax) smax = s;
-        }
+    double smin = d->ambient.shininess_min, smax = d->ambient.shininess_max;
+    if (!(smin > 0)) smin = IBL_DEFAULT_AMBIENT_SHININESS_MIN;
+    if (!(smax > smin)) smax = smin < IBL_DEFAULT_AMBIENT_SHININESS_MAX ? IBL_DEFAULT_AMBIENT_SHININESS_MAX : 2.0 * smin;
+    double half = rows > 1 ? 0.5 / (rows - 1) : 0.0;
+    if (d->ambient.spacing == IBL_SHININESS_LOG) {
+        double ratio = pow(smax / smin, half);
+        *lo = smin / ratio;
+        *hi = smax * ratio;
+    } else {
+        double step = (smax - smin) * half;
+        *lo = smin - step > 0 ? smin - step : smin;
+        *hi = smax + step;
     }
-    if (!(smin > 0 && smax > smin)) smin = IBL_DEFAULT_AMBIENT_SHININESS_MIN, smax = IBL_DEFAULT_AMBIENT_SHININESS_MAX;
-    if (!(*lo > 0)) *lo = smin;
-    if (!(*hi > *lo)) *hi = smax > *lo ? smax : *lo * 2.0;
 }
 
 /* An axis of n texel centres over [lo, hi] (linear) or log-spaced over [lo, hi]. */
@@ -157,9 +157,10 @@ static ibl_status stage_brdf(ibl_context *ctx, const ibl_bake_desc *d, ibl_bake_
     ld.channels[3] = IBL_BRDF_SHEEN_AVG;
     st = ibl_brdf_lut(ctx, &ld, &b->brdf_extra);
     if (st != IBL_OK || d->ambient_brdf < 0) return st;
-    double lo, hi;
-    ambient_range(d, b, &lo, &hi);
     ibl_ambient_brdf_desc ad = d->ambient;
+    if (ad.size_shininess == 0) ad.size_shininess = IBL_DEFAULT_AMBIENT_ROWS;
+    double lo, hi;
+    ambient_range(d, ad.size_shininess, &lo, &hi);
     ad.shininess_min = lo;
     ad.shininess_max = hi;
     st = ibl_ambient_brdf_volume(ctx, &ad, &b->ambient_brdf);

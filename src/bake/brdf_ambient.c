@@ -63,7 +63,7 @@ static ibl_ambient_brdf_desc resolve_desc(const ibl_ambient_brdf_desc *in)
     memset(&d, 0, sizeof d);
     if (in) d = *in;
     if (d.size_nv == 0) d.size_nv = 32;
-    if (d.size_shininess == 0) d.size_shininess = 32;
+    if (d.size_shininess == 0) d.size_shininess = IBL_DEFAULT_AMBIENT_ROWS;
     if (d.size_f0 == 0) d.size_f0 = 16;
     if (d.shininess_min == 0) d.shininess_min = IBL_DEFAULT_AMBIENT_TABLE_MIN;
     if (d.shininess_max == 0) d.shininess_max = IBL_DEFAULT_AMBIENT_TABLE_MAX;

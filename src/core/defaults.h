@@ -18,10 +18,12 @@
 #define IBL_DEFAULT_AMBIENT_TABLE_MIN 1.0
 #define IBL_DEFAULT_AMBIENT_TABLE_MAX 2000.0
 
-/* A bake's AmbientBRDF axis when the chain has no shininess range of its own (GGX): wide
- * enough for every Blinn-Phong material a preview shows, up to mirror-like 100000. */
+/* A bake's AmbientBRDF axis when the caller gives none, whatever the chain: wide enough for
+ * every Blinn-Phong material, up to mirror-like 100000. */
 #define IBL_DEFAULT_AMBIENT_SHININESS_MIN 1.0
 #define IBL_DEFAULT_AMBIENT_SHININESS_MAX 100000.0
+/* The AmbientBRDF's rows (shininess texels) when the caller gives none. */
+#define IBL_DEFAULT_AMBIENT_ROWS 32
 
 /* The shininess that stands for a mirror (unfiltered) level in a probe's level table. */
 #define IBL_MIRROR_SHININESS 1e6f
