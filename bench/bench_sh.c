@@ -77,13 +77,13 @@ static double cube_error(const ibl_cubemap *a, const ibl_cubemap *b)
 static void accuracy(ibl_context *ctx, const char *dir)
 {
     static const char *const names[] = {"city", "forest", "interior", "night", "studio", "sunset"};
-    printf("\naccuracy on %s/hdri (errors: max over directions / texels, relative to the mean E)\n", dir);
+    printf("\naccuracy on %s (errors: max over directions / texels, relative to the mean E)\n", dir);
     printf("%-9s %6s %9s | %10s %10s %10s | %9s %9s %9s %9s %9s | %10s %8s\n", "hdri", "cube",
            "max L", "eq-vs-cube", "centres0", "centres1x1", "conv8", "conv16", "conv32", "sh3",
            "sh3-auto", "min E(sh3)", "auto W");
     for (size_t k = 0; k < sizeof names / sizeof names[0]; k++) {
         char path[1024];
-        snprintf(path, sizeof path, "%s/hdri/%s.exr", dir, names[k]);
+        snprintf(path, sizeof path, "%s/%s.exr", dir, names[k]);
         ibl_image im;
         if (ibl_read_image(ctx, path, NULL, &im, NULL) != IBL_OK) {
             printf("%-9s (not readable: %s)\n", names[k], ibl_context_message(ctx));

@@ -15,7 +15,7 @@ run "$B/bench_io" "$DATA"
 run "$B/bench_layout" 1024 256 2 11
 run "$B/bench_render"
 run "$B/bench_triace_kernels"
-run "$B/bench_sh" "$DATA"
+run "$B/bench_sh" "$HDRI"
 run "$B/bench_specular" --dynamic
 if [ "${BENCH_FULL:-0}" = 1 ]; then
   mkdir -p "$BUILD/refcache"

@@ -82,8 +82,11 @@ int ibl_specular_preset(const char *name, ibl_specular_desc *d)
         d->shininess_max = table[i].smax;
         d->edge_fixup = table[i].fixup;
         d->mapping = table[i].mapping;
-        /* Filament's default chain stops at 16x16 (5 levels from 256); Unity's has 7 mips */
-        if (table[i].mapping == IBL_MAPPING_FILAMENT) d->levels = 5;
+        /* Filament's default chain stops at 16x16 (5 levels from 256), and so does the Khronos
+         * glTF Sample Viewer's IBL sampler (lowestMipLevel 4: levels = log2(256) + 1 - 4,
+         * roughness 1 on the 16x16 level); Unity's has 7 mips */
+        if (table[i].mapping == IBL_MAPPING_FILAMENT || table[i].mapping == IBL_MAPPING_LINEAR)
+            d->levels = 5;
         if (table[i].mapping == IBL_MAPPING_UNITY) d->levels = 7;
         return 1;
     }
