@@ -158,6 +158,7 @@ ibl_status ibl_specular_info_from_metadata(ibl_context *ctx, const ibl_texture *
 /* ---- the dynamic (per-frame) path: plan once, refilter many times ---- */
 
 typedef struct ibl_specular_plan ibl_specular_plan;
+struct ibl_sh; /* ibl/sh.h */
 
 /* Plans for source cubes of face edge desc->source_size (0: desc->size) and output desc->size
  * (required). All tables and scratch memory are allocated here. The context is kept and used
@@ -169,6 +170,10 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
  * nothing; time depends only on the sizes. */
 ibl_status ibl_specular_plan_run(ibl_specular_plan *plan, const ibl_cubemap *src, ibl_cubemap *dst);
 const ibl_specular_info *ibl_specular_plan_info(const ibl_specular_plan *plan);
+/* The diffuse SH of the dynamic path (a plan with .dynamic, after a run): the radiance SH
+ * (bands 1..5, 0: 3) of the last run's source, projected from its 8x8x6 box mip with
+ * precomputed weights (docs/SPECULAR.md "Dynamic path"). Allocates nothing. */
+ibl_status ibl_specular_plan_sh(const ibl_specular_plan *plan, int bands, struct ibl_sh *out);
 void ibl_specular_plan_destroy(ibl_specular_plan *plan);
 
 #ifdef __cplusplus

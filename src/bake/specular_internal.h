@@ -78,12 +78,16 @@ typedef struct ibl__specular_stats {
 } ibl__specular_stats;
 void ibl__specular_plan_stats(const ibl_specular_plan *plan, ibl__specular_stats *out);
 
-/* The dynamic path (specular_dynamic.c): the chain as a sparse operator over box mips. */
+/* The dynamic path (specular_dynamic/): every filter as a plan whose run allocates nothing
+ * (box and gauss chains with precomputed tables, the lobes as symmetric sparse operators over
+ * box mips; edge fixups included). */
 typedef struct ibl__dynamic ibl__dynamic;
 ibl_status ibl__dynamic_create(ibl_context *ctx, const ibl_specular_desc *desc,
                                const ibl_specular_info *info, int source_size, ibl__dynamic **out);
-void ibl__dynamic_mips(ibl__dynamic *d, const ibl_cubemap *src); /* first, once per run */
-void ibl__dynamic_level(ibl__dynamic *d, ibl_cubemap *dst, int level);
+/* Every level of dst, edge fixups applied. */
+ibl_status ibl__dynamic_run(ibl__dynamic *d, const ibl_cubemap *src, ibl_cubemap *dst);
+/* Non-zero weights and 8-wide chunks the lobe operator holds (0 for box and gauss). */
+void ibl__dynamic_stats(const ibl__dynamic *d, size_t *taps, size_t *row_chunks);
 void ibl__dynamic_destroy(ibl__dynamic *d);
 
 /* The most levels desc's mapping can make distinct (IBL_MAX_LEVELS when unbounded). */

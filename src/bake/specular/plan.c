@@ -4,7 +4,7 @@
  * A plan fixes everything that depends on the sizes and the lobes only: the geometry of the
  * moment pyramid, the pieces of every level and their grids, the precomputed weights and the
  * normalisers, and every buffer a run needs; a run allocates nothing. With desc.dynamic the plan
- * is instead the per-frame sparse operator of specular_dynamic.c. The fast method itself is
+ * is instead the per-frame plan of specular_dynamic/. The fast method itself is
  * described in fast_internal.h and docs/SPECULAR.md "The fast method".
  *
  * Plan:  face frames -> sub-texel split -> moments of every pyramid level (geometry.c) ->
@@ -140,9 +140,9 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
     if (desc->size < 1 || desc->size > 16384)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "specular plan: size %d out of range",
                          desc->size);
-    if (desc->filter == IBL_FILTER_BOX || desc->filter == IBL_FILTER_GAUSS)
+    if ((desc->filter == IBL_FILTER_BOX || desc->filter == IBL_FILTER_GAUSS) && !desc->dynamic)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
-                         "specular plan: the %s filter has no plan (use ibl_specular_prefilter)",
+                         "specular plan: the %s filter has a dynamic plan only (set .dynamic)",
                          ibl_specular_filter_name(desc->filter));
     int S = desc->source_size > 0 ? desc->source_size : desc->size;
     if (!is_power_of_two(S) || S > 16384)
@@ -178,13 +178,8 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
 /* The per-frame path: the sparse operator over box mips. */
 static ibl_status run_dynamic(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cubemap *dst)
 {
-    ibl__dynamic_mips(p->dynamic, src);
-    for (int l = 0; l < p->output_levels; l++) {
-        ibl__dynamic_level(p->dynamic, dst, l);
-        ibl_status st = ibl_edge_fixup_apply(p->ctx, p->desc.edge_fixup, dst, l);
-        if (st != IBL_OK) return st;
-    }
-    return ibl__progress(p->ctx, "prefilter", 1.0);
+    ibl_status st = ibl__dynamic_run(p->dynamic, src, dst);
+    return st == IBL_OK ? ibl__progress(p->ctx, "prefilter", 1.0) : st;
 }
 
 /* The radiance pyramid and what is gathered from it: every level's bright texels, then the

@@ -17,6 +17,8 @@
  *                  transpose, forward or with the weights reversed (lobe_rows.c; the products
  *                  in lobe_kernels.c).
  *
+ * Edge fixups are tables too (fixup_tables.c), and the plan keeps the weights of a 3..5-band
+ * SH projection of the source's 8x8x6 box mip (the talk's "small cube" for the diffuse SH).
  * dynamic.c holds the plan object and the order of a run; the entry points are declared in
  * specular_internal.h (ibl__dynamic_*). docs/SPECULAR.md "Dynamic path". */
 #ifndef IBL_BAKE_SPECULAR_DYNAMIC_INTERNAL_H
@@ -138,5 +140,28 @@ const float *ibl__dyn_box_chain_face(const dyn_box_chain *chain, const ibl_cubem
 /* dst's level: the chain's level, blurred if it has a kernel. */
 void ibl__dyn_box_chain_output(dyn_box_chain *chain, ibl_context *ctx, const ibl_cubemap *src,
                                ibl_cubemap *dst, int level);
+
+/* ---- edge fixups as tables (fixup_tables.c) ---- */
+
+enum { DYN_FIXUP_MEAN = 0 /* equal weights */, DYN_FIXUP_DEEP /* overlap2's second row */ };
+
+/* Texels blended together: indices (face, y, x) into one level, in canonical order. */
+typedef struct dyn_fixup_group {
+    uint32_t texel[3];
+    uint8_t count, kind;
+} dyn_fixup_group;
+
+typedef struct dyn_fixup {
+    int edge, groups;
+    ibl_edge_fixup method;
+    dyn_fixup_group *group;
+} dyn_fixup;
+
+/* The groups of one level of edge n (none for NONE, BENT, WARP: those only average a 1x1
+ * level). The same result as ibl_edge_fixup_apply, bit for bit. */
+ibl_status ibl__dyn_fixup_create(ibl_context *ctx, ibl_edge_fixup fixup, int n, dyn_fixup *out);
+void ibl__dyn_fixup_destroy(ibl_context *ctx, dyn_fixup *f);
+/* level: the level's six faces of RGBA. */
+void ibl__dyn_fixup_apply(const dyn_fixup *f, float *level);
 
 #endif

@@ -67,8 +67,8 @@ IBL_TARGET_AVX2 void ibl__dyn_row_product_avx2(const float *buffer, size_t plane
     for (; i + 1 < count; i += 2) {
         uint32_t c0 = codes[i], c1 = codes[i + 1];
         const float *p = buffer + (c0 >> 1), *q = buffer + (c1 >> 1);
-        __m256 w = _mm256_load_ps(wb[c0 & 1] + (size_t)i * DYN_CHUNK);
-        __m256 v = _mm256_load_ps(wb[c1 & 1] + (size_t)(i + 1) * DYN_CHUNK);
+        __m256 w = _mm256_loadu_ps(wb[c0 & 1] + (size_t)i * DYN_CHUNK);
+        __m256 v = _mm256_loadu_ps(wb[c1 & 1] + (size_t)(i + 1) * DYN_CHUNK);
         r0 = _mm256_add_ps(r0, _mm256_mul_ps(w, _mm256_loadu_ps(p)));
         g0 = _mm256_add_ps(g0, _mm256_mul_ps(w, _mm256_loadu_ps(p + plane)));
         b0 = _mm256_add_ps(b0, _mm256_mul_ps(w, _mm256_loadu_ps(p + 2 * plane)));
@@ -79,7 +79,7 @@ IBL_TARGET_AVX2 void ibl__dyn_row_product_avx2(const float *buffer, size_t plane
     if (i < count) {
         uint32_t c0 = codes[i];
         const float *p = buffer + (c0 >> 1);
-        __m256 w = _mm256_load_ps(wb[c0 & 1] + (size_t)i * DYN_CHUNK);
+        __m256 w = _mm256_loadu_ps(wb[c0 & 1] + (size_t)i * DYN_CHUNK);
         r0 = _mm256_add_ps(r0, _mm256_mul_ps(w, _mm256_loadu_ps(p)));
         g0 = _mm256_add_ps(g0, _mm256_mul_ps(w, _mm256_loadu_ps(p + plane)));
         b0 = _mm256_add_ps(b0, _mm256_mul_ps(w, _mm256_loadu_ps(p + 2 * plane)));
