@@ -88,6 +88,8 @@ int ibl_specular_preset(const char *name, ibl_specular_desc *d)
         if (table[i].mapping == IBL_MAPPING_FILAMENT || table[i].mapping == IBL_MAPPING_LINEAR)
             d->levels = 5;
         if (table[i].mapping == IBL_MAPPING_UNITY) d->levels = 7;
+        /* the talk's dynamic configurations are refiltered every frame: the dynamic plan */
+        d->dynamic = strncmp(name, "dynamic-", 8) == 0;
         return 1;
     }
     return 0;
@@ -184,7 +186,10 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
     st = ibl_cubemap_alloc(ctx, N, L, out);
     if (st != IBL_OK) goto done;
 
-    if (desc.filter == IBL_FILTER_BOX || desc.filter == IBL_FILTER_GAUSS) {
+    /* the dynamic plan (the dynamic presets) wants a power-of-two chain no larger than the
+     * source; other sizes take the general code */
+    if (desc.dynamic && (desc.method == IBL_METHOD_REFERENCE || !is_pow2(N) || N > s->size)) desc.dynamic = 0;
+    if ((desc.filter == IBL_FILTER_BOX || desc.filter == IBL_FILTER_GAUSS) && !desc.dynamic) {
         float kernel_exponents[IBL_MAX_LEVELS];
         for (int l = 0; l < L; l++) kernel_exponents[l] = ibl_specular_level_phong_exponent(&info, l);
         st = desc.filter == IBL_FILTER_BOX ? ibl__specular_box(ctx, s, out)
