@@ -40,6 +40,7 @@ struct ibl__dynamic {
     dyn_lobe_level lobe[IBL_MAX_LEVELS]; /* lobe engine, filtered levels                   */
     int source_mip[IBL_MAX_LEVELS];      /* lobe engine: the pyramid level a level reads    */
     float *planar[IBL_MAX_LEVELS];       /* per pyramid level read by a lobe level           */
+    float *planar_memory[IBL_MAX_LEVELS];
     dyn_row_product_fn product;
     dyn_fixup fixup[IBL_MAX_LEVELS];
     int sh_level, sh_edge;
@@ -63,7 +64,7 @@ void ibl__dynamic_destroy(ibl__dynamic *d)
     ibl__dyn_box_chain_destroy(ctx, &d->chain);
     for (int l = 0; l < IBL_MAX_LEVELS; l++) {
         ibl__dyn_lobe_level_destroy(ctx, &d->lobe[l]);
-        ibl_free(ctx, d->planar[l]);
+        ibl_free(ctx, d->planar_memory[l]);
         ibl__dyn_fixup_destroy(ctx, &d->fixup[l]);
     }
     ibl_free(ctx, d->sh_weights);
@@ -124,8 +125,11 @@ static ibl_status lobe_plan(ibl__dynamic *d)
         if (st != IBL_OK) return st;
         if (!d->planar[mip]) {
             int M = d->S >> mip;
-            d->planar[mip] = ibl_calloc(ctx, (size_t)36 * M * M + 2 * DYN_GUARD, sizeof(float));
-            if (!d->planar[mip]) return ibl_context_status(ctx);
+            /* 32-byte aligned (the chunks are aligned to eight floats) */
+            d->planar_memory[mip] = ibl_calloc(ctx, (size_t)36 * M * M + 2 * DYN_GUARD + 8, sizeof(float));
+            if (!d->planar_memory[mip]) return ibl_context_status(ctx);
+            uintptr_t a = (uintptr_t)d->planar_memory[mip];
+            d->planar[mip] = d->planar_memory[mip] + ((32 - a % 32) % 32) / sizeof(float);
         }
     }
     for (int l = 0; l < d->L; l++)

@@ -77,6 +77,7 @@ typedef struct dyn_lobe_level {
     uint32_t *rep_chunks; /* reps + 1: the first chunk of each representative            */
     float *weights;       /* 8 per chunk, normalised so that each row sums to 1           */
     float *reversed;      /* the same, each chunk's eight lanes reversed                  */
+    float *weight_memory; /* the block holding both                                       */
     uint32_t *row_rep;    /* per output texel (face, y, x): its representative            */
     uint32_t *row_codes;  /* per output texel + 1: the first of its chunk codes           */
     uint32_t *codes;
