@@ -114,7 +114,7 @@ typedef struct rows_job {
     const ibl_specular_desc *desc;
     const ibl__lobe *lobe;
     int n, M;
-    double reach_cos, floor_value;
+    double reach, reach_cos, floor_value;
     face_frame frames[6];
     double *centres; /* 6 M M x 3: texel centre directions of the mip (unit) */
     double *omega;   /* M M: texel solid angles */
@@ -170,7 +170,11 @@ static void rep_task(void *arg, int rep)
     ibl__output_direction(job->desc, job->lobe, 0, job->n, a, b, R);
     rep_row *row = &job->rows[rep];
     double *w = job->scratch + (size_t)rep * M;
-    for (int f = 0; f < 6; f++)
+    for (int f = 0; f < 6; f++) {
+        /* faces beyond the reach: a face is within atan(sqrt(2)) of its centre */
+        const double *m = job->frames[f].m;
+        double cf = R[0] * m[0] + R[1] * m[1] + R[2] * m[2];
+        if (acos(cf > 1 ? 1 : cf < -1 ? -1 : cf) > job->reach + atan(sqrt(2.0)) + 1e-6) continue;
         for (int y = 0; y < M; y++) {
             const double *c = job->centres + ((size_t)f * M + y) * M * 3;
             int run = -1;
@@ -191,6 +195,7 @@ static void rep_task(void *arg, int rep)
                 }
             }
         }
+    }
     double sum = 0;
     for (size_t i = 0; i < (size_t)row->chunks * DYN_CHUNK; i++) sum += row->w[i];
     for (size_t i = 0; i < (size_t)row->chunks * DYN_CHUNK; i++) row->w[i] = sum > 0 ? row->w[i] / sum : 0.0;
@@ -330,6 +335,7 @@ ibl_status ibl__dyn_lobe_level_create(ibl_context *ctx, const ibl_specular_desc 
     /* texels whose centre is within the floor's angle plus a texel's half diagonal (at most
      * atan(sqrt(2) / M) at the face centre) */
     double reach = angle_where(lobe, floor_value) + atan(sqrt(2.0) / M) * 1.01;
+    job.reach = reach;
     job.reach_cos = reach < IBL_PI ? cos(reach) : -1.0;
     ibl_status st = mip_geometry(ctx, &job);
     job.rows = ibl_calloc(ctx, (size_t)out->reps, sizeof(rep_row));
