@@ -162,7 +162,7 @@ int cli_cmd_prefilter(int argc, char **argv)
              "%s: %dx%dx6, %d levels, %s %s (%s mapping) in %.3f s (read %.3f, filter %.3f, "
              "write %.3f)\n",
              out, info.size, info.size, info.levels, ibl_specular_filter_name(info.filter),
-             d.method == IBL_METHOD_REFERENCE ? "reference" : "fast",
+             d.method == IBL_METHOD_REFERENCE ? "reference" : d.dynamic ? "dynamic plan" : "fast",
              ibl_specular_mapping_name(info.mapping), t1 - t0, t_read - t0, t_filter - t_read,
              t1 - t_filter);
     ibl_context_destroy(ctx);

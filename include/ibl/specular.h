@@ -84,9 +84,10 @@ typedef struct ibl_specular_desc {
     int source_size;             /* plans only: face edge of the cubes ibl_specular_plan_run gets     */
     float accuracy;              /* fast method: quadrature step scale; 0: 0.35 (smaller: more
                                     exact, slower)                                               */
-    int dynamic;                 /* plans only: the per-frame path, one precomputed sparse
-                                    operator over box mips (fast runs, less exact next to small
-                                    bright lights; see docs/SPECULAR.md "Dynamic path")          */
+    int dynamic;                 /* the per-frame path (the dynamic presets set it): a plan of
+                                    precomputed tables for every filter, box and gauss included
+                                    (Phong family: less exact next to small bright lights; see
+                                    docs/SPECULAR.md "Dynamic path")                             */
 } ibl_specular_desc;
 
 /* What a prefilter produced: everything a renderer needs to pick the level. */
