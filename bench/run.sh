@@ -16,7 +16,7 @@ run "$B/bench_layout" 1024 256 2 11
 run "$B/bench_render"
 run "$B/bench_triace_kernels"
 run "$B/bench_sh" "$HDRI"
-run "$B/bench_specular" --dynamic
+run "$B/bench_dynamic" 64 201 1
 if [ "${BENCH_FULL:-0}" = 1 ]; then
   mkdir -p "$BUILD/refcache"
   run "$B/bench_specular" --sizes 128,256 --samples 2000 --filters ggx,phong,blinn \
