@@ -157,6 +157,14 @@ typedef struct ibl_material {
 /* Helpers that fill every field (ao = 1). */
 ibl_material ibl_material_gltf(const float base_color[3], float metallic, float roughness);
 ibl_material ibl_material_blinn_phong(const float rd[3], const float f0[3], float shininess);
+/* The BRDF's own reflectances, per channel: F0 of the specular lobe and the albedo of the
+ * Lambert lobe (the diffuse term is diffuse_albedo / pi).
+ *   GGX: F0 = lerp(dielectric F0 (0.04 unless f0 is given), base_color, metallic),
+ *        diffuse_albedo = base_color (1 - metallic)
+ *   Blinn-Phong: F0 = f0, diffuse_albedo = Rd (1 - F0) (tri-Ace 2010, "Equations")
+ * ibl_shade's ambient Blinn-Phong diffuse may weight Rd by 1 - AmbientBRDF instead
+ * (ibl_bp_diffuse); punctual lights and the reference renderer use the BRDF as it is. */
+void ibl_material_reflectances(const ibl_material *m, float f0[3], float diffuse_albedo[3]);
 
 /* Specular occlusion from AO (docs/SHADING.md has every formula with its source). */
 typedef enum ibl_so_formula {
@@ -214,6 +222,15 @@ void ibl_ambient_mix_apply(ibl_ambient_mix mix, const float s_d[3], const float 
                            const float specular_ambient[3], const float albedo[3], float ao,
                            float so, float out[3]);
 
+/* What a punctual light's size does (light.h, ibl_light.size). */
+typedef enum ibl_light_size_model {
+    IBL_LIGHT_SIZE_WIDEN = 0, /* Blinn-Phong: tri-Ace 2010's shininess hack,
+                                 n' = n saturate(60 / size (1 - attenuation))^2;
+                                 GGX: D with Karis 2013's alpha' (V keeps alpha)          */
+    IBL_LIGHT_SIZE_IGNORE,    /* every light is a true point: the exact delta light         */
+    IBL_LIGHT_SIZE_COUNT
+} ibl_light_size_model;
+
 typedef struct ibl_shade_desc {
     ibl_energy_compensation energy;
     ibl_so_formula so;
@@ -226,6 +243,7 @@ typedef struct ibl_shade_desc {
     int mirror_direction; /* ibl_shade: look up along R itself instead of the lobe's
                                    dominant direction, which leans from R toward N as the
                                    lobe widens (ibl_dominant_direction_lean; the default)      */
+    ibl_light_size_model light_size; /* punctual lights (light.h): what their size does      */
 } ibl_shade_desc;
 
 typedef struct ibl_surface {
@@ -254,6 +272,11 @@ float ibl_dominant_direction_lean(const ibl_material *material);
  * is R = 2 (n.v) n - v; pass a corrected direction through ibl_shade_dir for local probes. */
 void ibl_shade(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_material *m,
                const ibl_surface *s, ibl_shade_result *out);
+/* The direction ibl_shade looks the prefiltered chain up along: the lobe's dominant
+ * direction, lerp(N, R, ibl_dominant_direction_lean(m)) normalised, or R itself with
+ * desc->mirror_direction. Start from it to correct it (IBL offset, parallax). */
+ibl_vec3 ibl_shade_lookup_direction(const ibl_shade_desc *desc, const ibl_material *m,
+                                    const ibl_surface *s);
 /* The same with the specular lookup direction given (parallax-corrected, offset, ...). */
 void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_material *m,
                    const ibl_surface *s, ibl_vec3 lookup_dir, ibl_shade_result *out);
@@ -311,6 +334,12 @@ ibl_vec3 ibl_parallax_correct(const ibl_volume *proxy, ibl_vec3 probe_position, 
                               ibl_vec3 r);
 /* The IBL offset: R' = normalize(c (P_obj - P_IBL) + R) (tri-Ace 2010). */
 ibl_vec3 ibl_offset_reflection(ibl_vec3 r, ibl_vec3 p_obj, ibl_vec3 p_ibl, float c);
+/* Its coefficient for surroundings at distance environment_radius from the capture point:
+ * c = k / environment_radius (k <= 0: 1), the first-order parallax of a sphere of that radius
+ * (docs/SHADING.md derives it; tri-Ace 2010 names the IBL's size, the object's size and a
+ * hand-tuned coefficient as its inputs without giving the formula, and the object's size drops
+ * out of the first order). 0 when environment_radius <= 0. */
+float ibl_offset_coefficient(float environment_radius, float k);
 /* The shininess hack for punctual lights:
  * shininess' = shininess * saturate(60 / light_size * (1 - attenuation))^2 (tri-Ace 2010). */
 float ibl_shininess_hack(float shininess, float light_size, float attenuation);

@@ -28,6 +28,10 @@
 /* The shininess that stands for a mirror (unfiltered) level in a probe's level table. */
 #define IBL_MIRROR_SHININESS 1e6f
 
+/* The smallest GGX alpha a punctual light or the reference renderer evaluates: at alpha = 0
+ * the lobe is a delta; 1e-3 is far below what any cube level resolves. */
+#define IBL_MIN_GGX_ALPHA 1e-3f
+
 /* The bake's parts. */
 #define IBL_DEFAULT_IRRADIANCE_SIZE 16
 #define IBL_DEFAULT_SH_BANDS 3

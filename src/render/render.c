@@ -6,6 +6,7 @@
 #include "render_internal.h"
 #include "core/context_internal.h"
 #include "core/numeric.h"
+#include "core/defaults.h"
 
 #include "ibl/io.h"
 
@@ -106,21 +107,10 @@ static lobe make_lobe(const ibl_material *m, float nv)
 {
     lobe b;
     b.bp = m->model == IBL_MATERIAL_BLINN_PHONG;
-    /* GGX at alpha = 0 is a delta; 1e-3 is far below what any cube level resolves */
-    b.alpha = fmaxf(m->roughness * m->roughness, 1e-3f);
+    b.alpha = fmaxf(m->roughness * m->roughness, IBL_MIN_GGX_ALPHA);
     b.shininess = m->shininess;
     b.nv = nv;
-    int given = m->f0[0] != 0.0f || m->f0[1] != 0.0f || m->f0[2] != 0.0f;
-    for (int c = 0; c < 3; c++) {
-        if (b.bp) {
-            b.f0[c] = m->f0[c];
-            b.kd[c] = m->base_color[c] * (1.0f - m->f0[c]);
-        } else {
-            float fd = given ? m->f0[c] : 0.04f;
-            b.f0[c] = fd + (m->base_color[c] - fd) * m->metallic;
-            b.kd[c] = m->base_color[c] * (1.0f - m->metallic);
-        }
-    }
+    ibl_material_reflectances(m, b.f0, b.kd);
     return b;
 }
 

@@ -142,22 +142,41 @@ float ibl_dominant_direction_lean(const ibl_material *m)
     return smooth * (sqrtf(smooth) + rough);
 }
 
-void ibl_shade(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_material *m,
-               const ibl_surface *s, ibl_shade_result *out)
+void ibl_material_reflectances(const ibl_material *m, float f0[3], float diffuse_albedo[3])
+{
+    int dielectric_given = m->f0[0] != 0.0f || m->f0[1] != 0.0f || m->f0[2] != 0.0f;
+    for (int c = 0; c < 3; c++) {
+        if (m->model == IBL_MATERIAL_BLINN_PHONG) {
+            f0[c] = m->f0[c];
+            diffuse_albedo[c] = m->base_color[c] * (1.0f - m->f0[c]);
+        } else {
+            float fd = dielectric_given ? m->f0[c] : 0.04f;
+            f0[c] = fd + (m->base_color[c] - fd) * m->metallic;
+            diffuse_albedo[c] = m->base_color[c] * (1.0f - m->metallic);
+        }
+    }
+}
+
+ibl_vec3 ibl_shade_lookup_direction(const ibl_shade_desc *desc, const ibl_material *m,
+                                    const ibl_surface *s)
 {
     float nv = ibl__dot(s->n, s->v);
     ibl_vec3 r = {2.0f * nv * s->n.x - s->v.x, 2.0f * nv * s->n.y - s->v.y,
                   2.0f * nv * s->n.z - s->v.z};
-    if (!desc || !desc->mirror_direction) {
-        /* the n = v = r prefilter cannot express a lobe that leans from R toward N: look up
-         * along lerp(N, R, t) instead (the lobe's dominant direction) */
-        float t = ibl_dominant_direction_lean(m);
-        ibl_vec3 d = {s->n.x + (r.x - s->n.x) * t, s->n.y + (r.y - s->n.y) * t,
-                      s->n.z + (r.z - s->n.z) * t};
-        float len = sqrtf(ibl__dot(d, d));
-        if (len > 0.0f) r = (ibl_vec3){d.x / len, d.y / len, d.z / len};
-    }
-    ibl_shade_dir(probe, desc, m, s, r, out);
+    if (desc && desc->mirror_direction) return r;
+    /* the n = v = r prefilter cannot express a lobe that leans from R toward N: look up along
+     * lerp(N, R, t) instead (the lobe's dominant direction) */
+    float t = ibl_dominant_direction_lean(m);
+    ibl_vec3 d = {s->n.x + (r.x - s->n.x) * t, s->n.y + (r.y - s->n.y) * t,
+                  s->n.z + (r.z - s->n.z) * t};
+    float len = sqrtf(ibl__dot(d, d));
+    return len > 0.0f ? ibl__v3(d.x / len, d.y / len, d.z / len) : r;
+}
+
+void ibl_shade(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_material *m,
+               const ibl_surface *s, ibl_shade_result *out)
+{
+    ibl_shade_dir(probe, desc, m, s, ibl_shade_lookup_direction(desc, m, s), out);
 }
 
 void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl_material *m,
@@ -198,10 +217,10 @@ void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl
         float a = 1.0f, b = 0.0f;
         if (probe->splitsum.data) ibl_splitsum_lookup(&probe->splitsum, nv, roughness, &a, &b);
         float ess = a + b;
-        int dielectric_given = m->f0[0] != 0.0f || m->f0[1] != 0.0f || m->f0[2] != 0.0f;
+        float f0s[3], albedo[3];
+        ibl_material_reflectances(m, f0s, albedo);
         for (int c = 0; c < 3; c++) {
-            float fd = dielectric_given ? m->f0[c] : 0.04f;
-            float f0 = fd + (m->base_color[c] - fd) * m->metallic;
+            float f0 = f0s[c];
             float fss_ess = f0 * a + b;
             spec[c] = pref[c] * fss_ess;
             if (desc->energy == IBL_ENERGY_FDEZ_AGUERA && ess > 0.0f) {
@@ -215,7 +234,7 @@ void ibl_shade_dir(const ibl_probe *probe, const ibl_shade_desc *desc, const ibl
                 /* Turquin 2019: E_ms lobe = F0 (1/E - 1) times the single-scattering lobe */
                 spec[c] *= 1.0f + f0 * (1.0f / ess - 1.0f);
             }
-            diffuse_color[c] = m->base_color[c] * (1.0f - m->metallic);
+            diffuse_color[c] = albedo[c];
         }
     }
 

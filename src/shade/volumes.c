@@ -115,6 +115,21 @@ ibl_vec3 ibl_offset_reflection(ibl_vec3 r, ibl_vec3 p_obj, ibl_vec3 p_ibl, float
                          c * (p_obj.z - p_ibl.z) + r.z));
 }
 
+/* tri-Ace 2010 ("IBL Offset") computes c "from the IBL size, the object size and another
+ * coefficient which is adjusted by hand" and gives no formula. Take the surroundings as a
+ * sphere of radius S around the capture point and a reflection ray x + t R from a point x of
+ * the object: it meets the sphere at x + t R with |x + t R| = S, seen from the capture point
+ * along (x_perp + sqrt(S^2 - |x_perp|^2) R) / S, x_perp the part of x across R. To first order
+ * in |x| / S that is normalize(x / S + R): the offset with c = 1/S. Taking the object's
+ * position for x (one offset per object) drops the shaded point's offset from it, a term of
+ * size object_radius / S that no constant c can restore, so the object's size does not enter
+ * c; k is the talk's hand-tuned coefficient. */
+float ibl_offset_coefficient(float environment_radius, float k)
+{
+    if (!(environment_radius > 0.0f)) return 0.0f;
+    return (k > 0.0f ? k : 1.0f) / environment_radius;
+}
+
 float ibl_shininess_hack(float shininess, float light_size, float attenuation)
 {
     if (light_size <= 0.0f) return shininess;
