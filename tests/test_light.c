@@ -445,6 +445,143 @@ static void size_widening(void **state)
 }
 
 /* ---------------------------------------------------------------------------------------- */
+/* A sphere light against a brute-force integral of the BRDF over its solid angle            */
+
+/* float64: the specular radiance a sphere light reflects toward v, the light a cone of
+ * half-angle theta (sin theta = sin_s) around c with the uniform radiance that gives
+ * illuminance 1 facing it, L = 1 / (pi sin^2 theta). Midpoint rule in (1 - cos, phi): cells of
+ * equal solid angle. bp: shininess, else the GGX alpha. */
+static double sphere_brute(int bp, double param, dvec v, dvec c, double sin_s, int steps)
+{
+    dvec n = dv(0, 0, 1);
+    double cos_s = sqrt(1 - sin_s * sin_s), omc = sin_s * sin_s / (1 + cos_s);
+    dvec t1 = dnorm(fabs(c.x) < 0.9 ? dv(0, -c.z, c.y) : dv(-c.y, c.x, 0));
+    dvec t2 = dv(c.y * t1.z - c.z * t1.y, c.z * t1.x - c.x * t1.z, c.x * t1.y - c.y * t1.x);
+    double cell = 2 * PI * omc / (steps * 2.0 * steps), radiance = 1 / (PI * sin_s * sin_s);
+    double sum = 0;
+    for (int i = 0; i < steps; i++) {
+        double x = omc * (i + 0.5) / steps, st = sqrt(x * (2 - x)), ct = 1 - x;
+        for (int j = 0; j < 2 * steps; j++) {
+            double phi = PI * (j + 0.5) / steps, a = st * cos(phi), b = st * sin(phi);
+            dvec l = dv(c.x * ct + t1.x * a + t2.x * b, c.y * ct + t1.y * a + t2.y * b,
+                        c.z * ct + t1.z * a + t2.z * b);
+            double nl = ddot(n, l);
+            if (nl <= 0) continue;
+            double f = bp ? bp_specular(param, 1.0, n, v, l) : ggx_specular(param, param, 1.0, n, v, l);
+            sum += f * nl * radiance * cell;
+        }
+    }
+    return sum;
+}
+
+/* The light's centre at angle t from the mirror direction, in the plane of incidence. */
+static dvec centre_at(double nv, double t)
+{
+    double a = atan2(-sqrt(1 - nv * nv), nv) + t;
+    return dv(sin(a), 0, cos(a));
+}
+
+/* One row of the comparison: at the peak (the light's centre on the mirror direction), the
+ * runtime's widened delta light and the plain delta against the brute-force sphere; and the
+ * energy: summed over every placement of the light, a sphere of uniform radiance reflects
+ * what a delta light of the same illuminance does (the sphere is a normalised kernel over
+ * directions: the sum is the plain BRDF's directional albedo, up to where the cone dips under
+ * the horizon), so the widened light's energy error is its albedo over the plain one's. */
+typedef struct sphere_errors {
+    double peak, peak_plain, energy;
+} sphere_errors;
+
+static sphere_errors sphere_compare(const ibl_material *m, double nv, double sin_s,
+                                    const ibl_light_incidence *tpl)
+{
+    int bp = m->model == IBL_MATERIAL_BLINN_PHONG;
+    double param = bp ? m->shininess : fmax(m->roughness * m->roughness, 1e-3);
+    ibl_shade_desc ignore = {.light_size = IBL_LIGHT_SIZE_IGNORE};
+    sphere_errors out;
+    dvec c = centre_at(nv, 0);
+    double ref = sphere_brute(bp, param, dv(sqrt(1 - nv * nv), 0, nv), c, sin_s, 160);
+    out.peak = specular_at(m, nv, 0, tpl, NULL) / ref - 1;
+    out.peak_plain = specular_at(m, nv, 0, tpl, &ignore) / ref - 1;
+    out.energy = albedo_through_lights(m, nv, 400, tpl, NULL) /
+                     albedo_through_lights(m, nv, 400, tpl, &ignore) - 1;
+    return out;
+}
+
+/* The shininess whose delta light matches the brute-force peak (bisection in log n). */
+static double matching_shininess(double shininess, double nv, double sin_s, double ref_peak)
+{
+    static const float zero[3] = {0, 0, 0}, one[3] = {1, 1, 1};
+    ibl_light_incidence plain = {.distance = 1};
+    double lo = log(0.01), hi = log(shininess);
+    for (int i = 0; i < 50; i++) {
+        double mid = 0.5 * (lo + hi);
+        ibl_material m = ibl_material_blinn_phong(zero, one, (float)exp(mid));
+        if (specular_at(&m, nv, 0, &plain, NULL) > ref_peak) hi = mid;
+        else lo = mid;
+    }
+    (void)sin_s;
+    return exp(0.5 * (lo + hi));
+}
+
+/* The shininess hack and Karis's alpha against the sphere they stand for. The runtime gives
+ * a widened delta light, the reference the sphere; the errors below are what each buys, per
+ * shininess or roughness, at n.v = 1 and 0.5, for the lights of docs/SHADING.md's picture: a
+ * sphere of radius r = 0.1, 0.25, 0.5 at distance d = 6.4 with range 30 (the hack's
+ * attenuation factor is that range window, 1 - (d/30)^4 = 0.99793, so its factor is
+ * saturate(60 (0.00207) / r)^2 = 1, 0.247, 0.0617). Bounds: the measured worst per row
+ * (printed) rounded up by ~20%; what they mean is in docs/SHADING.md "Punctual lights". */
+static void sphere_light_vs_brute_force(void **state)
+{
+    (void)state;
+    static const float zero[3] = {0, 0, 0}, one[3] = {1, 1, 1};
+    static const double radii[3] = {0.1, 0.25, 0.5};
+    const double d = 6.4, range = 30;
+    static const double shininess[4] = {10, 100, 1000, 10000};
+    /* bounds per shininess / roughness: measured worst |error| of the row x ~1.2. Peak: the
+     * hack (the talk's constant 60) over-widens by far at this scale, -52..-92%; Karis's
+     * linear alpha + r/(2d) over-widens too, -11% (r = 0.8) to -49% (r = 0.1). Energy: the
+     * hack's lower n' loses what tri-Ace's fitted normalisation loses at low n (up to -55% at
+     * n 10 -> 0.62); GGX stays within 5%. */
+    static const double hack_peak_bound[4] = {0.85, 0.95, 0.95, 0.65};
+    static const double hack_energy_bound[4] = {0.62, 0.42, 0.13, 0.05};
+    static const double roughness[4] = {0.1, 0.25, 0.5, 0.8};
+    static const double karis_peak_bound[4] = {0.60, 0.57, 0.29, 0.14};
+    static const double karis_energy_bound[4] = {0.005, 0.01, 0.032, 0.06};
+    for (int model = 0; model < 2; model++)
+        for (int i = 0; i < 4; i++) {
+            double worst_peak = 0, worst_energy = 0;
+            for (int j = 0; j < 3; j++)
+                for (int b = 0; b < 2; b++) {
+                    double nv = b == 0 ? 1.0 : 0.5, r = radii[j], sin_s = r / d;
+                    ibl_material m = model == 0 ? ibl_material_blinn_phong(zero, one, (float)shininess[i])
+                                                : ibl_material_gltf(one, 1, (float)roughness[i]);
+                    ibl_light_incidence tpl = {.distance = (float)d, .size = (float)r,
+                                               .attenuation = ibl_light_range_window((float)d, (float)range)};
+                    sphere_errors e = sphere_compare(&m, nv, sin_s, &tpl);
+                    char fit[64] = "";
+                    if (model == 0) {
+                        double ref = specular_at(&m, nv, 0, &tpl, NULL) / (1 + e.peak);
+                        ibl_light_result lr;
+                        ibl_surface s = surface(dv(0, 0, 1), dv(0, 0, 1));
+                        ibl_light_shade_incidence(&tpl, NULL, &m, &s, &lr);
+                        snprintf(fit, sizeof fit, " n'=%.4g, peak-matching n=%.4g", (double)lr.shininess,
+                                 matching_shininess(shininess[i], nv, sin_s, ref));
+                    }
+                    print_message("%s %-6g r=%.2f n.v=%.1f: peak %+7.2f%% (delta %+7.2f%%), "
+                                  "energy %+6.2f%%%s\n",
+                                  model == 0 ? "hack  n" : "Karis r", model == 0 ? shininess[i] : roughness[i],
+                                  r, nv, 100 * e.peak, 100 * e.peak_plain, 100 * e.energy, fit);
+                    worst_peak = fmax(worst_peak, fabs(e.peak));
+                    worst_energy = fmax(worst_energy, fabs(e.energy));
+                }
+            print_message("  worst |peak| %.1f%%, |energy| %.1f%%\n", 100 * worst_peak,
+                          100 * worst_energy);
+            assert_true(worst_peak <= (model == 0 ? hack_peak_bound : karis_peak_bound)[i]);
+            assert_true(worst_energy <= (model == 0 ? hack_energy_bound : karis_energy_bound)[i]);
+        }
+}
+
+/* ---------------------------------------------------------------------------------------- */
 /* The IBL offset's coefficient against exact parallax                                        */
 
 static double angle_between(ibl_vec3 a, ibl_vec3 b)
@@ -557,6 +694,130 @@ static void entire_specular_term(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* ---------------------------------------------------------------------------------------- */
+/* ibl_render with lights: runtime against reference                                          */
+
+/* A near-black constant environment (radiance 1e-4: the ambient part is negligible next to
+ * the light) and its probe. */
+static void dark_probe(ibl_context *ctx, ibl_probe *p, ibl_cubemap *cube)
+{
+    constant_probe(ctx, p, cube);
+    for (int level = 0; level < 2; level++)
+        for (int f = 0; f < 6; f++) {
+            int n = cube->size >> level;
+            float *t = ibl_cubemap_face(cube, level, f);
+            for (int i = 0; i < n * n; i++) t[i * 4] = t[i * 4 + 1] = t[i * 4 + 2] = 1e-4f;
+        }
+    for (int c = 0; c < 3; c++) p->sh[0][c] *= 1e-4f;
+}
+
+/* Per-object mean of an image (RGB sum) over the pixels whose centre ray hit it. */
+static void object_means(const ibl_image *im, const int *ids, double *means, int objects)
+{
+    for (int o = 0; o < objects; o++) {
+        double sum = 0;
+        int count = 0;
+        for (int i = 0; i < im->width * im->height; i++)
+            if (ids[i] == o) {
+                sum += im->pixels[i * 4] + im->pixels[i * 4 + 1] + im->pixels[i * 4 + 2];
+                count++;
+            }
+        means[o] = count ? sum / count : 0;
+    }
+}
+
+/* A delta light is exact in both modes: the runtime evaluates f E n.l at each ray, the
+ * reference adds the same at each of its footprint samples, so the per-sphere means differ
+ * only by how each covers the pixels (4x4 rays vs 64 Halton points) and the 1e-4 ambient:
+ * measured worst 1.4% (n = 200), bound 2%. A sphere light on the rough dielectric spheres
+ * (diffuse-dominated, where neither widening matters) checks the reference's cone radiance
+ * L = E / (pi sin^2 theta): within 2% of the delta light (measured 0.3%). */
+static void render_lights_runtime_vs_reference(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(0);
+    ibl_probe probe;
+    ibl_cubemap cube;
+    dark_probe(ctx, &probe, &cube);
+    ibl_light lights[2] = {
+        {.type = IBL_LIGHT_DIRECTIONAL, .direction = {0.5f, -0.6f, -0.8f}, .intensity = 3},
+        {.type = IBL_LIGHT_SPOT, .position = {2, 3, 5}, .direction = {-0.3f, -0.5f, -1},
+         .color = {1, 0.8f, 0.6f}, .intensity = 40, .range = 20, .outer_cone = 0.6f},
+    };
+    const int w = 96, h = 48;
+    int *ids = malloc(sizeof(int) * w * h);
+    assert_non_null(ids);
+    ibl_render_object objs[64];
+    int objects = ibl_render_scene_objects(objs, 64);
+    double fast[64], ref[64];
+    for (int pass = 0; pass < 2; pass++) {
+        ibl_render_desc d = {.width = w, .height = h, .lights = lights, .light_count = 2,
+                             .supersample = 4, .reference_samples = 64};
+        if (pass == 1) { /* the sun as a disc, a 1.2 unit sphere for the spot */
+            lights[0].size = 0.1f;
+            lights[1].size = 1.2f;
+        }
+        ibl_image a, b;
+        assert_int_equal(ibl_render(ctx, &probe, &d, &a, ids), IBL_OK);
+        d.reference = 1;
+        assert_int_equal(ibl_render(ctx, &probe, &d, &b, NULL), IBL_OK);
+        object_means(&a, ids, fast, objects);
+        object_means(&b, ids, ref, objects);
+        double worst = 0;
+        for (int o = 0; o < objects; o++) {
+            if (pass == 1 && !(o >= 10 && o < 14)) continue; /* dielectric r >= 0.5 */
+            /* sharp spheres: a delta light's highlight spans a few pixels of a 96-pixel image,
+             * which neither 4 x 4 rays nor 64 footprint samples resolve (r = 0.17: +49%,
+             * n = 1000: +8%): left out (r < 0.33, n > 200) */
+            if ((o < 14 && o % 7 < 2) || o >= 18) continue;
+            double e = fabs(fast[o] / ref[o] - 1);
+            if (e > worst) worst = e;
+            assert_true(e <= 0.02);
+        }
+        print_message("%s: runtime vs reference, worst per-sphere difference %.2f%%\n",
+                      pass == 0 ? "delta lights" : "sphere lights, rough dielectrics", 100 * worst);
+        ibl_image_free(ctx, &a);
+        ibl_image_free(ctx, &b);
+    }
+    /* a bad light is refused, naming it */
+    lights[1].inner_cone = 1.0f;
+    ibl_render_desc d = {.width = 16, .height = 8, .lights = lights, .light_count = 2};
+    ibl_image im;
+    assert_int_equal(ibl_render(ctx, &probe, &d, &im, NULL), IBL_ERR_INVALID_ARGUMENT);
+    assert_non_null(strstr(ibl_context_message(ctx), "light 1"));
+    free(ids);
+    ibl_cubemap_free(ctx, &cube);
+    ibl_context_destroy(ctx);
+}
+
+/* `ibl render --light`: the grammar of the help text, and "entire" differing from
+ * "ao-lerp-ao" only when a light is there. */
+static void cli_lights(void **state)
+{
+    (void)state;
+    const char *out;
+    const char *png = test_path("lights.png");
+    static const char *const good[] = {
+        "--light dir:0,-1,-1",
+        "--light dir:0,-1,-1:1,0.9,0.8:3:0.0047 --light point:1,2,3",
+        "--light point:-3,4,4::60:0.5:30",
+        "--light spot:0,3,3:0,-1,-1:::::10,30",
+        "--light spot:0,3,3:0,-1,-1:1,1,1:80:0.2:15:5,20 --light-size ignore",
+    };
+    for (int i = 0; i < 5; i++)
+        assert_int_equal(test_run_cli(&out, "render sky -o %s --width 32 -q %s", png, good[i]), 0);
+    static const char *const bad[] = {
+        "--light lamp:0,1,0",        "--light dir:0,1",          "--light dir:0,0,0",
+        "--light point:0,1,0:1,1",   "--light point:0,1,0::0",   "--light spot:0,1,0",
+        "--light spot:0,1,0:0,-1,0:::::40,30", "--light point:0,1,0::1:-1",
+        "--light point:1,2,3:::::9", "--light-size huge",
+    };
+    for (int i = 0; i < 10; i++) {
+        assert_int_equal(test_run_cli(&out, "render sky -o %s --width 32 -q %s", png, bad[i]), 2);
+        assert_non_null(strstr(out, "light"));
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -565,8 +826,11 @@ int main(void)
         cmocka_unit_test(falloffs),
         cmocka_unit_test(validation),
         cmocka_unit_test(size_widening),
+        cmocka_unit_test(sphere_light_vs_brute_force),
         cmocka_unit_test(ibl_offset),
         cmocka_unit_test(entire_specular_term),
+        cmocka_unit_test(render_lights_runtime_vs_reference),
+        cmocka_unit_test(cli_lights),
     };
     return cmocka_run_group_tests_name("light", tests, NULL, NULL);
 }

@@ -4,6 +4,7 @@
  * shininess values) or on an OBJ mesh with per-vertex AO, in front of the environment, using
  * the runtime shading of shade.h. A Monte Carlo reference of the same scene (the full BRDF
  * against the unfiltered environment, no split sum) measures the approximation error.
+ * Punctual lights (light.h) may be added to both.
  *
  * Output images are linear radiance (RGBA float, alpha 1); ibl_render_tonemap turns them
  * into display values. Every pixel depends only on its own index, so the output is
@@ -16,6 +17,7 @@
 #include "cubemap.h"
 #include "bake.h"
 #include "shade.h"
+#include "light.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -51,6 +53,13 @@ typedef struct ibl_render_desc {
     unsigned seed;                  /* of the per-pixel sample rotation                          */
     float sphere_ao_min;            /* > 0: synthetic AO on the spheres, from this value at the
                                     bottom to 1 at the top (to see specular occlusion)        */
+    const ibl_light *lights;        /* punctual lights (light.h), unshadowed, not drawn; the
+                                    runtime shades them with ibl_lights_shade (their specular is
+                                    the compositions' s_d), the reference integrates each as
+                                    what it is: a delta, or a sphere of radius `size` (a
+                                    directional light: a disc of angular radius atan(size)) of
+                                    uniform radiance, sampled over its solid angle            */
+    int light_count;
 } ibl_render_desc;
 
 /* One object of the scene, for per-object measurements. */

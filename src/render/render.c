@@ -2,7 +2,9 @@
  * in front of the environment. Runtime mode shades with ibl_shade (what an engine would do
  * with the bake); reference mode integrates the same BRDF against the unfiltered
  * environment by Monte Carlo (importance sampling of each lobe with a per-pixel rotated
- * Hammersley set), so the difference is the error of the whole baked pipeline. */
+ * Hammersley set), so the difference is the error of the whole baked pipeline. Punctual
+ * lights: ibl_lights_shade in runtime mode; in reference mode each light as what it is, a
+ * delta or a cone of uniform radiance (reference_light). */
 #include "render_internal.h"
 #include "core/context_internal.h"
 #include "core/numeric.h"
@@ -142,12 +144,81 @@ static float eval_lobe(const lobe *b, ibl_vec3 n, ibl_vec3 v, ibl_vec3 l, float 
     return nl;
 }
 
+/* The cone a light of finite size subtends at a point: its axis is in->l, its half-angle
+ * theta with 1 - cos(theta) = *one_minus_cos (kept apart from cos: a sun's is ~1e-5, near
+ * float's resolution of cos itself), and the uniform radiance that delivers the illuminance
+ * of the delta light, E = L pi sin^2(theta) on a surface facing it. Returns 0 for a delta
+ * light (or a point inside its own sphere, where the reference keeps the delta). */
+static int light_cone(const ibl_light *light, const ibl_light_incidence *in, float *one_minus_cos,
+                      float *radiance_scale)
+{
+    float sin2;
+    if (!(in->size > 0.0f)) return 0;
+    if (light->type == IBL_LIGHT_DIRECTIONAL) {
+        sin2 = in->size * in->size / (1.0f + in->size * in->size); /* size = tan(theta) */
+    } else {
+        if (!(in->distance > in->size)) return 0;
+        float s = in->size / in->distance; /* a sphere: sin(theta) = radius / distance */
+        sin2 = s * s;
+    }
+    *one_minus_cos = sin2 / (1.0f + sqrtf(1.0f - sin2));
+    *radiance_scale = 1.0f / (IBL_PI_F * sin2);
+    return 1;
+}
+
+/* One light's share of one reference iteration. A delta light is exact: f(l) E n.l. A light
+ * of finite size is a cone of uniform radiance, integrated with three strategies (a direction
+ * uniform in the cone, and the BRDF's specular and cosine samples of this iteration, which
+ * see the light when they fall in its cone), combined with the balance heuristic like the
+ * environment: each adds f L n.l / (p_cone + p_spec + p_diff). */
+static void reference_light(const ibl_light *light, const lobe *b, ibl_vec3 n, ibl_vec3 v,
+                            ibl_vec3 p, const ibl_vec3 brdf_dirs[2], float u0, float u1,
+                            double acc[3])
+{
+    ibl_light_incidence in;
+    ibl_light_incidence_at(light, p, &in);
+    if (!(in.illuminance[0] > 0.0f || in.illuminance[1] > 0.0f || in.illuminance[2] > 0.0f))
+        return;
+    float one_minus_cos, radiance_scale, f[3], ps, pd;
+    if (!light_cone(light, &in, &one_minus_cos, &radiance_scale)) {
+        float nl = eval_lobe(b, n, v, in.l, f, &ps, &pd);
+        for (int c = 0; c < 3 && nl > 0.0f; c++)
+            acc[c] += (double)(f[c] * in.illuminance[c] * nl);
+        return;
+    }
+    /* the cone sample, from its own rotation of this iteration's point */
+    float w0 = u0 + 0.6180340f, w1 = u1 + 0.4142136f;
+    w0 -= floorf(w0);
+    w1 -= floorf(w1);
+    float x = w1 * one_minus_cos; /* 1 - cos of the sampled angle */
+    float sin_t = sqrtf(fmaxf(0.0f, x * (2.0f - x))), phi = 2.0f * IBL_PI_F * w0;
+    ibl_vec3 t, bt;
+    ibl__frame(in.l, &t, &bt);
+    float a = sin_t * cosf(phi), c2 = sin_t * sinf(phi), z = 1.0f - x;
+    ibl_vec3 dirs[3] = {ibl__v3(t.x * a + bt.x * c2 + in.l.x * z, t.y * a + bt.y * c2 + in.l.y * z,
+                                t.z * a + bt.z * c2 + in.l.z * z),
+                        brdf_dirs[0], brdf_dirs[1]};
+    float cone_pdf = 1.0f / (2.0f * IBL_PI_F * one_minus_cos);
+    for (int k = 0; k < 3; k++) {
+        /* inside the cone: 1 - l.axis = |l - axis|^2 / 2 <= 1 - cos(theta), without the
+         * cancellation of 1 - dot for small cones */
+        ibl_vec3 d = ibl__sub(dirs[k], in.l);
+        int inside = k == 0 || 0.5f * ibl__dot(d, d) <= one_minus_cos;
+        if (k > 0 && !inside) continue;
+        float nl = eval_lobe(b, n, v, dirs[k], f, &ps, &pd);
+        if (nl <= 0.0f) continue;
+        float sum = ps + pd + (inside ? cone_pdf : 0.0f);
+        for (int c = 0; c < 3; c++)
+            acc[c] += (double)(f[c] * in.illuminance[c] * radiance_scale * nl / sum);
+    }
+}
+
 /* One iteration of the Monte Carlo estimate of the reflected radiance: three strategies (the
  * specular lobe, the cosine lobe, the environment's luminance), one sample of each, combined
  * with the balance heuristic (Veach 1997, multi-sample MIS): each adds f L n.l / the sum of
  * the three densities. No split sum, no prefiltering. */
-static void reference_sample(const render_job *job, const lobe *b, ibl_vec3 n, ibl_vec3 v, float u0,
-                             float u1, double acc[3])
+static void reference_sample(const render_job *job, const lobe *b, ibl_vec3 n, ibl_vec3 v,
+                             ibl_vec3 p, float u0, float u1, double acc[3])
 {
     float scale = job->probe->intensity > 0.0f ? job->probe->intensity : 1.0f;
     ibl_vec3 t, bt;
@@ -177,11 +248,13 @@ static void reference_sample(const render_job *job, const lobe *b, ibl_vec3 n, i
         env_radiance(job->env, scale, dirs[k], l_rad);
         for (int c = 0; c < 3; c++) acc[c] += (double)(f[c] * l_rad[c] * nl / sum);
     }
+    for (int i = 0; i < job->desc->light_count; i++)
+        reference_light(&job->desc->lights[i], b, n, v, p, dirs, u0, u1, acc);
 }
 
 typedef struct hit {
     int id;
-    ibl_vec3 d, n;
+    ibl_vec3 d, n, p; /* ray direction, normal and position of the hit */
     ibl_material mat;
 } hit;
 
@@ -194,7 +267,7 @@ static void trace_primary(const render_job *job, float fx, float fy, hit *h)
     float px = fx / (float)im->width * 2.0f - 1.0f;
     float py = 1.0f - fy / (float)im->height * 2.0f;
     h->d = ibl__norm(ibl__v3(px * job->half_w, py * job->half_h, -EYE_Z));
-    float t, ao = 1.0f;
+    float t = 0.0f, ao = 1.0f;
     if (desc->mesh) {
         h->id = ibl__mesh_intersect(desc->mesh, eye, h->d, &t, &h->n, &ao) ? 0 : -1;
         static const float grey[3] = {0.9f, 0.9f, 0.9f};
@@ -211,6 +284,29 @@ static void trace_primary(const render_job *job, float fx, float fy, hit *h)
         }
     }
     h->mat.ao = ao;
+    h->p = ibl__v3(eye.x + t * h->d.x, eye.y + t * h->d.y, eye.z + t * h->d.z);
+}
+
+/* Runtime shading of a hit: the probe through ibl_shade, the lights through
+ * ibl_lights_shade, their specular the compositions' s_d (so "entire" occludes it) and their
+ * diffuse added unoccluded (light.h). */
+static void runtime_shade(const render_job *job, const hit *h, float out[3])
+{
+    const ibl_render_desc *desc = job->desc;
+    ibl_surface surf;
+    memset(&surf, 0, sizeof surf);
+    surf.n = h->n;
+    surf.v = ibl__v3(-h->d.x, -h->d.y, -h->d.z);
+    ibl_light_result direct;
+    memset(&direct, 0, sizeof direct);
+    if (desc->light_count > 0) {
+        ibl_lights_shade(desc->lights, desc->light_count, NULL, &desc->shade, &h->mat, &surf, h->p,
+                         &direct);
+        memcpy(surf.direct_specular, direct.specular, sizeof surf.direct_specular);
+    }
+    ibl_shade_result r;
+    ibl_shade(job->probe, &desc->shade, &h->mat, &surf, &r);
+    for (int c = 0; c < 3; c++) out[c] = r.color[c] + direct.diffuse[c];
 }
 
 /* Van der Corput radical inverse in a prime base (the pixel-footprint dimensions). */
@@ -276,7 +372,7 @@ static void render_row(void *arg, int y)
                 b.nv = nv;
                 float u0, u1;
                 ibl__hammersley((uint32_t)i, (uint32_t)count, r[0], r[1], &u0, &u1);
-                reference_sample(job, &b, s.n, v, u0, u1, acc);
+                reference_sample(job, &b, s.n, v, s.p, u0, u1, acc);
             }
         } else {
             count = ss * ss;
@@ -290,13 +386,7 @@ static void render_row(void *arg, int y)
                     if (s.id < 0) {
                         env_radiance(job->env, scale, s.d, c3);
                     } else {
-                        ibl_surface surf;
-                        memset(&surf, 0, sizeof surf);
-                        surf.n = s.n;
-                        surf.v = ibl__v3(-s.d.x, -s.d.y, -s.d.z);
-                        ibl_shade_result r;
-                        ibl_shade(job->probe, &desc->shade, &s.mat, &surf, &r);
-                        memcpy(c3, r.color, sizeof c3);
+                        runtime_shade(job, &s, c3);
                     }
                     for (int c = 0; c < 3; c++) acc[c] += c3[c];
                 }
@@ -314,6 +404,13 @@ ibl_status ibl_render(ibl_context *ctx, const ibl_probe *probe, const ibl_render
     memset(out, 0, sizeof *out);
     if (!probe || !probe->specular.data)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "render: no probe");
+    if (desc->light_count < 0 || (desc->light_count > 0 && !desc->lights))
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "render: %d lights and no array",
+                         desc->light_count);
+    for (int i = 0; i < desc->light_count; i++) {
+        ibl_status ls = ibl_light_validate(ctx, &desc->lights[i], i);
+        if (ls != IBL_OK) return ls;
+    }
     int w = desc->width > 0 ? desc->width : 1024;
     int h = desc->height > 0 ? desc->height : (desc->width > 0 ? (w + 1) / 2 : 512);
     render_job *job = ibl_calloc(ctx, 1, sizeof *job);
