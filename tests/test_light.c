@@ -248,6 +248,33 @@ static void blinn_phong_albedo(void **state)
     assert_near(bp_albedo_reference(0, 1.0, 1.0, 400), 0.0856832 * PI, 1e-4);
 }
 
+/* White furnace for the diffuse lobe: directional lights of illuminance 1 from every direction
+ * of the hemisphere (midpoint rule in (cos, phi): equal solid angles) reflect, through a white
+ * Lambert lobe, sum (1/pi) n.l dw = 1; a light below the surface adds nothing. The rule's own
+ * error is ~1/steps^2 (4e-6 here), float sums add ~1e-5: bound 1e-4. */
+static void diffuse_furnace(void **state)
+{
+    (void)state;
+    static const float white[3] = {1, 1, 1};
+    ibl_material m = ibl_material_gltf(white, 0, 0.5f);
+    ibl_surface s = surface(dv(0, 0, 1), dnorm(dv(0.4, 0.1, 1)));
+    const int steps = 400;
+    double sum = 0, cell = 2 * PI / (steps * 2.0 * steps);
+    for (int i = 0; i < 2 * steps; i++) { /* cos from -1 to 1: the lower half must add 0 */
+        double z = -1 + (i + 0.5) / steps, r = sqrt(1 - z * z);
+        for (int j = 0; j < 2 * steps; j++) {
+            double phi = PI * (j + 0.5) / steps;
+            ibl_light light = light_from(dv(r * cos(phi), r * sin(phi), z));
+            ibl_light_result res;
+            ibl_light_shade(&light, NULL, &m, &s, (ibl_vec3){0, 0, 0}, &res);
+            if (z < 0) assert_true(res.diffuse[0] == 0 && res.specular[0] == 0);
+            sum += res.diffuse[0] * cell;
+        }
+    }
+    print_message("white Lambert furnace: %.7f\n", sum);
+    assert_near(sum, 1.0, 1e-4);
+}
+
 /* ---------------------------------------------------------------------------------------- */
 /* KHR_lights_punctual's falloffs, by hand                                                    */
 
@@ -823,6 +850,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(brdf_pointwise),
         cmocka_unit_test(blinn_phong_albedo),
+        cmocka_unit_test(diffuse_furnace),
         cmocka_unit_test(falloffs),
         cmocka_unit_test(validation),
         cmocka_unit_test(size_widening),

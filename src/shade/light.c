@@ -157,7 +157,8 @@ void ibl_light_incidence_at(const ibl_light *light, ibl_vec3 p, ibl_light_incide
                                               outer_cone_of(light));
         }
     }
-    for (int c = 0; c < 3; c++) out->illuminance[c] = (white ? 1.0f : light->color[c]) * scale * falloff;
+    for (int c = 0; c < 3; c++)
+        out->illuminance[c] = (white ? 1.0f : light->color[c]) * scale * falloff;
 }
 
 void ibl_light_shade_incidence(const ibl_light_incidence *in, const ibl_shade_desc *desc,
