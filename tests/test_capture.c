@@ -274,6 +274,64 @@ static void far_plane_alpha(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* ---- premultiplied filtering: uncovered directions go to the next probe ------------------------- */
+
+static void alpha_gives_way(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(0);
+    ibl_scene_material m = lambert(0.5f, 1.0f);
+    box_scene b;
+    const int walls[6] = {-1, 0, 0, 0, 0, 0}; /* +X open: alpha 0 there */
+    ibl_scene *s = box_scene_create(ctx, &b, walls, &m, 1);
+    ibl_cubemap env, cap, chain;
+    constant_env(ctx, &env, 3.0f);
+    ibl_local_probe p = centre_probe(IBL_CAPTURE_FAR_PLANE, 16);
+    ibl_capture_desc d = {.bounces = IBL_CAPTURE_NO_BOUNCE, .samples = 4};
+    assert_int_equal(ibl_capture_probe(ctx, s, &env, &p, 0, &d, &cap), IBL_OK);
+    assert_int_equal(ibl_capture_prefilter(ctx, &cap, "gltf", &chain), IBL_OK);
+    assert_true(chain.levels > 2);
+    /* every covered direction sees radiance 1, so premultiplied RGB equals alpha at every
+     * level: filtering spreads coverage, never black light */
+    size_t texels = ibl_cubemap_floats(chain.size, chain.levels) / 4;
+    double min_a = 1, max_a = 0;
+    for (size_t i = 0; i < texels; i++) {
+        float a = chain.data[4 * i + 3];
+        assert_near(chain.data[4 * i], a, 2e-3);
+        min_a = fmin(min_a, a), max_a = fmax(max_a, a);
+    }
+    assert_true(min_a < 0.01 && max_a > 0.99);
+    /* the rough end mixes: toward the opening alpha is between 0 and 1 */
+    float t[4];
+    ibl_cubemap_sample_nearest(&chain, chain.levels - 1, (ibl_vec3){1, 0, 0}, t);
+    assert_true(t[3] > 0.05f && t[3] < 0.95f);
+    /* blend: this probe first, then a probe of constant colour, then the global probe */
+    const float next[4] = {0.2f, 0.5f, 0.9f, 1.0f}, global[3] = {5, 5, 5};
+    const float weights[2] = {1.0f, 1.0f};
+    float look[2][4], out[3];
+    memcpy(look[1], next, sizeof next);
+    ibl_cubemap_sample_nearest(&chain, 0, (ibl_vec3){1, 0, 0}, look[0]); /* uncovered */
+    assert_near(look[0][3], 0.0, 1e-6);
+    float rest = ibl_capture_blend((const float(*)[4])look, weights, 2, global, out);
+    assert_near(rest, 0.0, 0);
+    for (int c = 0; c < 3; c++) assert_near(out[c], next[c], 1e-6); /* the next probe's */
+    ibl_cubemap_sample_nearest(&chain, 0, (ibl_vec3){-1, 0, 0}, look[0]); /* covered */
+    rest = ibl_capture_blend((const float(*)[4])look, weights, 2, global, out);
+    assert_near(rest, 0.0, 1e-5);
+    for (int c = 0; c < 3; c++) assert_near(out[c], 1.0, 1e-5); /* this probe's own */
+    /* half coverage, half influence: 0.5 of this probe's light, 0.75 left for the next */
+    const float half[2][4] = {{0.5f, 0.5f, 0.5f, 0.5f}, {0.2f, 0.5f, 0.9f, 1.0f}};
+    const float w2[2] = {1.0f, 0.0f};
+    rest = ibl_capture_blend(half, w2, 2, global, out);
+    assert_near(rest, 0.5, 1e-6); /* the second has no influence: the rest is the sky's */
+    assert_near(out[0], 0.5 + 0.5 * 5, 1e-5);
+    ibl_cubemap_free(ctx, &chain);
+    ibl_cubemap_free(ctx, &cap);
+    ibl_cubemap_free(ctx, &env);
+    ibl_scene_destroy(s);
+    ibl_context_destroy(ctx);
+}
+
 /* ---- the sample scene: glTF loading, threads --------------------------------------------------- */
 
 #define ROOMS IBL_TEST_DATA "/../../examples/rooms"
@@ -387,6 +445,7 @@ int main(void)
         cmocka_unit_test(furnace),
         cmocka_unit_test(emitting_ceiling),
         cmocka_unit_test(far_plane_alpha),
+        cmocka_unit_test(alpha_gives_way),
         cmocka_unit_test(sample_scene_threads),
         cmocka_unit_test(cli_errors),
     };

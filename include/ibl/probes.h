@@ -109,6 +109,25 @@ ibl_status ibl_capture_set(ibl_context *ctx, const ibl_scene *scene,
                            const ibl_cubemap *environment, const ibl_probe_set *set,
                            const ibl_capture_desc *desc, const char *dir);
 
+/* ---- coverage-aware filtering and blending ---------------------------------------------- */
+
+/* Prefilters a capture (premultiplied RGB, coverage A; level 0) into a specular chain with a
+ * preset's kernel (ibl_specular_preset; NULL: "gltf"), at the capture's size. RGB and A go
+ * through the same linear filter, so every level stays premultiplied: a texel near uncovered
+ * directions gets their share as alpha < 1 and no light for them, and the run time gives that
+ * weight to the next probe (ibl_capture_blend). out: a new cube (ibl_cubemap_free). */
+ibl_status ibl_capture_prefilter(ibl_context *ctx, const ibl_cubemap *capture,
+                                 const char *preset, ibl_cubemap *out);
+
+/* Front-to-back blend of premultiplied probe lookups (JAGE 2015's priority blend with its
+ * alpha): probes in blend order (ibl_probe_set_order), each with its influence weight
+ * (ibl_volume_weight) and looked-up premultiplied RGBA. With remaining = 1 at first, probe i
+ * adds w_i remaining rgb_i and takes w_i remaining a_i of the remaining weight; the global
+ * probe gets what is left. Returns that remaining weight; out receives RGB. With every alpha
+ * 1 the weights are ibl_volume_blend's. */
+float ibl_capture_blend(const float (*rgba)[4], const float *weights, int count,
+                        const float global_rgb[3], float out[3]);
+
 #ifdef __cplusplus
 }
 #endif
