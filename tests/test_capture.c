@@ -63,7 +63,7 @@ static ibl_scene *box_scene_create(ibl_context *ctx, box_scene *b, const int wal
     make_box(b, walls);
     ibl_scene_desc d;
     memset(&d, 0, sizeof d);
-    d.vertex_count = 24;
+    d.vertex_count = 2 * b->tris; /* 4 per wall */
     d.triangle_count = b->tris;
     d.positions = b->pos;
     d.indices = b->idx;

@@ -80,10 +80,11 @@ static void face_geometry(ibl_scene *s)
         s->bounds_min[k] = FLT_MAX;
         s->bounds_max[k] = -FLT_MAX;
     }
-    for (int v = 0; v < s->vertex_count; v++)
+    /* the bounds of what the triangles use (an unused vertex may hold anything) */
+    for (int i = 0; i < 3 * s->triangle_count; i++)
         for (int k = 0; k < 3; k++) {
-            s->bounds_min[k] = fminf(s->bounds_min[k], s->positions[3 * v + k]);
-            s->bounds_max[k] = fmaxf(s->bounds_max[k], s->positions[3 * v + k]);
+            s->bounds_min[k] = fminf(s->bounds_min[k], s->positions[3 * s->indices[i] + k]);
+            s->bounds_max[k] = fmaxf(s->bounds_max[k], s->positions[3 * s->indices[i] + k]);
         }
     for (int t = 0; t < s->triangle_count; t++) {
         const float *a = s->positions + 3 * s->indices[3 * t];
