@@ -26,7 +26,7 @@ int ibl__mesh_intersect(const ibl_mesh *m, ibl_vec3 o, ibl_vec3 d, float *t, ibl
 static double now(void)
 {
     struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts); /* CPU time: the host is shared */
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
@@ -95,6 +95,14 @@ int main(int argc, char **argv)
         double r = sqrt(fmax(0.0, 1.0 - z * z));
         dir[i] = (ibl_vec3){(float)(r * cos(phi)), (float)(r * sin(phi)), (float)z};
     }
+    /* ibl_mesh_load_obj centres the mesh and scales it to a height of 3.2 (the preview's
+     * frame): the rays go to that frame for mesh.c and its distances come back */
+    float c[3], scale = 0.0f;
+    for (int k = 0; k < 3; k++) {
+        c[k] = 0.5f * (scene->bounds_min[k] + scene->bounds_max[k]);
+        scale = fmaxf(scale, scene->bounds_max[k] - scene->bounds_min[k]);
+    }
+    scale = 3.2f / scale;
     double sum_e = 0, sum_m = 0;
     long hits_e = 0, hits_m = 0, agree = 0;
     float *te = malloc((size_t)rays * sizeof *te);
@@ -109,7 +117,9 @@ int main(int argc, char **argv)
     for (long i = 0; i < rays; i++) {
         float t, ao;
         ibl_vec3 n;
-        if (ibl__mesh_intersect(&mesh, o[i], dir[i], &t, &n, &ao)) {
+        ibl_vec3 om = {(o[i].x - c[0]) * scale, (o[i].y - c[1]) * scale, (o[i].z - c[2]) * scale};
+        if (ibl__mesh_intersect(&mesh, om, dir[i], &t, &n, &ao)) {
+            t /= scale;
             hits_m++, sum_m += n.y;
             if (te[i] >= 0 && fabsf(te[i] - t) <= 1e-4f * (1.0f + t)) agree++;
         }
@@ -123,8 +133,8 @@ int main(int argc, char **argv)
            rays / t_embree / 1e6, hits_e);
     printf("%-24s %8.1f ms  %6.2f Mrays/s  hits %ld\n", "hand-written (mesh.c)", 1e3 * t_mesh,
            rays / t_mesh / 1e6, hits_m);
-    printf("same nearest distance: %ld of %ld; speed-up %.2fx (checksums %.3f %.3f)\n", agree,
-           hits_m, t_mesh / t_embree, sum_e, sum_m);
+    printf("same nearest distance: %ld of %ld; Embree %.2fx as fast (sum of normal.y %.1f %.1f)\n",
+           agree, hits_m, t_mesh / t_embree, sum_e, sum_m);
     free(o);
     free(dir);
     free(te);
