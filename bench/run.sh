@@ -17,6 +17,7 @@ run "$B/bench_render"
 run "$B/bench_triace_kernels"
 run "$B/bench_sh" "$HDRI"
 run "$B/bench_dynamic" 64 201 1
+run "$B/bench_scene" 2000000
 if [ "${BENCH_FULL:-0}" = 1 ]; then
   mkdir -p "$BUILD/refcache"
   run "$B/bench_specular" --sizes 128,256 --samples 2000 --filters ggx,phong,blinn \
@@ -43,3 +44,5 @@ hyperfine -w 1 -r 5 -N "$BUILD/ibl render -q $OUT/bake -o $OUT/rb.png"
 "$BUILD/ibl" convert -q "$IN" -o "$OUT/cube512.ktx2" --size 512 --format rgba32f
 "$BUILD/ibl" convert -q "$OUT/cube512.ktx2" -o "$OUT/big.exr" --format rgb32f
 hyperfine -w 1 -r 3 -N "$BUILD/ibl prefilter -q $OUT/big.exr -o $OUT/p512.ktx2 --size 512"
+# probe capture of the sample scene (docs/PERFORMANCE.md "Scene ray casting and probe capture")
+hyperfine -w 1 -r 3 -N "$BUILD/ibl capture -q examples/rooms/scene.gltf --probes examples/rooms/probes.json -o $OUT/caps --size 32 --samples 64"
