@@ -1,7 +1,7 @@
 // The sphere grid of `ibl render` (src/render/render.c) as one fragment shader over a
 // full-screen triangle: a pinhole camera at (0, 0, 12) looking down -Z, 7 x 3 spheres of
 // radius 0.48 spaced 1.1, each shaded by ibl_shade from shaders/ibl.glsl; the background is
-// the probe's mirror cube (the unfiltered environment). The program prepends
+// the probe's mirror cube (the unfiltered environment) or, without one, the chain's level 0. The program prepends
 // "#version 450 core" and ibl.glsl. Materials come from ibl_render_scene_objects.
 layout(std140, binding = 0) uniform ProbeBlock { ibl_probe probe; };
 layout(binding = 0) uniform samplerCube u_specular;
@@ -39,7 +39,10 @@ void main()
         }
     }
     if (best < 0) {
-        o_color = vec4(probe.intensity * textureLod(u_mirror, d, 0.0).rgb, 0.0);
+        // as render.c: the mirror cube when the probe has one, else the chain's level 0
+        vec3 bg = probe.has_mirror != 0 ? textureLod(u_mirror, d, 0.0).rgb
+                                        : textureLod(u_specular, d, 0.0).rgb;
+        o_color = vec4(probe.intensity * bg, 0.0);
         return;
     }
     vec3 c = vec3((float(best % 7) - 3.0) * 1.1, (1.0 - float(best / 7)) * 1.1, 0.0);
