@@ -510,6 +510,85 @@ static void example_png_matches_cli(void **state)
     ibl_image_free(f->ctx, &b);
 }
 
+/* shaders/ibl_box_mip.comp (the box chain of the dynamic path) against ibl_cubemap_build_mips:
+ * the forest cube's 32 -> 1 chain. Bound: 1e-6 relative (float accumulation of four products
+ * against the C's double). */
+static void box_mips_match_c(void **state)
+{
+    fixture *f = *state;
+    const glh_gl *gl = &f->gl.gl;
+    char *src = read_shader("ibl_box_mip.comp");
+    assert_non_null(src);
+    assert_int_equal(validate("-V -S comp -o /dev/null", test_path("box_mip.comp"), "", src, ""), 0);
+    const char *srcs[1] = {src};
+    GLenum type = GL_COMPUTE_SHADER;
+    char log[4096] = "";
+    GLuint prog = glh_program(&f->gl, log, sizeof log, 1, &type, srcs);
+    if (!prog) print_error("ibl_box_mip.comp: %s\n", log);
+    assert_true(prog != 0);
+    int size = f->env.size, levels = ibl_full_mip_count(size);
+    ibl_cubemap ref;
+    assert_int_equal(ibl_cubemap_alloc(f->ctx, size, levels, &ref), IBL_OK);
+    for (int face = 0; face < 6; face++)
+        memcpy(ibl_cubemap_face(&ref, 0, face), ibl_cubemap_face(&f->env, 0, face),
+               (size_t)size * size * 4 * sizeof(float));
+    assert_int_equal(ibl_cubemap_build_mips(f->ctx, &ref), IBL_OK);
+    /* level 0 uploaded, the others made on the GPU */
+    GLuint tex = glp_cube_texture(gl, &ref, 1), buf;
+    gl->BindTexture(GL_TEXTURE_CUBE_MAP, tex);
+    for (int k = 1; k < levels; k++)
+        for (int face = 0; face < 6; face++)
+            gl->TexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + (GLenum)face, k, GL_RGBA32F,
+                           ibl_level_size(size, k), ibl_level_size(size, k), 0, GL_RGBA, GL_FLOAT,
+                           NULL);
+    /* an image unit needs its level inside [BASE_LEVEL, MAX_LEVEL] of a complete texture */
+    gl->TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAX_LEVEL, levels - 1);
+    gl->TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    gl->GenBuffers(1, &buf);
+    float *table = malloc((size_t)size * size * sizeof(float));
+    float *back = malloc((size_t)size * size * 4 * sizeof(float));
+    assert_non_null(table);
+    assert_non_null(back);
+    gl->UseProgram(prog);
+    for (int k = 1; k < levels; k++) {
+        int cn = ibl_level_size(size, k - 1), n = ibl_level_size(size, k);
+        ibl_cube_solid_angle_table(cn, table);
+        gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, buf);
+        gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((size_t)cn * cn * sizeof(float)),
+                       table, GL_STATIC_DRAW);
+        gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buf);
+        gl->BindImageTexture(0, tex, k - 1, GL_TRUE, 0, GL_READ_ONLY, GL_RGBA32F);
+        gl->BindImageTexture(1, tex, k, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        gl->Uniform1i(gl->GetUniformLocation(prog, "u_child_size"), cn);
+        gl->DispatchCompute((GLuint)(n + 7) / 8, (GLuint)(n + 7) / 8, 6);
+        gl->MemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
+    }
+    double worst = 0;
+    gl->BindTexture(GL_TEXTURE_CUBE_MAP, tex);
+    gl->PixelStorei(GL_PACK_ALIGNMENT, 4);
+    for (int k = 1; k < levels; k++)
+        for (int face = 0; face < 6; face++) {
+            int n = ibl_level_size(size, k);
+            gl->GetTexImage(GL_TEXTURE_CUBE_MAP_POSITIVE_X + (GLenum)face, k, GL_RGBA, GL_FLOAT, back);
+            const float *c = ibl_cubemap_face(&ref, k, face);
+            for (int i = 0; i < n * n * 4; i++) {
+                double e = fabs((double)back[i] - c[i]) / fmax(fabs((double)c[i]), 1e-6);
+                if (e > worst) worst = e;
+            }
+        }
+    assert_int_equal(gl->GetError(), GL_NO_ERROR);
+    print_message("box mips %d -> 1 (%d levels): max relative error %.2e\n", size, levels, worst);
+    assert_true(worst <= 1e-6);
+    gl->UseProgram(0);
+    gl->DeleteBuffers(1, &buf);
+    gl->DeleteTextures(1, &tex);
+    gl->DeleteProgram(prog);
+    free(table);
+    free(back);
+    free(src);
+    ibl_cubemap_free(f->ctx, &ref);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -518,6 +597,7 @@ int main(void)
         cmocka_unit_test(functions_match_c),
         cmocka_unit_test(full_frame_matches_c_renderer),
         cmocka_unit_test(example_png_matches_cli),
+        cmocka_unit_test(box_mips_match_c),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
