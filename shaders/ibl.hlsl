@@ -378,6 +378,20 @@ ibl_material ibl_material_blinn_phong(float3 rd, float3 f0, float shininess)
     return m;
 }
 
+/* The BRDF's own reflectances: GGX F0 = lerp(0.04 or f0, base, metallic), albedo base (1 - m);
+ * Blinn-Phong F0 = f0, albedo Rd (1 - F0) (tri-Ace 2010, "Equations"). */
+void ibl_material_reflectances(ibl_material m, out float3 f0, out float3 diffuse_albedo)
+{
+    if (m.model == IBL_MATERIAL_BLINN_PHONG) {
+        f0 = m.f0;
+        diffuse_albedo = m.base_color * (1.0 - m.f0);
+    } else {
+        float3 fd = any(m.f0 != 0.0) ? m.f0 : (0.04).xxx;
+        f0 = fd + (m.base_color - fd) * m.metallic;
+        diffuse_albedo = m.base_color * (1.0 - m.metallic);
+    }
+}
+
 /* Lean t of the lookup lerp(N, R, t): GGX, Lagarde & de Rousiers 2014 (1 - r)(sqrt(1 - r) + r);
  * Blinn-Phong, the lobe centroid g / (1 + g), g = 0.1785 s^0.9805 (docs/SHADING.md). */
 float ibl_dominant_direction_lean(ibl_material m)
@@ -541,7 +555,7 @@ ibl_shade_result ibl_shade_dir(ibl_probe probe, TextureCube specular, TextureCub
 
 /* The lookup direction of ibl_shade: R = 2 (n.v) n - v leaned toward N by
  * ibl_dominant_direction_lean unless desc.mirror_direction (Lagarde & de Rousiers 2014). */
-float3 ibli_shade_direction(ibl_shade_desc desc, ibl_material m, ibl_surface s)
+float3 ibl_shade_lookup_direction(ibl_shade_desc desc, ibl_material m, ibl_surface s)
 {
     float3 r = 2.0 * dot(s.n, s.v) * s.n - s.v;
     if (desc.mirror_direction == 0) {
@@ -559,7 +573,7 @@ ibl_shade_result ibl_shade(ibl_probe probe, TextureCube specular, TextureCube mi
                            SamplerState smp, ibl_shade_desc desc, ibl_material m, ibl_surface s)
 {
     return ibl_shade_dir(probe, specular, mirror, irradiance, splitsum, ambient_brdf, smp, desc,
-                         m, s, ibli_shade_direction(desc, m, s));
+                         m, s, ibl_shade_lookup_direction(desc, m, s));
 }
 #else
 ibl_shade_result ibl_shade(ibl_probe probe, TextureCube specular, TextureCube mirror,
@@ -567,7 +581,7 @@ ibl_shade_result ibl_shade(ibl_probe probe, TextureCube specular, TextureCube mi
                            ibl_shade_desc desc, ibl_material m, ibl_surface s)
 {
     return ibl_shade_dir(probe, specular, mirror, irradiance, splitsum, smp, desc, m, s,
-                         ibli_shade_direction(desc, m, s));
+                         ibl_shade_lookup_direction(desc, m, s));
 }
 #endif
 
@@ -666,6 +680,14 @@ float3 ibl_parallax_correct(ibl_volume proxy, float3 probe_position, float3 p, f
 float3 ibl_offset_reflection(float3 r, float3 p_obj, float3 p_ibl, float c)
 {
     return ibli_normalize(c * (p_obj - p_ibl) + r);
+}
+
+/* The IBL offset's coefficient for surroundings at environment_radius: k / radius (k <= 0:
+ * 1), the first-order parallax of a sphere of that radius (docs/SHADING.md); 0 if no radius. */
+float ibl_offset_coefficient(float environment_radius, float k)
+{
+    if (!(environment_radius > 0.0)) return 0.0;
+    return (k > 0.0 ? k : 1.0) / environment_radius;
 }
 
 /* The shininess hack (tri-Ace 2010): n saturate(60 / light_size (1 - attenuation))^2. */

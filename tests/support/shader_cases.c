@@ -435,6 +435,22 @@ static void ref_constructors(const fixture *f, const float *x, float *y)
     y[10] = m.ao;
 }
 
+static void ref_reflectances(const fixture *f, const float *x, float *y)
+{
+    (void)f;
+    ibl_material m = material_of(x);
+    ibl_material_reflectances(&m, y, y + 3);
+}
+
+static void ref_lookup_direction(const fixture *f, const float *x, float *y)
+{
+    (void)f;
+    ibl_material m = material_of(x);
+    ibl_surface s = surface_of(x + 11);
+    ibl_shade_desc d = desc_of(x + 23);
+    put3(y, ibl_shade_lookup_direction(&d, &m, &s));
+}
+
 static void gen_so(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
@@ -647,6 +663,12 @@ static void ref_hack(const fixture *f, const float *x, float *y)
     y[0] = ibl_shininess_hack(x[0], x[1], x[2]);
 }
 
+static void ref_offset_coefficient(const fixture *f, const float *x, float *y)
+{
+    (void)f;
+    y[0] = ibl_offset_coefficient(x[1] - 20.0f, x[2]);
+}
+
 static void ref_switch(const fixture *f, const float *x, float *y)
 {
     (void)f;
@@ -757,6 +779,12 @@ const shader_case shader_cases[] = {
      "  Y(0, float(m.model)); Y3(1, m.base_color); Y(4, m.metallic); Y(5, m.roughness);\n"
      "  Y3(6, m.f0); Y(9, m.shininess); Y(10, m.ao);",
      gen_material_only, ref_constructors, 0.0, 0.0, "copies", NULL},
+    {"ibl_material_reflectances", 11, 6,
+     "vec3 f0, albedo; ibl_material_reflectances(M(0), f0, albedo); Y3(0, f0); Y3(3, albedo);",
+     gen_material_only, ref_reflectances, ARITH, "arithmetic", NULL},
+    {"ibl_shade_lookup_direction", 40, 3,
+     "Y3(0, ibl_shade_lookup_direction(D(23), M(0), S(11)));", gen_shade, ref_lookup_direction,
+     TRANSC, "the lean's pow, a normalisation", NULL},
     {"ibl_specular_occlusion", 5, 1,
      "Y(0, ibl_specular_occlusion(I(0), X(1), X(2), X(3), X(4)));", gen_so, ref_so, 1e-5, 1e-5,
      "pow; + the cone's angle error / its width", so_tolerance},
@@ -796,6 +824,8 @@ const shader_case shader_cases[] = {
      gen_offset, ref_offset, ARITH, "arithmetic", NULL},
     {"ibl_shininess_hack", 3, 1, "Y(0, ibl_shininess_hack(X(0), X(1), X(2)));", gen_three,
      ref_hack, ARITH, "arithmetic", NULL},
+    {"ibl_offset_coefficient", 3, 1, "Y(0, ibl_offset_coefficient(X(1) - 20.0, X(2)));",
+     gen_three, ref_offset_coefficient, ARITH, "a division", NULL},
     {"ibl_environment_switch", 3, 1,
      "Y(0, ibl_environment_switch(X(2) * 10.0, X(0) * 1e-4, X(1) * 0.05 - 2.0));", gen_three,
      ref_switch, ARITH, "arithmetic", NULL},
