@@ -212,7 +212,8 @@ float ibli_axis_coord(ibl_table_axis a, float value)
 }
 
 /* Split-sum A, B (Karis 2013) at n.v and roughness: table.rg, bilinear (shade.h). */
-void ibl_splitsum_lookup(Texture2D table, SamplerState smp, ibl_probe p, float n_dot_v, float roughness,
+void ibl_splitsum_lookup(Texture2D table, SamplerState smp, ibl_probe p, float n_dot_v,
+                         float roughness,
                          out float a, out float b)
 {
     float2 uv = float2(ibli_axis_coord(p.splitsum_n_dot_v, n_dot_v),
@@ -224,7 +225,8 @@ void ibl_splitsum_lookup(Texture2D table, SamplerState smp, ibl_probe p, float n
 
 #ifndef IBL_NO_AMBIENT_BRDF_3D
 /* tri-Ace 2010 AmbientBRDF(n.v, shininess, F0): table.r, trilinear (shade.h). */
-float ibl_ambient_brdf_lookup(Texture3D table, SamplerState smp, ibl_probe p, float n_dot_v, float shininess,
+float ibl_ambient_brdf_lookup(Texture3D table, SamplerState smp, ibl_probe p, float n_dot_v,
+                              float shininess,
                               float f0)
 {
     float3 uvw = float3(ibli_axis_coord(p.ambient_n_dot_v, n_dot_v),
@@ -721,7 +723,8 @@ void ibl_atlas_uv(ibl_atlas_layout l, int level, float3 dir, out float u, out fl
 
 /* Trilinear read of the atlas: bilinear at the two levels around lod, then linear. The
  * atlas texture: one level, GL_LINEAR, clamp to edge, its first row at v = 0. */
-float4 ibl_atlas_sample(Texture2D atlas, SamplerState smp, ibl_atlas_layout l, float lod, float3 dir)
+float4 ibl_atlas_sample(Texture2D atlas, SamplerState smp, ibl_atlas_layout l, float lod,
+                        float3 dir)
 {
     lod = clamp(lod, 0.0, float(l.levels - 1));
     int k = int(floor(lod));
