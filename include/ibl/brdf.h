@@ -22,7 +22,7 @@
  * Texel centres: texel (i, j) of an N-texel axis holds the value at (i + 0.5) / N, so a GPU's
  * bilinear lookup at the normalised coordinate is right. Rows are stored top first: row 0,
  * the top of the image, is r ~ 0 (smooth) for the split-sum table and the smallest
- * shininess for the AmbientBRDF. docs/BRDF.md has the derivations, the shader code and the
+ * shininess for the AmbientBRDF. docs/BRDF.md has the derivations and the
  * measurements.
  */
 #ifndef IBL_BRDF_H

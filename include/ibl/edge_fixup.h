@@ -1,7 +1,7 @@
 /*
  * ibl/edge_fixup.h - cube edge fixups for hardware without seamless cube filtering
  * (the tri-Ace talk's "Edge overlapping" (1)-(2), "Bent Phong filter kernel"; the
- * NVTT/cmft "warp" with its shader-side lookup). docs/EDGE_FIXUP.md has the shader code.
+ * NVTT/cmft "warp" with its shader-side lookup). shaders/ibl.glsl and ibl.hlsl have the shader side.
  *
  * Two kinds of fixup:
  *  - post-processes of a filtered level (overlap, overlap2): ibl_edge_fixup_apply;
@@ -50,7 +50,7 @@ ibl_status ibl_edge_fixup_apply(ibl_context *ctx, ibl_edge_fixup fixup, ibl_cube
                                 int level);
 
 /* The warp's lookup: maps a direction to the one a shader must sample on a level of edge n
- * so that texel centres of warped levels are hit (the shader code is in the docs). */
+ * so that texel centres of warped levels are hit (shaders/ibl.glsl: its GLSL twin). */
 ibl_vec3 ibl_edge_fixup_warp_lookup(ibl_vec3 dir, int n);
 
 #ifdef __cplusplus

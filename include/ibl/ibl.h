@@ -4,8 +4,8 @@
  * Start with core.h (context, images, cubemaps, textures), then io.h (files), layout.h (2D
  * layouts <-> cubemaps), cubemap.h (geometry and sampling). The bake stages (sh.h,
  * irradiance.h, specular.h, brdf.h, sky.h) take cubemaps and return plain data; shade.h
- * evaluates baked data at runtime, light.h punctual lights. docs/ has the design, conventions
- * and measurements.
+ * evaluates baked data at runtime, light.h punctual lights; shader.h gives shaders/ibl.glsl
+ * and ibl.hlsl their uniform block. docs/ has the design, conventions and measurements.
  */
 #ifndef IBL_IBL_H
 #define IBL_IBL_H
@@ -23,6 +23,7 @@
 #include "render.h"
 #include "scene.h"
 #include "shade.h"
+#include "shader.h"
 #include "sky.h"
 #include "specular.h"
 

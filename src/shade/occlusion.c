@@ -69,7 +69,8 @@ int ibl_ambient_mix_from_name(const char *name, ibl_ambient_mix *out)
 static float cap_intersection(float r1, float r2, float d)
 {
     float rmin = r1 < r2 ? r1 : r2, rmax = r1 < r2 ? r2 : r1;
-    float small_cap = 2.0f * IBL_PI_F * (1.0f - cosf(rmin));
+    float h = sinf(0.5f * rmin); /* 1 - cos r = 2 sin^2(r/2): no cancellation for thin cones */
+    float small_cap = 4.0f * IBL_PI_F * h * h;
     if (d <= rmax - rmin) return small_cap;
     if (d >= r1 + r2) return 0.0f;
     float x = 1.0f - ibl__saturate((d - (rmax - rmin)) / (2.0f * rmin));
@@ -81,16 +82,24 @@ static float cap_intersection(float r1, float r2, float d)
  * fraction is AO (AO = sin^2 of the half-angle, tri-Ace's isotropic occlusion); the
  * specular cone is where the equivalent Phong lobe cos^n falls to half (our choice, stated
  * in docs/SHADING.md). Both cones are centred on their axes: n and R. */
+/* acos(1 - x) for x in [0, 2], written 2 asin(sqrt(x / 2)): acos loses the angle near 1
+ * (one float step of c = 1 - 6e-8 is already 3.5e-4 rad), while 1 - c keeps its digits. */
+static float acos_one_minus(float x)
+{
+    return 2.0f * asinf(sqrtf(ibl__saturate(0.5f * x)));
+}
+
 static float cone_so(float n_dot_e, float ao, float roughness)
 {
     float vis = asinf(sqrtf(ibl__saturate(ao)));
     float n = ibl_shininess_from_roughness(roughness);
-    float c = powf(0.5f, 1.0f / (n + 1.0f));
-    float spec = acosf(c);
+    /* half-angle where cos^n falls to 1/2: c = 2^(-1/(n+1)), 1 - c = -expm1(-ln2 / (n+1)) */
+    float spec = acos_one_minus(-expm1f(-0.69314718f / (n + 1.0f)));
     if (spec < 1e-4f) spec = 1e-4f;
     /* R is E mirrored about n: both make the same angle with n */
-    float d = acosf(ibl__saturate(n_dot_e));
-    float cap = 2.0f * IBL_PI_F * (1.0f - cosf(spec));
+    float d = acos_one_minus(1.0f - ibl__saturate(n_dot_e));
+    float h = sinf(0.5f * spec);
+    float cap = 4.0f * IBL_PI_F * h * h;
     return ibl__saturate(cap_intersection(vis, spec, d) / cap);
 }
 
