@@ -1,4 +1,5 @@
-/* Zstandard (libzstd; RFC 8878) for KTX2 supercompression scheme 2: one frame per level. */
+/* Zstandard (libzstd; RFC 8878) for KTX2 supercompression scheme 2: one frame per level,
+ * written with its content size and checksum (the reader verifies both when present). */
 #include <zstd.h>
 
 #include "core/context_internal.h"
@@ -20,8 +21,17 @@ ibl_status ibl__zstd_compress(ibl_context *ctx, const char *name, const void *sr
         ibl__budget_release(ctx, working);
         return ibl__fail_named(ctx, ibl_context_status(ctx), name);
     }
-    size_t n = ZSTD_compress(buf, bound, src, size, level);
+    /* with the frame's content checksum, so that a corrupt level is refused on reading */
+    ZSTD_CCtx *cctx = ZSTD_createCCtx();
+    size_t n = cctx ? ZSTD_CCtx_setParameter(cctx, ZSTD_c_compressionLevel, level) : 0;
+    if (cctx && !ZSTD_isError(n)) n = ZSTD_CCtx_setParameter(cctx, ZSTD_c_checksumFlag, 1);
+    if (cctx && !ZSTD_isError(n)) n = ZSTD_compress2(cctx, buf, bound, src, size);
+    ZSTD_freeCCtx(cctx);
     ibl__budget_release(ctx, working);
+    if (!cctx) {
+        ibl_free(ctx, buf);
+        return ibl__fail(ctx, IBL_ERR_OUT_OF_MEMORY, "%s: out of memory for Zstandard", name);
+    }
     if (ZSTD_isError(n)) {
         ibl_free(ctx, buf);
         return ibl__fail(ctx, IBL_ERR_IO, "%s: Zstandard compression failed: %s", name,
