@@ -20,11 +20,10 @@
 
 #include <unistd.h>
 
-/* Acceptance bounds on the RMS of log2(1 + x) differences (docs/FORMATS.md explains them). */
-#define SYNTH_FAST_BOUND 1.0
-#define SYNTH_DEFAULT_BOUND 1.0
-#define REAL_FAST_BOUND 1.0
-#define REAL_DEFAULT_BOUND 1.0
+/* Acceptance bounds on the RMS of log2(1 + x) differences: the measured errors plus a
+ * quarter (docs/FORMATS.md, "BC6H"), so that a change that makes the encoder worse fails. */
+#define SYNTH_FAST_BOUND 0.0092
+#define SYNTH_DEFAULT_BOUND 0.0092
 
 /* ---- the spec's tables, as the test reads them ---- */
 
@@ -534,6 +533,8 @@ static float *small_hdri(ibl_context *ctx, const char *name, int *w, int *h)
 
 static const char *const HDRIS[] = {"city.exr", "forest.exr", "interior.exr",
                                     "night.exr", "studio.exr", "sunset.exr"};
+/* measured at default quality: 0.0091 0.0243 0.0145 0.0150 0.0114 0.0081 */
+static const double HDRI_BOUND[] = {0.0114, 0.0304, 0.0182, 0.0188, 0.0143, 0.0102};
 
 static void encoder_real_hdris(void **state)
 {
@@ -545,8 +546,8 @@ static void encoder_real_hdris(void **state)
         double fast = round_trip(ctx, img, w, h, 0, IBL_QUALITY_FAST);
         double def = round_trip(ctx, img, w, h, 0, IBL_QUALITY_DEFAULT);
         print_message("%s %dx%d: RMS log2 error fast %.5f default %.5f\n", HDRIS[i], w, h, fast, def);
-        assert_true(fast < REAL_FAST_BOUND);
-        assert_true(def < REAL_DEFAULT_BOUND);
+        assert_true(fast < HDRI_BOUND[i] * 1.05);
+        assert_true(def < HDRI_BOUND[i]);
         assert_true(def <= fast * 1.0001);
         free(img);
     }

@@ -28,9 +28,9 @@ extern "C" {
 
 /* Encoder effort. */
 typedef enum ibl_quality {
-    IBL_QUALITY_DEFAULT = 0, /* a few partitions, the best fitting modes, two refinements */
+    IBL_QUALITY_DEFAULT = 0, /* two partitions, the best fitting mode, two refinements     */
     IBL_QUALITY_FAST,        /* one partition, the best fitting mode, one refinement       */
-    IBL_QUALITY_THOROUGH     /* every partition and mode, more refinements, endpoint search */
+    IBL_QUALITY_THOROUGH     /* 8 partitions, every mode, 4 refinements, endpoint search    */
 } ibl_quality;
 
 /* "default", "fast", "thorough". */

@@ -11,7 +11,7 @@
  *     one-region mode (3, 7, 11, 15) quantizes them (nearest unquantized value), orders them
  *     so the anchor texel sits near E0, and, when its deltas do not fit, clamps them;
  *  2. two regions: every partition is scored by the residual of a principal-axis fit of
- *     each subset; the best few (1 fast, 3 default, 8 thorough) are tried in the two-region
+ *     each subset; the best few (1 fast, 2 default, 8 thorough) are tried in the two-region
  *     modes;
  *  3. each try assigns the nearest palette entry to every texel, makes the anchors' top
  *     index bit 0 (swapping a subset's endpoints when the deltas allow, else restricting the
@@ -19,7 +19,11 @@
  *     quantized again, kept while the error falls;
  *  4. thorough: a last search moves each quantized endpoint channel by +-1.
  * Modes are tried from the highest endpoint precision down; fast and default stop after the
- * first one or two whose deltas fit unclamped, thorough tries all 14. */
+ * first whose deltas fit unclamped (or the untransformed mode), thorough tries all 14 with
+ * clamped deltas where they do not fit, and compares every palette entry for each texel
+ * (fast and default: the entries next to the texel's projection on the endpoints' line).
+ * Fast and default skip two regions when one region is already within 4 (fast) or 2
+ * (default) interpolation-domain units RMS per channel. */
 #include <math.h>
 #include <string.h>
 
@@ -30,6 +34,7 @@
 typedef struct enc_block {
     float v[16][3]; /* targets in the interpolation domain */
     int is_signed;
+    int exhaustive; /* indices: every palette entry (thorough), else the line projection +-1 */
 } enc_block;
 
 typedef struct cand {
@@ -40,18 +45,21 @@ typedef struct cand {
 } cand;
 
 typedef struct effort {
-    int partitions; /* two-region partitions tried                        */
-    int modes;      /* fitting modes tried per region count (14: all)      */
-    int refine;     /* least-squares passes                                */
-    int search;     /* +-1 endpoint search on the best candidate           */
+    int partitions; /* two-region partitions tried                                      */
+    int modes;      /* fitting modes tried per region count (14: all)                    */
+    int refine;     /* least-squares passes                                              */
+    int search;     /* +-1 endpoint search on the best candidate, exhaustive indices     */
+    float enough;   /* one-region error per texel channel below which two regions are
+                       not tried (squared interpolation-domain units; 0.5 unit = 1/4 of
+                       a half-float step)                                                */
 } effort;
 
 static effort effort_of(ibl_quality q)
 {
     switch (q) {
-    case IBL_QUALITY_FAST: return (effort){1, 1, 1, 0};
-    case IBL_QUALITY_THOROUGH: return (effort){8, BC6H_MODES, 4, 1};
-    default: return (effort){3, 2, 2, 0};
+    case IBL_QUALITY_FAST: return (effort){1, 1, 1, 0, 16.0f};
+    case IBL_QUALITY_THOROUGH: return (effort){8, BC6H_MODES, 4, 1, 0.0f};
+    default: return (effort){2, 1, 2, 0, 4.0f};
     }
 }
 
@@ -96,6 +104,8 @@ static int quantize(float v, int prec, int is_signed)
         }
         int max = (1 << prec) - 1;
         int q = (int)(v * (float)(1 << prec) * (1.0f / 65536.0f));
+        /* inside the range, unquantize(q) is the middle of [q, q + 1) * 2^(16 - prec) */
+        if (q >= 1 && q <= max - 2) return q;
         int best = 0;
         float best_d = 1e30f;
         for (int k = q - 1; k <= q + 1; k++) {
@@ -112,6 +122,7 @@ static int quantize(float v, int prec, int is_signed)
     float m = fabsf(v);
     int max = (1 << (prec - 1)) - 1;
     int q = (int)(m * (float)(1 << (prec - 1)) * (1.0f / 32768.0f));
+    if (q >= 1 && q <= max - 2) return v < 0.0f ? -q : q;
     int best = 0;
     float best_d = 1e30f;
     for (int k = q - 1; k <= q + 1; k++) {
@@ -200,6 +211,30 @@ static float nearest(const float *v, float pal[16][3], int limit, uint8_t *index
     return best;
 }
 
+/* The palette entry nearest v by projection onto the endpoints' line: the weight nearest
+ * the projection and its two neighbours are compared (the entries lie on the line up to
+ * the interpolation's rounding). */
+static float nearest_on_line(const float *v, float pal[16][3], int n, uint8_t *index)
+{
+    const float *a = pal[0], *z = pal[n - 1];
+    float d[3] = {z[0] - a[0], z[1] - a[1], z[2] - a[2]};
+    float len = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    int guess = 0;
+    if (len > 0.0f) {
+        /* the weights are within one of index * 64 / (n - 1): start there */
+        float t = ((v[0] - a[0]) * d[0] + (v[1] - a[1]) * d[1] + (v[2] - a[2]) * d[2]) / len;
+        guess = (int)(t * (float)(n - 1) + 0.5f);
+        guess = guess < 0 ? 0 : guess > n - 1 ? n - 1 : guess;
+    }
+    int lo = guess > 0 ? guess - 1 : 0, hi = guess < n - 1 ? guess + 1 : n - 1;
+    float best = 1e38f;
+    for (int i = lo; i <= hi; i++) {
+        float e = texel_error(v, pal[i]);
+        if (e < best) best = e, *index = (uint8_t)i;
+    }
+    return best;
+}
+
 /* Assigns indices for c's endpoints and makes each anchor's top index bit 0. Returns the
  * error (also stored in c->err). */
 static float evaluate(const enc_block *b, cand *c)
@@ -209,7 +244,9 @@ static float evaluate(const enc_block *b, cand *c)
     int n = palettes(m, c->q, b->is_signed, pal);
     uint16_t shape = shape_of(m, c->partition);
     float err = 0.0f;
-    for (int t = 0; t < 16; t++) err += nearest(b->v[t], pal[(shape >> t) & 1], n, &c->index[t]);
+    for (int t = 0; t < 16; t++)
+        err += b->exhaustive ? nearest(b->v[t], pal[(shape >> t) & 1], n, &c->index[t])
+                             : nearest_on_line(b->v[t], pal[(shape >> t) & 1], n, &c->index[t]);
     for (int s = 0; s < m->regions; s++) {
         int anchor = anchor_of(c, s);
         if (c->index[anchor] < n / 2) continue;
@@ -407,14 +444,74 @@ static void try_modes(const enc_block *b, const effort *ef, int regions, int par
 
 /* ---- partitions ---- */
 
+/* Sums of x and of x x^T (six products) per texel, for scoring partitions. */
+typedef struct texel_sums {
+    float x[16][3], xx[16][6], total_x[3], total_xx[6];
+} texel_sums;
+
+/* The residual of the principal-axis line through n texels with sums sx, sxx: the trace of
+ * their scatter matrix minus its largest eigenvalue (power iteration). */
+static float line_residual_of_sums(const float sx[3], const float sxx[6], int n)
+{
+    if (n < 2) return 0.0f;
+    float inv = 1.0f / (float)n;
+    float c00 = sxx[0] - sx[0] * sx[0] * inv, c01 = sxx[1] - sx[0] * sx[1] * inv;
+    float c02 = sxx[2] - sx[0] * sx[2] * inv, c11 = sxx[3] - sx[1] * sx[1] * inv;
+    float c12 = sxx[4] - sx[1] * sx[2] * inv, c22 = sxx[5] - sx[2] * sx[2] * inv;
+    float trace = c00 + c11 + c22;
+    float a[3] = {c00 >= c11 && c00 >= c22 ? 1.0f : 0.0f, c11 > c00 && c11 >= c22 ? 1.0f : 0.0f,
+                  c22 > c00 && c22 > c11 ? 1.0f : 0.0f};
+    float lambda = 0.0f;
+    for (int it = 0; it < 3; it++) {
+        float y[3] = {c00 * a[0] + c01 * a[1] + c02 * a[2], c01 * a[0] + c11 * a[1] + c12 * a[2],
+                      c02 * a[0] + c12 * a[1] + c22 * a[2]};
+        float len = sqrtf(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
+        if (!(len > 1e-20f)) return trace > 0.0f ? trace : 0.0f;
+        for (int c = 0; c < 3; c++) a[c] = y[c] / len;
+        lambda = len;
+    }
+    float r = trace - lambda;
+    return r > 0.0f ? r : 0.0f;
+}
+
+/* The two subsets' residuals: subset 1 summed from its mask, subset 0 the rest. */
+static float partition_residual(const texel_sums *ts, uint16_t shape)
+{
+    float sx[3] = {0, 0, 0}, sxx[6] = {0, 0, 0, 0, 0, 0}, rx[3], rxx[6];
+    int n = 0;
+    for (int t = 0; t < 16; t++) {
+        if (!((shape >> t) & 1)) continue;
+        n++;
+        for (int c = 0; c < 3; c++) sx[c] += ts->x[t][c];
+        for (int k = 0; k < 6; k++) sxx[k] += ts->xx[t][k];
+    }
+    for (int c = 0; c < 3; c++) rx[c] = ts->total_x[c] - sx[c];
+    for (int k = 0; k < 6; k++) rxx[k] = ts->total_xx[k] - sxx[k];
+    return line_residual_of_sums(sx, sxx, n) + line_residual_of_sums(rx, rxx, 16 - n);
+}
+
 static void best_partitions(const enc_block *b, int want, int *out)
 {
-    float score[BC6H_PARTITIONS];
-    for (int p = 0; p < BC6H_PARTITIONS; p++) {
-        float lo[3], hi[3];
-        uint16_t shape = ibl__bc6h_partitions[p];
-        score[p] = fit_line(b, (uint16_t)~shape, lo, hi) + fit_line(b, shape, lo, hi);
+    /* centred on the block's mean: the scatter matrices do not change, and the sums stay
+     * small enough for float (a sun's values are near 65535) */
+    texel_sums ts;
+    float mean[3] = {0, 0, 0};
+    for (int t = 0; t < 16; t++)
+        for (int c = 0; c < 3; c++) mean[c] += b->v[t][c] * (1.0f / 16.0f);
+    for (int t = 0; t < 16; t++) {
+        float v[3] = {b->v[t][0] - mean[0], b->v[t][1] - mean[1], b->v[t][2] - mean[2]};
+        memcpy(ts.x[t], v, sizeof ts.x[t]);
+        ts.xx[t][0] = v[0] * v[0], ts.xx[t][1] = v[0] * v[1], ts.xx[t][2] = v[0] * v[2];
+        ts.xx[t][3] = v[1] * v[1], ts.xx[t][4] = v[1] * v[2], ts.xx[t][5] = v[2] * v[2];
     }
+    memset(ts.total_x, 0, sizeof ts.total_x);
+    memset(ts.total_xx, 0, sizeof ts.total_xx);
+    for (int t = 0; t < 16; t++) {
+        for (int c = 0; c < 3; c++) ts.total_x[c] += ts.x[t][c];
+        for (int k = 0; k < 6; k++) ts.total_xx[k] += ts.xx[t][k];
+    }
+    float score[BC6H_PARTITIONS];
+    for (int p = 0; p < BC6H_PARTITIONS; p++) score[p] = partition_residual(&ts, ibl__bc6h_partitions[p]);
     for (int k = 0; k < want; k++) { /* selection in a fixed order: ties keep the lower p */
         int pick = -1;
         for (int p = 0; p < BC6H_PARTITIONS; p++) {
@@ -479,6 +576,7 @@ void ibl_bc6h_encode_block(const ibl_bc6h_desc *desc, const float rgba[64], uint
     effort ef = effort_of(d.quality);
     enc_block b;
     b.is_signed = d.is_signed != 0;
+    b.exhaustive = ef.search;
     for (int t = 0; t < 16; t++)
         for (int c = 0; c < 3; c++) b.v[t][c] = to_domain(rgba[4 * t + c], b.is_signed);
 
@@ -488,8 +586,8 @@ void ibl_bc6h_encode_block(const ibl_bc6h_desc *desc, const float rgba[64], uint
     float ep[4][3];
     fit_line(&b, 0xFFFF, ep[0], ep[1]);
     try_modes(&b, &ef, 1, 0, ep, &best);
-    /* a block one region already encodes to within a unit per channel needs no more */
-    if (best.err > 48.0f || ef.modes >= BC6H_MODES) {
+    /* a block one region already encodes closely enough (effort.enough) needs no more */
+    if (best.err > ef.enough * 48.0f || ef.modes >= BC6H_MODES) {
         int parts[BC6H_PARTITIONS];
         best_partitions(&b, ef.partitions, parts);
         for (int k = 0; k < ef.partitions; k++) {
