@@ -80,6 +80,20 @@ static ibl_status bc6h_codec(ibl_context *ctx, int quality, const float *rgba, i
     return st;
 }
 
+static ibl_status astc_codec(ibl_context *ctx, int quality, const float *rgba, int w, int h,
+                             float *decoded, double ms[2])
+{
+    ibl_astc_desc d = {4, 4, (ibl_quality)quality};
+    uint8_t *blocks = malloc(ibl_astc_bytes(4, 4, w, h));
+    double t0 = now_ms(), c0 = cpu_ms();
+    ibl_status st = ibl_astc_encode(ctx, &d, rgba, w, h, blocks);
+    ms[0] += now_ms() - t0;
+    ms[1] += cpu_ms() - c0;
+    if (st == IBL_OK) st = ibl_astc_decode(ctx, &d, blocks, w, h, decoded);
+    free(blocks);
+    return st;
+}
+
 static void run(ibl_context *ctx, const char *path, const ibl_texture *t, const char *name,
                 codec_fn codec, int variant, int runs)
 {
@@ -141,7 +155,10 @@ int main(int argc, char **argv)
         }
         static const char *const names[] = {"bc6h default", "bc6h fast", "bc6h thorough"};
         for (int q = 0; q < 3; q++) run(ctx, argv[i], &t, names[q], bc6h_codec, q, q == 2 ? 1 : runs);
-        (void)astc;
+        if (astc) {
+            run(ctx, argv[i], &t, "astcenc 4x4 -medium", astc_codec, IBL_QUALITY_DEFAULT, 1);
+            run(ctx, argv[i], &t, "astcenc 4x4 -thorough", astc_codec, IBL_QUALITY_THOROUGH, 1);
+        }
         ibl_texture_free(ctx, &t);
     }
     ibl_context_destroy(ctx);

@@ -13,6 +13,8 @@
  * multiples of 4 (the small mips) are padded by repeating their last row and column: the
  * texels outside the image are "irrelevant and undefined" for the formats.
  *
+ * ASTC HDR (block sizes 4x4 to 8x8) goes through ARM's astcenc (ibl_astc_*).
+ *
  * 8-bit HDR encodings (exact formulas in docs/FORMATS.md): RGBM (rgb = m.rgb * m.a * range),
  * RGBD (rgb = d.rgb / d.a, a shade over [1/255, 1]) and the shared-exponent RGBE of Radiance
  * files. Stored as R8G8B8A8_UNORM with a key naming the encoding in KTX2.
@@ -75,6 +77,24 @@ ibl_status ibl_bc6h_decode(ibl_context *ctx, int is_signed, const void *blocks, 
  * are not included (drivers need not agree on them). Deterministic for a seed. */
 void ibl_bc6h_test_vectors(uint64_t seed, int count, int is_signed, uint8_t *blocks,
                            uint16_t *expected);
+
+/* ------------------------------------------------------------------------------------------ */
+/* ASTC HDR (VK_FORMAT_ASTC_<w>x<h>_SFLOAT_BLOCK) through ARM's astcenc                       */
+
+typedef struct ibl_astc_desc {
+    int block_width, block_height; /* 4x4, 5x4, 5x5, 6x5, 6x6, 8x5, 8x6 or 8x8; 0: 4x4      */
+    ibl_quality quality;           /* astcenc's presets: fast, medium (default), thorough    */
+} ibl_astc_desc;
+
+/* Bytes of the 16-byte blocks of an image (0 for an invalid block size or image). */
+size_t ibl_astc_bytes(int block_width, int block_height, int width, int height);
+/* Encodes width * height RGBA float texels (alpha stored as 1) with the HDR RGB profile; the
+ * image is split into bands of block rows, each encoded by its own single-threaded astcenc
+ * context on the context's parallel-for (output identical at any thread count). */
+ibl_status ibl_astc_encode(ibl_context *ctx, const ibl_astc_desc *desc, const float *rgba,
+                           int width, int height, void *blocks);
+ibl_status ibl_astc_decode(ibl_context *ctx, const ibl_astc_desc *desc, const void *blocks,
+                           int width, int height, float *rgba);
 
 /* ------------------------------------------------------------------------------------------ */
 /* 8-bit HDR encodings                                                                        */

@@ -210,7 +210,7 @@ int ibl_format_channels(ibl_format format)
     case IBL_FORMAT_BC6H_SIGNED:
     case IBL_FORMAT_RGBM:
     case IBL_FORMAT_RGBD: return 3;
-    default: return 4;
+    default: return format >= IBL_FORMAT_ASTC_4x4 && format <= IBL_FORMAT_ASTC_8x8 ? 3 : 4;
     }
 }
 

@@ -303,16 +303,29 @@ void ibl__unpack(ibl_context *ctx, ibl_format format, const uint8_t *src, size_t
 
 /* ---- block formats and 8-bit encodings ---- */
 
+int ibl__format_block(ibl_format format, int *block_width, int *block_height)
+{
+    static const uint8_t astc[8][2] = {{4, 4}, {5, 4}, {5, 5}, {6, 5}, {6, 6}, {8, 5}, {8, 6}, {8, 8}};
+    int w = 1, h = 1;
+    if (format == IBL_FORMAT_BC6H || format == IBL_FORMAT_BC6H_SIGNED) w = h = 4;
+    if (format >= IBL_FORMAT_ASTC_4x4 && format <= IBL_FORMAT_ASTC_8x8) {
+        w = astc[format - IBL_FORMAT_ASTC_4x4][0];
+        h = astc[format - IBL_FORMAT_ASTC_4x4][1];
+    }
+    if (block_width) *block_width = w;
+    if (block_height) *block_height = h;
+    return w > 1;
+}
+
 int ibl__format_is_block(ibl_format format)
 {
-    return format == IBL_FORMAT_BC6H || format == IBL_FORMAT_BC6H_SIGNED;
+    return ibl__format_block(format, NULL, NULL);
 }
 
 size_t ibl__format_unit_bytes(ibl_format format)
 {
+    if (ibl__format_is_block(format)) return 16; /* BC6H and ASTC blocks */
     switch (format) {
-    case IBL_FORMAT_BC6H:
-    case IBL_FORMAT_BC6H_SIGNED: return IBL_BC6H_BLOCK_BYTES;
     case IBL_FORMAT_RGBE:
     case IBL_FORMAT_RGBM:
     case IBL_FORMAT_RGBD: return 4;
@@ -323,12 +336,13 @@ size_t ibl__format_unit_bytes(ibl_format format)
 uint64_t ibl__level_bytes(ibl_format format, ibl_texture_kind kind, int width, int height,
                           int depth, int level)
 {
-    if (!ibl__format_is_block(format))
+    int bw, bh;
+    if (!ibl__format_block(format, &bw, &bh))
         return ibl__level_texels(kind, width, height, depth, level) * ibl__format_unit_bytes(format);
-    uint64_t bx = ((uint64_t)ibl_level_size(width, level) + 3) / 4;
-    uint64_t by = ((uint64_t)ibl_level_size(height, level) + 3) / 4;
+    uint64_t bx = ((uint64_t)ibl_level_size(width, level) + (uint64_t)bw - 1) / (uint64_t)bw;
+    uint64_t by = ((uint64_t)ibl_level_size(height, level) + (uint64_t)bh - 1) / (uint64_t)bh;
     uint64_t d = kind == IBL_TEXTURE_3D ? (uint64_t)ibl_level_size(depth, level) : 1;
-    return bx * by * d * IBL_BC6H_BLOCK_BYTES;
+    return bx * by * d * 16;
 }
 
 typedef struct hdr8_job {
@@ -372,17 +386,26 @@ static void run_hdr8(ibl_context *ctx, hdr8_job *j)
 }
 
 size_t ibl__encode_level(ibl_context *ctx, ibl_format format, const ibl_write_desc *desc,
-                         const ibl_texture *tex, int level, int face, uint8_t *dst)
+                         const ibl_texture *tex, int level, int face, uint8_t *dst,
+                         ibl_status *status)
 {
+    *status = IBL_OK;
     int w = ibl_level_size(tex->width, level), h = ibl_level_size(tex->height, level);
     int d = tex->kind == IBL_TEXTURE_3D ? ibl_level_size(tex->depth, level) : 1;
     const float *src = ibl_texture_level(tex, level, face);
     size_t count = (size_t)w * (size_t)h * (size_t)d;
-    if (ibl__format_is_block(format)) {
+    int bw, bh;
+    if (ibl__format_block(format, &bw, &bh)) {
         ibl_bc6h_desc bd = {format == IBL_FORMAT_BC6H_SIGNED, desc ? desc->quality : IBL_QUALITY_DEFAULT};
-        size_t slice = ibl_bc6h_bytes(w, h), clamped = 0;
-        for (int z = 0; z < d; z++)
-            ibl_bc6h_encode(ctx, &bd, src + (size_t)z * (size_t)w * (size_t)h * 4, w, h, dst + (size_t)z * slice);
+        ibl_astc_desc ad = {bw, bh, bd.quality};
+        int astc = bw != 4 || bh != 4 || (format != IBL_FORMAT_BC6H && format != IBL_FORMAT_BC6H_SIGNED);
+        size_t slice = astc ? ibl_astc_bytes(bw, bh, w, h) : ibl_bc6h_bytes(w, h), clamped = 0;
+        for (int z = 0; z < d; z++) {
+            const float *texels = src + (size_t)z * (size_t)w * (size_t)h * 4;
+            if (astc) *status = ibl_astc_encode(ctx, &ad, texels, w, h, dst + (size_t)z * slice);
+            else *status = ibl_bc6h_encode(ctx, &bd, texels, w, h, dst + (size_t)z * slice);
+            if (*status != IBL_OK) return 0;
+        }
         for (size_t i = 0; i < count; i++) {
             int over = 0;
             for (int c = 0; c < 3; c++) over |= fabsf(src[i * 4 + (size_t)c]) > 65504.0f;
@@ -406,24 +429,31 @@ size_t ibl__encode_level(ibl_context *ctx, ibl_format format, const ibl_write_de
     return ibl__pack(ctx, format, src, count, dst);
 }
 
-void ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_range, const uint8_t *src,
-                       ibl_texture *tex, int level, int face)
+ibl_status ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_range,
+                             const uint8_t *src, ibl_texture *tex, int level, int face)
 {
     int w = ibl_level_size(tex->width, level), h = ibl_level_size(tex->height, level);
     int d = tex->kind == IBL_TEXTURE_3D ? ibl_level_size(tex->depth, level) : 1;
     float *dst = ibl_texture_level(tex, level, face);
     size_t count = (size_t)w * (size_t)h * (size_t)d;
-    if (ibl__format_is_block(format)) {
-        size_t slice = ibl_bc6h_bytes(w, h);
-        for (int z = 0; z < d; z++)
-            ibl_bc6h_decode(ctx, format == IBL_FORMAT_BC6H_SIGNED, src + (size_t)z * slice, w, h,
-                            dst + (size_t)z * (size_t)w * (size_t)h * 4);
+    int bw, bh;
+    if (ibl__format_block(format, &bw, &bh)) {
+        int bc6h = format == IBL_FORMAT_BC6H || format == IBL_FORMAT_BC6H_SIGNED;
+        ibl_astc_desc ad = {bw, bh, IBL_QUALITY_DEFAULT};
+        size_t slice = bc6h ? ibl_bc6h_bytes(w, h) : ibl_astc_bytes(bw, bh, w, h);
+        for (int z = 0; z < d; z++) {
+            float *texels = dst + (size_t)z * (size_t)w * (size_t)h * 4;
+            ibl_status st = bc6h ? ibl_bc6h_decode(ctx, format == IBL_FORMAT_BC6H_SIGNED, src + (size_t)z * slice, w, h, texels)
+                                 : ibl_astc_decode(ctx, &ad, src + (size_t)z * slice, w, h, texels);
+            if (st != IBL_OK) return st;
+        }
     } else if (format == IBL_FORMAT_RGBM || format == IBL_FORMAT_RGBD || format == IBL_FORMAT_RGBE) {
         hdr8_job j = {format, rgbm_range > 0.0f ? rgbm_range : IBL_RGBM_DEFAULT_RANGE, count, NULL, NULL, src, dst};
         run_hdr8(ctx, &j);
     } else {
         ibl__unpack(ctx, format, src, count, dst);
     }
+    return IBL_OK;
 }
 
 void ibl__fill_info(ibl_file_info *info, ibl_file_type type, const ibl_texture *tex)

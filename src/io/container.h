@@ -76,21 +76,25 @@ void ibl__unpack(ibl_context *ctx, ibl_format format, const uint8_t *src, size_t
 
 /* ---- formats beyond fixed-size float texels: BC6H blocks and the 8-bit HDR encodings ---- */
 
-/* Non-zero for 4x4 block formats (BC6H). */
+/* Non-zero for block formats (BC6H 4x4, ASTC 4x4..8x8): their block footprint in
+ * *block_width x *block_height (1x1 for texel formats; either pointer may be NULL). */
+int ibl__format_block(ibl_format format, int *block_width, int *block_height);
 int ibl__format_is_block(ibl_format format);
-/* Bytes of one texel (4 for RGBM/RGBD/RGBE) or of one 4x4 block (16 for BC6H); 0 if the
- * containers cannot store the format. */
+/* Bytes of one texel (4 for RGBM/RGBD/RGBE) or of one block (16 for BC6H and ASTC); 0 if
+ * the containers cannot store the format. */
 size_t ibl__format_unit_bytes(ibl_format format);
-/* Bytes of one face of one level (all its slices; blocks of 4x4 texels per slice). */
+/* Bytes of one face of one level (all its slices; whole blocks per slice). */
 uint64_t ibl__level_bytes(ibl_format format, ibl_texture_kind kind, int width, int height,
                           int depth, int level);
-/* Stores one face of one level of tex in format (BC6H encoded with desc->quality, RGBM with
- * desc->rgbm_range); returns the texels stored at the format's largest value. */
+/* Stores one face of one level of tex in format (BC6H and ASTC encoded with desc->quality,
+ * RGBM with desc->rgbm_range); returns the texels stored at the format's largest value.
+ * *status is IBL_OK unless the ASTC encoder failed (then with the context's message). */
 size_t ibl__encode_level(ibl_context *ctx, ibl_format format, const ibl_write_desc *desc,
-                         const ibl_texture *tex, int level, int face, uint8_t *dst);
+                         const ibl_texture *tex, int level, int face, uint8_t *dst,
+                         ibl_status *status);
 /* The reverse of ibl__encode_level; rgbm_range as written (0: the default). */
-void ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_range, const uint8_t *src,
-                       ibl_texture *tex, int level, int face);
+ibl_status ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_range,
+                             const uint8_t *src, ibl_texture *tex, int level, int face);
 
 /* Fills the file info of a decoded texture. */
 void ibl__fill_info(ibl_file_info *info, ibl_file_type type, const ibl_texture *tex);

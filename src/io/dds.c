@@ -166,7 +166,11 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
     size_t at = DATA_OFFSET_DX10;
     for (int f = 0; f < faces; f++) {
         for (int l = 0; l < tex->levels; l++) {
-            clamped += ibl__encode_level(ctx, fmt, desc, tex, l, f, buf + at);
+            clamped += ibl__encode_level(ctx, fmt, desc, tex, l, f, buf + at, &st);
+            if (st != IBL_OK) {
+                ibl_free(ctx, buf);
+                return ibl__fail_named(ctx, st, name);
+            }
             at += (size_t)ibl__level_bytes(fmt, tex->kind, tex->width, tex->height, tex->depth, l);
         }
     }
@@ -272,7 +276,11 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     const uint8_t *p = bytes + data_at;
     for (int f = 0; f < faces; f++) {
         for (int l = 0; l < (int)levels; l++) {
-            ibl__decode_level(ctx, dx->format, 0.0f, p, out, l, f);
+            st = ibl__decode_level(ctx, dx->format, 0.0f, p, out, l, f);
+            if (st != IBL_OK) {
+                ibl_texture_free(ctx, out);
+                return ibl__fail_named(ctx, st, name);
+            }
             p += (size_t)ibl__level_bytes(dx->format, kind, w, hh, d, l);
         }
     }

@@ -30,9 +30,12 @@ enum {
     VK_E5B9G9R9_UFLOAT_PACK32 = 123,
     VK_BC6H_UFLOAT_BLOCK = 143,
     VK_BC6H_SFLOAT_BLOCK = 144,
+    VK_ASTC_4x4_SFLOAT_BLOCK = 1000066000, /* VK_EXT_texture_compression_astc_hdr, Vulkan 1.3;
+                                              4x4, 5x4, 5x5, 6x5, 6x6, 8x5, 8x6, 8x8 follow */
     /* Khronos Data Format Specification enumerants */
     KHR_DF_MODEL_RGBSDA = 1,
     KHR_DF_MODEL_BC6H = 133,
+    KHR_DF_MODEL_ASTC = 162,
     KHR_DF_PRIMARIES_BT709 = 1,
     KHR_DF_TRANSFER_LINEAR = 1,
     KHR_DF_VERSION_1_3 = 2,
@@ -60,6 +63,10 @@ static const vk_map VK_FORMATS[] = {
     /* the 8-bit HDR encodings share one vkFormat; the key ENCODING_KEY tells them apart */
     {IBL_FORMAT_RGBM, VK_R8G8B8A8_UNORM, 1}, {IBL_FORMAT_RGBD, VK_R8G8B8A8_UNORM, 1},
     {IBL_FORMAT_RGBE, VK_R8G8B8A8_UNORM, 1},
+    {IBL_FORMAT_ASTC_4x4, VK_ASTC_4x4_SFLOAT_BLOCK + 0, 1}, {IBL_FORMAT_ASTC_5x4, VK_ASTC_4x4_SFLOAT_BLOCK + 1, 1},
+    {IBL_FORMAT_ASTC_5x5, VK_ASTC_4x4_SFLOAT_BLOCK + 2, 1}, {IBL_FORMAT_ASTC_6x5, VK_ASTC_4x4_SFLOAT_BLOCK + 3, 1},
+    {IBL_FORMAT_ASTC_6x6, VK_ASTC_4x4_SFLOAT_BLOCK + 4, 1}, {IBL_FORMAT_ASTC_8x5, VK_ASTC_4x4_SFLOAT_BLOCK + 5, 1},
+    {IBL_FORMAT_ASTC_8x6, VK_ASTC_4x4_SFLOAT_BLOCK + 6, 1}, {IBL_FORMAT_ASTC_8x8, VK_ASTC_4x4_SFLOAT_BLOCK + 7, 1},
 };
 
 /* Key/value entries naming an 8-bit HDR encoding ("rgbm", "rgbd", "rgbe") and RGBM's range. */
@@ -151,6 +158,22 @@ static int dfd_samples(ibl_format f, dfd_sample s[6])
         s[0].lower = f == IBL_FORMAT_BC6H_SIGNED ? F32_MINUS_ONE : F32_ZERO;
         s[0].upper = F32_ONE;
         return 1;
+    case IBL_FORMAT_ASTC_4x4:
+    case IBL_FORMAT_ASTC_5x4:
+    case IBL_FORMAT_ASTC_5x5:
+    case IBL_FORMAT_ASTC_6x5:
+    case IBL_FORMAT_ASTC_6x6:
+    case IBL_FORMAT_ASTC_8x5:
+    case IBL_FORMAT_ASTC_8x6:
+    case IBL_FORMAT_ASTC_8x8:
+        /* KHR_DF_MODEL_ASTC: one 128-bit DATA sample; FLOAT marks blocks that may be HDR,
+         * SIGNED the SFLOAT formats */
+        s[0].bit_offset = 0;
+        s[0].bit_length = 128;
+        s[0].channel_type = (uint8_t)(KHR_DF_FLOAT | KHR_DF_SIGNED);
+        s[0].lower = F32_MINUS_ONE;
+        s[0].upper = F32_ONE;
+        return 1;
     case IBL_FORMAT_RGBM:
     case IBL_FORMAT_RGBD:
     case IBL_FORMAT_RGBE:
@@ -177,13 +200,14 @@ static size_t write_dfd(ibl_format f, uint8_t *out)
     uint8_t *b = out + 4;
     ibl__wr32(b + 0, 0); /* vendorId 0 (Khronos), descriptorType 0 (basic) */
     ibl__wr32(b + 4, (uint32_t)KHR_DF_VERSION_1_3 | ((uint32_t)block << 16));
-    int is_block = ibl__format_is_block(f);
-    b[8] = is_block ? KHR_DF_MODEL_BC6H : KHR_DF_MODEL_RGBSDA;
+    int bw, bh, is_block = ibl__format_block(f, &bw, &bh);
+    int bc6h = f == IBL_FORMAT_BC6H || f == IBL_FORMAT_BC6H_SIGNED;
+    b[8] = !is_block ? KHR_DF_MODEL_RGBSDA : bc6h ? KHR_DF_MODEL_BC6H : KHR_DF_MODEL_ASTC;
     b[9] = KHR_DF_PRIMARIES_BT709;
     b[10] = KHR_DF_TRANSFER_LINEAR;
     b[11] = 0;                          /* flags: KHR_DF_FLAG_ALPHA_STRAIGHT */
     memset(b + 12, 0, 12);              /* texelBlockDimension0-3 = 0 (1x1x1x1), bytesPlane */
-    if (is_block) b[12] = b[13] = 3;       /* 4x4 texel blocks (stored minus one) */
+    if (is_block) b[12] = (uint8_t)(bw - 1), b[13] = (uint8_t)(bh - 1); /* stored minus one */
     b[16] = (uint8_t)ibl__format_unit_bytes(f); /* bytesPlane0, also when supercompressed */
     for (int i = 0; i < n; i++) {
         uint8_t *p = b + 24 + 16 * (size_t)i;
@@ -237,14 +261,14 @@ static void free_levels(ibl_context *ctx, level_data *ld)
     for (int l = 0; l < IBL_MAX_LEVELS; l++) ibl_free(ctx, ld->bytes[l]);
 }
 
-static size_t encode_faces(ibl_context *ctx, const ibl_texture *tex, ibl_format fmt,
-                           const ibl_write_desc *desc, int level, uint8_t *dst)
+static ibl_status encode_faces(ibl_context *ctx, const ibl_texture *tex, ibl_format fmt,
+                               const ibl_write_desc *desc, int level, uint8_t *dst, size_t *clamped)
 {
-    size_t clamped = 0;
+    ibl_status st = IBL_OK;
     uint64_t face_bytes = ibl__level_bytes(fmt, tex->kind, tex->width, tex->height, tex->depth, level);
-    for (int f = 0; f < ibl_texture_faces(tex); f++)
-        clamped += ibl__encode_level(ctx, fmt, desc, tex, level, f, dst + (size_t)face_bytes * (size_t)f);
-    return clamped;
+    for (int f = 0; f < ibl_texture_faces(tex) && st == IBL_OK; f++)
+        *clamped += ibl__encode_level(ctx, fmt, desc, tex, level, f, dst + (size_t)face_bytes * (size_t)f, &st);
+    return st;
 }
 
 /* Encodes and compresses every level (the supercompressed path). */
@@ -256,8 +280,11 @@ static ibl_status compress_levels(ibl_context *ctx, const char *name, const ibl_
         size_t raw = ld->raw[l];
         uint8_t *tmp = ibl_alloc(ctx, raw ? raw : 1);
         if (!tmp) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
-        *clamped += encode_faces(ctx, tex, fmt, desc, l, tmp);
-        ibl_status st = ibl__zstd_compress(ctx, name, tmp, raw, desc->zstd_level, &ld->bytes[l], &ld->len[l]);
+        ibl_status st = encode_faces(ctx, tex, fmt, desc, l, tmp, clamped);
+        if (st == IBL_OK)
+            st = ibl__zstd_compress(ctx, name, tmp, raw, desc->zstd_level, &ld->bytes[l], &ld->len[l]);
+        else
+            st = ibl__fail_named(ctx, st, name);
         ibl_free(ctx, tmp);
         if (st != IBL_OK) return st;
     }
@@ -279,7 +306,8 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     if (!vk)
         return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: KTX2 output does not support pixel format %s (use rgba16f, rgba32f, "
-                        "rg11b10f, rgb9e5, rg16f, rg32f, bc6h, bc6h-signed, rgbm, rgbd or rgbe)",
+                        "rg11b10f, rgb9e5, rg16f, rg32f, bc6h, bc6h-signed, astc4x4..astc8x8, "
+                        "rgbm, rgbd or rgbe)",
                         name, ibl_format_name(fmt));
     int zstd = desc && desc->zstd_level > 0;
     if (zstd && desc->zstd_level > 22)
@@ -367,11 +395,15 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     if (kvd_len) memcpy(buf + kvd_off, kvd, kvd_len);
     ibl_free(ctx, kvd);
     /* A level's images are layer, face, slice, row: exactly our in-memory level block. */
-    for (int l = 0; l < tex->levels; l++) {
+    for (int l = 0; l < tex->levels && st == IBL_OK; l++) {
         if (zstd) memcpy(buf + level_off[l], ld.bytes[l], ld.len[l]);
-        else clamped += encode_faces(ctx, tex, fmt, desc, l, buf + level_off[l]);
+        else st = encode_faces(ctx, tex, fmt, desc, l, buf + level_off[l], &clamped);
     }
     free_levels(ctx, &ld);
+    if (st != IBL_OK) {
+        ibl_free(ctx, buf);
+        return ibl__fail_named(ctx, st, name);
+    }
     *bytes = buf;
     *size = (size_t)total;
     if (desc && desc->report) desc->report->clamped_texels += clamped;
@@ -405,11 +437,12 @@ static ibl_status check_dfd(ibl_context *ctx, const char *name, const uint8_t *d
     if (block < 24 || block > len - 4 || (block - 24) % 16 != 0)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: descriptor block size %u is inconsistent", name,
                         block);
-    int dim = ibl__format_is_block(fmt) ? 3 : 0; /* 4x4 blocks are stored as 3, 3 */
-    if (b[12] != dim || b[13] != dim || b[14] | b[15])
+    int bw, bh;
+    ibl__format_block(fmt, &bw, &bh); /* stored minus one */
+    if (b[12] != bw - 1 || b[13] != bh - 1 || b[14] | b[15])
         return ibl__fail(ctx, IBL_ERR_FORMAT,
-                        "%s: texel block dimensions in the descriptor are not %s", name,
-                        dim ? "4x4x1x1" : "1x1x1x1");
+                        "%s: texel block dimensions in the descriptor are not %dx%dx1x1", name, bw,
+                        bh);
     if ((size_t)b[16] != ibl__format_unit_bytes(fmt) && b[16] != 0)
         return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: descriptor says %u bytes per texel block, the vkFormat has %zu", name,
@@ -485,9 +518,11 @@ static ibl_status decode_levels(ibl_context *ctx, const char *name, const uint8_
             src = tmp;
         }
         uint64_t face_bytes = raw[l] / (uint64_t)faces;
-        for (int f = 0; f < faces; f++)
-            ibl__decode_level(ctx, out->format, range, src + (size_t)face_bytes * (size_t)f, out, l, f);
+        ibl_status st = IBL_OK;
+        for (int f = 0; f < faces && st == IBL_OK; f++)
+            st = ibl__decode_level(ctx, out->format, range, src + (size_t)face_bytes * (size_t)f, out, l, f);
         ibl_free(ctx, tmp);
+        if (st != IBL_OK) return ibl__fail_named(ctx, st, name);
     }
     return IBL_OK;
 }
@@ -519,8 +554,8 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
                         "%s: unsupported vkFormat %u (supported: 97 R16G16B16A16_SFLOAT, 109 "
                         "R32G32B32A32_SFLOAT, 122 B10G11R11_UFLOAT_PACK32, 123 "
                         "E5B9G9R9_UFLOAT_PACK32, 83 R16G16_SFLOAT, 103 R32G32_SFLOAT, 143 "
-                        "BC6H_UFLOAT_BLOCK, 144 BC6H_SFLOAT_BLOCK, 37 R8G8B8A8_UNORM with an "
-                        "ibl.encoding key)",
+                        "BC6H_UFLOAT_BLOCK, 144 BC6H_SFLOAT_BLOCK, 1000066000-7 ASTC 4x4..8x8 "
+                        "SFLOAT_BLOCK, 37 R8G8B8A8_UNORM with an ibl.encoding key)",
                         name, vkformat);
     if (type_size != vk->type_size)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: typeSize %u, the vkFormat requires %u", name,
