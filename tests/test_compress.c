@@ -756,6 +756,75 @@ static void containers_zstd(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* ---- ASTC HDR through astcenc ---- */
+
+static void astc_codec(void **state)
+{
+    (void)state;
+    ibl_context *c1 = test_context(1), *c3 = test_context(3);
+    int w, h;
+    float *img = small_hdri(c1, "forest.exr", &w, &h);
+    static const int sizes[][2] = {{4, 4}, {5, 4}, {5, 5}, {6, 5}, {6, 6}, {8, 5}, {8, 6}, {8, 8}};
+    double prev = 0.0;
+    for (size_t i = 0; i < 8; i++) {
+        ibl_astc_desc d = {sizes[i][0], sizes[i][1], IBL_QUALITY_FAST};
+        size_t bytes = ibl_astc_bytes(d.block_width, d.block_height, w, h);
+        assert_int_equal(bytes, (size_t)((w + d.block_width - 1) / d.block_width) *
+                                    (size_t)((h + d.block_height - 1) / d.block_height) * 16);
+        uint8_t *a = malloc(bytes), *b = malloc(bytes);
+        float *back = malloc((size_t)w * (size_t)h * 16);
+        assert_int_equal(ibl_astc_encode(c1, &d, img, w, h, a), IBL_OK);
+        assert_int_equal(ibl_astc_encode(c3, &d, img, w, h, b), IBL_OK);
+        assert_memory_equal(a, b, bytes); /* any thread count */
+        assert_int_equal(ibl_astc_decode(c3, &d, a, w, h, back), IBL_OK);
+        double e = log_rms(img, back, (size_t)w * (size_t)h, 0);
+        print_message("astc %dx%d fast on forest 256x128: RMS log2 error %.5f\n", d.block_width, d.block_height, e);
+        assert_true(e < 0.12);
+        assert_true(e >= prev * 0.9); /* fewer bits per texel, more error (roughly) */
+        prev = e;
+        free(a);
+        free(b);
+        free(back);
+    }
+    ibl_astc_desc bad = {7, 7, IBL_QUALITY_DEFAULT};
+    uint8_t block[16];
+    assert_int_equal(ibl_astc_bytes(7, 7, 4, 4), 0);
+    assert_int_equal(ibl_astc_encode(c1, &bad, img, 4, 4, block), IBL_ERR_INVALID_ARGUMENT);
+    /* KTX2: vkFormat 1000066000 + n, a KHR_DF_MODEL_ASTC descriptor with the footprint */
+    ibl_texture t = smooth_cube(c1, 16, 0);
+    ibl_write_desc wd = {0};
+    wd.format = IBL_FORMAT_ASTC_6x5;
+    void *bytes;
+    size_t size;
+    assert_int_equal(ibl__ktx2_encode(c1, &t, &wd, "a.ktx2", &bytes, &size), IBL_OK);
+    const uint8_t *kb = bytes;
+    assert_int_equal(rd32(kb + 12), 1000066003u);
+    const uint8_t *dfd = kb + rd32(kb + 48);
+    assert_int_equal(dfd[4 + 8], 162);
+    assert_int_equal(dfd[4 + 12], 5);
+    assert_int_equal(dfd[4 + 13], 4);
+    assert_int_equal(rd64(kb + 80 + 8), (uint64_t)3 * 4 * 16 * 6); /* 16x16: 3x4 blocks */
+    ibl_texture back;
+    assert_int_equal(ibl__ktx2_decode(c1, bytes, size, "a.ktx2", &back, NULL), IBL_OK);
+    assert_int_equal(back.format, IBL_FORMAT_ASTC_6x5);
+    ibl_astc_desc d65 = {6, 5, IBL_QUALITY_DEFAULT};
+    uint8_t *blocks = malloc(ibl_astc_bytes(6, 5, 16, 16));
+    float *want = malloc(16 * 16 * 16);
+    assert_int_equal(ibl_astc_encode(c1, &d65, ibl_texture_level(&t, 0, 2), 16, 16, blocks), IBL_OK);
+    assert_int_equal(ibl_astc_decode(c1, &d65, blocks, 16, 16, want), IBL_OK);
+    assert_memory_equal(want, ibl_texture_level(&back, 0, 2), 16 * 16 * 16);
+    free(blocks);
+    free(want);
+    ibl_texture_free(c1, &back);
+    ibl_free(c1, bytes);
+    assert_false(ibl_file_type_writes_format(IBL_FILE_DDS, IBL_FORMAT_ASTC_4x4));
+    assert_int_equal(ibl__dds_encode(c1, &t, &wd, "a.dds", &bytes, &size), IBL_ERR_UNSUPPORTED);
+    ibl_texture_free(c1, &t);
+    free(img);
+    ibl_context_destroy(c1);
+    ibl_context_destroy(c3);
+}
+
 /* ---- 8-bit HDR encodings ---- */
 
 static void hdr8_round_trips(void **state)
@@ -880,6 +949,10 @@ static void cli_formats(void **state)
     assert_int_equal(test_run_cli(&out, "info '%s'", test_path("m.ktx2")), 0);
     assert_non_null(strstr(out, "rgbm"));
     assert_non_null(strstr(out, "ibl.rgbm_range = 16"));
+    assert_int_equal(test_run_cli(&out, "convert -q '%s' -o '%s' --size 16 --mips --format astc5x5 --quality fast",
+                                  exr, test_path("a.ktx2")), 0);
+    assert_int_equal(test_run_cli(&out, "info '%s'", test_path("a.ktx2")), 0);
+    assert_non_null(strstr(out, "astc5x5"));
     /* usage errors: exit 2 */
     assert_int_equal(test_run_cli(&out, "convert '%s' -o '%s' --format rgbm", exr, test_path("m.dds")), 2);
     assert_int_equal(test_run_cli(&out, "convert '%s' -o '%s' --zstd", exr, test_path("z.dds")), 2);
@@ -907,6 +980,7 @@ int main(void)
         cmocka_unit_test(encoder_threads_and_padding),
         cmocka_unit_test(containers_bc6h),
         cmocka_unit_test(containers_zstd),
+        cmocka_unit_test(astc_codec),
         cmocka_unit_test(hdr8_round_trips),
         cmocka_unit_test(hdr8_containers),
         cmocka_unit_test(cli_formats),
