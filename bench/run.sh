@@ -18,6 +18,7 @@ run "$B/bench_triace_kernels"
 run "$B/bench_sh" "$HDRI"
 run "$B/bench_dynamic" 64 201 1
 run "$B/bench_scene" 2000000
+run sh bench/compress_tables.sh "$BUILD" "$HDRI"
 if [ "${BENCH_FULL:-0}" = 1 ]; then
   mkdir -p "$BUILD/refcache"
   run "$B/bench_specular" --sizes 128,256 --samples 2000 --filters ggx,phong,blinn \

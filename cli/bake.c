@@ -28,7 +28,8 @@ static const char usage[] =
     "  --window W             SH window: none (default), auto, or a Hanning width\n"
     "  --lut-size N           split-sum table edge (default 128)\n"
     "  --format F             pixel format of the cube textures: rgba16f (default), rgba32f,\n"
-    "                         rg11b10f, rgb9e5\n"
+    "                         rg11b10f, rgb9e5, bc6h, bc6h-signed (default quality); rgbm,\n"
+    "                         rgbd, rgbe (8-bit HDR: KTX2 only, no DDS)\n"
     "  --working-size N       face edge the input is read at (default: the chain's, at least\n"
     "                         128; 256 without --size)\n"
     "  --preview-width W      width of environment.png (default 1024; 0: no preview)\n"
@@ -66,8 +67,10 @@ static void parse(cli_args *a, bake_options *o)
             const char *v = cli_value(a, arg);
             if (!ibl_format_from_name(v, &o->desc.format) ||
                 !ibl_file_type_writes_format(IBL_FILE_KTX2, o->desc.format))
-                cli_usage_error(a, "--format wants rgba16f, rgba32f, rg11b10f, rgb9e5, rg16f or "
-                                   "rg32f, not '%s'", v);
+                cli_usage_error(a, "--format wants rgba16f, rgba32f, rg11b10f, rgb9e5, rg16f, "
+                                   "rg32f, bc6h, bc6h-signed, rgbm, rgbd or rgbe, not '%s'", v);
+            /* DDS has no key/value data to name an 8-bit encoding: those bakes are KTX2 only */
+            if (!ibl_file_type_writes_format(IBL_FILE_DDS, o->desc.format)) o->desc.containers = IBL_BAKE_KTX2;
         } else {
             cli_positional_or_unknown(a, arg);
         }

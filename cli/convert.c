@@ -1,4 +1,5 @@
 /* ibl convert: any layout or container to any other. */
+#include "format_options.h"
 #include "input.h"
 
 #include <stdio.h>
@@ -19,7 +20,9 @@ static const char usage[] =
     "  --size N             cube face edge (default: from the input's resolution)\n"
     "  --mips               write the full area-correct mip chain (containers)\n"
     "  --format F           pixel format: rgba16f (default for containers), rgba32f, rg11b10f,\n"
-    "                       rgb9e5, rg16f, rg32f; rgba16 for 16-bit PNG\n"
+    "                       rgb9e5, rg16f, rg32f, bc6h, bc6h-signed (.ktx2 .dds), rgbm, rgbd,\n"
+    "                       rgbe (.ktx2); rgba16 for 16-bit PNG\n"
+    CLI_FORMAT_HELP
     "  --exposure EV        exposure for 8-bit outputs (PNG/JPEG previews; filmic tone map)\n"
     CLI_INPUT_HELP
     "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n"
@@ -40,7 +43,9 @@ static void parse(cli_args *a, convert_options *o)
 {
     const char *arg;
     while ((arg = cli_next(a))) {
-        if (cli_common_option(a, arg) || cli_input_option(a, arg, &o->input)) continue;
+        if (cli_common_option(a, arg) || cli_input_option(a, arg, &o->input) ||
+            cli_format_option(a, arg, &o->wd))
+            continue;
         if (cli_is(a, arg, "--output", "-o")) o->out = cli_value(a, arg);
         else if (cli_is(a, arg, "--size", NULL)) o->input.size = cli_int(a, arg, 1, 16384);
         else if (cli_flag(a, arg, "--mips", NULL)) o->mips = 1;
@@ -66,6 +71,7 @@ static void parse(cli_args *a, convert_options *o)
     ibl_file_type type = cli_check_output(a, o->out);
     if (!ibl_file_type_writes_format(type, o->wd.format))
         cli_usage_error(a, "%s cannot store %s pixels", o->out, ibl_format_name(o->wd.format));
+    cli_format_check(a, &o->wd, type, o->out);
     if (o->mips && !ibl_file_type_is_container(type))
         cli_usage_error(a, "--mips needs a container output (.ktx2 .ktx .dds)");
 }

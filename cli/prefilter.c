@@ -1,4 +1,5 @@
 /* ibl prefilter: the prefiltered (mipmapped) radiance environment map of an environment. */
+#include "format_options.h"
 #include "input.h"
 #include "specular_options.h"
 
@@ -19,8 +20,10 @@ static const char usage[] =
     "\n"
     "  -o, --output OUT     output file\n"
     CLI_SPECULAR_HELP
-    "  --format F           storage format (rgba16f, rgba32f, rg11b10f, rgb9e5, rg16f, rg32f for\n"
-    "                       containers; rgb32f, rgb16f, rgba16f, rgba32f for EXR)\n"
+    "  --format F           storage format (rgba16f, rgba32f, rg11b10f, rgb9e5, rg16f, rg32f,\n"
+    "                       bc6h, bc6h-signed for containers; rgbm, rgbd, rgbe for KTX2; rgb32f,\n"
+    "                       rgb16f, rgba16f, rgba32f for EXR)\n"
+    CLI_FORMAT_HELP
     "  --source-size N      face edge the input is converted to first (default: its own)\n"
     CLI_INPUT_HELP
     "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n";
@@ -116,7 +119,7 @@ int cli_cmd_prefilter(int argc, char **argv)
     const char *arg;
     while ((arg = cli_next(&a))) {
         if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io) ||
-            cli_specular_option(&a, arg, &so))
+            cli_specular_option(&a, arg, &so) || cli_format_option(&a, arg, &wd))
             continue;
         if (cli_is(&a, arg, "--output", "-o")) {
             out = cli_value(&a, arg);
@@ -134,6 +137,7 @@ int cli_cmd_prefilter(int argc, char **argv)
     ibl_file_type type = cli_check_output(&a, out);
     if (!ibl_file_type_writes_format(type, wd.format))
         cli_usage_error(&a, "%s cannot store %s pixels", out, ibl_format_name(wd.format));
+    cli_format_check(&a, &wd, type, out);
     ibl_specular_desc d = cli_specular_resolve(&a, &so, NULL);
     const char *in = a.positional[0];
     ibl_context *ctx = cli_context(&a.common);

@@ -85,7 +85,8 @@ static void option_errors_are_usage_errors(void **state)
         "prefilter '%s' -o '%s' --shininess-min 100 --shininess-max 10 --filter phong",
         "prefilter '%s' -o '%s' --mapping table --table nan,1",
         "prefilter '%s' -o '%s' --format rgba8",
-        "convert '%s' -o '%s' --format rgbe",
+        "convert '%s' -o '%s' --format rgba8",
+        "convert '%s' -o '%s' --format bc6h --zstd 23",
         "bake '%s' -o '%s' --format rgb16f",
         "prefilter '%s' -o '%s' -qq",
     };

@@ -739,7 +739,7 @@ static void encoder_refusals(void **state)
         const container *ct = &CONTAINERS[c];
         void *vb = NULL;
         size_t size = 0;
-        ibl_write_desc d = {.format = IBL_FORMAT_RGBE};
+        ibl_write_desc d = {.format = IBL_FORMAT_RGBA8_SRGB};
         assert_int_equal(ct->encode(ctx, &t, &d, ct->name, &vb, &size), IBL_ERR_UNSUPPORTED);
         assert_message_named(ctx, ct->name);
         assert_null(vb);

@@ -1,6 +1,8 @@
 /* Writes the starting corpus of the container readers with ibl's own encoders: KTX2, KTX1
  * and DDS, each of the six storage formats as a 2D texture with a partial mip chain (odd
- * size), a 3D texture with mips and a cube with mips, plus a 1x1 texture and one carrying
+ * size), a 3D texture with mips and a cube with mips, the block-compressed and 8-bit HDR
+ * formats and Zstandard supercompression where the container stores them (a cube of 8 with
+ * its chain to 1x1), plus a 1x1 texture and one carrying
  * metadata. Usage: containers OUT_DIR (writes OUT_DIR/{ktx2,ktx1,dds}/...). */
 #include <math.h>
 #include <stdio.h>
@@ -38,12 +40,13 @@ static void fill(ibl_texture *t)
     }
 }
 
-static int emit(ibl_context *ctx, const char *out, int c, ibl_texture *t, ibl_format format,
-                const char *stem)
+static int emit_z(ibl_context *ctx, const char *out, int c, ibl_texture *t, ibl_format format,
+                  int zstd, const char *stem)
 {
     ibl_write_desc wd;
     memset(&wd, 0, sizeof wd);
     wd.format = format;
+    wd.zstd_level = zstd;
     void *bytes = NULL;
     size_t size = 0;
     if (ibl_encode_texture(ctx, containers[c].type, t, &wd, &bytes, &size) != IBL_OK) {
@@ -57,6 +60,43 @@ static int emit(ibl_context *ctx, const char *out, int c, ibl_texture *t, ibl_fo
     if (f && fclose(f) != 0) bad = 1;
     ibl_free(ctx, bytes);
     if (bad) fprintf(stderr, "cannot write %s\n", path);
+    return bad;
+}
+
+static int emit(ibl_context *ctx, const char *out, int c, ibl_texture *t, ibl_format format,
+                const char *stem)
+{
+    return emit_z(ctx, out, c, t, format, 0, stem);
+}
+
+/* The block-compressed and 8-bit HDR formats, and Zstandard supercompression, where the
+ * container stores them: a cube of 8 with its chain down to 1x1 (padded blocks). */
+static int emit_compressed(ibl_context *ctx, const char *out, int c)
+{
+    static const struct {
+        ibl_format format;
+        int zstd;
+        const char *name;
+    } list[] = {
+        {IBL_FORMAT_BC6H, 0, "bc6h"},         {IBL_FORMAT_BC6H_SIGNED, 0, "bc6h_signed"},
+        {IBL_FORMAT_ASTC_4x4, 0, "astc4x4"},  {IBL_FORMAT_ASTC_6x5, 0, "astc6x5"},
+        {IBL_FORMAT_RGBM, 0, "rgbm"},         {IBL_FORMAT_RGBD, 0, "rgbd"},
+        {IBL_FORMAT_RGBE, 0, "rgbe"},         {IBL_FORMAT_BC6H, 3, "bc6h_zstd"},
+        {IBL_FORMAT_RGBA16F, 3, "rgba16f_zstd"},
+    };
+    ibl_texture t;
+    if (ibl_texture_alloc(ctx, IBL_TEXTURE_CUBE, 8, 8, 1, 4, &t) != IBL_OK) return 1;
+    fill(&t);
+    int bad = 0;
+    for (size_t i = 0; i < sizeof list / sizeof list[0]; i++) {
+        if (!ibl_file_type_writes_format(containers[c].type, list[i].format) ||
+            (list[i].zstd && containers[c].type != IBL_FILE_KTX2))
+            continue;
+        char stem[64];
+        snprintf(stem, sizeof stem, "cube_%s", list[i].name);
+        bad |= emit_z(ctx, out, c, &t, list[i].format, list[i].zstd, stem);
+    }
+    ibl_texture_free(ctx, &t);
     return bad;
 }
 
@@ -103,6 +143,7 @@ int main(int argc, char **argv)
         ibl_texture_set_metadata(ctx, &t, "ibl.source", "corpus");
         bad |= emit(ctx, argv[1], c, &t, IBL_FORMAT_RGBA16F, "meta_cube_rgba16f");
         ibl_texture_free(ctx, &t);
+        bad |= emit_compressed(ctx, argv[1], c);
     }
     ibl_context_destroy(ctx);
     return bad;

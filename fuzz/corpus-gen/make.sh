@@ -12,7 +12,8 @@ OUT=fuzz/corpus
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 cc -std=c11 -O1 -Wall -Wextra -Werror -Iinclude fuzz/corpus-gen/containers.c "$BUILD/libibl.a" \
-  $(pkg-config --libs OpenEXR libpng libjpeg libdeflate) -lstdc++ -lpthread -lm -o "$TMP/containers"
+  $(pkg-config --libs OpenEXR libpng libjpeg libdeflate libzstd) -lastcenc -lstdc++ -lpthread -lm \
+  -o "$TMP/containers"
 c++ -std=c++17 -O1 -Wall -Wextra -Werror $(pkg-config --cflags OpenEXR) fuzz/corpus-gen/exr_variants.cpp \
   $(pkg-config --libs OpenEXR) -o "$TMP/exr_variants"
 mkdir -p "$OUT/ktx2" "$OUT/ktx1" "$OUT/dds" "$OUT/exr" "$OUT/any"

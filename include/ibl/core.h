@@ -136,7 +136,19 @@ typedef enum ibl_format {
     IBL_FORMAT_RGB16F,       /* 3 x half (EXR)                                            */
     IBL_FORMAT_RGBA8_SRGB,   /* 8-bit sRGB (PNG/JPEG previews)                            */
     IBL_FORMAT_RGBA16_UNORM, /* 16-bit linear (PNG tables)                                */
-    IBL_FORMAT_RGBE,         /* Radiance shared exponent                                  */
+    IBL_FORMAT_RGBE,         /* shared exponent in 8-bit RGBA (Radiance; KTX2 R8G8B8A8)    */
+    IBL_FORMAT_BC6H,         /* BC6H unsigned float: VK_FORMAT_BC6H_UFLOAT_BLOCK / DXGI 95 */
+    IBL_FORMAT_BC6H_SIGNED,  /* BC6H signed float: VK_FORMAT_BC6H_SFLOAT_BLOCK / DXGI 96   */
+    IBL_FORMAT_RGBM,         /* 8-bit RGBM (KTX2 R8G8B8A8_UNORM; ibl/compress.h)          */
+    IBL_FORMAT_RGBD,         /* 8-bit RGBD (KTX2 R8G8B8A8_UNORM; ibl/compress.h)          */
+    IBL_FORMAT_ASTC_4x4,     /* ASTC HDR, VK_FORMAT_ASTC_4x4_SFLOAT_BLOCK (KTX2 only)      */
+    IBL_FORMAT_ASTC_5x4,
+    IBL_FORMAT_ASTC_5x5,
+    IBL_FORMAT_ASTC_6x5,
+    IBL_FORMAT_ASTC_6x6,
+    IBL_FORMAT_ASTC_8x5,
+    IBL_FORMAT_ASTC_8x6,
+    IBL_FORMAT_ASTC_8x8,
     IBL_FORMAT_COUNT
 } ibl_format;
 

@@ -14,6 +14,7 @@
 #ifndef IBL_IO_H
 #define IBL_IO_H
 
+#include "compress.h"
 #include "core.h"
 
 #ifdef __cplusplus
@@ -95,6 +96,9 @@ typedef struct ibl_write_desc {
     ibl_exr_compression exr_compression;
     int hdr_no_rle;           /* Radiance: write flat scanlines                        */
     ibl_write_report *report; /* optional: receives what was changed (added to)        */
+    ibl_quality quality;      /* BC6H: encoder effort (ibl/compress.h)                  */
+    float rgbm_range;         /* RGBM: the range (0: IBL_RGBM_DEFAULT_RANGE)            */
+    int zstd_level;           /* KTX2: Zstandard supercompression level 1..22 (0: none) */
 } ibl_write_desc;
 
 /* Writes one flat image; the container follows the extension (.hdr .exr .pfm .png .jpg, or

@@ -205,8 +205,12 @@ int ibl_format_channels(ibl_format format)
     case IBL_FORMAT_RGB9E5:
     case IBL_FORMAT_RGB32F:
     case IBL_FORMAT_RGB16F:
-    case IBL_FORMAT_RGBE: return 3;
-    default: return 4;
+    case IBL_FORMAT_RGBE:
+    case IBL_FORMAT_BC6H:
+    case IBL_FORMAT_BC6H_SIGNED:
+    case IBL_FORMAT_RGBM:
+    case IBL_FORMAT_RGBD: return 3;
+    default: return format >= IBL_FORMAT_ASTC_4x4 && format <= IBL_FORMAT_ASTC_8x8 ? 3 : 4;
     }
 }
 
@@ -290,7 +294,10 @@ float ibl_format_max_value(ibl_format format)
     switch (format) {
     case IBL_FORMAT_RGBA16F:
     case IBL_FORMAT_RGB16F:
-    case IBL_FORMAT_RG16F: return 65504.0f;
+    case IBL_FORMAT_RG16F:
+    case IBL_FORMAT_BC6H:
+    case IBL_FORMAT_BC6H_SIGNED: return 65504.0f;
+    case IBL_FORMAT_RGBD: return 255.0f;
     case IBL_FORMAT_RG11B10F: return 65024.0f; /* 6-bit mantissa, exponent 30 */
     case IBL_FORMAT_RGB9E5: return 65408.0f;   /* (511/512) 2^16 */
     case IBL_FORMAT_RGBA8_SRGB:

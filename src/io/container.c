@@ -2,12 +2,14 @@
 #include "io/container.h"
 #include "core/context_internal.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <stdatomic.h>
 #include <string.h>
 
 #include "core/pixel_format.h"
+#include "ibl/compress.h"
 
 ibl_format ibl__container_format(const ibl_texture *tex, const ibl_write_desc *desc)
 {
@@ -85,7 +87,8 @@ ibl_status ibl__check_texture(ibl_context *ctx, const ibl_texture *tex, const ch
 
 static int reserved_key(const char *key)
 {
-    return strncmp(key, "KTX", 3) == 0 || strncmp(key, "ktx", 3) == 0;
+    return strncmp(key, "KTX", 3) == 0 || strncmp(key, "ktx", 3) == 0 ||
+           strcmp(key, "ibl.encoding") == 0 || strcmp(key, "ibl.rgbm_range") == 0;
 }
 
 static int compare_pairs(const void *a, const void *b)
@@ -296,6 +299,161 @@ void ibl__unpack(ibl_context *ctx, ibl_format format, const uint8_t *src, size_t
     int chunks = chunk_count(count);
     if (chunks <= 1) ibl_unpack_texels(format, src, count, rgba);
     else ibl_parallel_for(ctx, chunks, unpack_chunk, &j);
+}
+
+/* ---- block formats and 8-bit encodings ---- */
+
+int ibl__format_block(ibl_format format, int *block_width, int *block_height)
+{
+    static const uint8_t astc[8][2] = {{4, 4}, {5, 4}, {5, 5}, {6, 5}, {6, 6}, {8, 5}, {8, 6}, {8, 8}};
+    int w = 1, h = 1;
+    if (format == IBL_FORMAT_BC6H || format == IBL_FORMAT_BC6H_SIGNED) w = h = 4;
+    if (format >= IBL_FORMAT_ASTC_4x4 && format <= IBL_FORMAT_ASTC_8x8) {
+        w = astc[format - IBL_FORMAT_ASTC_4x4][0];
+        h = astc[format - IBL_FORMAT_ASTC_4x4][1];
+    }
+    if (block_width) *block_width = w;
+    if (block_height) *block_height = h;
+    return w > 1;
+}
+
+int ibl__format_is_block(ibl_format format)
+{
+    return ibl__format_block(format, NULL, NULL);
+}
+
+size_t ibl__format_unit_bytes(ibl_format format)
+{
+    if (ibl__format_is_block(format)) return 16; /* BC6H and ASTC blocks */
+    switch (format) {
+    case IBL_FORMAT_RGBE:
+    case IBL_FORMAT_RGBM:
+    case IBL_FORMAT_RGBD: return 4;
+    default: return ibl_format_texel_bytes(format);
+    }
+}
+
+uint64_t ibl__level_bytes(ibl_format format, ibl_texture_kind kind, int width, int height,
+                          int depth, int level)
+{
+    int bw, bh;
+    if (!ibl__format_block(format, &bw, &bh))
+        return ibl__level_texels(kind, width, height, depth, level) * ibl__format_unit_bytes(format);
+    uint64_t bx = ((uint64_t)ibl_level_size(width, level) + (uint64_t)bw - 1) / (uint64_t)bw;
+    uint64_t by = ((uint64_t)ibl_level_size(height, level) + (uint64_t)bh - 1) / (uint64_t)bh;
+    uint64_t d = kind == IBL_TEXTURE_3D ? (uint64_t)ibl_level_size(depth, level) : 1;
+    return bx * by * d * 16;
+}
+
+typedef struct hdr8_job {
+    ibl_format format;
+    float range;
+    size_t count;
+    const float *src_f;
+    uint8_t *dst_b;
+    const uint8_t *src_b;
+    float *dst_f;
+} hdr8_job;
+
+static void hdr8_chunk(void *arg, int index)
+{
+    const hdr8_job *j = arg;
+    size_t first = (size_t)index * CHUNK_TEXELS;
+    size_t end = j->count - first < CHUNK_TEXELS ? j->count : first + CHUNK_TEXELS;
+    for (size_t i = first; i < end; i++) {
+        if (j->src_f) {
+            const float *c = j->src_f + i * 4;
+            uint8_t *o = j->dst_b + i * 4;
+            if (j->format == IBL_FORMAT_RGBM) ibl_rgbm_encode(c, j->range, o);
+            else if (j->format == IBL_FORMAT_RGBD) ibl_rgbd_encode(c, o);
+            else ibl_rgbe_encode(c, o);
+        } else {
+            const uint8_t *b = j->src_b + i * 4;
+            float *o = j->dst_f + i * 4;
+            if (j->format == IBL_FORMAT_RGBM) ibl_rgbm_decode(b, j->range, o);
+            else if (j->format == IBL_FORMAT_RGBD) ibl_rgbd_decode(b, o);
+            else ibl_rgbe_decode(b, o);
+            o[3] = 1.0f;
+        }
+    }
+}
+
+static void run_hdr8(ibl_context *ctx, hdr8_job *j)
+{
+    int chunks = chunk_count(j->count);
+    if (chunks == 1) hdr8_chunk(j, 0);
+    else if (chunks > 1) ibl_parallel_for(ctx, chunks, hdr8_chunk, j);
+}
+
+size_t ibl__encode_level(ibl_context *ctx, ibl_format format, const ibl_write_desc *desc,
+                         const ibl_texture *tex, int level, int face, uint8_t *dst,
+                         ibl_status *status)
+{
+    *status = IBL_OK;
+    int w = ibl_level_size(tex->width, level), h = ibl_level_size(tex->height, level);
+    int d = tex->kind == IBL_TEXTURE_3D ? ibl_level_size(tex->depth, level) : 1;
+    const float *src = ibl_texture_level(tex, level, face);
+    size_t count = (size_t)w * (size_t)h * (size_t)d;
+    int bw, bh;
+    if (ibl__format_block(format, &bw, &bh)) {
+        ibl_bc6h_desc bd = {format == IBL_FORMAT_BC6H_SIGNED, desc ? desc->quality : IBL_QUALITY_DEFAULT};
+        ibl_astc_desc ad = {bw, bh, bd.quality};
+        int astc = bw != 4 || bh != 4 || (format != IBL_FORMAT_BC6H && format != IBL_FORMAT_BC6H_SIGNED);
+        size_t slice = astc ? ibl_astc_bytes(bw, bh, w, h) : ibl_bc6h_bytes(w, h), clamped = 0;
+        for (int z = 0; z < d; z++) {
+            const float *texels = src + (size_t)z * (size_t)w * (size_t)h * 4;
+            if (astc) *status = ibl_astc_encode(ctx, &ad, texels, w, h, dst + (size_t)z * slice);
+            else *status = ibl_bc6h_encode(ctx, &bd, texels, w, h, dst + (size_t)z * slice);
+            if (*status != IBL_OK) return 0;
+        }
+        for (size_t i = 0; i < count; i++) {
+            int over = 0;
+            for (int c = 0; c < 3; c++) over |= fabsf(src[i * 4 + (size_t)c]) > 65504.0f;
+            clamped += (size_t)over;
+        }
+        return clamped;
+    }
+    if (format == IBL_FORMAT_RGBM || format == IBL_FORMAT_RGBD || format == IBL_FORMAT_RGBE) {
+        float range = desc && desc->rgbm_range > 0.0f ? desc->rgbm_range : IBL_RGBM_DEFAULT_RANGE;
+        hdr8_job j = {format, range, count, src, dst, NULL, NULL};
+        run_hdr8(ctx, &j);
+        float max = format == IBL_FORMAT_RGBM ? range : ibl_format_max_value(format);
+        size_t clamped = 0;
+        for (size_t i = 0; i < count; i++) {
+            int over = 0;
+            for (int c = 0; c < 3; c++) over |= src[i * 4 + (size_t)c] > max;
+            clamped += (size_t)over;
+        }
+        return clamped;
+    }
+    return ibl__pack(ctx, format, src, count, dst);
+}
+
+ibl_status ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_range,
+                             const uint8_t *src, ibl_texture *tex, int level, int face)
+{
+    int w = ibl_level_size(tex->width, level), h = ibl_level_size(tex->height, level);
+    int d = tex->kind == IBL_TEXTURE_3D ? ibl_level_size(tex->depth, level) : 1;
+    float *dst = ibl_texture_level(tex, level, face);
+    size_t count = (size_t)w * (size_t)h * (size_t)d;
+    int bw, bh;
+    if (ibl__format_block(format, &bw, &bh)) {
+        int bc6h = format == IBL_FORMAT_BC6H || format == IBL_FORMAT_BC6H_SIGNED;
+        ibl_astc_desc ad = {bw, bh, IBL_QUALITY_DEFAULT};
+        size_t slice = bc6h ? ibl_bc6h_bytes(w, h) : ibl_astc_bytes(bw, bh, w, h);
+        for (int z = 0; z < d; z++) {
+            float *texels = dst + (size_t)z * (size_t)w * (size_t)h * 4;
+            ibl_status st = bc6h ? ibl_bc6h_decode(ctx, format == IBL_FORMAT_BC6H_SIGNED, src + (size_t)z * slice, w, h, texels)
+                                 : ibl_astc_decode(ctx, &ad, src + (size_t)z * slice, w, h, texels);
+            if (st != IBL_OK) return st;
+        }
+    } else if (format == IBL_FORMAT_RGBM || format == IBL_FORMAT_RGBD || format == IBL_FORMAT_RGBE) {
+        hdr8_job j = {format, rgbm_range > 0.0f ? rgbm_range : IBL_RGBM_DEFAULT_RANGE, count, NULL, NULL, src, dst};
+        run_hdr8(ctx, &j);
+    } else {
+        ibl__unpack(ctx, format, src, count, dst);
+    }
+    return IBL_OK;
 }
 
 void ibl__fill_info(ibl_file_info *info, ibl_file_type type, const ibl_texture *tex)

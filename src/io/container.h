@@ -53,8 +53,9 @@ enum { IBL__MAX_KEY_VALUES = 4096 };
 /* Builds a key/value block (KTX 1 and KTX 2 share the layout): for each pair sorted by the
  * key's bytes (the Unicode code point order for UTF-8), UInt32 keyAndValueByteLength, the
  * key, NUL, the value, NUL, then zero padding to 4 bytes. The `fixed` pairs are the ones
- * the container itself writes (KTXorientation, KTXwriter); texture metadata whose key starts
- * with "KTX" or "ktx" (reserved by the KTX specifications) is not copied, the rest is.
+ * the container itself writes (KTXorientation, KTXwriter, ibl.encoding, ibl.rgbm_range);
+ * texture metadata whose key starts with "KTX" or "ktx" (reserved by the KTX
+ * specifications) or is one of the two ibl keys the writer owns is not copied, the rest is.
  * *out is NULL when there are no pairs. */
 ibl_status ibl__kv_build(ibl_context *ctx, const char *name, const ibl_key_value *fixed,
                          int fixed_count, const ibl_texture *tex, uint8_t **out, size_t *size);
@@ -72,6 +73,28 @@ void ibl__flip_texture(ibl_texture *tex, int flip_x, int flip_y, int flip_z);
 size_t ibl__pack(ibl_context *ctx, ibl_format format, const float *rgba, size_t count, uint8_t *dst);
 void ibl__unpack(ibl_context *ctx, ibl_format format, const uint8_t *src, size_t count,
                  float *rgba);
+
+/* ---- formats beyond fixed-size float texels: BC6H blocks and the 8-bit HDR encodings ---- */
+
+/* Non-zero for block formats (BC6H 4x4, ASTC 4x4..8x8): their block footprint in
+ * *block_width x *block_height (1x1 for texel formats; either pointer may be NULL). */
+int ibl__format_block(ibl_format format, int *block_width, int *block_height);
+int ibl__format_is_block(ibl_format format);
+/* Bytes of one texel (4 for RGBM/RGBD/RGBE) or of one block (16 for BC6H and ASTC); 0 if
+ * the containers cannot store the format. */
+size_t ibl__format_unit_bytes(ibl_format format);
+/* Bytes of one face of one level (all its slices; whole blocks per slice). */
+uint64_t ibl__level_bytes(ibl_format format, ibl_texture_kind kind, int width, int height,
+                          int depth, int level);
+/* Stores one face of one level of tex in format (BC6H and ASTC encoded with desc->quality,
+ * RGBM with desc->rgbm_range); returns the texels stored at the format's largest value.
+ * *status is IBL_OK unless the ASTC encoder failed (then with the context's message). */
+size_t ibl__encode_level(ibl_context *ctx, ibl_format format, const ibl_write_desc *desc,
+                         const ibl_texture *tex, int level, int face, uint8_t *dst,
+                         ibl_status *status);
+/* The reverse of ibl__encode_level; rgbm_range as written (0: the default). */
+ibl_status ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_range,
+                             const uint8_t *src, ibl_texture *tex, int level, int face);
 
 /* Fills the file info of a decoded texture. */
 void ibl__fill_info(ibl_file_info *info, ibl_file_type type, const ibl_texture *tex);

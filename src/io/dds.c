@@ -1,7 +1,8 @@
 /* DDS read and write (Microsoft "DDS Programming Guide": DDS_HEADER, DDS_PIXELFORMAT and
  * DDS_HEADER_DXT10). We write the DX10 extended header with a DXGI format; we read it and the
  * legacy float FourCCs (D3DFMT_A16B16G16R16F 113, A32B32G32R32F 116, G16R16F 112, G32R32F
- * 115). Data order differs from KTX: for each face (array slice), all its mip levels, each
+ * 115). BC6H (DXGI 95 BC6H_UF16, 96 BC6H_SF16) is read (decoded) and written (encoded) in
+ * 4x4 blocks, pitchOrLinearSize then being the top level's bytes. Data order differs from KTX: for each face (array slice), all its mip levels, each
  * level being all its depth slices, rows top first. DDS has no metadata. */
 #include <string.h>
 
@@ -23,6 +24,7 @@ enum {
     DDSD_PITCH = 0x8,
     DDSD_PIXELFORMAT = 0x1000,
     DDSD_MIPMAPCOUNT = 0x20000,
+    DDSD_LINEARSIZE = 0x80000,
     DDSD_DEPTH = 0x800000,
     DDPF_FOURCC = 0x4,
     DDSCAPS_COMPLEX = 0x8,
@@ -51,7 +53,9 @@ enum {
     DXGI_R32G32_FLOAT = 16,
     DXGI_R11G11B10_FLOAT = 26,
     DXGI_R16G16_FLOAT = 34,
-    DXGI_R9G9B9E5_SHAREDEXP = 67
+    DXGI_R9G9B9E5_SHAREDEXP = 67,
+    DXGI_BC6H_UF16 = 95,
+    DXGI_BC6H_SF16 = 96
 };
 
 typedef struct dxgi_map {
@@ -67,6 +71,8 @@ static const dxgi_map DXGI_FORMATS[] = {
     {IBL_FORMAT_RGB9E5, DXGI_R9G9B9E5_SHAREDEXP, 0},
     {IBL_FORMAT_RG16F, DXGI_R16G16_FLOAT, D3DFMT_G16R16F},
     {IBL_FORMAT_RG32F, DXGI_R32G32_FLOAT, D3DFMT_G32R32F},
+    {IBL_FORMAT_BC6H, DXGI_BC6H_UF16, 0},
+    {IBL_FORMAT_BC6H_SIGNED, DXGI_BC6H_SF16, 0},
 };
 
 static const dxgi_map *map_format(ibl_format f)
@@ -106,23 +112,22 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
     if (!dx)
         return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: DDS output does not support pixel format %s (use rgba16f, rgba32f, "
-                        "rg11b10f, rgb9e5, rg16f or rg32f)",
+                        "rg11b10f, rgb9e5, rg16f, rg32f, bc6h or bc6h-signed)",
                         name, ibl_format_name(fmt));
-    size_t texel = ibl_format_texel_bytes(fmt);
     int faces = ibl_texture_faces(tex);
-    int is3d = tex->kind == IBL_TEXTURE_3D;
+    int is3d = tex->kind == IBL_TEXTURE_3D, block = ibl__format_is_block(fmt);
 
     uint64_t total = DATA_OFFSET_DX10;
     for (int l = 0; l < tex->levels; l++)
-        total += ibl__level_texels(tex->kind, tex->width, tex->height, tex->depth, l) * texel *
+        total += ibl__level_bytes(fmt, tex->kind, tex->width, tex->height, tex->depth, l) *
                  (uint64_t)faces;
     if (total > SIZE_MAX)
         return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
     uint8_t *buf = ibl_calloc(ctx, (size_t)total, 1);
     if (!buf) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
 
-    uint32_t flags = DDSD_CAPS | DDSD_HEIGHT | DDSD_WIDTH | DDSD_PIXELFORMAT | DDSD_PITCH |
-                     DDSD_MIPMAPCOUNT;
+    uint32_t flags = DDSD_CAPS | DDSD_HEIGHT | DDSD_WIDTH | DDSD_PIXELFORMAT |
+                     (block ? DDSD_LINEARSIZE : DDSD_PITCH) | DDSD_MIPMAPCOUNT;
     if (is3d) flags |= DDSD_DEPTH;
     uint32_t caps = DDSCAPS_TEXTURE, caps2 = 0;
     if (tex->levels > 1) caps |= DDSCAPS_COMPLEX | DDSCAPS_MIPMAP;
@@ -139,7 +144,10 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
     ibl__wr32(h + 4, flags);
     ibl__wr32(h + 8, (uint32_t)tex->height);
     ibl__wr32(h + 12, (uint32_t)tex->width);
-    ibl__wr32(h + 16, (uint32_t)((size_t)tex->width * texel)); /* pitch: bytes per row */
+    /* pitch: bytes per row; for block formats the linear size: bytes of the top level */
+    ibl__wr32(h + 16, block ? (uint32_t)ibl__level_bytes(fmt, tex->kind, tex->width, tex->height,
+                                                          tex->depth, 0)
+                            : (uint32_t)((size_t)tex->width * ibl__format_unit_bytes(fmt)));
     ibl__wr32(h + 20, is3d ? (uint32_t)tex->depth : 0);
     ibl__wr32(h + 24, (uint32_t)tex->levels);
     /* dwReserved1[11] stays zero; DDS_PIXELFORMAT at 72 */
@@ -158,10 +166,12 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
     size_t at = DATA_OFFSET_DX10;
     for (int f = 0; f < faces; f++) {
         for (int l = 0; l < tex->levels; l++) {
-            size_t count =
-                (size_t)ibl__level_texels(tex->kind, tex->width, tex->height, tex->depth, l);
-            clamped += ibl__pack(ctx, fmt, ibl_texture_level(tex, l, f), count, buf + at);
-            at += count * texel;
+            clamped += ibl__encode_level(ctx, fmt, desc, tex, l, f, buf + at, &st);
+            if (st != IBL_OK) {
+                ibl_free(ctx, buf);
+                return ibl__fail_named(ctx, st, name);
+            }
+            at += (size_t)ibl__level_bytes(fmt, tex->kind, tex->width, tex->height, tex->depth, l);
         }
     }
     *bytes = buf;
@@ -208,7 +218,7 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
             return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                             "%s: unsupported DXGI format %u (supported: 10 R16G16B16A16_FLOAT, 2 "
                             "R32G32B32A32_FLOAT, 26 R11G11B10_FLOAT, 67 R9G9B9E5_SHAREDEXP, 34 "
-                            "R16G16_FLOAT, 16 R32G32_FLOAT)",
+                            "R16G16_FLOAT, 16 R32G32_FLOAT, 95 BC6H_UF16, 96 BC6H_SF16)",
                             name, dxgi);
         if (array != 1)
             return ibl__fail(ctx, array == 0 ? IBL_ERR_FORMAT : IBL_ERR_UNSUPPORTED,
@@ -252,10 +262,9 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     if (st != IBL_OK) return st;
     int w = (int)width, hh = (int)height, d = (int)depth;
     int faces = kind == IBL_TEXTURE_CUBE ? 6 : 1;
-    size_t texel = ibl_format_texel_bytes(dx->format);
     uint64_t need = 0; /* at most 17 levels * 6 * 2^48 * 16: fits in 64 bits */
     for (int l = 0; l < (int)levels; l++)
-        need += ibl__level_texels(kind, w, hh, d, l) * texel * (uint64_t)faces;
+        need += ibl__level_bytes(dx->format, kind, w, hh, d, l) * (uint64_t)faces;
     if (need > size - data_at)
         return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: truncated: the texture needs %llu bytes of data, the file has %zu",
@@ -267,9 +276,12 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     const uint8_t *p = bytes + data_at;
     for (int f = 0; f < faces; f++) {
         for (int l = 0; l < (int)levels; l++) {
-            size_t count = (size_t)ibl__level_texels(kind, w, hh, d, l);
-            ibl__unpack(ctx, dx->format, p, count, ibl_texture_level(out, l, f));
-            p += count * texel;
+            st = ibl__decode_level(ctx, dx->format, 0.0f, p, out, l, f);
+            if (st != IBL_OK) {
+                ibl_texture_free(ctx, out);
+                return ibl__fail_named(ctx, st, name);
+            }
+            p += (size_t)ibl__level_bytes(dx->format, kind, w, hh, d, l);
         }
     }
     ibl__fill_info(info, IBL_FILE_DDS, out);

@@ -94,8 +94,14 @@ int ibl_file_type_writes_format(ibl_file_type type, ibl_format f)
     if (f == IBL_FORMAT_DEFAULT) return type != IBL_FILE_UNKNOWN;
     switch (type) {
     case IBL_FILE_KTX2:
-    case IBL_FILE_KTX1:
+        if (f == IBL_FORMAT_RGBE || f == IBL_FORMAT_RGBM || f == IBL_FORMAT_RGBD ||
+            (f >= IBL_FORMAT_ASTC_4x4 && f <= IBL_FORMAT_ASTC_8x8))
+            return 1;
+        /* fall through */
     case IBL_FILE_DDS:
+        if (f == IBL_FORMAT_BC6H || f == IBL_FORMAT_BC6H_SIGNED) return type != IBL_FILE_KTX1;
+        /* fall through */
+    case IBL_FILE_KTX1:
         return f == IBL_FORMAT_RGBA16F || f == IBL_FORMAT_RGBA32F || f == IBL_FORMAT_RG11B10F ||
                f == IBL_FORMAT_RGB9E5 || f == IBL_FORMAT_RG16F || f == IBL_FORMAT_RG32F;
     case IBL_FILE_EXR:

@@ -82,6 +82,14 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
 ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size);
 
+/* Zstandard (src/io/zstd.c): one frame of `size` bytes compressed at `level` (1..22) into a
+ * new buffer (ibl_free); and a frame inflated into exactly `expect` bytes (anything else,
+ * or corrupt data, fails with IBL_ERR_FORMAT naming the level). */
+ibl_status ibl__zstd_compress(ibl_context *ctx, const char *name, const void *src, size_t size,
+                              int level, uint8_t **out, size_t *out_size);
+ibl_status ibl__zstd_decompress(ibl_context *ctx, const char *name, int level, const void *src,
+                                size_t size, void *dst, size_t expect);
+
 /* Re-records the context's last message as "name: <message>" with status (for failures
  * reported by core calls such as ibl_alloc, whose messages do not name the file). */
 ibl_status ibl__fail_named(ibl_context *ctx, ibl_status status, const char *name);

@@ -1,0 +1,44 @@
+/* The storage-format options shared by the writing commands: see format_options.h. */
+#include "format_options.h"
+
+#include <ctype.h>
+#include <string.h>
+
+static int is_number(const char *s)
+{
+    if (!s || !*s) return 0;
+    for (; *s; s++)
+        if (!isdigit((unsigned char)*s)) return 0;
+    return 1;
+}
+
+int cli_format_option(cli_args *a, const char *arg, ibl_write_desc *wd)
+{
+    if (cli_is(a, arg, "--quality", NULL)) {
+        const char *v = cli_value(a, arg);
+        if (!ibl_quality_from_name(v, &wd->quality))
+            cli_usage_error(a, "--quality wants fast, default or thorough, not '%s'", v);
+        return 1;
+    }
+    if (cli_is(a, arg, "--rgbm-range", NULL)) {
+        wd->rgbm_range = (float)cli_double(a, arg, 1.0 / 64.0, 65504.0);
+        return 1;
+    }
+    if (cli_is(a, arg, "--zstd", NULL)) {
+        /* the level is optional: "--zstd", "--zstd 9", "--zstd=9" */
+        if (strchr(arg, '=') || (a->index < a->argc && is_number(a->argv[a->index])))
+            wd->zstd_level = cli_int(a, "--zstd", 1, 22);
+        else
+            wd->zstd_level = 3;
+        return 1;
+    }
+    return 0;
+}
+
+void cli_format_check(cli_args *a, const ibl_write_desc *wd, ibl_file_type type, const char *out)
+{
+    if (wd->zstd_level && type != IBL_FILE_KTX2)
+        cli_usage_error(a, "--zstd needs a .ktx2 output, not %s", out);
+    if (wd->rgbm_range > 0.0f && wd->format != IBL_FORMAT_RGBM)
+        cli_usage_error(a, "--rgbm-range applies to --format rgbm only");
+}

@@ -1,0 +1,107 @@
+/* The 8-bit HDR encodings (RGBM, RGBD, RGBE) and the quality names of ibl/compress.h. The
+ * exact formulas are in docs/FORMATS.md ("8-bit HDR encodings"). */
+#include <math.h>
+#include <string.h>
+#include <strings.h>
+
+#include "ibl/compress.h"
+
+static const char *const QUALITY_NAMES[] = {"default", "fast", "thorough"};
+
+const char *ibl_quality_name(ibl_quality quality)
+{
+    return (unsigned)quality < 3 ? QUALITY_NAMES[quality] : "unknown";
+}
+
+int ibl_quality_from_name(const char *name, ibl_quality *out)
+{
+    for (int i = 0; name && i < 3; i++)
+        if (strcasecmp(name, QUALITY_NAMES[i]) == 0) {
+            *out = (ibl_quality)i;
+            return 1;
+        }
+    return 0;
+}
+
+/* A channel made finite and non-negative (NaN and negatives: 0). */
+static float clean(float v)
+{
+    return v > 0.0f ? v : 0.0f;
+}
+
+static uint8_t unorm8(float v)
+{
+    v = v < 0.0f ? 0.0f : v > 1.0f ? 1.0f : v;
+    return (uint8_t)lrintf(v * 255.0f);
+}
+
+void ibl_rgbm_encode(const float rgb[3], float range, uint8_t out[4])
+{
+    if (!(range > 0.0f)) range = IBL_RGBM_DEFAULT_RANGE;
+    float c[3] = {clean(rgb[0]), clean(rgb[1]), clean(rgb[2])};
+    float m = fmaxf(c[0], fmaxf(c[1], c[2])) / range;
+    if (!(m > 0.0f)) {
+        memset(out, 0, 4);
+        return;
+    }
+    if (m > 1.0f) m = 1.0f;
+    int a = (int)ceilf(m * 255.0f);
+    if (a < 1) a = 1;
+    float scale = 1.0f / (range * (float)a / 255.0f);
+    for (int i = 0; i < 3; i++) out[i] = unorm8(c[i] * scale);
+    out[3] = (uint8_t)a;
+}
+
+void ibl_rgbm_decode(const uint8_t in[4], float range, float rgb[3])
+{
+    if (!(range > 0.0f)) range = IBL_RGBM_DEFAULT_RANGE;
+    float s = (float)in[3] / 255.0f * range / 255.0f;
+    for (int i = 0; i < 3; i++) rgb[i] = (float)in[i] * s;
+}
+
+void ibl_rgbd_encode(const float rgb[3], uint8_t out[4])
+{
+    float c[3] = {clean(rgb[0]), clean(rgb[1]), clean(rgb[2])};
+    float m = fmaxf(1.0f, fmaxf(c[0], fmaxf(c[1], c[2])));
+    int a = (int)floorf(255.0f / m);
+    if (a < 1) a = 1;
+    float d = (float)a / 255.0f;
+    for (int i = 0; i < 3; i++) out[i] = unorm8(c[i] * d);
+    out[3] = (uint8_t)a;
+}
+
+void ibl_rgbd_decode(const uint8_t in[4], float rgb[3])
+{
+    float d = (float)(in[3] ? in[3] : 1) / 255.0f;
+    for (int i = 0; i < 3; i++) rgb[i] = (float)in[i] / 255.0f / d;
+}
+
+void ibl_rgbe_encode(const float rgb[3], uint8_t out[4])
+{
+    float c[3] = {clean(rgb[0]), clean(rgb[1]), clean(rgb[2])};
+    float m = fmaxf(c[0], fmaxf(c[1], c[2]));
+    if (!(m > 1e-38f)) {
+        memset(out, 0, 4);
+        return;
+    }
+    int e;
+    if (isinf(m)) m = 1.7e38f, c[0] = fminf(c[0], m), c[1] = fminf(c[1], m), c[2] = fminf(c[2], m);
+    (void)frexpf(m, &e); /* m = f 2^e, f in [0.5, 1) */
+    if (e > 127) e = 127;
+    float scale = ldexpf(1.0f, 8 - e);
+    for (int i = 0; i < 3; i++) {
+        float v = floorf(c[i] * scale);
+        out[i] = (uint8_t)(v > 255.0f ? 255.0f : v);
+    }
+    out[3] = (uint8_t)(e + 128);
+}
+
+void ibl_rgbe_decode(const uint8_t in[4], float rgb[3])
+{
+    if (in[3] == 0) {
+        rgb[0] = rgb[1] = rgb[2] = 0.0f;
+        return;
+    }
+    float s = ldexpf(1.0f, (int)in[3] - 136);
+    for (int i = 0; i < 3; i++) rgb[i] = ((float)in[i] + 0.5f) * s;
+}
