@@ -171,6 +171,19 @@ int study_ambient(const study_env *env)
     if (!md) return 1;
     fprintf(md, "Relative error of each sphere's mean radiance against the Monte Carlo reference "
                 "(256×128, %d reference iterations per pixel):\n", env->quick ? 32 : 256);
+    /* what "AmbientBRDF off" puts F0 in place of */
+    static const double shin[] = {1, 10, 50, 200, 1000, 100000};
+    fprintf(md, "\nThe value F0 stands in for without the volume, the directional albedo of the "
+                "specular term (`ibl_ambient_brdf`, tri-Ace normalisation, F0 = 1):\n\n| n·v |");
+    for (int j = 0; j < 6; j++) fprintf(md, " s = %g |", shin[j]);
+    fprintf(md, "\n|---|---|---|---|---|---|---|\n");
+    for (int k = 0; k < 2; k++) {
+        double nv = k ? 0.5 : 1.0;
+        fprintf(md, "| %g |", nv);
+        for (int j = 0; j < 6; j++)
+            fprintf(md, " %.3f |", ibl_ambient_brdf(nv, shin[j], 1.0, IBL_BLINN_TRIACE_FIT, 0));
+        fprintf(md, "\n");
+    }
     int rc = 0;
     for (size_t i = 0; i < sizeof hdris / sizeof hdris[0] && !rc; i++) {
         scene_errors *se = calloc(1, sizeof *se);
