@@ -159,7 +159,7 @@ static void write_table(FILE *md, const char *hdri, const scene_errors *se)
     for (int v = 0; v < VARIANTS; v++) fprintf(md, " %.2f%% |", 100 * sqrt(sum2[v] / count));
     fprintf(md, "\n| worst \\|error\\| |");
     for (int v = 0; v < VARIANTS; v++) fprintf(md, " %.2f%% |", 100 * worst[v]);
-    fprintf(md, "\nThe diffuse sources alone against the float64 irradiance (E/π at 1536 normals): "
+    fprintf(md, "\n\nThe diffuse sources alone against the float64 irradiance (E/π at 1536 normals): "
                 "irradiance map mean %+.2f%%, RMS %.2f%%; SH9 mean %+.2f%%, RMS %.2f%%.\n",
             100 * se->diffuse[0][0], 100 * se->diffuse[0][1], 100 * se->diffuse[1][0], 100 * se->diffuse[1][1]);
 }
@@ -169,11 +169,9 @@ int study_ambient(const study_env *env)
     static const char *const hdris[] = {"forest.exr", "sunset.exr", "interior.exr"};
     FILE *md = study_fragment(env, "ambient");
     if (!md) return 1;
-    fprintf(md, "Relative error of each sphere's mean radiance against the Monte Carlo reference "
-                "(256×128, %d reference iterations per pixel):\n", env->quick ? 32 : 256);
     /* what "AmbientBRDF off" puts F0 in place of */
     static const double shin[] = {1, 10, 50, 200, 1000, 100000};
-    fprintf(md, "\nThe value F0 stands in for without the volume, the directional albedo of the "
+    fprintf(md, "The value F0 stands in for without the volume, the directional albedo of the "
                 "specular term (`ibl_ambient_brdf`, tri-Ace normalisation, F0 = 1):\n\n| n·v |");
     for (int j = 0; j < 6; j++) fprintf(md, " s = %g |", shin[j]);
     fprintf(md, "\n|---|---|---|---|---|---|---|\n");
@@ -184,6 +182,8 @@ int study_ambient(const study_env *env)
             fprintf(md, " %.3f |", ibl_ambient_brdf(nv, shin[j], 1.0, IBL_BLINN_TRIACE_FIT, 0));
         fprintf(md, "\n");
     }
+    fprintf(md, "\nRelative error of each sphere's mean radiance against the Monte Carlo reference "
+                "(256×128, %d reference iterations per pixel):\n", env->quick ? 32 : 256);
     int rc = 0;
     for (size_t i = 0; i < sizeof hdris / sizeof hdris[0] && !rc; i++) {
         scene_errors *se = calloc(1, sizeof *se);
@@ -195,5 +195,5 @@ int study_ambient(const study_env *env)
         fclose(md);
         return rc;
     }
-    return study_fragment_close(env, md, "build/tools/studies/ibl_studies --study ambient");
+    return study_fragment_close(env, md, "ambient");
 }

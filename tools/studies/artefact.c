@@ -95,5 +95,5 @@ int study_artefact(const study_env *env)
     if (!md) return 1;
     value_table(md);
     occlusion_table(md);
-    return study_fragment_close(env, md, "build/tools/studies/ibl_studies --study artefact");
+    return study_fragment_close(env, md, "artefact");
 }

@@ -184,5 +184,5 @@ int study_blinn_factor(const study_env *env)
         fclose(md);
         return rc;
     }
-    return study_fragment_close(env, md, "build/tools/studies/ibl_studies --study blinn");
+    return study_fragment_close(env, md, "blinn");
 }

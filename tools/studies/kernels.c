@@ -137,6 +137,98 @@ static int one_size(const study_env *env, int size, FILE *md, double summary[KER
     return rc;
 }
 
+
+/* ---- the picture: the three chains and the exact convolution at one material shininess ---- */
+
+enum { PIC_W = 200, PIC_H = 100, PIC_SIZE = 32 };
+#define PIC_SHININESS 100.0
+
+/* The runtime's view of a chain: its levels' material shininess, read by shininess. */
+static ibl_status chain_probe(const study_env *env, const ibl_cubemap *chain, const ibl_specular_info *info,
+                              ibl_probe *p)
+{
+    memset(p, 0, sizeof *p);
+    p->specular = *chain;
+    p->specular.owns_data = 0;
+    p->mapping.levels = info->levels;
+    for (int l = 0; l < info->levels; l++) p->mapping.shininess[l] = ibl_specular_level_shininess(info, l);
+    p->sh_kind = IBL_SH_KIND_RADIANCE; /* no diffuse is read */
+    return ibl_probe_validate(env->ctx, p);
+}
+
+/* Equirect panel k (0..2: the chains through ibl_probe_sample_specular at the probe's lod for
+ * PIC_SHININESS; 3: the float64 Phong convolution of exponent PIC_SHININESS / 4.2). */
+static int fill_panel(const study_env *env, const ibl_cubemap *src, int k, const ibl_cubemap *chain,
+                      const ibl_specular_info *info, ibl_image *out)
+{
+    ibl_probe probe;
+    study_quad q = {0};
+    double n = PIC_SHININESS / 4.2;
+    ibl_status st = ibl_image_alloc(env->ctx, PIC_W, PIC_H, out);
+    if (st == IBL_OK && k < 3) st = chain_probe(env, chain, info, &probe);
+    if (st != IBL_OK) return study_fail(env, "kernels picture", st);
+    if (k == 3 && study_quad_build(src, split_for(src->size, n), &q)) return 1;
+    float lod = k < 3 ? ibl_probe_lod_from_shininess(&probe, (float)PIC_SHININESS) : 0.0f;
+    for (int y = 0; y < PIC_H; y++)
+        for (int x = 0; x < PIC_W; x++) {
+            ibl_vec3 d;
+            ibl_layout_direction(IBL_LAYOUT_EQUIRECT, (x + 0.5f) / PIC_W, (y + 0.5f) / PIC_H, &d);
+            float *px = ibl_image_texel(out, x, y);
+            if (k < 3) {
+                ibl_probe_sample_specular(&probe, lod, d, px);
+            } else {
+                double r[3] = {d.x, d.y, d.z}, rgb[3];
+                study_convolve(&q, r, study_kernel_phong, n, study_phong_cut(n), rgb);
+                for (int c = 0; c < 3; c++) px[c] = (float)rgb[c];
+            }
+            px[3] = 1.0f;
+        }
+    study_quad_free(&q);
+    return 0;
+}
+
+/* Two labelled pairs stacked: box | Gaussian over Phong | exact. */
+static int kernels_picture(const study_env *env)
+{
+    static const char *const labels[4] = {"box", "gaussian", "phong", "exact phong (float64)"};
+    ibl_cubemap src;
+    if (study_load_cube(env, HDRI, PIC_SIZE, &src)) return 1;
+    ibl_cubemap chain[KERNEL_COUNT] = {{0}};
+    ibl_specular_info info[KERNEL_COUNT];
+    ibl_image panel[4] = {{0}}, pair[2] = {{0}}, out = {0};
+    int rc = 0;
+    for (int k = 0; k < 4 && !rc; k++) {
+        if (k < KERNEL_COUNT) {
+            ibl_status st = make_chain(env, &src, kernel_filter[k], &chain[k], &info[k]);
+            if (st != IBL_OK) rc = study_fail(env, "prefilter", st);
+        }
+        if (!rc) rc = fill_panel(env, &src, k, k < 3 ? &chain[k] : NULL, k < 3 ? &info[k] : NULL, &panel[k]);
+    }
+    float exposure = rc ? 0.0f : ibl_image_auto_exposure(&panel[3]);
+    for (int k = 0; k < 4 && !rc; k++) ibl_render_tonemap(&panel[k], exposure);
+    for (int i = 0; i < 2 && !rc; i++) {
+        ibl_status st = ibl_render_side_by_side(env->ctx, &panel[2 * i], labels[2 * i], &panel[2 * i + 1],
+                                                labels[2 * i + 1], &pair[i]);
+        if (st != IBL_OK) rc = study_fail(env, "kernels picture", st);
+    }
+    if (!rc && ibl_image_alloc(env->ctx, pair[0].width, 2 * pair[0].height + 2, &out) != IBL_OK) rc = 1;
+    for (int y = 0; y < out.height && !rc; y++)
+        for (int x = 0; x < out.width; x++) {
+            const ibl_image *from = y < pair[0].height ? &pair[0] : &pair[1];
+            int fy = y < pair[0].height ? y : y - pair[0].height - 2;
+            float *px = ibl_image_texel(&out, x, y);
+            if (fy < 0) px[0] = px[1] = px[2] = 0.0f, px[3] = 1.0f;
+            else memcpy(px, ibl_image_texel(from, x, fy), 4 * sizeof(float));
+        }
+    if (!rc) rc = study_write_picture(env, "studies_kernels.png", &out);
+    ibl_image_free(env->ctx, &out);
+    for (int i = 0; i < 2; i++) ibl_image_free(env->ctx, &pair[i]);
+    for (int k = 0; k < 4; k++) ibl_image_free(env->ctx, &panel[k]);
+    for (int k = 0; k < KERNEL_COUNT; k++) ibl_cubemap_free(env->ctx, &chain[k]);
+    ibl_cubemap_free(env->ctx, &src);
+    return rc;
+}
+
 int study_kernels(const study_env *env)
 {
     FILE *md = study_fragment(env, "kernels");
@@ -162,9 +254,10 @@ int study_kernels(const study_env *env)
         }
         fprintf(md, "\n");
     }
+    if (!rc) rc = kernels_picture(env);
     if (rc) {
         fclose(md);
         return rc;
     }
-    return study_fragment_close(env, md, "build/tools/studies/ibl_studies --study kernels");
+    return study_fragment_close(env, md, "kernels");
 }

@@ -1,7 +1,7 @@
 /* ibl_studies: runs the studies of docs/STUDIES.md and writes their tables as Markdown
  * fragments (tools/studies/run.sh splices them into the document).
  *
- * usage: ibl_studies --hdri DIR --out DIR [--machine TEXT] [--date TEXT] [--quick]
+ * usage: ibl_studies --hdri DIR --out DIR [--images DIR] [--machine TEXT] [--date TEXT] [--quick]
  *                    [--study kernels|blinn|artefact|ambient|speed]...
  */
 #include "studies.h"
@@ -19,7 +19,8 @@ enum { STUDY_COUNT = sizeof studies / sizeof studies[0] };
 
 static int usage(void)
 {
-    fprintf(stderr, "usage: ibl_studies --hdri DIR --out DIR [--machine TEXT] [--date TEXT] [--quick]\n"
+    fprintf(stderr, "usage: ibl_studies --hdri DIR --out DIR [--images DIR] [--machine TEXT] [--date TEXT]\n"
+                    "                   [--quick]\n"
                     "                   [--study kernels|blinn|artefact|ambient|speed]...\n");
     return 2;
 }
@@ -39,6 +40,7 @@ int main(int argc, char **argv)
         i++;
         if (strcmp(a, "--hdri") == 0) env.hdri_dir = v;
         else if (strcmp(a, "--out") == 0) env.out_dir = v;
+        else if (strcmp(a, "--images") == 0) env.image_dir = v;
         else if (strcmp(a, "--machine") == 0) env.machine = v;
         else if (strcmp(a, "--date") == 0) env.date = v;
         else if (strcmp(a, "--study") == 0) {

@@ -22,11 +22,11 @@ MACHINE="${cpu:-an unknown CPU} ($(nproc) cores, one thread used), $(uname -s) $
 DATE=$(date -u +%Y-%m-%d)
 start=$(date +%s)
 
-"$STUDIES" --hdri "$HDRI" --out "$WORK/md" --machine "$MACHINE" --date "$DATE"
+"$STUDIES" --hdri "$HDRI" --out "$WORK/md" --images "$IMG" --machine "$MACHINE" --date "$DATE"
 
 # ---- pictures: `ibl render`, one thread, 320 pixels per image; each group's commands go into
 # its fragment (paths shown relative to the test HDRIs and the work folder) ----
-render() { echo "ibl render $*" | sed "s|$HDRI/||g; s|$WORK/||g" >>"$CMDS"; "$IBL" render -q -j 1 --width 320 "$@"; }
+render() { echo "ibl render -q -j 1 --width 320 $*" | sed "s|$HDRI/||g; s|$WORK/||g" >>"$CMDS"; "$IBL" render -q -j 1 --width 320 "$@"; }
 commands() {
     { echo '```sh'; cat "$CMDS"; echo '```'; echo; echo "Rendered on $MACHINE, $DATE."; } >"${CMDS%.cmd}.md"
     rm "$CMDS"

@@ -97,5 +97,5 @@ int study_speed(const study_env *env)
         fclose(md);
         return rc;
     }
-    return study_fragment_close(env, md, "build/tools/studies/ibl_studies --study speed");
+    return study_fragment_close(env, md, "speed");
 }

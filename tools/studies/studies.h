@@ -18,6 +18,7 @@ typedef struct study_env {
     ibl_context *ctx;
     const char *hdri_dir;
     const char *out_dir;
+    const char *image_dir; /* pictures (docs/images); NULL: none are written            */
     const char *machine;
     const char *date;
     int quick; /* smaller sample counts (for a smoke run; the docs use the full run)   */
@@ -34,8 +35,11 @@ int study_speed(const study_env *env);        /* speed.c: the six presets' timin
 
 /* Opens OUT_DIR/name.md for writing; prints the reason and returns NULL on failure. */
 FILE *study_fragment(const study_env *env, const char *name);
-/* Closes a fragment after the provenance line ("Measured on MACHINE, DATE, with ..."). */
-int study_fragment_close(const study_env *env, FILE *f, const char *command);
+/* Closes a fragment after the provenance line: machine, date and the command of the study. */
+int study_fragment_close(const study_env *env, FILE *f, const char *study);
+/* Writes a display-referred image (ibl_render_tonemap) to IMAGE_DIR/name; a no-op without an
+ * image directory. */
+int study_write_picture(const study_env *env, const char *name, const ibl_image *image);
 /* Reads HDRI_DIR/name and converts it to a one-level cube of face edge size. */
 int study_load_cube(const study_env *env, const char *name, int size, ibl_cubemap *out);
 /* Prints the context's last message and returns 1 (for `return study_fail(...)`). */
