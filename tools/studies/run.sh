@@ -36,7 +36,8 @@ CMDS=$WORK/md/pictures_so.cmd
 render "$HDRI/sunset.exr" -o "$IMG/studies_so.png" --sphere-ao 0.1 --compare so=ao so=triace-fast
 commands
 # specular occlusion off and on with the AS (2) composition; AmbientBRDF off / on (SH
-# diffuse); the irradiance map (AmbientBRDF on): one bake, three renders
+# diffuse, the bake's chain and split-sum table; the volume written by `ibl lut` with a stated
+# range); the irradiance map (the bake itself, AmbientBRDF on); the Monte Carlo reference
 CMDS=$WORK/md/pictures_ambient.cmd
 render "$HDRI/forest.exr" -o "$IMG/studies_so_mix.png" --sphere-ao 0.2 --compare so=none so=triace-fast,mix=lerp-ao
 "$IBL" bake -q -j 1 "$HDRI/interior.exr" -o "$WORK/bake-interior"
@@ -44,7 +45,9 @@ echo "ibl bake interior.exr -o bake-interior" >>"$CMDS"
 B=$WORK/bake-interior
 # one exposure for the four interior pictures (automatic exposure would hide the differences)
 render "$HDRI/interior.exr" --chain "$B/specular.ktx2" --lut "$B/brdf_lut.ktx2" --exposure -2.5 -o "$IMG/studies_ambient_off.png"
-render "$HDRI/interior.exr" --chain "$B/specular.ktx2" --lut "$B/brdf_lut.ktx2" --ambient "$B/ambient_brdf.ktx2" \
+"$IBL" lut -q -j 1 --kind ambient-brdf --shininess-range 1:100000 -o "$WORK/ambient_brdf.ktx2"
+echo "ibl lut --kind ambient-brdf --shininess-range 1:100000 -o ambient_brdf.ktx2" >>"$CMDS"
+render "$HDRI/interior.exr" --chain "$B/specular.ktx2" --lut "$B/brdf_lut.ktx2" --ambient "$WORK/ambient_brdf.ktx2" \
     --ambient-range 1:100000 --exposure -2.5 -o "$IMG/studies_ambient_on.png"
 render "$B" --environment "$HDRI/interior.exr" --exposure -2.5 -o "$IMG/studies_iem.png"
 render "$HDRI/interior.exr" --reference --samples 64 --exposure -2.5 -o "$IMG/studies_reference.png"
