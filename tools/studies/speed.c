@@ -2,7 +2,7 @@
  * on one thread of this machine: a one-shot ibl_specular_prefilter of a 64² source (the talk
  * refilters dynamic probes from a 64x64x6 cube; its static 64² configuration needs no less), and
  * the per-frame path, a plan created once and ibl_specular_plan_run per frame (the dynamic
- * operator, desc.dynamic, for the dynamic configurations). Medians of several runs. */
+ * plan, desc.dynamic, for the dynamic configurations). Medians of several runs. */
 #include "studies.h"
 
 #include <stdlib.h>
@@ -38,11 +38,6 @@ static int time_preset(const study_env *env, const ibl_cubemap *src, const char 
         ms[r] = study_now_ms() - t0;
     }
     t->levels = study_median(ms, runs);
-    t->plan_create = t->plan_run = -1.0;
-    if (d.filter == IBL_FILTER_BOX || d.filter == IBL_FILTER_GAUSS) { /* no plan: one call is the frame */
-        free(ms);
-        return st == IBL_OK ? 0 : study_fail(env, name, st);
-    }
     d.source_size = SOURCE;
     d.dynamic = name[0] == 'd'; /* the "dynamic-*" configurations */
     ibl_specular_plan *plan = NULL;
@@ -88,8 +83,7 @@ int study_speed(const study_env *env)
                 (double)t.info.shininess_min, (double)t.info.shininess_max,
                 ibl_edge_fixup_name(d.edge_fixup), t.oneshot);
         fprintf(md, " %.3f ms |", t.levels);
-        if (t.plan_run < 0) fprintf(md, " (no plan: the call itself) | %.2f ms |\n", t.oneshot);
-        else fprintf(md, " %.1f ms | %.3f ms |\n", t.plan_create, t.plan_run);
+        fprintf(md, " %.1f ms | %.3f ms |\n", t.plan_create, t.plan_run);
     }
     fprintf(md, "\nOne thread (`ibl_context_desc.threads = 1`), 64² source, median of %d runs.\n", runs);
     ibl_cubemap_free(env->ctx, &src);
