@@ -7,7 +7,7 @@ PREFIX ?= /usr/local
 IBL = $(BUILD)/ibl
 DEMO_DIR = out/demo
 
-.PHONY: all deps build test test-release test-asan demo bench fuzz valgrind install clean
+.PHONY: all deps build test test-release test-asan demo bench studies fuzz valgrind install clean
 
 all: build
 
@@ -35,6 +35,10 @@ demo: build
 bench: build
 	@sh scripts/install-deps.sh --bench
 	@sh bench/run.sh $(BUILD)
+
+# docs/STUDIES.md's tables and docs/images/studies_*.png, regenerated (~1-2 minutes, one thread)
+studies: build
+	@sh tools/studies/run.sh $(BUILD)
 
 fuzz:
 	@sh scripts/install-deps.sh --fuzz
