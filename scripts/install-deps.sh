@@ -9,7 +9,8 @@
 #              libjansson-dev (JSON: the bake manifest, sh.json, --json outputs, probe sets)
 #              libassimp-dev (glTF 2.0 scenes for probe capture, through its C API)
 #              libembree-dev (Intel Embree 3: ray casting in those scenes)
-#   tests:     libcmocka-dev (test framework; CTest drives it)
+#   tests:     libcmocka-dev (test framework; CTest drives it), parallel (GNU parallel: the
+#              probe bake's shard/merge test and docs/PROBES.md's scale-out recipes)
 #   fuzzing:   clang libclang-rt-14-dev (libFuzzer, sanitizer runtimes), dpkg-dev (apt-get
 #              source unpacks with dpkg-source), zlib1g-dev libimath-dev (their versions name
 #              the sources to fetch), python3 libjpeg-turbo-progs (cjpeg) for
@@ -22,7 +23,7 @@
 # components and keyring) in /etc/apt/sources.list.d/ibl-deb-src.sources. Nothing else is
 # ever downloaded: every byte comes through apt from the machine's configured Debian archive.
 set -eu
-PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libpng-dev libjpeg-dev libdeflate-dev libjansson-dev libassimp-dev libembree-dev libcmocka-dev"
+PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libpng-dev libjpeg-dev libdeflate-dev libjansson-dev libassimp-dev libembree-dev libcmocka-dev parallel"
 # Source package:binary package whose installed version is fetched (headers and instrumented
 # libraries then match exactly). Built in this order by fuzz/build-deps.sh.
 FUZZ_SOURCES="zlib:zlib1g-dev libdeflate:libdeflate-dev libpng1.6:libpng-dev libjpeg-turbo:libjpeg62-turbo-dev imath:libimath-dev openexr:libopenexr-dev"

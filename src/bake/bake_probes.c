@@ -217,11 +217,13 @@ static ibl_status check_set(ibl_context *ctx, const ibl_probe_set *set)
 
 /* ---- the folder outside the transaction (shards) ------------------------------------------- */
 
-static ibl_status open_shared_folder(ibl_context *ctx, const char *dir)
+static ibl_status open_shared_folder(ibl_context *ctx, const char *dir, int *created)
 {
     struct stat s;
+    *created = 0;
     if (stat(dir, &s) != 0) {
-        if (mkdir(dir, 0777) != 0 && errno != EEXIST)
+        if (mkdir(dir, 0777) == 0) *created = 1;
+        else if (errno != EEXIST)
             return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot create the folder: %s", dir, strerror(errno));
         return IBL_OK;
     }
@@ -236,6 +238,21 @@ static ibl_status open_shared_folder(ibl_context *ctx, const char *dir)
                            "the probe bake to a new or empty folder", dir, e->d_name);
     closedir(d);
     return st;
+}
+
+/* A folder this run created and failed to fill: its parts go with it. */
+static void remove_created(ibl_context *ctx, const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d) return;
+    struct dirent *e;
+    char path[4096];
+    while ((e = readdir(d)) != NULL)
+        if (ibl__bake_is_entry(e->d_name) && snprintf(path, sizeof path, "%s/%s", dir, e->d_name) < (int)sizeof path)
+            unlink(path);
+    closedir(d);
+    rmdir(dir);
+    (void)ctx;
 }
 
 static int part_path(const char *dir, const char *file, char *out, size_t cap)
@@ -565,11 +582,13 @@ ibl_status ibl_probe_bake(ibl_context *ctx, const ibl_probe_set *set, const ibl_
     if (!d->shards && !environment)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: the merge needs the global environment", dir);
     ibl_format format = d->format ? d->format : IBL_FORMAT_RGBA16F;
+    int created = 0;
     ibl_status st = check_set(ctx, set);
-    if (st == IBL_OK && !d->merge) st = open_shared_folder(ctx, dir);
+    if (st == IBL_OK && !d->merge) st = open_shared_folder(ctx, dir, &created);
     for (int i = 0; i < set->probe_count && st == IBL_OK && !d->merge; i++)
         if (d->shards == 0 || i % d->shards == d->shard - 1)
             st = ensure_part(ctx, set, d, format, i, dir, report);
     if (st == IBL_OK && d->shards == 0) st = merge(ctx, set, environment, d, format, dir);
+    if (st != IBL_OK && created) remove_created(ctx, dir); /* no output from a failed run */
     return st;
 }
