@@ -48,3 +48,4 @@ hyperfine -w 1 -r 3 -N "$BUILD/ibl prefilter -q $OUT/big.exr -o $OUT/p512.ktx2 -
 # probe capture of the sample scene (docs/PERFORMANCE.md "Scene ray casting and probe capture")
 hyperfine -w 1 -r 3 -N "$BUILD/ibl capture -q examples/rooms/scene.gltf --probes examples/rooms/probes.json -o $OUT/caps --size 32 --samples 64"
 hyperfine -w 1 -r 3 -N "$BUILD/ibl bake -q --probes examples/rooms/probes.json --captures $OUT/caps -o $OUT/probe_bake"
+run "$B/bench_probes" 20

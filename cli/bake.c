@@ -1,6 +1,7 @@
 /* ibl bake: everything a renderer needs from one environment, in one pass over the input.
  * A thin client of bake.h: the library names the files, writes the manifest and swaps the
  * folder in whole. */
+#include "bake_probes.h"
 #include "input.h"
 #include "specular_options.h"
 
@@ -36,13 +37,15 @@ static const char usage[] =
     CLI_INPUT_HELP
     "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n"
     "\n"
-    "The default chain is the gltf preset: GGX, 256 texels, roughness = level / (levels - 1).\n";
+    "The default chain is the gltf preset: GGX, 256 texels, roughness = level / (levels - 1).\n"
+    CLI_PROBE_BAKE_HELP;
 
 typedef struct bake_options {
     const char *dir;
     cli_input_options input;
     cli_specular_options specular;
     ibl_bake_desc desc;
+    cli_probe_bake_options probes;
 } bake_options;
 
 static void parse(cli_args *a, bake_options *o)
@@ -52,7 +55,12 @@ static void parse(cli_args *a, bake_options *o)
         if (cli_common_option(a, arg) || cli_input_option(a, arg, &o->input) ||
             cli_specular_option(a, arg, &o->specular))
             continue;
-        if (cli_is(a, arg, "--output", "-o")) o->dir = cli_value(a, arg);
+        if (cli_is(a, arg, "--output", "-o")) o->dir = o->probes.dir = cli_value(a, arg);
+        else if (cli_is(a, arg, "--probes", NULL)) o->probes.probes = cli_value(a, arg);
+        else if (cli_is(a, arg, "--captures", NULL)) o->probes.captures = cli_value(a, arg);
+        else if (cli_is(a, arg, "--scene", NULL)) o->probes.scene = cli_value(a, arg);
+        else if (cli_is(a, arg, "--shard", NULL)) cli_shard_value(a, arg, &o->probes.shard, &o->probes.shards);
+        else if (cli_flag(a, arg, "--merge", NULL)) o->probes.merge = 1;
         else if (cli_is(a, arg, "--irradiance-size", NULL)) o->desc.irradiance_size = cli_int(a, arg, 1, 64);
         else if (cli_is(a, arg, "--sh-bands", NULL)) o->desc.sh_bands = cli_int(a, arg, 1, IBL_SH_MAX_BANDS);
         else if (cli_is(a, arg, "--lut-size", NULL)) o->desc.lut_size = cli_int(a, arg, 2, 4096);
@@ -128,6 +136,13 @@ int cli_cmd_bake(int argc, char **argv)
     bake_options o;
     memset(&o, 0, sizeof o);
     parse(&a, &o);
+    if (o.probes.probes) {
+        if (a.positional_count) cli_usage_error(&a, "--probes takes no input file (the set names its global probe)");
+        o.probes.format = o.desc.format;
+        return cli_bake_probes(&a, &o.probes);
+    }
+    if (o.probes.captures || o.probes.scene || o.probes.shards || o.probes.merge)
+        cli_usage_error(&a, "--captures, --scene, --shard and --merge need --probes SET");
     ibl_context *ctx = cli_context(&a.common);
     ibl_sky_desc sky;
     ibl_cubemap env = {0};

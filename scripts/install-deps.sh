@@ -11,7 +11,8 @@
 #              libembree-dev (Intel Embree 3: ray casting in those scenes)
 #              libzstd-dev (Zstandard: KTX2 supercompression, written with --zstd, read always)
 #              libastcenc-dev (ARM's astcenc 4.2: ASTC HDR encoding and decoding)
-#   tests:     libcmocka-dev (test framework; CTest drives it)
+#   tests:     libcmocka-dev (test framework; CTest drives it), parallel (GNU parallel: the
+#              probe bake's shard/merge test and docs/PROBES.md's scale-out recipes)
 #   shaders:   libegl-dev (EGL headers, libglvnd's loader), libgl-dev (GL/glcorearb.h),
 #              libegl-mesa0 (Mesa's EGL: the surfaceless platform), libgl1-mesa-dri (llvmpipe,
 #              OpenGL 4.5 core in software), glslang-tools (glslangValidator: every GLSL
@@ -28,7 +29,7 @@
 # components and keyring) in /etc/apt/sources.list.d/ibl-deb-src.sources. Nothing else is
 # ever downloaded: every byte comes through apt from the machine's configured Debian archive.
 set -eu
-PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libpng-dev libjpeg-dev libdeflate-dev libjansson-dev libassimp-dev libembree-dev libzstd-dev libastcenc-dev libcmocka-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools"
+PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libpng-dev libjpeg-dev libdeflate-dev libjansson-dev libassimp-dev libembree-dev libzstd-dev libastcenc-dev libcmocka-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools parallel"
 # Source package:binary package whose installed version is fetched (headers and instrumented
 # libraries then match exactly). Built in this order by fuzz/build-deps.sh.
 FUZZ_SOURCES="zlib:zlib1g-dev libdeflate:libdeflate-dev libpng1.6:libpng-dev libjpeg-turbo:libjpeg62-turbo-dev imath:libimath-dev openexr:libopenexr-dev"

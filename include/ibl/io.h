@@ -146,6 +146,18 @@ float ibl_tonemap_apply(ibl_tonemap tonemap, float linear);
  * default of 8-bit previews. 0 for a black image. */
 float ibl_image_auto_exposure(const ibl_image *image);
 
+/* KTX2 cube-map arrays (layerCount N, faceCount 6; src/io/ktx2_array.c): count cubes of one
+ * size and level count, layer i = layers[i]; metadata (may be NULL) goes into the file's
+ * key/value data. Encodes into a new buffer (ibl_free). */
+ibl_status ibl_encode_cube_array(ibl_context *ctx, const ibl_cubemap *layers, int count,
+                                 const ibl_key_value *metadata, int metadata_count,
+                                 const ibl_write_desc *desc, void **bytes, size_t *size);
+/* Decodes one: *layers_out receives count new cubes (free each, then the array with ibl_free);
+ * meta (may be NULL) receives a texture without texels holding the file's metadata
+ * (ibl_texture_free). */
+ibl_status ibl_decode_cube_array(ibl_context *ctx, const void *bytes, size_t size, const char *name,
+                                 ibl_cubemap **layers_out, int *count_out, ibl_texture *meta);
+
 #ifdef __cplusplus
 }
 #endif

@@ -162,7 +162,7 @@ static ibl_status take_lock(ibl_context *ctx, target_folder *t)
  * temporary of one (".NAME.tmp-..."). */
 static int is_bake_entry(const char *name)
 {
-    if (ibl__bake_file_named(name) != IBL__BAKE_FILE_COUNT) return 1;
+    if (ibl__bake_file_named(name) != IBL__BAKE_FILE_COUNT || ibl__bake_probe_entry(name)) return 1;
     if (name[0] != '.') return 0;
     const char *tmp = strstr(name, ".tmp-");
     if (!tmp) return 0;
@@ -171,7 +171,12 @@ static int is_bake_entry(const char *name)
     if (n >= sizeof base) return 0;
     memcpy(base, name + 1, n);
     base[n] = 0;
-    return ibl__bake_file_named(base) != IBL__BAKE_FILE_COUNT;
+    return ibl__bake_file_named(base) != IBL__BAKE_FILE_COUNT || ibl__bake_probe_entry(base);
+}
+
+int ibl__bake_is_entry(const char *name)
+{
+    return is_bake_entry(name);
 }
 
 /* Checks that a folder holds only bake entries: 1 yes, 0 no (*stranger names the first
@@ -260,8 +265,8 @@ static ibl_status begin(ibl_context *ctx, const char *dir, target_folder *t)
 }
 
 /* Writes bytes to a new file of the private staging folder and flushes it. */
-static ibl_status write_staged(ibl_context *ctx, const char *dir, const char *name,
-                               const void *bytes, size_t size)
+ibl_status ibl__bake_write_staged(ibl_context *ctx, const char *dir, const char *name,
+                                  const void *bytes, size_t size)
 {
     char *path = join(ctx, dir, name);
     if (!path) return ibl__fail(ctx, ibl_context_status(ctx), "%s: out of memory", name);
@@ -290,7 +295,7 @@ static ibl_status stage_texture(ibl_context *ctx, const char *dir, ibl__bake_fil
     void *bytes = NULL;
     size_t size = 0;
     ibl_status st = ibl_encode_texture(ctx, ibl_file_type_from_path(name), tex, &wd, &bytes, &size);
-    if (st == IBL_OK) st = write_staged(ctx, dir, name, bytes, size);
+    if (st == IBL_OK) st = ibl__bake_write_staged(ctx, dir, name, bytes, size);
     else st = ibl__fail(ctx, st, "%s/%s: %s", dir, name, ibl_context_message(ctx));
     ibl_free(ctx, bytes);
     return st;
@@ -323,7 +328,7 @@ static ibl_status stage_table(ibl_context *ctx, const char *dir, ibl__bake_file 
 
 static ibl_status stage_text(ibl_context *ctx, const char *dir, ibl__bake_file file, char *text)
 {
-    ibl_status st = write_staged(ctx, dir, ibl__bake_file_info_of(file)->name, text, strlen(text));
+    ibl_status st = ibl__bake_write_staged(ctx, dir, ibl__bake_file_info_of(file)->name, text, strlen(text));
     ibl_free(ctx, text);
     return st;
 }
@@ -334,13 +339,14 @@ static ibl_status stage_preview(ibl_context *ctx, const char *dir, const ibl_bak
     void *bytes = NULL;
     size_t size = 0;
     ibl_status st = ibl_encode_image(ctx, IBL_FILE_PNG, &b->preview, &wd, &bytes, &size);
-    if (st == IBL_OK) st = write_staged(ctx, dir, ibl__bake_file_info_of(IBL__BAKE_PREVIEW)->name, bytes, size);
+    if (st == IBL_OK) st = ibl__bake_write_staged(ctx, dir, ibl__bake_file_info_of(IBL__BAKE_PREVIEW)->name, bytes, size);
     ibl_free(ctx, bytes);
     return st;
 }
 
 /* Every file of the bake into the (new, empty) staging folder. */
-static ibl_status stage_all(ibl_context *ctx, const char *dir, const ibl_bake_data *b)
+static ibl_status stage_all(ibl_context *ctx, const char *dir, const ibl_bake_data *b,
+                            const ibl__bake_extra *extra)
 {
     ibl_status st = stage_cube(ctx, dir, b, &b->specular, IBL__BAKE_SPECULAR_KTX2, 1);
     if (st == IBL_OK && b->irradiance.data)
@@ -362,9 +368,11 @@ static ibl_status stage_all(ibl_context *ctx, const char *dir, const ibl_bake_da
     if (st == IBL_OK && b->ambient_brdf.data)
         st = stage_texture(ctx, dir, IBL__BAKE_AMBIENT_BRDF, &b->ambient_brdf, IBL_FORMAT_RG16F);
     if (st == IBL_OK && b->preview.pixels) st = stage_preview(ctx, dir, b);
+    if (st == IBL_OK && extra) st = extra->stage(ctx, dir, extra->user);
     if (st == IBL_OK) {
         char *manifest = NULL;
         st = ibl_bake_manifest(ctx, b, &manifest);
+        if (st == IBL_OK && extra) st = extra->manifest(ctx, &manifest, extra->user);
         if (st == IBL_OK) st = stage_text(ctx, dir, IBL__BAKE_MANIFEST, manifest);
     }
     return st;
@@ -421,12 +429,13 @@ static ibl_status name_failure(ibl_context *ctx, ibl_status st, const char *dir)
 }
 
 /* Writes b into the locked target: stage, flush, last cancellation point, swap. */
-static ibl_status commit(ibl_context *ctx, target_folder *t, const ibl_bake_data *b)
+static ibl_status commit(ibl_context *ctx, target_folder *t, const ibl_bake_data *b,
+                         const ibl__bake_extra *extra)
 {
     if (mkdir(t->staging, 0777) != 0)
         return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot create the staging folder %s: %s", t->path,
                          t->staging, strerror(errno));
-    ibl_status st = stage_all(ctx, t->staging, b);
+    ibl_status st = stage_all(ctx, t->staging, b, extra);
     if (st == IBL_OK && sync_folder(t->staging) != 0)
         st = ibl__fail(ctx, IBL_ERR_IO, "%s: cannot flush %s: %s", t->path, t->staging, strerror(errno));
     if (st == IBL_OK && ibl__progress(ctx, "write", 1.0) == IBL_ERR_CANCELLED)
@@ -439,11 +448,17 @@ static ibl_status commit(ibl_context *ctx, target_folder *t, const ibl_bake_data
 
 ibl_status ibl_bake_write(ibl_context *ctx, const ibl_bake_data *bake, const char *dir)
 {
+    return ibl__bake_write_extra(ctx, bake, dir, NULL);
+}
+
+ibl_status ibl__bake_write_extra(ibl_context *ctx, const ibl_bake_data *bake, const char *dir,
+                                 const ibl__bake_extra *extra)
+{
     if (!bake || !bake->specular.data || !dir)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "bake: nothing to write");
     target_folder t;
     ibl_status st = begin(ctx, dir, &t);
-    if (st == IBL_OK) st = commit(ctx, &t, bake);
+    if (st == IBL_OK) st = commit(ctx, &t, bake, extra);
     target_release(ctx, &t);
     return st;
 }
@@ -462,7 +477,7 @@ ibl_status ibl_bake(ibl_context *ctx, const ibl_cubemap *env, const ibl_bake_des
         st = ibl_bake_compute(ctx, env, desc, &b);
         if (st != IBL_OK) st = name_failure(ctx, st, t.path);
     }
-    if (st == IBL_OK) st = commit(ctx, &t, &b);
+    if (st == IBL_OK) st = commit(ctx, &t, &b, NULL);
     if (st == IBL_OK && result) *result = b;
     else ibl_bake_free(ctx, &b);
     target_release(ctx, &t);

@@ -48,4 +48,25 @@ ibl_status ibl__bake_manifest_parse(ibl_context *ctx, const void *bytes, size_t 
                                     ibl__bake_manifest_files *files, void **root);
 void ibl__bake_manifest_release(void *root);
 
+/* Extra files of a bake folder (the probe array, src/bake/bake_probes.c): stage writes them
+ * into the staging folder before the manifest; manifest rewrites the manifest's text (it may
+ * replace *text, freeing the old one with ibl_free). */
+typedef struct ibl__bake_extra {
+    ibl_status (*stage)(ibl_context *ctx, const char *staging, void *user);
+    ibl_status (*manifest)(ibl_context *ctx, char **text, void *user);
+    void *user;
+} ibl__bake_extra;
+
+/* ibl_bake_write with extra files (extra may be NULL), the same transaction. */
+ibl_status ibl__bake_write_extra(ibl_context *ctx, const ibl_bake_data *bake, const char *dir,
+                                 const ibl__bake_extra *extra);
+/* Writes and flushes a new file in a folder (O_EXCL); errors name the file. */
+ibl_status ibl__bake_write_staged(ibl_context *ctx, const char *dir, const char *name,
+                                  const void *bytes, size_t size);
+/* May the bake module delete this entry of a bake folder (its files and their temporaries)? */
+int ibl__bake_is_entry(const char *name);
+/* bake_probes.c: is name one of the probe array's files (probes.ktx2, probes.bin,
+ * probes.json, probe-HASH.ktx2)? */
+int ibl__bake_probe_entry(const char *name);
+
 #endif

@@ -434,3 +434,77 @@ ibl_status ibl_capture_probe(ibl_context *ctx, const ibl_scene *scene,
     emitters_free(ctx, &lights);
     return st;
 }
+
+/* ---- a camera's view (ibl render --reference) ---------------------------------------------- */
+
+typedef struct view_job {
+    tracer tr;
+    const ibl_camera *cam;
+    uint64_t key;
+    int samples;
+    ibl_image *out;
+    int row0;
+} view_job;
+
+static void view_row(void *arg, int index)
+{
+    const view_job *j = arg;
+    int y = j->row0 + index;
+    const ibl_camera *cam = j->cam;
+    for (int x = 0; x < cam->width; x++) {
+        uint64_t pk = mix64(j->key ^ mix64(((uint64_t)y << 24) ^ (uint64_t)x));
+        double sum[3] = {0, 0, 0};
+        for (int i = 0; i < j->samples; i++) {
+            rng r = {mix64(pk ^ (uint64_t)i), 0};
+            float px = (float)x + rnd(&r), py = (float)y + rnd(&r);
+            ibl_vec3 d = ibl__norm(ibl_camera_ray(cam, px, py));
+            float acc[3] = {0, 0, 0};
+            ibl_scene_hit h;
+            if (ibl_scene_intersect(j->tr.scene, cam->position, d, 0.0f, FLT_MAX, &h))
+                trace_path(&j->tr, h, d, &r, acc);
+            else
+                env_radiance(&j->tr, d, acc);
+            if (isfinite(acc[0]) && isfinite(acc[1]) && isfinite(acc[2]))
+                for (int c = 0; c < 3; c++) sum[c] += acc[c];
+        }
+        float *o = j->out->pixels + ((size_t)y * cam->width + x) * 4;
+        for (int c = 0; c < 3; c++) o[c] = (float)(sum[c] / j->samples);
+        o[3] = 1.0f;
+    }
+}
+
+ibl_status ibl_trace_view(ibl_context *ctx, const ibl_scene *scene, const ibl_cubemap *environment,
+                          const ibl_camera *cam, const ibl_trace_desc *desc, ibl_image *out)
+{
+    if (!ctx || !scene || !environment || !cam || !out || cam->width < 1 || cam->height < 1)
+        return IBL_ERR_INVALID_ARGUMENT;
+    ibl_trace_desc d;
+    memset(&d, 0, sizeof d);
+    if (desc) d = *desc;
+    int bounces = d.bounces == IBL_CAPTURE_NO_BOUNCE ? 0 : d.bounces ? d.bounces : DEFAULT_BOUNCES;
+    int samples = d.samples ? d.samples : DEFAULT_SAMPLES;
+    emitters lights;
+    ibl_status st = emitters_init(ctx, scene, &lights);
+    ibl__env_sampler *es = st == IBL_OK ? ibl__env_sampler_create(ctx, environment) : NULL;
+    if (st == IBL_OK && !es) st = IBL_ERR_OUT_OF_MEMORY;
+    if (st == IBL_OK) st = ibl_image_alloc(ctx, cam->width, cam->height, out);
+    if (st == IBL_OK) {
+        float extent = 0.0f;
+        for (int k = 0; k < 3; k++)
+            extent = fmaxf(extent, fmaxf(fabsf(scene->bounds_min[k]), fabsf(scene->bounds_max[k])));
+        view_job j = {{scene, environment, es, &lights, bounces, 1, 1e-4f * (1.0f + extent)},
+                      cam, mix64(mix64((uint64_t)d.seed) ^ 0x7669657775ull), samples, out, 0};
+        int step = cam->height / 8 > 0 ? cam->height / 8 : 1;
+        for (int y0 = 0; y0 < cam->height && st == IBL_OK; y0 += step) {
+            st = ibl__progress(ctx, "reference", (double)y0 / cam->height);
+            if (st != IBL_OK) break;
+            int rows = cam->height - y0 < step ? cam->height - y0 : step;
+            j.row0 = y0;
+            ibl_parallel_for(ctx, rows, view_row, &j);
+        }
+        if (st != IBL_OK) ibl_image_free(ctx, out);
+    }
+    ibl__env_sampler_destroy(ctx, es);
+    emitters_free(ctx, &lights);
+    return st;
+}
