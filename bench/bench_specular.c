@@ -118,39 +118,58 @@ static void dynamic_bench(void)
     ibl_context_destroy(ctx);
 }
 
-int main(int argc, char **argv)
+/* The command line: --sizes A,B --samples N --threads N --accuracy X --levels N --ref-cache
+ * DIR --dynamic --filters ggx,phong,blinn FILE... */
+typedef struct bench_options {
+    int sizes[8], nsizes, samples, threads, dynamic, max_levels;
+    float accuracy;
+    ibl_specular_filter filters[3];
+    int nfilters;
+    const char *files[64], *cache_dir;
+    int nfiles;
+} bench_options;
+
+static void parse_options(int argc, char **argv, bench_options *o)
 {
-    int sizes[8] = {128, 256}, nsizes = 2, samples = 2000, threads = 0, dynamic = 0, max_levels = 0;
-    float accuracy = 0;
-    ibl_specular_filter filters[3] = {IBL_FILTER_GGX, IBL_FILTER_PHONG, IBL_FILTER_BLINN};
-    int nfilters = 3;
-    const char *files[64], *cache_dir = NULL;
-    int nfiles = 0;
+    *o = (bench_options){.sizes = {128, 256}, .nsizes = 2, .samples = 2000,
+                         .filters = {IBL_FILTER_GGX, IBL_FILTER_PHONG, IBL_FILTER_BLINN}, .nfilters = 3};
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--sizes") == 0 && i + 1 < argc) {
-            nsizes = 0;
-            for (char *p = strtok(argv[++i], ","); p && nsizes < 8; p = strtok(NULL, ","))
-                sizes[nsizes++] = atoi(p);
+            o->nsizes = 0;
+            for (char *p = strtok(argv[++i], ","); p && o->nsizes < 8; p = strtok(NULL, ","))
+                o->sizes[o->nsizes++] = atoi(p);
         } else if (strcmp(argv[i], "--samples") == 0 && i + 1 < argc) {
-            samples = atoi(argv[++i]);
+            o->samples = atoi(argv[++i]);
         } else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) {
-            threads = atoi(argv[++i]);
+            o->threads = atoi(argv[++i]);
         } else if (strcmp(argv[i], "--accuracy") == 0 && i + 1 < argc) {
-            accuracy = (float)atof(argv[++i]);
+            o->accuracy = (float)atof(argv[++i]);
         } else if (strcmp(argv[i], "--levels") == 0 && i + 1 < argc) {
-            max_levels = atoi(argv[++i]);
+            o->max_levels = atoi(argv[++i]);
         } else if (strcmp(argv[i], "--ref-cache") == 0 && i + 1 < argc) {
-            cache_dir = argv[++i];
+            o->cache_dir = argv[++i];
         } else if (strcmp(argv[i], "--dynamic") == 0) {
-            dynamic = 1;
+            o->dynamic = 1;
         } else if (strcmp(argv[i], "--filters") == 0 && i + 1 < argc) {
-            nfilters = 0;
-            for (char *p = strtok(argv[++i], ","); p && nfilters < 3; p = strtok(NULL, ","))
-                if (ibl_specular_filter_from_name(p, &filters[nfilters])) nfilters++;
-        } else if (nfiles < 64) {
-            files[nfiles++] = argv[i];
+            o->nfilters = 0;
+            for (char *p = strtok(argv[++i], ","); p && o->nfilters < 3; p = strtok(NULL, ","))
+                if (ibl_specular_filter_from_name(p, &o->filters[o->nfilters])) o->nfilters++;
+        } else if (o->nfiles < 64) {
+            o->files[o->nfiles++] = argv[i];
         }
     }
+}
+
+int main(int argc, char **argv)
+{
+    bench_options o;
+    parse_options(argc, argv, &o);
+    int *sizes = o.sizes, nsizes = o.nsizes, samples = o.samples, threads = o.threads;
+    int dynamic = o.dynamic, max_levels = o.max_levels, nfilters = o.nfilters, nfiles = o.nfiles;
+    float accuracy = o.accuracy;
+    const ibl_specular_filter *filters = o.filters;
+    const char *const *files = o.files;
+    const char *cache_dir = o.cache_dir;
     if (dynamic) dynamic_bench();
     ibl_context_desc cd = {0};
     cd.threads = threads;
