@@ -14,13 +14,8 @@
 #include <time.h>
 
 #include "ibl/ibl.h"
+#include "bench_timing.h"
 
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
-}
 
 /* CPU time of every thread of the process: on a loaded machine, what the encode costs. */
 static double cpu_ms(void)
@@ -30,11 +25,6 @@ static double cpu_ms(void)
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 typedef struct metrics {
     double log_rms, mpsnr;
@@ -71,9 +61,9 @@ static ibl_status bc6h_codec(ibl_context *ctx, int quality, const float *rgba, i
 {
     uint8_t *blocks = malloc(ibl_bc6h_bytes(w, h));
     ibl_bc6h_desc d = {0, (ibl_quality)quality};
-    double t0 = now_ms(), c0 = cpu_ms();
+    double t0 = bench_now_ms(), c0 = cpu_ms();
     ibl_status st = ibl_bc6h_encode(ctx, &d, rgba, w, h, blocks);
-    ms[0] += now_ms() - t0;
+    ms[0] += bench_now_ms() - t0;
     ms[1] += cpu_ms() - c0;
     if (st == IBL_OK) st = ibl_bc6h_decode(ctx, 0, blocks, w, h, decoded);
     free(blocks);
@@ -85,9 +75,9 @@ static ibl_status astc_codec(ibl_context *ctx, int quality, const float *rgba, i
 {
     ibl_astc_desc d = {4, 4, (ibl_quality)quality};
     uint8_t *blocks = malloc(ibl_astc_bytes(4, 4, w, h));
-    double t0 = now_ms(), c0 = cpu_ms();
+    double t0 = bench_now_ms(), c0 = cpu_ms();
     ibl_status st = ibl_astc_encode(ctx, &d, rgba, w, h, blocks);
-    ms[0] += now_ms() - t0;
+    ms[0] += bench_now_ms() - t0;
     ms[1] += cpu_ms() - c0;
     if (st == IBL_OK) st = ibl_astc_decode(ctx, &d, blocks, w, h, decoded);
     free(blocks);
@@ -114,8 +104,8 @@ static void run(ibl_context *ctx, const char *path, const ibl_texture *t, const 
         times[r] = ms[0];
         cpu[r] = ms[1];
     }
-    qsort(times, (size_t)runs, sizeof *times, cmp_double);
-    qsort(cpu, (size_t)runs, sizeof *cpu, cmp_double);
+    qsort(times, (size_t)runs, sizeof *times, bench_cmp_double);
+    qsort(cpu, (size_t)runs, sizeof *cpu, bench_cmp_double);
     printf("%s %s: encode %.1f ms wall, %.1f ms CPU (medians of %d)\n", path, name,
            times[runs / 2], cpu[runs / 2], runs);
     printf("  level  size  log2-RMS  mPSNR\n");

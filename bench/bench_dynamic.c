@@ -11,24 +11,10 @@
 #include <stdlib.h>
 #include <time.h>
 
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
+#include "bench_timing.h"
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
 
-static double median(double *t, int n)
-{
-    qsort(t, (size_t)n, sizeof *t, cmp_double);
-    return t[n / 2];
-}
+
 
 static void fill(ibl_cubemap *c)
 {
@@ -69,32 +55,32 @@ int main(int argc, char **argv)
         d.source_size = source;
         ibl_specular_plan *plan = NULL;
         for (int r = 0; r < creations; r++) {
-            double t0 = now_ms();
+            double t0 = bench_now_ms();
             if (ibl_specular_plan_create(ctx, &d, &plan) != IBL_OK) {
                 fprintf(stderr, "%s: %s\n", presets[i], ibl_context_message(ctx));
                 return 1;
             }
-            t[r] = now_ms() - t0;
+            t[r] = bench_now_ms() - t0;
             if (r + 1 < creations) ibl_specular_plan_destroy(plan);
         }
-        double create = median(t, creations);
+        double create = bench_median(t, creations);
         const ibl_specular_info *info = ibl_specular_plan_info(plan);
         ibl_cubemap dst;
         if (ibl_cubemap_alloc(ctx, info->size, info->levels, &dst) != IBL_OK) return 1;
         for (int r = 0; r < runs; r++) {
-            double t0 = now_ms();
+            double t0 = bench_now_ms();
             ibl_specular_plan_run(plan, &src, &dst);
-            t[r] = now_ms() - t0;
+            t[r] = bench_now_ms() - t0;
         }
-        double run = median(t, runs);
+        double run = bench_median(t, runs);
         ibl_sh sh;
         for (int r = 0; r < runs; r++) {
-            double t0 = now_ms();
+            double t0 = bench_now_ms();
             ibl_specular_plan_sh(plan, 3, &sh);
-            t[r] = now_ms() - t0;
+            t[r] = bench_now_ms() - t0;
         }
         printf("| %s | %dx%dx6, %d levels | %.2f ms | %.4f ms | %.4f ms |\n", presets[i], info->size,
-               info->size, info->levels, create, run, median(t, runs));
+               info->size, info->levels, create, run, bench_median(t, runs));
         ibl_cubemap_free(ctx, &dst);
         ibl_specular_plan_destroy(plan);
     }

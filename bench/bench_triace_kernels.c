@@ -9,26 +9,12 @@
 #include <stdlib.h>
 #include <time.h>
 
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
+#include "bench_timing.h"
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
+
 
 enum { RUNS = 51 };
 
-static double median(double *t, int n)
-{
-    qsort(t, (size_t)n, sizeof *t, cmp_double);
-    return t[n / 2];
-}
 
 static void fill(ibl_cubemap *c)
 {
@@ -61,22 +47,22 @@ int main(int argc, char **argv)
         for (int l = 0; l < 6; l++) shininess[l] = (float)(1000.0 * pow(1000.0, -l / 5.0));
         double t_box[RUNS], t_gauss[RUNS], t_overlap[RUNS], t_overlap2[RUNS];
         for (int r = 0; r < RUNS; r++) {
-            double t0 = now_ms();
+            double t0 = bench_now_ms();
             ibl__specular_box(ctx, &src, &box);
-            double t1 = now_ms();
+            double t1 = bench_now_ms();
             ibl__specular_gauss(ctx, &src, &gauss, shininess);
-            double t2 = now_ms();
+            double t2 = bench_now_ms();
             for (int l = 0; l < gauss.levels; l++) ibl_edge_fixup_apply(ctx, IBL_EDGE_FIXUP_OVERLAP, &gauss, l);
-            double t3 = now_ms();
+            double t3 = bench_now_ms();
             for (int l = 0; l < gauss.levels; l++) ibl_edge_fixup_apply(ctx, IBL_EDGE_FIXUP_OVERLAP2, &gauss, l);
-            double t4 = now_ms();
+            double t4 = bench_now_ms();
             t_box[r] = t1 - t0, t_gauss[r] = t2 - t1, t_overlap[r] = t3 - t2, t_overlap2[r] = t4 - t3;
         }
         printf("threads %d, median of %d runs (ms):\n", threads, RUNS);
-        printf("  box   16x16x6, 5 levels, from 64x64x6:   %.3f\n", median(t_box, RUNS));
-        printf("  gauss 32x32x6, 6 levels, from 64x64x6:   %.3f\n", median(t_gauss, RUNS));
-        printf("  overlap  on the 6 levels of 32x32x6:     %.3f\n", median(t_overlap, RUNS));
-        printf("  overlap2 on the 6 levels of 32x32x6:     %.3f\n", median(t_overlap2, RUNS));
+        printf("  box   16x16x6, 5 levels, from 64x64x6:   %.3f\n", bench_median(t_box, RUNS));
+        printf("  gauss 32x32x6, 6 levels, from 64x64x6:   %.3f\n", bench_median(t_gauss, RUNS));
+        printf("  overlap  on the 6 levels of 32x32x6:     %.3f\n", bench_median(t_overlap, RUNS));
+        printf("  overlap2 on the 6 levels of 32x32x6:     %.3f\n", bench_median(t_overlap2, RUNS));
         ibl_cubemap_free(ctx, &src);
         ibl_cubemap_free(ctx, &box);
         ibl_cubemap_free(ctx, &gauss);
@@ -88,23 +74,23 @@ int main(int argc, char **argv)
         double t[RUNS];
         volatile float sink = 0;
         for (int r = 0; r < RUNS; r++) {
-            double t0 = now_ms();
+            double t0 = bench_now_ms();
             for (int f = 0; f < 6; f++)
                 for (int y = 0; y < 32; y++)
                     for (int x = 0; x < 32; x++)
                         sink += ibl_edge_fixup_texel_direction(kinds[k], NULL, f, 32, x, y, 0.1f).x;
-            t[r] = now_ms() - t0;
+            t[r] = bench_now_ms() - t0;
         }
         printf("texel_direction %-5s: %.1f ns per texel (32x32x6)\n", ibl_edge_fixup_name(kinds[k]),
-               median(t, RUNS) * 1e6 / (6 * 32 * 32));
+               bench_median(t, RUNS) * 1e6 / (6 * 32 * 32));
     }
     double t[RUNS];
     for (int r = 0; r < RUNS; r++) {
-        double t0 = now_ms();
+        double t0 = bench_now_ms();
         volatile float s = ibl__box_level_shininess(256, r % 9);
         (void)s;
-        t[r] = now_ms() - t0;
+        t[r] = bench_now_ms() - t0;
     }
-    printf("box_level_shininess: %.2f ms per level\n", median(t, RUNS));
+    printf("box_level_shininess: %.2f ms per level\n", bench_median(t, RUNS));
     return 0;
 }

@@ -359,21 +359,12 @@ static void pack_record(unsigned char *b, const ibl_local_probe *p, const part *
         for (int c = 0; c < 4; c++) put_f32(b + 96 + 16 * k + 4 * c, pt->sh[k][c]);
 }
 
-static json_t *vec3_json(ibl_vec3 v)
-{
-    json_t *a = json_array();
-    ibl__json_append(a, ibl__json_float(v.x));
-    ibl__json_append(a, ibl__json_float(v.y));
-    ibl__json_append(a, ibl__json_float(v.z));
-    return a;
-}
-
 static json_t *volume_json(const ibl_volume *v, int influence)
 {
     json_t *o = json_object();
     ibl__json_set(o, "shape", ibl__json_string(v->shape == IBL_VOLUME_BOX ? "box" : "sphere"));
-    ibl__json_set(o, "center", vec3_json(v->center));
-    if (v->shape == IBL_VOLUME_BOX) ibl__json_set(o, "half_extent", vec3_json(v->half_extent));
+    ibl__json_set(o, "center", ibl__json_vec3(v->center));
+    if (v->shape == IBL_VOLUME_BOX) ibl__json_set(o, "half_extent", ibl__json_vec3(v->half_extent));
     else ibl__json_set(o, "radius", ibl__json_float(v->radius));
     if (influence) ibl__json_set(o, "blend", ibl__json_float(v->blend_distance));
     return o;
@@ -384,7 +375,7 @@ static json_t *record_json(const ibl_local_probe *p, const part *pt, int layer)
     json_t *o = json_object();
     ibl__json_set(o, "name", ibl__json_string(p->name));
     ibl__json_set(o, "layer", ibl__json_number(layer));
-    ibl__json_set(o, "position", vec3_json(p->position));
+    ibl__json_set(o, "position", ibl__json_vec3(p->position));
     ibl__json_set(o, "influence_size", ibl__json_float(ibl_volume_size(&p->influence)));
     ibl__json_set(o, "influence", volume_json(&p->influence, 1));
     ibl__json_set(o, "proxy", volume_json(&p->proxy, 0));

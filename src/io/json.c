@@ -88,6 +88,15 @@ json_t *ibl__json_float(float x)
 
 json_t *ibl__json_bool(int b) { return json_boolean(b); }
 
+json_t *ibl__json_vec3(ibl_vec3 v)
+{
+    json_t *a = json_array();
+    ibl__json_append(a, ibl__json_float(v.x));
+    ibl__json_append(a, ibl__json_float(v.y));
+    ibl__json_append(a, ibl__json_float(v.z));
+    return a;
+}
+
 void ibl__json_set(json_t *object, const char *key, json_t *value)
 {
     if (!object) return;

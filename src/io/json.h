@@ -8,6 +8,7 @@
 #define IBL_IO_JSON_H
 
 #include "ibl/core.h"
+#include "ibl/cubemap.h"
 
 #include <jansson.h>
 
@@ -17,6 +18,7 @@ json_t *ibl__json_string(const char *s);  /* NULL s: JSON null */
 json_t *ibl__json_number(double x);       /* integers stay integers; NaN/Inf: null */
 json_t *ibl__json_float(float x);         /* the shortest text that reads back as x  */
 json_t *ibl__json_bool(int b);
+json_t *ibl__json_vec3(ibl_vec3 v);      /* [x, y, z] as floats                     */
 /* Sets key to value (stealing the reference); a NULL value (allocation failure) is recorded
  * in the object as a failure that ibl__json_text reports. */
 void ibl__json_set(json_t *object, const char *key, json_t *value);

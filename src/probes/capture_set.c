@@ -26,15 +26,6 @@ static ibl_status make_folder(ibl_context *ctx, const char *dir, int *created)
     return IBL_OK;
 }
 
-static json_t *vec3_json(ibl_vec3 v)
-{
-    json_t *a = json_array();
-    ibl__json_append(a, ibl__json_float(v.x));
-    ibl__json_append(a, ibl__json_float(v.y));
-    ibl__json_append(a, ibl__json_float(v.z));
-    return a;
-}
-
 static json_t *probe_json(const ibl_local_probe *p, const char *file, int size, double coverage)
 {
     json_t *o = json_object();
@@ -42,7 +33,7 @@ static json_t *probe_json(const ibl_local_probe *p, const char *file, int size, 
     ibl__json_set(o, "file", ibl__json_string(file));
     ibl__json_set(o, "size", ibl__json_number(size));
     ibl__json_set(o, "capture", ibl__json_string(ibl_capture_mode_name(p->capture)));
-    ibl__json_set(o, "position", vec3_json(p->position));
+    ibl__json_set(o, "position", ibl__json_vec3(p->position));
     ibl__json_set(o, "coverage", ibl__json_number(coverage));
     return o;
 }

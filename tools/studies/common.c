@@ -1,6 +1,7 @@
 /* Shared pieces of the studies: fragments, inputs, timing, and the float64 reference
  * convolution of a piecewise-constant cube (the independent yardstick of the kernel studies). */
 #include "studies.h"
+#include "bench_timing.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -52,24 +53,9 @@ int study_load_cube(const study_env *env, const char *name, int size, ibl_cubema
     return st == IBL_OK ? 0 : study_fail(env, path, st);
 }
 
-double study_now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
+double study_now_ms(void) { return bench_now_ms(); }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-double study_median(double *values, int count)
-{
-    qsort(values, (size_t)count, sizeof *values, cmp_double);
-    return count % 2 ? values[count / 2] : 0.5 * (values[count / 2 - 1] + values[count / 2]);
-}
+double study_median(double *values, int count) { return bench_median(values, count); }
 
 double study_luminance(const float *rgb)
 {
