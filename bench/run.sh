@@ -4,7 +4,7 @@
 # BENCH_FULL=1 adds the prefilter's accuracy table against the reference (tens of minutes).
 set -eu
 BUILD=${1:-build}
-DATA=${IBL_TESTDATA:-../shared/testdata}
+DATA=${IBL_TESTDATA:-tests/data}
 HDRI=$DATA/hdri
 [ -d "$HDRI" ] || { DATA=tests/data; HDRI=tests/data; }
 B=$BUILD/bench

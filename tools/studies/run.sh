@@ -1,12 +1,12 @@
 #!/bin/sh
 # make studies: regenerates the tables of docs/STUDIES.md (between its <!-- studies:NAME -->
 # and <!-- /studies:NAME --> markers) and docs/images/studies_*.png from scratch.
-# Usage: tools/studies/run.sh [BUILD_DIR]; IBL_TESTDATA names the test data (default
-# ../shared/testdata, the HDRIs in its hdri/ folder). One thread throughout.
+# Usage: tools/studies/run.sh [BUILD_DIR]; the 1024x512 HDRIs are the repository's copies in
+# tests/data (IBL_TESTDATA=DIR reads DIR/hdri instead). One thread throughout.
 set -eu
 BUILD=${1:-build}
-DATA=${IBL_TESTDATA:-../shared/testdata}
-HDRI=$DATA/hdri
+HDRI=${IBL_TESTDATA:+$IBL_TESTDATA/hdri}
+HDRI=${HDRI:-tests/data}
 IBL=$BUILD/ibl
 STUDIES=$BUILD/tools/studies/ibl_studies
 DOC=docs/STUDIES.md
