@@ -49,7 +49,7 @@ void main()
     vec4 q = u_params[best];
     ibl_material m = ibl_material(int(q.x), u_base[best].rgb, q.y, q.z, u_f0[best].rgb, q.w, 1.0);
     ibl_surface s = ibl_surface(normalize(eye + best_t * d - c), -d, vec3(0.0), vec3(0.0));
-    ibl_shade_desc desc = ibl_shade_desc(0, 0, 0, 0, 0.0, 0, 0, 0, 0); // the defaults
+    ibl_shade_desc desc = ibl_shade_desc(0, 0, 0, 0, 0.0, 0, 0, 0, 0, 0); // the defaults
     ibl_shade_result r = ibl_shade(probe, u_specular, u_mirror, u_irradiance, u_splitsum,
                                    u_ambient, desc, m, s);
     o_color = vec4(r.color, 1.0);

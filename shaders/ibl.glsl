@@ -12,6 +12,8 @@
  *                      here, the file declares no resources (bindings are yours)
  * Switches (#define before including):
  *   IBL_MAX_VOLUMES n  array size of ibl_volume_blend (default 8)
+ *   IBL_MAX_LIGHTS n   array size of ibl_lights_shade and ibl_light_set (default 8, the
+ *                      size of ibl_shader_lights in include/ibl/shader.h)
  *   IBL_NO_AMBIENT_BRDF_3D  leave out the functions that take the AmbientBRDF sampler3D
  *                      (tri-Ace Blinn-Phong), e.g. on devices short of texture slots; then
  *                      ibl_shade uses F0 in its place as the C does without a table
@@ -34,10 +36,14 @@ precision highp sampler3D;
 #ifndef IBL_MAX_VOLUMES
 #define IBL_MAX_VOLUMES 8
 #endif
+#ifndef IBL_MAX_LIGHTS
+#define IBL_MAX_LIGHTS 8
+#endif
 
 #define IBL_PI 3.14159265358979
 #define IBL_FLT_MAX 3.402823466e38
 #define IBL_MIRROR_SHININESS 1e6
+#define IBL_MIN_GGX_ALPHA 1e-3
 
 /* enums of shade.h, same values */
 #define IBL_SH_KIND_NONE 0
@@ -65,6 +71,12 @@ precision highp sampler3D;
 #define IBL_BP_DIFFUSE_F0 1
 #define IBL_VOLUME_SPHERE 0
 #define IBL_VOLUME_BOX 1
+#define IBL_LIGHT_SIZE_WIDEN 0
+#define IBL_LIGHT_SIZE_IGNORE 1
+/* enums of light.h */
+#define IBL_LIGHT_DIRECTIONAL 0
+#define IBL_LIGHT_POINT 1
+#define IBL_LIGHT_SPOT 2
 
 /* ---- data: std140 layouts, filled by include/ibl/shader.h ------------------------------- */
 
@@ -113,6 +125,7 @@ struct ibl_shade_desc {
     int horizon_occlusion;
     float horizon_k;    /* 0: 1.3                                                         */
     int bp_diffuse, no_mirror, nearest_level, mirror_direction;
+    int light_size;     /* IBL_LIGHT_SIZE_*: what a punctual light's size does            */
 };
 
 struct ibl_surface {
@@ -753,6 +766,189 @@ vec3 ibl_edge_fixup_warp_lookup(vec3 dir, int n)
     float u = 2.0 / k * ibli_sinh(ibli_asinh(1.5 * k * (2.0 * s - 1.0)) / 3.0);
     float v = 2.0 / k * ibli_sinh(ibli_asinh(1.5 * k * (2.0 * t - 1.0)) / 3.0);
     return normalize(ibl_cube_direction(face, 0.5 * u + 0.5, 0.5 * v + 0.5));
+}
+
+/* ---- punctual lights (include/ibl/light.h; src/shade/light.c) ------------------------- */
+
+/* A KHR_lights_punctual light (ibl_light): ibl_shader_light in C (include/ibl/shader.h),
+ * four 16-byte rows, std140 and HLSL packing alike. Zero means the C's defaults. */
+struct ibl_light {
+    vec3 color;       /* linear RGB; all zero: white                                       */
+    float intensity;  /* lux (directional) or candela (point, spot); 0: 1                  */
+    vec3 position;    /* point, spot                                                       */
+    float range;      /* point, spot: where the light reaches zero; 0: infinite            */
+    vec3 direction;   /* directional, spot: the direction the light travels; any length   */
+    float size;       /* emitter radius; directional: tan of its angular radius; 0: point  */
+    int type;         /* IBL_LIGHT_*                                                       */
+    float inner_cone; /* spot: half-angles in radians; outer 0: pi/4                       */
+    float outer_cone;
+    int reserved;
+};
+
+/* A uniform block's worth of lights: ibl_shader_lights in C (ibl_shader_lights_fill). */
+struct ibl_light_set {
+    int count, reserved0, reserved1, reserved2;
+    ibl_light light[IBL_MAX_LIGHTS];
+};
+
+/* What a light delivers at a point (ibl_light_incidence). distance: IBL_FLT_MAX for a
+ * directional light, where the C has INFINITY (GLSL ES need not represent infinities). */
+struct ibl_light_incidence {
+    vec3 l;
+    float distance;
+    vec3 illuminance;
+    float size;
+    float attenuation;
+};
+
+/* One light's reflected radiance (ibl_light_result): specular is s_d of the compositions. */
+struct ibl_light_result {
+    vec3 diffuse;
+    vec3 specular;
+    float n_dot_l;
+    float shininess;
+    float alpha;
+};
+
+/* KHR_lights_punctual's range window saturate(1 - (d / range)^4); 1 without a range. */
+float ibl_light_range_window(float distance, float range)
+{
+    if (!(range > 0.0)) return 1.0;
+    float x = distance / range, x2 = x * x;
+    return clamp(1.0 - x2 * x2, 0.0, 1.0);
+}
+
+/* KHR_lights_punctual's distance falloff: window / d^2, d floored at 1e-4. */
+float ibl_light_distance_falloff(float distance, float range)
+{
+    float d = distance > 1e-4 ? distance : 1e-4;
+    return ibl_light_range_window(d, range) / (d * d);
+}
+
+/* KHR_lights_punctual's cone falloff saturate((cos - cos_outer) / (cos_inner - cos_outer))^2. */
+float ibl_light_cone_falloff(float cos_angle, float inner_cone, float outer_cone)
+{
+    float cos_inner = cos(inner_cone), cos_outer = cos(outer_cone);
+    float t = clamp((cos_angle - cos_outer) / max(1e-3, cos_inner - cos_outer), 0.0, 1.0);
+    return t * t;
+}
+
+/* Karis 2013 sphere light: GGX alpha widened to saturate(alpha + radius / (2 distance)). */
+float ibl_ggx_sphere_alpha(float alpha, float radius, float distance)
+{
+    if (!(radius > 0.0) || !(distance > 0.0)) return alpha;
+    return clamp(alpha + radius / (2.0 * distance), 0.0, 1.0);
+}
+
+/* Direction, distance, illuminance and tri-Ace's attenuation factor of a light at p. */
+ibl_light_incidence ibl_light_incidence_at(ibl_light light, vec3 p)
+{
+    ibl_light_incidence r;
+    float scale = light.intensity > 0.0 ? light.intensity : 1.0;
+    vec3 color = light.color == vec3(0.0) ? vec3(1.0) : light.color;
+    float falloff = 1.0;
+    r.size = light.size > 0.0 ? light.size : 0.0;
+    r.attenuation = 0.0;
+    if (light.type == IBL_LIGHT_DIRECTIONAL) {
+        r.l = ibli_normalize(-light.direction);
+        r.distance = IBL_FLT_MAX;
+    } else {
+        vec3 to_light = light.position - p;
+        float d = sqrt(dot(to_light, to_light));
+        r.distance = d;
+        if (d > 0.0) {
+            r.l = to_light / d;
+            falloff = ibl_light_distance_falloff(d, light.range);
+        } else { /* at the light itself there is no direction to light from */
+            r.l = vec3(0.0, 1.0, 0.0);
+            falloff = 0.0;
+        }
+        /* the talk's attenuation factor: the range window (1 at the light, 0 at its range) */
+        if (light.range > 0.0) r.attenuation = ibl_light_range_window(d, light.range);
+        if (light.type == IBL_LIGHT_SPOT) {
+            float outer = light.outer_cone > 0.0 ? light.outer_cone : 0.78539816;
+            falloff *= ibl_light_cone_falloff(-dot(ibli_normalize(light.direction), r.l),
+                                              light.inner_cone, outer);
+        }
+    }
+    r.illuminance = color * scale * falloff;
+    return r;
+}
+
+/* One light from its incidence on tri-Ace 2010's Blinn-Phong ("Equations", with the shininess
+ * hack) or glTF 2.0's GGX (D with Karis 2013's alpha, V the material's); desc.light_size. */
+ibl_light_result ibl_light_shade_incidence(ibl_light_incidence inc, ibl_shade_desc desc,
+                                           ibl_material m, ibl_surface s)
+{
+    ibl_light_result r = ibl_light_result(vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0);
+    bool widen = desc.light_size == IBL_LIGHT_SIZE_WIDEN;
+    bool bp = m.model == IBL_MATERIAL_BLINN_PHONG;
+    float alpha = max(m.roughness * m.roughness, IBL_MIN_GGX_ALPHA);
+    if (bp) {
+        r.shininess = widen ? ibl_shininess_hack(m.shininess, inc.size, inc.attenuation)
+                            : m.shininess;
+    } else { /* a directional light's size is already the ratio radius / distance */
+        float distance = inc.distance >= IBL_FLT_MAX ? 1.0 : inc.distance;
+        r.alpha = widen ? ibl_ggx_sphere_alpha(alpha, inc.size, distance) : alpha;
+    }
+    float nl = dot(s.n, inc.l);
+    if (nl <= 0.0) return r;
+    float nv = max(dot(s.n, s.v), 1e-4);
+    vec3 h = ibli_normalize(s.v + inc.l);
+    float nh = max(dot(s.n, h), 0.0), vh = max(dot(s.v, h), 0.0);
+    float lobe;
+    if (bp)
+        lobe = ibl_blinn_phong_norm(r.shininess) * ibli_pow(nh, r.shininess) / max(nl, nv);
+    else
+        lobe = ibl_ggx_d(r.alpha, nh) * ibl_smith_ggx_v(alpha, nv, nl);
+    vec3 f0, albedo;
+    ibl_material_reflectances(m, f0, albedo);
+    vec3 e = inc.illuminance * nl;
+    vec3 fresnel = vec3(ibl_fresnel_schlick(f0.r, vh), ibl_fresnel_schlick(f0.g, vh),
+                        ibl_fresnel_schlick(f0.b, vh));
+    r.specular = lobe * fresnel * e;
+    r.diffuse = albedo * (1.0 / IBL_PI) * e;
+    r.n_dot_l = nl;
+    return r;
+}
+
+/* One light at point p of a surface (ibl_light_shade). */
+ibl_light_result ibl_light_shade(ibl_light light, ibl_shade_desc desc, ibl_material m,
+                                 ibl_surface s, vec3 p)
+{
+    return ibl_light_shade_incidence(ibl_light_incidence_at(light, p), desc, m, s);
+}
+
+/* The first count lights summed, each scaled by its visibility (e.g. 0 in its shadow).
+ * Feed the result to the ambient compositions as the C's `ibl render` does:
+ *   s.direct_specular = total.specular; colour = ibl_shade(...).color + total.diffuse */
+ibl_light_result ibl_lights_shade(ibl_light lights[IBL_MAX_LIGHTS], int count,
+                                  float visibility[IBL_MAX_LIGHTS], ibl_shade_desc desc,
+                                  ibl_material m, ibl_surface s, vec3 p)
+{
+    ibl_light_result acc = ibl_light_result(vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0);
+    for (int i = 0; i < IBL_MAX_LIGHTS; i++) {
+        if (i >= count) break;
+        float vis = visibility[i];
+        if (!(vis > 0.0)) continue;
+        ibl_light_result one = ibl_light_shade(lights[i], desc, m, s, p);
+        if (one.n_dot_l <= 0.0) continue;
+        acc.diffuse += vis * one.diffuse;
+        acc.specular += vis * one.specular;
+        acc.n_dot_l = one.n_dot_l;
+        acc.shininess = one.shininess;
+        acc.alpha = one.alpha;
+    }
+    return acc;
+}
+
+/* The same with every light visible (the C's visibility = NULL). */
+ibl_light_result ibl_lights_shade(ibl_light lights[IBL_MAX_LIGHTS], int count,
+                                  ibl_shade_desc desc, ibl_material m, ibl_surface s, vec3 p)
+{
+    float visibility[IBL_MAX_LIGHTS];
+    for (int i = 0; i < IBL_MAX_LIGHTS; i++) visibility[i] = 1.0;
+    return ibl_lights_shade(lights, count, visibility, desc, m, s, p);
 }
 
 #endif /* IBL_GLSL */

@@ -135,7 +135,7 @@ static const char *const glsl_frag_main =
     "in vec3 v_normal; in vec3 v_view;\n"
     "layout(location = 0) out vec4 o_color;\n"
     "void main() {\n"
-    "  ibl_shade_desc desc = ibl_shade_desc(0, 0, 0, 0, 0.0, 0, 0, 0, 0);\n"
+    "  ibl_shade_desc desc = ibl_shade_desc(0, 0, 0, 0, 0.0, 0, 0, 0, 0, 0);\n"
     "  ibl_surface s = ibl_surface(normalize(v_normal), normalize(v_view), vec3(0.0), vec3(0.0));\n"
     "  ibl_material m = ibl_material_gltf(vec3(1.0, 0.766, 0.336), 1.0, 0.5);\n"
     "  ibl_shade_result r = ibl_shade(probe, u_specular, u_mirror, u_irradiance, u_splitsum,\n"
@@ -153,7 +153,7 @@ static const char *const vulkan_frag_main =
     "layout(location = 0) in vec3 v_normal; layout(location = 1) in vec3 v_view;\n"
     "layout(location = 0) out vec4 o_color;\n"
     "void main() {\n"
-    "  ibl_shade_desc desc = ibl_shade_desc(0, 0, 0, 0, 0.0, 0, 0, 0, 0);\n"
+    "  ibl_shade_desc desc = ibl_shade_desc(0, 0, 0, 0, 0.0, 0, 0, 0, 0, 0);\n"
     "  ibl_surface s = ibl_surface(normalize(v_normal), normalize(v_view), vec3(0.0), vec3(0.0));\n"
     "  ibl_material m = ibl_material_gltf(vec3(1.0, 0.766, 0.336), 1.0, 0.5);\n"
     "  ibl_shade_result r = ibl_shade(probe, u_specular, u_mirror, u_irradiance, u_splitsum,\n"
@@ -208,7 +208,7 @@ static const char *const es_atlas_main =
     "in vec3 v_normal; in vec3 v_view;\n"
     "layout(location = 0) out vec4 o_color;\n"
     "void main() {\n"
-    "  ibl_shade_desc desc = ibl_shade_desc(0, 0, 0, 0, 0.0, 0, 0, 0, 0);\n"
+    "  ibl_shade_desc desc = ibl_shade_desc(0, 0, 0, 0, 0.0, 0, 0, 0, 0, 0);\n"
     "  ibl_surface s = ibl_surface(normalize(v_normal), normalize(v_view), vec3(0.0), vec3(0.0));\n"
     "  ibl_material m = ibl_material_gltf(vec3(1.0, 0.766, 0.336), 1.0, 0.5);\n"
     "  ibl_shade_result r = ibl_shade(probe, u_specular, u_mirror, u_irradiance, u_splitsum,\n"
@@ -259,7 +259,7 @@ static void compile_all_dialects(void **state)
 
 /* ---- 2. every function against its C twin ------------------------------------------------- */
 
-enum { SAMPLES = 10240, MAX_IN = 64, MAX_OUT = 16 };
+enum { SAMPLES = 10240, MAX_IN = 80, MAX_OUT = 16 };
 
 static const char *const compute_head =
     "layout(local_size_x = 64) in;\n"
@@ -284,7 +284,9 @@ static const char *const compute_head =
     "                                            X(k + 9), X(k + 10)); }\n"
     "ibl_surface S(int k) { return ibl_surface(V(k), V(k + 3), V(k + 6), V(k + 9)); }\n"
     "ibl_shade_desc D(int k) { return ibl_shade_desc(I(k), I(k + 1), I(k + 2), I(k + 3),\n"
-    "    X(k + 4), I(k + 5), I(k + 6), I(k + 7), I(k + 8)); }\n"
+    "    X(k + 4), I(k + 5), I(k + 6), I(k + 7), I(k + 8), 0); }\n"
+    "ibl_light L(int k) { return ibl_light(V(k + 1), X(k + 4), V(k + 5), X(k + 11), V(k + 8),\n"
+    "    X(k + 14), I(k), X(k + 12), X(k + 13), 0); }\n"
     "ibl_volume VOL(int k) { return ibl_volume(I(k), V(k + 1), V(k + 4), X(k + 7), X(k + 8)); }\n"
     "void Yr(int k, ibl_shade_result r) { Y3(k, r.color); Y3(k + 3, r.diffuse);\n"
     "    Y3(k + 6, r.specular); Y(k + 9, r.so); Y(k + 10, r.lod); Y3(k + 11, r.r); }\n";
@@ -341,6 +343,46 @@ static void run_case_gpu(fixture *f, const shader_case *c, const float *in, floa
     gl->DeleteProgram(prog);
 }
 
+/* One case over SAMPLES inputs; returns 1 when a sample is out of its bound. */
+static int check_case(fixture *f, const shader_case *c, int seed, float *in, float *gpu)
+{
+    assert_true(c->n_in <= MAX_IN && c->n_out <= MAX_OUT);
+    uint64_t rng = 0x9E3779B97F4A7C15ull ^ (uint64_t)(seed + 1) * 0xD1B54A32D192ED03ull;
+    for (int i = 0; i < SAMPLES; i++) c->gen(f, i, &rng, in + (size_t)i * c->n_in);
+    run_case_gpu(f, c, in, gpu);
+    double worst_abs = 0, worst_rel = 0;
+    int bad = -1, bad_k = 0;
+    for (int i = 0; i < SAMPLES; i++) {
+        float ref[MAX_OUT];
+        const float *x = in + (size_t)i * c->n_in;
+        c->ref(f, x, ref);
+        double abs_tol = c->abs_tol + (c->extra_abs ? c->extra_abs(x) : 0.0);
+        for (int k = 0; k < c->n_out; k++) {
+            double g = gpu[(size_t)i * c->n_out + k], r = ref[k];
+            double err = fabs(g - r);
+            if (!(err <= abs_tol + c->rel_tol * fabs(r)) && bad < 0) {
+                bad = i;
+                bad_k = k;
+            }
+            if (err > worst_abs) worst_abs = err;
+            double rel = err / fmax(fabs(r), 1e-30);
+            if (fabs(r) > 1e-3 && rel > worst_rel) worst_rel = rel;
+            if (!(err == err)) worst_abs = INFINITY; /* NaN */
+        }
+    }
+    print_message("%-32s %9.2e %9.2e  %.0e+%.0e|c| %s\n", c->name, worst_abs, worst_rel,
+                  c->abs_tol, c->rel_tol, c->why);
+    if (bad < 0) return 0;
+    float ref[MAX_OUT];
+    const float *x = in + (size_t)bad * c->n_in;
+    c->ref(f, x, ref);
+    print_error("%s: sample %d output %d: GPU %.9g, C %.9g; inputs:", c->name, bad, bad_k,
+                (double)gpu[(size_t)bad * c->n_out + bad_k], (double)ref[bad_k]);
+    for (int k = 0; k < c->n_in; k++) print_error(" %.9g", (double)x[k]);
+    print_error("\n");
+    return 1;
+}
+
 static void functions_match_c(void **state)
 {
     fixture *f = *state;
@@ -351,45 +393,10 @@ static void functions_match_c(void **state)
     int failed = 0;
     print_message("%-32s %9s %9s  %-10s %s\n", "function", "max abs", "max rel", "bound",
                   "why");
-    for (int ci = 0; ci < shader_case_count; ci++) {
-        const shader_case *c = &shader_cases[ci];
-        assert_true(c->n_in <= MAX_IN && c->n_out <= MAX_OUT);
-        uint64_t rng = 0x9E3779B97F4A7C15ull ^ (uint64_t)(ci + 1) * 0xD1B54A32D192ED03ull;
-        for (int i = 0; i < SAMPLES; i++) c->gen(f, i, &rng, in + (size_t)i * c->n_in);
-        run_case_gpu(f, c, in, gpu);
-        double worst_abs = 0, worst_rel = 0;
-        int bad = -1, bad_k = 0;
-        for (int i = 0; i < SAMPLES; i++) {
-            float ref[MAX_OUT];
-            c->ref(f, in + (size_t)i * c->n_in, ref);
-            for (int k = 0; k < c->n_out; k++) {
-                double g = gpu[(size_t)i * c->n_out + k], r = ref[k];
-                double err = fabs(g - r);
-                const float *x = in + (size_t)i * c->n_in;
-                double abs_tol = c->abs_tol + (c->extra_abs ? c->extra_abs(x) : 0.0);
-                if (!(err <= abs_tol + c->rel_tol * fabs(r)) && bad < 0) {
-                    bad = i;
-                    bad_k = k;
-                }
-                if (err > worst_abs) worst_abs = err;
-                double rel = err / fmax(fabs(r), 1e-30);
-                if (fabs(r) > 1e-3 && rel > worst_rel) worst_rel = rel;
-                if (!(err == err)) worst_abs = INFINITY; /* NaN */
-            }
-        }
-        print_message("%-32s %9.2e %9.2e  %.0e+%.0e|c| %s\n", c->name, worst_abs, worst_rel,
-                      c->abs_tol, c->rel_tol, c->why);
-        if (bad >= 0) {
-            failed++;
-            float ref[MAX_OUT];
-            const float *x = in + (size_t)bad * c->n_in;
-            c->ref(f, x, ref);
-            print_error("%s: sample %d output %d: GPU %.9g, C %.9g; inputs:", c->name, bad,
-                        bad_k, (double)gpu[(size_t)bad * c->n_out + bad_k], (double)ref[bad_k]);
-            for (int k = 0; k < c->n_in; k++) print_error(" %.9g", (double)x[k]);
-            print_error("\n");
-        }
-    }
+    for (int ci = 0; ci < shader_case_count; ci++)
+        failed += check_case(f, &shader_cases[ci], ci, in, gpu);
+    for (int ci = 0; ci < shader_light_case_count; ci++)
+        failed += check_case(f, &shader_light_cases[ci], 1000 + ci, in, gpu);
     free(in);
     free(gpu);
     assert_int_equal(failed, 0);

@@ -2,7 +2,8 @@
  * ibl/shader.h - the numbers shaders/ibl.glsl and ibl.hlsl read, in their uniform-block
  * layout: a probe's level mapping, SH and table axes (ibl_shader_probe = the shaders'
  * `ibl_probe` struct, std140 / HLSL cbuffer packing) and a mip atlas layout
- * (ibl_shader_atlas = `ibl_atlas_layout`). Plain data; no graphics API here. docs/SHADERS.md
+ * (ibl_shader_atlas = `ibl_atlas_layout`), and punctual lights (ibl_shader_lights = the
+ * shaders' `ibl_light_set`, light.h's ibl_light). Plain data; no graphics API here. docs/SHADERS.md
  * shows the upload (textures, bindings, samplers) and a complete fragment shader.
  *
  *   ibl_shader_probe block;
@@ -13,6 +14,7 @@
 #define IBL_SHADER_H
 
 #include "core.h"
+#include "light.h"
 #include "shade.h"
 
 #ifdef __cplusplus
@@ -47,11 +49,36 @@ typedef struct ibl_shader_atlas {
     int32_t y[IBL_MAX_LEVELS];
 } ibl_shader_atlas;
 
+/* The shaders' ibl_light struct (std140 / HLSL), 64 bytes: light.h's ibl_light as it is
+ * (zeros keep their meaning: white, intensity 1, no range, outer cone pi/4). */
+typedef struct ibl_shader_light {
+    float color[3], intensity;
+    float position[3], range;
+    float direction[3], size;
+    int32_t type;
+    float inner_cone, outer_cone;
+    int32_t reserved;
+} ibl_shader_light;
+
+enum { IBL_SHADER_MAX_LIGHTS = 8 }; /* the shaders' IBL_MAX_LIGHTS default */
+
+/* The shaders' ibl_light_set struct (std140 / HLSL), 528 bytes: a count row, then the
+ * lights. */
+typedef struct ibl_shader_lights {
+    int32_t count, reserved[3];
+    ibl_shader_light light[IBL_SHADER_MAX_LIGHTS];
+} ibl_shader_lights;
+
 /* Fills the block from a validated probe (ibl_probe_validate or ibl_bake_probe). Fails when
  * the mapping uses lod functions (lod_from_roughness / lod_from_shininess): a shader has
  * only the per-level tables. */
 ibl_status ibl_shader_probe_fill(ibl_context *ctx, const ibl_probe *probe, ibl_shader_probe *out);
 void ibl_shader_atlas_fill(const ibl_atlas_layout *layout, ibl_shader_atlas *out);
+/* Fills the block from count lights (0 <= count <= IBL_SHADER_MAX_LIGHTS), each checked by
+ * ibl_light_validate; unused slots are zero. */
+ibl_status ibl_shader_lights_fill(ibl_context *ctx, const ibl_light *lights, int count,
+                                  ibl_shader_lights *out);
+void ibl_shader_light_fill(const ibl_light *light, ibl_shader_light *out);
 
 #ifdef __cplusplus
 }

@@ -8,6 +8,8 @@
 _Static_assert(sizeof(ibl_shader_axis) == 16, "ibl_table_axis is one 16-byte row");
 _Static_assert(sizeof(ibl_shader_probe) == 384, "std140 size of the shaders' ibl_probe");
 _Static_assert(sizeof(ibl_shader_atlas) == 208, "std140 size of the shaders' ibl_atlas_layout");
+_Static_assert(sizeof(ibl_shader_light) == 64, "std140 size of the shaders' ibl_light");
+_Static_assert(sizeof(ibl_shader_lights) == 528, "std140 size of the shaders' ibl_light_set");
 
 static ibl_shader_axis axis(const ibl_table_axis *a)
 {
@@ -59,4 +61,40 @@ void ibl_shader_atlas_fill(const ibl_atlas_layout *l, ibl_shader_atlas *out)
         out->x[k] = l->x[k];
         out->y[k] = l->y[k];
     }
+}
+
+void ibl_shader_light_fill(const ibl_light *l, ibl_shader_light *out)
+{
+    memset(out, 0, sizeof *out);
+    memcpy(out->color, l->color, sizeof out->color);
+    out->intensity = l->intensity;
+    out->position[0] = l->position.x, out->position[1] = l->position.y;
+    out->position[2] = l->position.z;
+    out->range = l->range;
+    out->direction[0] = l->direction.x, out->direction[1] = l->direction.y;
+    out->direction[2] = l->direction.z;
+    out->size = l->size;
+    out->type = (int32_t)l->type;
+    out->inner_cone = l->inner_cone;
+    out->outer_cone = l->outer_cone;
+}
+
+ibl_status ibl_shader_lights_fill(ibl_context *ctx, const ibl_light *lights, int count,
+                                  ibl_shader_lights *out)
+{
+    memset(out, 0, sizeof *out);
+    if (count < 0 || count > IBL_SHADER_MAX_LIGHTS || (count > 0 && !lights))
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "shader lights: %d lights, the block holds 0 to %d", count,
+                         IBL_SHADER_MAX_LIGHTS);
+    for (int i = 0; i < count; i++) {
+        ibl_status st = ibl_light_validate(ctx, &lights[i], i);
+        if (st != IBL_OK) {
+            memset(out, 0, sizeof *out);
+            return st;
+        }
+        ibl_shader_light_fill(&lights[i], &out->light[i]);
+    }
+    out->count = count;
+    return IBL_OK;
 }

@@ -18,7 +18,7 @@
 
 /* ---- generators ------------------------------------------------------------------------ */
 
-static float rnd(uint64_t *s)
+float sc_rnd(uint64_t *s)
 {
     *s ^= *s << 13; /* xorshift64 (Marsaglia 2003) */
     *s ^= *s >> 7;
@@ -27,43 +27,43 @@ static float rnd(uint64_t *s)
 }
 
 /* Every 4th sample cycles through the edge values, the others are uniform in [lo, hi]. */
-static float pick(int i, uint64_t *s, const float *edges, int n, float lo, float hi)
+float sc_pick(int i, uint64_t *s, const float *edges, int n, float lo, float hi)
 {
-    float r = rnd(s);
+    float r = sc_rnd(s);
     if (n > 0 && i % 4 == 0) return edges[(i / 4) % n];
     return lo + (hi - lo) * r;
 }
 
-static float pick_log(int i, uint64_t *s, const float *edges, int n, float lo, float hi)
+float sc_pick_log(int i, uint64_t *s, const float *edges, int n, float lo, float hi)
 {
-    float r = rnd(s);
+    float r = sc_rnd(s);
     if (n > 0 && i % 4 == 0) return edges[(i / 4) % n];
     return expf(logf(lo) + (logf(hi) - logf(lo)) * r);
 }
 
-static int pick_int(uint64_t *s, int count)
+int sc_pick_int(uint64_t *s, int count)
 {
-    int k = (int)(rnd(s) * (float)count);
+    int k = (int)(sc_rnd(s) * (float)count);
     return k < count ? k : count - 1;
 }
 
 /* Unit direction; every 3rd sample lies on a cube edge or corner (or a face centre), some
  * of them nudged by 1e-6 off it. */
-static void gen_dir(int i, uint64_t *s, float *d)
+void sc_gen_dir(int i, uint64_t *s, float *d)
 {
     if (i % 3 == 0) {
-        int code = pick_int(s, 26);
+        int code = sc_pick_int(s, 26);
         code += code >= 13; /* skip (0, 0, 0) */
         float v[3] = {(float)(code % 3) - 1.0f, (float)(code / 3 % 3) - 1.0f,
                       (float)(code / 9) - 1.0f};
-        if (rnd(s) < 0.3f) v[pick_int(s, 3)] += rnd(s) < 0.5f ? 1e-6f : -1e-6f;
+        if (sc_rnd(s) < 0.3f) v[sc_pick_int(s, 3)] += sc_rnd(s) < 0.5f ? 1e-6f : -1e-6f;
         float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         for (int k = 0; k < 3; k++) d[k] = v[k] / len;
         return;
     }
     float v[3], len;
     do {
-        for (int k = 0; k < 3; k++) v[k] = 2.0f * rnd(s) - 1.0f;
+        for (int k = 0; k < 3; k++) v[k] = 2.0f * sc_rnd(s) - 1.0f;
         len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     } while (len < 0.1f || len > 1.0f);
     for (int k = 0; k < 3; k++) d[k] = v[k] / len;
@@ -73,11 +73,11 @@ static void gen_dir(int i, uint64_t *s, float *d)
 static void gen_nv(int i, uint64_t *s, float *n, float *v)
 {
     static const float grazing[] = {0.0f, 1e-4f, 1e-3f, 0.02f, 1.0f, -0.05f};
-    gen_dir(i / 2, s, n);
-    float c = pick(i / 2 + 1, s, grazing, 6, 0.0f, 1.0f);
+    sc_gen_dir(i / 2, s, n);
+    float c = sc_pick(i / 2 + 1, s, grazing, 6, 0.0f, 1.0f);
     float t[3], len;
     do {
-        gen_dir(1, s, t);
+        sc_gen_dir(1, s, t);
         float d = t[0] * n[0] + t[1] * n[1] + t[2] * n[2];
         for (int k = 0; k < 3; k++) t[k] -= d * n[k];
         len = sqrtf(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
@@ -86,8 +86,8 @@ static void gen_nv(int i, uint64_t *s, float *n, float *v)
     for (int k = 0; k < 3; k++) v[k] = n[k] * c + t[k] / len * sn;
 }
 
-static ibl_vec3 v3(const float *x) { return (ibl_vec3){x[0], x[1], x[2]}; }
-static void put3(float *y, ibl_vec3 v)
+ibl_vec3 sc_v3(const float *x) { return (ibl_vec3){x[0], x[1], x[2]}; }
+void sc_put3(float *y, ibl_vec3 v)
 {
     y[0] = v.x;
     y[1] = v.y;
@@ -95,22 +95,22 @@ static void put3(float *y, ibl_vec3 v)
 }
 
 /* x[0..10]: model, base colour, metallic, roughness, f0, shininess, ao */
-static void gen_material(int i, uint64_t *s, float *x)
+void sc_gen_material(int i, uint64_t *s, float *x)
 {
     static const float r_edges[] = {0.0f, 1.0f, 0.5f, 0.0376f};
     static const float s_edges[] = {1.0f, 100000.0f, 1e6f, 0.5f};
     static const float unit_edges[] = {0.0f, 1.0f};
     x[0] = (float)(i % 2);
-    for (int k = 1; k < 4; k++) x[k] = rnd(s);
-    x[4] = pick(i / 2, s, unit_edges, 2, 0.0f, 1.0f);
-    x[5] = pick(i / 2 + 1, s, r_edges, 4, 0.0f, 1.0f);
-    int f0_given = x[0] == 1.0f || rnd(s) < 0.3f;
-    for (int k = 6; k < 9; k++) x[k] = f0_given ? 0.02f + 0.98f * rnd(s) : 0.0f;
-    x[9] = pick_log(i / 2 + 2, s, s_edges, 4, 0.5f, 2e5f);
-    x[10] = pick(i / 2 + 3, s, unit_edges, 2, 0.0f, 1.0f);
+    for (int k = 1; k < 4; k++) x[k] = sc_rnd(s);
+    x[4] = sc_pick(i / 2, s, unit_edges, 2, 0.0f, 1.0f);
+    x[5] = sc_pick(i / 2 + 1, s, r_edges, 4, 0.0f, 1.0f);
+    int f0_given = x[0] == 1.0f || sc_rnd(s) < 0.3f;
+    for (int k = 6; k < 9; k++) x[k] = f0_given ? 0.02f + 0.98f * sc_rnd(s) : 0.0f;
+    x[9] = sc_pick_log(i / 2 + 2, s, s_edges, 4, 0.5f, 2e5f);
+    x[10] = sc_pick(i / 2 + 3, s, unit_edges, 2, 0.0f, 1.0f);
 }
 
-static ibl_material material_of(const float *x)
+ibl_material sc_material_of(const float *x)
 {
     ibl_material m;
     memset(&m, 0, sizeof m);
@@ -127,29 +127,29 @@ static ibl_material material_of(const float *x)
 }
 
 /* x[0..11]: n, v, geometric normal (zero half the time), direct specular */
-static void gen_surface(int i, uint64_t *s, float *x)
+void sc_gen_surface(int i, uint64_t *s, float *x)
 {
     gen_nv(i, s, x, x + 3);
-    if (rnd(s) < 0.5f) {
+    if (sc_rnd(s) < 0.5f) {
         x[6] = x[7] = x[8] = 0.0f;
     } else {
         float g[3], len;
-        gen_dir(1, s, g);
+        sc_gen_dir(1, s, g);
         for (int k = 0; k < 3; k++) g[k] = x[k] + 0.5f * g[k];
         len = sqrtf(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
         for (int k = 0; k < 3; k++) x[6 + k] = len > 0.0f ? g[k] / len : x[k];
     }
-    int sd = rnd(s) < 0.5f;
-    for (int k = 9; k < 12; k++) x[k] = sd ? rnd(s) : 0.0f;
+    int sd = sc_rnd(s) < 0.5f;
+    for (int k = 9; k < 12; k++) x[k] = sd ? sc_rnd(s) : 0.0f;
 }
 
-static ibl_surface surface_of(const float *x)
+ibl_surface sc_surface_of(const float *x)
 {
     ibl_surface s;
     memset(&s, 0, sizeof s);
-    s.n = v3(x);
-    s.v = v3(x + 3);
-    s.geometric_normal = v3(x + 6);
+    s.n = sc_v3(x);
+    s.v = sc_v3(x + 3);
+    s.geometric_normal = sc_v3(x + 6);
     for (int c = 0; c < 3; c++) s.direct_specular[c] = x[9 + c];
     return s;
 }
@@ -158,15 +158,15 @@ static ibl_surface surface_of(const float *x)
 static void gen_desc(uint64_t *s, float *x)
 {
     static const float ks[] = {0.0f, 1.3f, 2.0f};
-    x[0] = (float)pick_int(s, 3);
-    x[1] = (float)pick_int(s, IBL_SO_COUNT);
-    x[2] = (float)pick_int(s, IBL_MIX_COUNT);
-    x[3] = (float)(rnd(s) < 0.5f);
-    x[4] = ks[pick_int(s, 3)];
-    x[5] = (float)(rnd(s) < 0.5f);
-    x[6] = (float)(rnd(s) < 0.3f);
-    x[7] = (float)(rnd(s) < 0.2f);
-    x[8] = (float)(rnd(s) < 0.3f);
+    x[0] = (float)sc_pick_int(s, 3);
+    x[1] = (float)sc_pick_int(s, IBL_SO_COUNT);
+    x[2] = (float)sc_pick_int(s, IBL_MIX_COUNT);
+    x[3] = (float)(sc_rnd(s) < 0.5f);
+    x[4] = ks[sc_pick_int(s, 3)];
+    x[5] = (float)(sc_rnd(s) < 0.5f);
+    x[6] = (float)(sc_rnd(s) < 0.3f);
+    x[7] = (float)(sc_rnd(s) < 0.2f);
+    x[8] = (float)(sc_rnd(s) < 0.3f);
 }
 
 static ibl_shade_desc desc_of(const float *x)
@@ -182,17 +182,18 @@ static ibl_shade_desc desc_of(const float *x)
     d.no_mirror = (int)x[6];
     d.nearest_level = (int)x[7];
     d.mirror_direction = (int)x[8];
+    d.light_size = IBL_LIGHT_SIZE_WIDEN; /* D(k) in the GLSL: only the lights read it */
     return d;
 }
 
 /* x[0..8]: shape, centre, half extent, radius, blend distance */
 static void gen_volume(uint64_t *s, float *x)
 {
-    x[0] = (float)(rnd(s) < 0.5f);
-    for (int k = 1; k < 4; k++) x[k] = 2.0f * rnd(s) - 1.0f;
-    for (int k = 4; k < 7; k++) x[k] = 0.3f + 2.0f * rnd(s);
-    x[7] = 0.3f + 2.0f * rnd(s);
-    x[8] = rnd(s) < 0.2f ? 0.0f : rnd(s);
+    x[0] = (float)(sc_rnd(s) < 0.5f);
+    for (int k = 1; k < 4; k++) x[k] = 2.0f * sc_rnd(s) - 1.0f;
+    for (int k = 4; k < 7; k++) x[k] = 0.3f + 2.0f * sc_rnd(s);
+    x[7] = 0.3f + 2.0f * sc_rnd(s);
+    x[8] = sc_rnd(s) < 0.2f ? 0.0f : sc_rnd(s);
 }
 
 static ibl_volume volume_of(const float *x)
@@ -200,8 +201,8 @@ static ibl_volume volume_of(const float *x)
     ibl_volume v;
     memset(&v, 0, sizeof v);
     v.shape = (ibl_volume_shape)(int)x[0];
-    v.center = v3(x + 1);
-    v.half_extent = v3(x + 4);
+    v.center = sc_v3(x + 1);
+    v.half_extent = sc_v3(x + 4);
     v.radius = x[7];
     v.blend_distance = x[8];
     return v;
@@ -216,7 +217,7 @@ static void put_result(float *y, const ibl_shade_result *r)
     }
     y[9] = r->so;
     y[10] = r->lod;
-    put3(y + 11, r->r);
+    sc_put3(y + 11, r->r);
 }
 
 static const float unit_edges[] = {0.0f, 1.0f};
@@ -228,13 +229,13 @@ static void gen_axis(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
     static const int counts[] = {1, 2, 16, 64};
-    x[0] = (float)counts[pick_int(s, 4)];
-    x[3] = (float)(rnd(s) < 0.5f);
-    x[1] = 0.01f + rnd(s);
-    x[2] = x[1] + 100.0f * rnd(s) + 0.01f;
-    x[4] = (float)pick_int(s, (int)x[0]);
+    x[0] = (float)counts[sc_pick_int(s, 4)];
+    x[3] = (float)(sc_rnd(s) < 0.5f);
+    x[1] = 0.01f + sc_rnd(s);
+    x[2] = x[1] + 100.0f * sc_rnd(s) + 0.01f;
+    x[4] = (float)sc_pick_int(s, (int)x[0]);
     static const float rel[] = {0.0f, 1.0f, -0.5f};
-    float t = pick(i, s, rel, 3, -0.2f, 1.2f);
+    float t = sc_pick(i, s, rel, 3, -0.2f, 1.2f);
     x[5] = x[1] + (x[2] - x[1]) * t;
 }
 
@@ -261,8 +262,8 @@ static void ref_axis_index(const fixture *f, const float *x, float *y)
 static void gen_splitsum(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
-    x[0] = pick(i, s, nv_edges, 5, 0.0f, 1.0f);
-    x[1] = pick(i / 2, s, unit_edges, 2, 0.0f, 1.0f);
+    x[0] = sc_pick(i, s, nv_edges, 5, 0.0f, 1.0f);
+    x[1] = sc_pick(i / 2, s, unit_edges, 2, 0.0f, 1.0f);
 }
 
 static void ref_splitsum(const fixture *f, const float *x, float *y)
@@ -274,9 +275,9 @@ static void gen_ambient(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
     static const float s_edges[] = {1.0f, 100000.0f, 0.5f, 1e6f};
-    x[0] = pick(i, s, nv_edges, 5, 0.0f, 1.0f);
-    x[1] = pick_log(i / 2, s, s_edges, 4, 0.5f, 2e5f);
-    x[2] = pick(i / 3, s, unit_edges, 2, 0.0f, 1.0f);
+    x[0] = sc_pick(i, s, nv_edges, 5, 0.0f, 1.0f);
+    x[1] = sc_pick_log(i / 2, s, s_edges, 4, 0.5f, 2e5f);
+    x[2] = sc_pick(i / 3, s, unit_edges, 2, 0.0f, 1.0f);
 }
 
 static void ref_ambient(const fixture *f, const float *x, float *y)
@@ -290,9 +291,9 @@ static void gen_two_unit(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
     static const float a_edges[] = {1e-3f, 1.0f, 0.02f};
-    x[0] = pick(i, s, a_edges, 3, 1e-3f, 1.0f);
-    x[1] = pick(i / 2, s, nv_edges, 5, -0.1f, 1.0f);
-    x[2] = pick(i / 3, s, nv_edges, 5, -0.1f, 1.0f);
+    x[0] = sc_pick(i, s, a_edges, 3, 1e-3f, 1.0f);
+    x[1] = sc_pick(i / 2, s, nv_edges, 5, -0.1f, 1.0f);
+    x[2] = sc_pick(i / 3, s, nv_edges, 5, -0.1f, 1.0f);
 }
 
 static void ref_fresnel(const fixture *f, const float *x, float *y)
@@ -327,7 +328,7 @@ static void ref_smith(const fixture *f, const float *x, float *y)
 static void gen_shininess(const fixture *f, int i, uint64_t *s, float *x)
 {
     static const float edges[] = {0.0f, -1.0f, 1e6f, 1.0f, 100000.0f, 1e-3f};
-    x[0] = pick_log(i, s, edges, 6, 1e-4f, 2e6f);
+    x[0] = sc_pick_log(i, s, edges, 6, 1e-4f, 2e6f);
     /* every 4th of the rest: exactly a level's shininess */
     if (i % 8 == 2) x[0] = f->probe.mapping.shininess[(i / 8) % f->probe.mapping.levels];
 }
@@ -335,7 +336,7 @@ static void gen_shininess(const fixture *f, int i, uint64_t *s, float *x)
 static void gen_roughness(const fixture *f, int i, uint64_t *s, float *x)
 {
     static const float edges[] = {0.0f, 1.0f, -0.1f, 1.1f, 0.0376f, 0.03759f};
-    x[0] = pick(i, s, edges, 6, 0.0f, 1.0f);
+    x[0] = sc_pick(i, s, edges, 6, 0.0f, 1.0f);
     if (i % 8 == 2) x[0] = f->probe.mapping.roughness[(i / 8) % f->probe.mapping.levels];
 }
 
@@ -373,35 +374,35 @@ static void gen_lod_dir(const fixture *f, int i, uint64_t *s, float *x)
 {
     float last = (float)(f->probe.mapping.levels - 1);
     const float edges[] = {0.0f, -1.0f, -0.5f, 1.0f, last, last + 0.5f, -1.5f, 0.25f};
-    x[0] = pick(i, s, edges, 8, -1.2f, last + 0.2f);
-    gen_dir(i / 2, s, x + 1);
-    float scale = 0.5f + 2.0f * rnd(s); /* directions need not be unit */
+    x[0] = sc_pick(i, s, edges, 8, -1.2f, last + 0.2f);
+    sc_gen_dir(i / 2, s, x + 1);
+    float scale = 0.5f + 2.0f * sc_rnd(s); /* directions need not be unit */
     for (int k = 1; k < 4; k++) x[k] *= scale;
 }
 
 static void ref_sample_specular(const fixture *f, const float *x, float *y)
 {
-    ibl_probe_sample_specular(&f->probe, x[0], v3(x + 1), y);
+    ibl_probe_sample_specular(&f->probe, x[0], sc_v3(x + 1), y);
 }
 
 static void gen_kind_dir(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
     x[0] = (float)(1 + i % 2);
-    gen_dir(i / 2, s, x + 1);
+    sc_gen_dir(i / 2, s, x + 1);
     x[4] = (float)(i % 3); /* the probe's own kind for ibl_probe_irradiance: NONE reads the cube */
 }
 
 static void ref_sh9(const fixture *f, const float *x, float *y)
 {
-    ibl_sh9_eval_irradiance(f->probe.sh, (ibl_sh_kind)(int)x[0], v3(x + 1), y);
+    ibl_sh9_eval_irradiance(f->probe.sh, (ibl_sh_kind)(int)x[0], sc_v3(x + 1), y);
 }
 
 static void ref_irradiance(const fixture *f, const float *x, float *y)
 {
     ibl_probe p = f->probe;
     p.sh_kind = (ibl_sh_kind)(int)x[4];
-    ibl_probe_irradiance(&p, v3(x + 1), y);
+    ibl_probe_irradiance(&p, sc_v3(x + 1), y);
 }
 
 /* ---- materials, occlusion, compositions ---------------------------------------------- */
@@ -409,13 +410,13 @@ static void ref_irradiance(const fixture *f, const float *x, float *y)
 static void gen_material_only(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
-    gen_material(i, s, x);
+    sc_gen_material(i, s, x);
 }
 
 static void ref_lean(const fixture *f, const float *x, float *y)
 {
     (void)f;
-    ibl_material m = material_of(x);
+    ibl_material m = sc_material_of(x);
     y[0] = ibl_dominant_direction_lean(&m);
 }
 
@@ -438,17 +439,17 @@ static void ref_constructors(const fixture *f, const float *x, float *y)
 static void ref_reflectances(const fixture *f, const float *x, float *y)
 {
     (void)f;
-    ibl_material m = material_of(x);
+    ibl_material m = sc_material_of(x);
     ibl_material_reflectances(&m, y, y + 3);
 }
 
 static void ref_lookup_direction(const fixture *f, const float *x, float *y)
 {
     (void)f;
-    ibl_material m = material_of(x);
-    ibl_surface s = surface_of(x + 11);
+    ibl_material m = sc_material_of(x);
+    ibl_surface s = sc_surface_of(x + 11);
     ibl_shade_desc d = desc_of(x + 23);
-    put3(y, ibl_shade_lookup_direction(&d, &m, &s));
+    sc_put3(y, ibl_shade_lookup_direction(&d, &m, &s));
 }
 
 static void gen_so(const fixture *f, int i, uint64_t *s, float *x)
@@ -457,10 +458,10 @@ static void gen_so(const fixture *f, int i, uint64_t *s, float *x)
     static const float r_edges[] = {0.0f, 1.0f, 0.1f, 0.5f};
     static const float s_edges[] = {0.0f, 10.0f, 100.0f, 1000.0f, 1e6f};
     x[0] = (float)(i % (IBL_SO_COUNT + 1)); /* and one unknown formula: SO = 1 */
-    x[1] = pick(i / 8, s, nv_edges, 5, -0.1f, 1.0f);
-    x[2] = pick(i / 8 + 1, s, unit_edges, 2, 0.0f, 1.0f);
-    x[3] = pick(i / 8 + 2, s, r_edges, 4, 0.0f, 1.0f);
-    x[4] = pick_log(i / 8 + 3, s, s_edges, 5, 1.0f, 1e5f);
+    x[1] = sc_pick(i / 8, s, nv_edges, 5, -0.1f, 1.0f);
+    x[2] = sc_pick(i / 8 + 1, s, unit_edges, 2, 0.0f, 1.0f);
+    x[3] = sc_pick(i / 8 + 2, s, r_edges, 4, 0.0f, 1.0f);
+    x[4] = sc_pick_log(i / 8 + 3, s, s_edges, 5, 1.0f, 1e5f);
 }
 
 /* The cone formula's smoothstep spans 2 spec (the specular cone's half-angle, 1e-3 rad for a
@@ -496,24 +497,24 @@ static void gen_horizon(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
     static const float k_edges[] = {0.0f, -1.0f, 1.3f, 5.0f};
-    gen_dir(i, s, x);
-    gen_dir(i / 3, s, x + 3);
-    x[6] = pick(i / 2, s, k_edges, 4, 0.0f, 3.0f);
+    sc_gen_dir(i, s, x);
+    sc_gen_dir(i / 3, s, x + 3);
+    x[6] = sc_pick(i / 2, s, k_edges, 4, 0.0f, 3.0f);
 }
 
 static void ref_horizon(const fixture *f, const float *x, float *y)
 {
     (void)f;
-    y[0] = ibl_horizon_occlusion(v3(x), v3(x + 3), x[6]);
+    y[0] = ibl_horizon_occlusion(sc_v3(x), sc_v3(x + 3), x[6]);
 }
 
 static void gen_mix(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
     x[0] = (float)(i % (IBL_MIX_COUNT + 1));
-    for (int k = 1; k < 13; k++) x[k] = 2.0f * rnd(s);
-    x[13] = pick(i / 7, s, unit_edges, 2, 0.0f, 1.0f);
-    x[14] = pick(i / 7 + 1, s, unit_edges, 2, 0.0f, 1.0f);
+    for (int k = 1; k < 13; k++) x[k] = 2.0f * sc_rnd(s);
+    x[13] = sc_pick(i / 7, s, unit_edges, 2, 0.0f, 1.0f);
+    x[14] = sc_pick(i / 7 + 1, s, unit_edges, 2, 0.0f, 1.0f);
 }
 
 static void ref_mix(const fixture *f, const float *x, float *y)
@@ -529,20 +530,20 @@ static void ref_mix(const fixture *f, const float *x, float *y)
 static void gen_shade(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
-    gen_material(i, s, x);
-    gen_surface(i, s, x + 11);
+    sc_gen_material(i, s, x);
+    sc_gen_surface(i, s, x + 11);
     gen_desc(s, x + 23);
-    gen_dir(i / 2, s, x + 32);
+    sc_gen_dir(i / 2, s, x + 32);
     static const float w_edges[] = {0.0f, 1.0f, 0.5f};
-    x[35] = pick(i / 3, s, w_edges, 3, 0.0f, 1.0f);
-    x[36] = pick(i / 3 + 1, s, w_edges, 3, 0.0f, 1.0f);
-    gen_dir(i / 5, s, x + 37);
+    x[35] = sc_pick(i / 3, s, w_edges, 3, 0.0f, 1.0f);
+    x[36] = sc_pick(i / 3 + 1, s, w_edges, 3, 0.0f, 1.0f);
+    sc_gen_dir(i / 5, s, x + 37);
 }
 
 static void ref_shade(const fixture *f, const float *x, float *y)
 {
-    ibl_material m = material_of(x);
-    ibl_surface s = surface_of(x + 11);
+    ibl_material m = sc_material_of(x);
+    ibl_surface s = sc_surface_of(x + 11);
     ibl_shade_desc d = desc_of(x + 23);
     ibl_shade_result r;
     ibl_shade(&f->probe, &d, &m, &s, &r);
@@ -551,22 +552,22 @@ static void ref_shade(const fixture *f, const float *x, float *y)
 
 static void ref_shade_dir(const fixture *f, const float *x, float *y)
 {
-    ibl_material m = material_of(x);
-    ibl_surface s = surface_of(x + 11);
+    ibl_material m = sc_material_of(x);
+    ibl_surface s = sc_surface_of(x + 11);
     ibl_shade_desc d = desc_of(x + 23);
     ibl_shade_result r;
-    ibl_shade_dir(&f->probe, &d, &m, &s, v3(x + 32), &r);
+    ibl_shade_dir(&f->probe, &d, &m, &s, sc_v3(x + 32), &r);
     put_result(y, &r);
 }
 
 static void ref_shade_blend(const fixture *f, const float *x, float *y)
 {
-    ibl_material m = material_of(x);
-    ibl_surface s = surface_of(x + 11);
+    ibl_material m = sc_material_of(x);
+    ibl_surface s = sc_surface_of(x + 11);
     ibl_shade_desc d = desc_of(x + 23);
     const ibl_probe *probes[2] = {&f->probe, &f->probe};
     const float w[2] = {x[35], x[36]};
-    const ibl_vec3 dirs[2] = {v3(x + 32), v3(x + 37)};
+    const ibl_vec3 dirs[2] = {sc_v3(x + 32), sc_v3(x + 37)};
     ibl_shade_result r;
     ibl_shade_blend(probes, w, 2, dirs, &d, &m, &s, &r);
     put_result(y, &r);
@@ -587,7 +588,7 @@ static void gen_volumes(const fixture *f, int i, uint64_t *s, float *x)
     }
     ibl_volume_sort(v, 4, order);
     for (int k = 0; k < 4; k++) x[1 + k] = (float)order[k];
-    for (int k = 41; k < 47; k++) x[k] = 3.0f * rnd(s) - 1.5f;
+    for (int k = 41; k < 47; k++) x[k] = 3.0f * sc_rnd(s) - 1.5f;
     if (i % 7 == 0) { /* a point on a volume's surface, and the capture point itself */
         ibl_volume a = v[0];
         x[41] = a.center.x + (a.shape == IBL_VOLUME_BOX ? a.half_extent.x : a.radius);
@@ -596,7 +597,7 @@ static void gen_volumes(const fixture *f, int i, uint64_t *s, float *x)
     }
     if (i % 11 == 0)
         for (int k = 0; k < 3; k++) x[44 + k] = x[41 + k];
-    gen_dir(i / 2, s, x + 47);
+    sc_gen_dir(i / 2, s, x + 47);
 }
 
 static void ref_volume_size(const fixture *f, const float *x, float *y)
@@ -610,7 +611,7 @@ static void ref_volume_weight(const fixture *f, const float *x, float *y)
 {
     (void)f;
     ibl_volume v = volume_of(x + 5);
-    y[0] = ibl_volume_weight(&v, v3(x + 41));
+    y[0] = ibl_volume_weight(&v, sc_v3(x + 41));
 }
 
 static void ref_volume_blend(const fixture *f, const float *x, float *y)
@@ -623,38 +624,38 @@ static void ref_volume_blend(const fixture *f, const float *x, float *y)
         v[k] = volume_of(x + 5 + 9 * k);
         order[k] = (int)x[1 + k];
     }
-    y[4] = ibl_volume_blend(v, order, (int)x[0], v3(x + 41), y);
+    y[4] = ibl_volume_blend(v, order, (int)x[0], sc_v3(x + 41), y);
 }
 
 static void ref_parallax(const fixture *f, const float *x, float *y)
 {
     (void)f;
     ibl_volume v = volume_of(x + 5);
-    put3(y, ibl_parallax_correct(&v, v3(x + 44), v3(x + 41), v3(x + 47)));
+    sc_put3(y, ibl_parallax_correct(&v, sc_v3(x + 44), sc_v3(x + 41), sc_v3(x + 47)));
 }
 
 static void gen_offset(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
-    gen_dir(i, s, x);
-    for (int k = 3; k < 9; k++) x[k] = 4.0f * rnd(s) - 2.0f;
+    sc_gen_dir(i, s, x);
+    for (int k = 3; k < 9; k++) x[k] = 4.0f * sc_rnd(s) - 2.0f;
     static const float c_edges[] = {0.0f, 1.0f, -0.2f};
-    x[9] = pick(i / 2, s, c_edges, 3, -0.5f, 0.5f);
+    x[9] = sc_pick(i / 2, s, c_edges, 3, -0.5f, 0.5f);
 }
 
 static void ref_offset(const fixture *f, const float *x, float *y)
 {
     (void)f;
-    put3(y, ibl_offset_reflection(v3(x), v3(x + 3), v3(x + 6), x[9]));
+    sc_put3(y, ibl_offset_reflection(sc_v3(x), sc_v3(x + 3), sc_v3(x + 6), x[9]));
 }
 
 static void gen_three(const fixture *f, int i, uint64_t *s, float *x)
 {
     (void)f;
     static const float size_edges[] = {0.0f, -1.0f, 60.0f, 1.0f};
-    x[0] = pick_log(i, s, NULL, 0, 1.0f, 1e5f);
-    x[1] = pick(i, s, size_edges, 4, 0.1f, 200.0f);
-    x[2] = pick(i / 2, s, unit_edges, 2, -0.5f, 1.5f);
+    x[0] = sc_pick_log(i, s, NULL, 0, 1.0f, 1e5f);
+    x[1] = sc_pick(i, s, size_edges, 4, 0.1f, 200.0f);
+    x[2] = sc_pick(i / 2, s, unit_edges, 2, -0.5f, 1.5f);
 }
 
 static void ref_hack(const fixture *f, const float *x, float *y)
@@ -681,42 +682,42 @@ static void gen_level_dir(const fixture *f, int i, uint64_t *s, float *x)
 {
     int levels = f->atlas_layout.levels;
     x[0] = (float)(i % levels);
-    gen_dir(i / levels, s, x + 1);
+    sc_gen_dir(i / levels, s, x + 1);
     static const int ns[] = {1, 2, 3, 4, 8, 32, 256};
     x[4] = (float)ns[i % 7];
     const float edges[] = {0.0f, 0.5f, (float)(levels - 1), (float)levels};
-    x[5] = pick(i / 3, s, edges, 4, -0.3f, (float)levels - 0.7f);
+    x[5] = sc_pick(i / 3, s, edges, 4, -0.3f, (float)levels - 0.7f);
     x[6] = (float)(i % 6);
-    x[7] = pick(i / 6, s, unit_edges, 2, 0.0f, 1.0f);
-    x[8] = pick(i / 12, s, unit_edges, 2, 0.0f, 1.0f);
+    x[7] = sc_pick(i / 6, s, unit_edges, 2, 0.0f, 1.0f);
+    x[8] = sc_pick(i / 12, s, unit_edges, 2, 0.0f, 1.0f);
 }
 
 static void ref_atlas_uv(const fixture *f, const float *x, float *y)
 {
-    ibl_atlas_uv(&f->atlas_layout, (int)x[0], v3(x + 1), &y[0], &y[1]);
+    ibl_atlas_uv(&f->atlas_layout, (int)x[0], sc_v3(x + 1), &y[0], &y[1]);
 }
 
 static void ref_atlas_sample(const fixture *f, const float *x, float *y)
 {
-    ibl_atlas_sample(&f->atlas, &f->atlas_layout, x[5], v3(x + 1), y);
+    ibl_atlas_sample(&f->atlas, &f->atlas_layout, x[5], sc_v3(x + 1), y);
 }
 
 static void ref_warp(const fixture *f, const float *x, float *y)
 {
     (void)f;
-    put3(y, ibl_edge_fixup_warp_lookup(v3(x + 1), (int)x[4]));
+    sc_put3(y, ibl_edge_fixup_warp_lookup(sc_v3(x + 1), (int)x[4]));
 }
 
 static void ref_face_st(const fixture *f, const float *x, float *y)
 {
     (void)f;
-    y[0] = (float)ibl_cube_face_st(v3(x + 1), &y[1], &y[2]);
+    y[0] = (float)ibl_cube_face_st(sc_v3(x + 1), &y[1], &y[2]);
 }
 
 static void ref_cube_direction(const fixture *f, const float *x, float *y)
 {
     (void)f;
-    put3(y, ibl_cube_direction((int)x[6], x[7], x[8]));
+    sc_put3(y, ibl_cube_direction((int)x[6], x[7], x[8]));
 }
 
 /* ---- the table --------------------------------------------------------------------------- */

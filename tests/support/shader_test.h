@@ -37,5 +37,21 @@ typedef struct shader_case {
 
 extern const shader_case shader_cases[];
 extern const int shader_case_count;
+/* the punctual lights (shader_cases_light.c) */
+extern const shader_case shader_light_cases[];
+extern const int shader_light_case_count;
+
+/* generators shared by the case tables (shader_cases.c) */
+float sc_rnd(uint64_t *s);
+float sc_pick(int i, uint64_t *s, const float *edges, int n, float lo, float hi);
+float sc_pick_log(int i, uint64_t *s, const float *edges, int n, float lo, float hi);
+int sc_pick_int(uint64_t *s, int count);
+void sc_gen_dir(int i, uint64_t *s, float *d);
+void sc_gen_material(int i, uint64_t *s, float *x);  /* 11 floats */
+ibl_material sc_material_of(const float *x);
+void sc_gen_surface(int i, uint64_t *s, float *x);   /* 12 floats */
+ibl_surface sc_surface_of(const float *x);
+ibl_vec3 sc_v3(const float *x);
+void sc_put3(float *y, ibl_vec3 v);
 
 #endif
