@@ -74,8 +74,8 @@ int main(int argc, char **argv)
         goto done;
     }
     /* 2. draw, read back the linear image */
-    if (sg_render(&gl, ctx, &gpu, glsl, frag, width, height, &image, NULL, log, sizeof log) !=
-        IBL_OK) {
+    if (sg_render(&gl, ctx, &gpu, NULL, glsl, frag, width, height, &image, NULL, log,
+                  sizeof log) != IBL_OK) {
         fprintf(stderr, "render_spheres: drawing failed: %s\n", log);
         goto done;
     }

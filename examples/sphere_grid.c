@@ -44,8 +44,9 @@ static void set_materials(const glh_gl *gl, GLuint prog)
 }
 
 ibl_status sg_render(const glh_context *c, ibl_context *ctx, const glp_probe *probe,
-                     const char *ibl_glsl, const char *frag, int w, int h, ibl_image *out,
-                     unsigned char *hit, char *log, size_t log_size)
+                     const ibl_shader_lights *lights, const char *ibl_glsl, const char *frag,
+                     int w, int h, ibl_image *out, unsigned char *hit, char *log,
+                     size_t log_size)
 {
     const glh_gl *gl = &c->gl;
     memset(out, 0, sizeof *out);
@@ -65,7 +66,13 @@ ibl_status sg_render(const glh_context *c, ibl_context *ctx, const glp_probe *pr
         ibl_image_free(ctx, out);
         return IBL_ERR_OUT_OF_MEMORY;
     }
-    GLuint target, fbo, vao;
+    GLuint target, fbo, vao, light_block;
+    ibl_shader_lights none;
+    memset(&none, 0, sizeof none);
+    gl->GenBuffers(1, &light_block);
+    gl->BindBuffer(GL_UNIFORM_BUFFER, light_block);
+    gl->BufferData(GL_UNIFORM_BUFFER, sizeof none, lights ? lights : &none, GL_STATIC_DRAW);
+    gl->BindBufferBase(GL_UNIFORM_BUFFER, 2, light_block);
     gl->GenTextures(1, &target);
     gl->BindTexture(GL_TEXTURE_2D, target);
     gl->TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, NULL);
@@ -100,6 +107,7 @@ ibl_status sg_render(const glh_context *c, ibl_context *ctx, const glp_probe *pr
     gl->UseProgram(0);
     gl->BindFramebuffer(GL_FRAMEBUFFER, 0);
     gl->DeleteVertexArrays(1, &vao);
+    gl->DeleteBuffers(1, &light_block);
     gl->DeleteFramebuffers(1, &fbo);
     gl->DeleteTextures(1, &target);
     gl->DeleteProgram(prog);
