@@ -200,6 +200,10 @@ static void box_shininess_fit(void **state)
         double r = ibl__box_level_shininess(n, 0) / ibl__box_level_shininess(n / 2, 0);
         assert_near(r, 4.0, 0.05 * 4.0);
     }
+    /* the table of power-of-two edges is the fit itself, float for float; other edges fit */
+    for (int n = 1; n <= 4096; n *= 2)
+        assert_true(ibl__box_level_shininess(n, 0) == ibl__box_fit_shininess(n));
+    assert_true(ibl__box_level_shininess(48, 0) == ibl__box_fit_shininess(48));
 }
 
 /* The box chain's tri-Ace mapping: level l's material shininess is blinn_factor times the

@@ -192,8 +192,21 @@ static double fit_shininess(int n)
     return exp(0.5 * (a + b));
 }
 
+/* fit_shininess(n) for the power-of-two level edges 1, 2, 4 ... 4096, as it computes them
+ * (each fit costs ~2 ms, and every chain description asks for them): tests/test_triace_kernels.c
+ * recomputes the table with ibl__box_fit_shininess and requires the same floats. */
+static const float box_fit_table[13] = {0.819779515f, 5.985116f,   17.5821171f, 62.8321457f,
+                                        243.242935f,  964.609741f, 3849.05322f, 15386.7031f,
+                                        61540.6719f,  246153.922f, 984606.938f, 3938418.25f,
+                                        15753666.0f};
+
+float ibl__box_fit_shininess(int n) { return (float)fit_shininess(n); }
+
 float ibl__box_level_shininess(int size, int level)
 {
     if (size < 1 || level < 0) return 0.0f;
-    return (float)fit_shininess(ibl_level_size(size, level));
+    int n = ibl_level_size(size, level);
+    for (int k = 0; k < 13; k++)
+        if (n == 1 << k) return box_fit_table[k];
+    return ibl__box_fit_shininess(n);
 }

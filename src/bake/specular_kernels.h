@@ -23,6 +23,9 @@ ibl_status ibl__specular_gauss(ibl_context *ctx, const ibl_cubemap *src, ibl_cub
  * the box chain's effective kernel at `level` of a chain whose level 0 has edge `size`
  * (area-mean texels read back with seamless bilinear filtering). */
 float ibl__box_level_shininess(int size, int level);
+/* The least-squares fit itself for a level of edge n (uncached: the yardstick of the table
+ * ibl__box_level_shininess reads for power-of-two edges). */
+float ibl__box_fit_shininess(int n);
 
 /* The Gaussian profile's per-axis sigma, in texels of a face of edge n, for a Phong lobe of
  * the given exponent: sqrt(max(0, (n / 2)^2 / (shininess + 3) - 1/12)). */
