@@ -4,6 +4,8 @@
 #include "cli.h"
 #include "viewer_html.h"
 
+#include "ibl/render.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -49,6 +51,18 @@ static void bake_name(const char *input, char *out, size_t size)
     snprintf(out, size, "%s", slash && slash[1] ? slash + 1 : path);
 }
 
+/* The exposure `ibl render` picks for this probe (ibl_image_auto_exposure of its default
+ * image), from a small render: the page starts there. */
+static float default_exposure(ibl_context *ctx, const ibl_probe *probe)
+{
+    ibl_render_desc d = {.width = 128, .height = 64};
+    ibl_image image;
+    if (ibl_render(ctx, probe, &d, &image, NULL) != IBL_OK) return 0.0f;
+    float ev = ibl_image_auto_exposure(&image);
+    ibl_image_free(ctx, &image);
+    return ev;
+}
+
 /* Loads the bake, builds the page and writes it whole (or not at all). */
 static int run(ibl_context *ctx, const cli_args *a, const char *input, const char *output,
                const char *title)
@@ -82,7 +96,8 @@ static int run(ibl_context *ctx, const cli_args *a, const char *input, const cha
             memcpy(text, manifest, manifest_size);
             text[manifest_size] = 0;
             bake_name(input, name, sizeof name);
-            viewer_input in = {&probe, &block, bake.sh.bands, text, title ? title : name};
+            viewer_input in = {&probe, &block, bake.sh.bands, text, title ? title : name,
+                               default_exposure(ctx, &probe)};
             st = viewer_html_build(&in, &html, &html_size, err, sizeof err);
             if (st != IBL_OK) cli_error("%s: %s", output, err);
             free(text);

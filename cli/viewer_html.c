@@ -1,7 +1,7 @@
 /* Assembling the page of `ibl view` (viewer_html.h): the template of viewer/viewer.html with
  * its @IBL_...@ slots filled, and the JSON block the page's script reads:
  *   {"format": "ibl-viewer", "version": 1, "title", "probe": base64 of ibl_shader_probe,
- *    "sh_bands", "textures": {name: {target, width, height, depth, levels, channels, type,
+ *    "sh_bands", "exposure", "textures": {name: {target, width, height, depth, levels, channels, type,
  *    bytes, fnv, data}}, "spheres": [...], "manifest": {...}}
  * Texture bytes are little-endian half floats (f16) or floats (f32), cube faces level-major
  * in OpenGL's order as ibl stores them; `fnv` (FNV-1a, 32 bits) lets the page refuse a
@@ -290,7 +290,8 @@ static int build_data(sbuf *b, const viewer_input *in)
 {
     sb_str(b, "{\"format\": \"ibl-viewer\", \"version\": 1, \"title\": ");
     sb_json_string(b, in->title);
-    sb_printf(b, ", \"sh_bands\": %d, \"probe\": \"", in->sh_bands);
+    sb_printf(b, ", \"sh_bands\": %d, \"exposure\": %.9g, \"probe\": \"", in->sh_bands,
+              (double)in->exposure);
     sb_base64(b, (const uint8_t *)in->block, sizeof *in->block);
     sb_str(b, "\"");
     if (!put_textures(b, in->probe)) return 0;

@@ -15,6 +15,7 @@ typedef struct viewer_input {
     int sh_bands;                 /* of the bake: > 0 lets the page switch to the SH       */
     const char *manifest_json;    /* the bake's manifest.json text (parsed by the page)    */
     const char *title;            /* the bake's name, shown in the page                    */
+    float exposure;               /* the page's starting exposure (EV)                     */
 } viewer_input;
 
 /* Builds the page into a new buffer (free()); returns IBL_OK, or an error with the reason

@@ -191,9 +191,8 @@
     program = makeProgram(gl, glsl, $('ibl-scene-frag').textContent);
     gl.useProgram(program);
     UNITS.forEach((name, unit) => {
-      const t = uploadTexture(gl, data.textures[name], textures[name]);
-      gl.activeTexture(gl.TEXTURE0 + unit);
-      gl.bindTexture(t.target, t.tex);
+      gl.activeTexture(gl.TEXTURE0 + unit); // each texture stays bound to its own unit
+      uploadTexture(gl, data.textures[name], textures[name]);
       gl.uniform1i(gl.getUniformLocation(program, SAMPLERS[unit]), unit);
     });
     gl.activeTexture(gl.TEXTURE0);
@@ -209,6 +208,10 @@
     const err = gl.getError();
     if (err !== gl.NO_ERROR) throw new Error('WebGL error 0x' + err.toString(16) + ' while uploading the bake');
     setSphereUniforms();
+    // the exposure `ibl render` would pick; the slider spans 12 EV about it
+    state.exposure = data.exposure;
+    $('exposure').min = Math.floor(data.exposure) - 12;
+    $('exposure').max = Math.ceil(data.exposure) + 12;
   }
 
   function setSphereUniforms() {
@@ -380,8 +383,9 @@
     for (let k = 0; k < levelCount(); k++) {
       const r = pv.getFloat32(4 * k, true), s = pv.getFloat32(64 + 4 * k, true);
       const size = Math.max(data.textures.specular.width >> k, 1);
+      const ggx = (data.manifest.specular || {}).filter === 'ggx';
       bg.add(new Option('level ' + k + ' (' + size + '\u00b2, ' +
-                        (r > 0 || k === 0 && !(s > 0) ? 'roughness ' + r.toFixed(3) : 'shininess ' + s.toPrecision(4)) + ')', k));
+                        (ggx ? 'roughness ' + r.toFixed(3) : 'shininess ' + s.toPrecision(4)) + ')', k));
     }
     for (const id of ['scene', 'bg', 'model', 'tonemap'])
       $(id).addEventListener('change', () => { set({ [id]: Number($(id).value) }); });
