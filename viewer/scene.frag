@@ -31,6 +31,7 @@ uniform vec3 u_mat_f0;
 uniform float u_exposure;           // EV
 uniform int u_tonemap_row;          // 0 filmic, 1 clamp
 uniform int u_linear;               // 1: write linear radiance (float targets)
+uniform int u_mask;                 // 1: write white where an object is hit (tests)
 
 out vec4 o_color;
 
@@ -147,9 +148,11 @@ void main()
     vec3 d = normalize(u_forward + ndc.x * u_tan_half.x * u_right + ndc.y * u_tan_half.y * u_up);
     vec3 color;
     float t;
+    bool hit = true;
     if (u_scene == 0) {
         int i = hit_spheres(u_eye, d, t);
         if (i < 0) {
+            hit = false;
             color = background(d);
         } else {
             vec3 n = normalize(u_eye + t * d - sphere_center(i));
@@ -166,7 +169,12 @@ void main()
                                       u_mat_params.z, u_mat_f0, u_mat_params.w, ao);
         color = shade(m, n, -d);
     } else {
+        hit = false;
         color = background(d);
+    }
+    if (u_mask != 0) {
+        o_color = vec4(hit ? 1.0 : 0.0);
+        return;
     }
     if (u_linear != 0) {
         o_color = vec4(color, 1.0);

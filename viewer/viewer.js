@@ -147,7 +147,7 @@
   };
 
   function defaultCamera(scene) {
-    return scene === 1 ? { yaw: 0.5, pitch: 0.25, dist: 4.6, target: [0, 0.1, 0] }
+    return scene === 1 ? { yaw: 0.5, pitch: 0.25, dist: 9.5, target: [0, 0.1, 0] }
                        : { yaw: 0, pitch: 0, dist: 12, target: [0, 0, 0] };
   }
 
@@ -262,7 +262,8 @@
     gl.drawArrays(gl.TRIANGLES, 0, 3);
   }
 
-  function draw(linear) {
+  // mode: 0 the image, 1 linear radiance, 2 the object mask
+  function draw(mode) {
     const [w, h] = resize();
     const t0 = performance.now();
     gl.viewport(0, 0, w, h);
@@ -285,7 +286,8 @@
     gl.uniform3f(uniforms.u_mat_f0, state.f0, state.f0, state.f0);
     gl.uniform1f(uniforms.u_exposure, state.exposure);
     gl.uniform1i(uniforms.u_tonemap_row, state.tonemap);
-    gl.uniform1i(uniforms.u_linear, linear ? 1 : 0);
+    gl.uniform1i(uniforms.u_linear, mode === 1 ? 1 : 0);
+    gl.uniform1i(uniforms.u_mask, mode === 2 ? 1 : 0);
     gl.enable(gl.SCISSOR_TEST);
     const split = state.split ? Math.round(state.split_at * w) : w;
     if (split > 0) drawVariant('A', 0, split, h);
@@ -296,8 +298,8 @@
   }
 
   // Draws and waits for the GPU (a one-pixel read): the time of one frame's work.
-  function drawSynced() {
-    const t0 = draw(false);
+  function drawSynced(mode) {
+    const t0 = draw(mode || 0);
     gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
     api.drawMs = performance.now() - t0;
     return api.drawMs;
@@ -526,11 +528,19 @@
   api.state = state;
   api.set = set;
   // Fixes the canvas's size in pixels (null: follow the page) and draws now.
-  api.setSize = (w, h) => { fixedSize = w ? [w, h] : null; drawSynced(); showStats(); };
-  api.render = () => { drawSynced(); showStats(); };
-  // Draws now and returns the canvas's RGBA bytes, top row first, as base64.
-  api.pixels = () => {
+  api.setSize = (w, h) => {
+    fixedSize = w ? [w, h] : null;
+    const c = $('canvas');
+    c.style.width = w ? w + 'px' : '';
+    c.style.height = w ? h + 'px' : '';
     drawSynced();
+    showStats();
+  };
+  api.render = () => { drawSynced(); showStats(); };
+  // Draws now and returns the canvas's RGBA bytes, top row first, as base64 (mask: white
+  // where an object is hit, black elsewhere).
+  api.pixels = (mask) => {
+    drawSynced(mask ? 2 : 0);
     const c = $('canvas'), w = c.width, h = c.height;
     const px = new Uint8Array(w * h * 4);
     gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
