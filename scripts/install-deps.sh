@@ -17,6 +17,11 @@
 #              libegl-mesa0 (Mesa's EGL: the surfaceless platform), libgl1-mesa-dri (llvmpipe,
 #              OpenGL 4.5 core in software), glslang-tools (glslangValidator: every GLSL
 #              dialect and HLSL); tests/test_shaders.c and examples/ run them headless
+#   viewer:    chromium (the headless browser of the `ibl view` tests, software WebGL2),
+#              nodejs and npm (npm only when no npm is on PATH: a nodejs that bundles it
+#              conflicts with Debian's); then `npm ci` in tests/viewer installs the exact
+#              playwright-core of its package-lock.json from the npm registry (no browser
+#              download: the tests drive /usr/bin/chromium)
 #   fuzzing:   clang libclang-rt-14-dev (libFuzzer, sanitizer runtimes), dpkg-dev (apt-get
 #              source unpacks with dpkg-source), zlib1g-dev libimath-dev (their versions name
 #              the sources to fetch), python3 libjpeg-turbo-progs (cjpeg) for
@@ -29,7 +34,8 @@
 # components and keyring) in /etc/apt/sources.list.d/ibl-deb-src.sources. Nothing else is
 # ever downloaded: every byte comes through apt from the machine's configured Debian archive.
 set -eu
-PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libpng-dev libjpeg-dev libdeflate-dev libjansson-dev libassimp-dev libembree-dev libzstd-dev libastcenc-dev libcmocka-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools parallel"
+PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libpng-dev libjpeg-dev libdeflate-dev libjansson-dev libassimp-dev libembree-dev libzstd-dev libastcenc-dev libcmocka-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools parallel chromium nodejs"
+command -v npm >/dev/null 2>&1 || PACKAGES="$PACKAGES npm"
 # Source package:binary package whose installed version is fetched (headers and instrumented
 # libraries then match exactly). Built in this order by fuzz/build-deps.sh.
 FUZZ_SOURCES="zlib:zlib1g-dev libdeflate:libdeflate-dev libpng1.6:libpng-dev libjpeg-turbo:libjpeg62-turbo-dev imath:libimath-dev openexr:libopenexr-dev"
@@ -59,6 +65,15 @@ if [ -n "$missing" ]; then
     echo "  sudo apt-get install -y$missing" >&2
     exit 1
   fi
+fi
+# the browser tests' npm packages, from the lock file (again whenever it changes)
+viewer_dir="$(cd "$(dirname "$0")/.." && pwd)/tests/viewer"
+if [ -f "$viewer_dir/package-lock.json" ] &&
+   ! cmp -s "$viewer_dir/package-lock.json" "$viewer_dir/node_modules/.ibl-lock" 2>/dev/null; then
+  echo "installing the viewer tests' npm packages (npm ci in tests/viewer)" >&2
+  (cd "$viewer_dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null) ||
+    { echo "npm ci failed in $viewer_dir" >&2; exit 1; }
+  cp "$viewer_dir/package-lock.json" "$viewer_dir/node_modules/.ibl-lock"
 fi
 [ "$mode" = --fuzz ] || exit 0
 
