@@ -124,8 +124,9 @@ vec3 background(vec3 d)
 vec3 shade(ibl_material m, vec3 n, vec3 v)
 {
     ibl_surface s = ibl_surface(n, v, vec3(0.0), vec3(0.0));
+    /* light_size 0: the page has no punctual lights */
     ibl_shade_desc desc = ibl_shade_desc(u_desc0.x, u_desc0.y, u_desc0.z, u_desc0.w, u_horizon_k,
-                                         u_desc1.x, u_desc1.y, u_desc1.z, u_desc1.w);
+                                         u_desc1.x, u_desc1.y, u_desc1.z, u_desc1.w, 0);
     return ibl_shade(probe, u_specular, u_mirror, u_irradiance, u_splitsum, u_ambient, desc, m, s).color;
 }
 
