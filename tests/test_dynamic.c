@@ -10,7 +10,9 @@
  *    threads and with the portable kernels;
  *  - ibl_specular_plan_sh against the exact projection of the same cube, within the bound its
  *    8x8 block means allow (computed here), and exact for a cube constant over those blocks;
- *  - `ibl prefilter --preset dynamic-*` (ibl_specular_prefilter with the preset) is the plan. */
+ *  - `ibl prefilter --preset dynamic-*` (ibl_specular_prefilter with the preset) is the plan;
+ *  - the Phong presets' operator exported as CSR rows (ibl_specular_plan_rows_fill, what
+ *    shaders/ibl_dynamic_phong.comp runs) summed over the box mips is the plan's run. */
 #include "test_support.h"
 #include "bake/specular_kernels.h"
 
@@ -478,6 +480,100 @@ static void prefilter_preset_is_the_plan(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* ---- the lobe operator exported as CSR rows (ibl_specular_plan_rows_*) ---- */
+
+/* The exported rows, summed in double over the C box mips of the source (and the 1x1 mean
+ * where a level reports a fixup), give the plan's run up to float summation order: bound 1e-5
+ * of max(|C|, 1e-3 of the level's mean). Also with a mirror level (rows of one tap). */
+static void exported_rows_are_the_plan(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(2);
+    ibl_cubemap src = source_cube(ctx), mips;
+    assert_int_equal(ibl_cubemap_alloc(ctx, SRC, ibl_full_mip_count(SRC), &mips), IBL_OK);
+    memcpy(mips.data, src.data, (size_t)6 * SRC * SRC * 4 * sizeof(float));
+    assert_int_equal(ibl_cubemap_build_mips(ctx, &mips), IBL_OK);
+    for (int p = 0; p < 3; p++) {
+        ibl_specular_desc d;
+        assert_true(ibl_specular_preset(p == 0 ? "dynamic-phong16" : "dynamic-phong32", &d));
+        d.source_size = SRC;
+        d.mirror = p == 2;
+        ibl_specular_plan *plan = NULL;
+        assert_int_equal(ibl_specular_plan_create(ctx, &d, &plan), IBL_OK);
+        const ibl_specular_info *info = ibl_specular_plan_info(plan);
+        ibl_cubemap out;
+        assert_int_equal(ibl_cubemap_alloc(ctx, info->size, info->levels, &out), IBL_OK);
+        assert_int_equal(ibl_specular_plan_run(plan, &src, &out), IBL_OK);
+        double worst = 0;
+        int mirrors = 0;
+        for (int l = 0; l < info->levels; l++) {
+            ibl_specular_plan_rows r;
+            assert_int_equal(ibl_specular_plan_rows_info(plan, l, &r), IBL_OK);
+            int n = r.size, M = r.source_size;
+            assert_int_equal(n, ibl_level_size(info->size, l));
+            assert_int_equal(M, SRC >> r.source_mip);
+            assert_int_equal(r.fixup, n == 1 ? IBL_EDGE_FIXUP_OVERLAP : IBL_EDGE_FIXUP_NONE);
+            mirrors += r.mirror;
+            uint32_t *offsets = malloc((r.rows + 1) * sizeof(uint32_t));
+            uint32_t *columns = malloc(r.taps * sizeof(uint32_t));
+            float *weights = malloc(r.taps * sizeof(float));
+            double *level = malloc(r.rows * 3 * sizeof(double));
+            assert_true(offsets && columns && weights && level);
+            assert_int_equal(ibl_specular_plan_rows_fill(plan, l, offsets, columns, weights), IBL_OK);
+            assert_int_equal(offsets[r.rows], r.taps);
+            const float *mip = ibl_cubemap_face(&mips, r.source_mip, 0);
+            for (size_t i = 0; i < r.rows; i++)
+                for (int c = 0; c < 3; c++) {
+                    double acc = 0;
+                    for (uint32_t k = offsets[i]; k < offsets[i + 1]; k++) {
+                        assert_true(columns[k] < (size_t)6 * M * M);
+                        acc += (double)weights[k] * mip[(size_t)columns[k] * 4 + c];
+                    }
+                    level[i * 3 + c] = acc;
+                }
+            if (r.fixup != IBL_EDGE_FIXUP_NONE) {
+                assert_int_equal(n, 1);
+                for (int c = 0; c < 3; c++) {
+                    double m = 0;
+                    for (int f = 0; f < 6; f++) m += level[f * 3 + c] / 6.0;
+                    for (int f = 0; f < 6; f++) level[f * 3 + c] = m;
+                }
+            }
+            const float *cl = ibl_cubemap_face(&out, l, 0);
+            double mean = 0;
+            for (size_t i = 0; i < r.rows * 3; i++) mean += level[i] / (double)(r.rows * 3);
+            for (size_t i = 0; i < r.rows; i++)
+                for (int c = 0; c < 3; c++) {
+                    double e = fabs(level[i * 3 + c] - cl[i * 4 + c]) /
+                               fmax(fabs((double)cl[i * 4 + c]), 1e-3 * mean);
+                    if (e > worst) worst = e;
+                }
+            free(offsets);
+            free(columns);
+            free(weights);
+            free(level);
+        }
+        assert_int_equal(mirrors, p == 2);
+        print_message("%s%s: exported rows vs the run: max relative error %.2e\n",
+                      p == 0 ? "dynamic-phong16" : "dynamic-phong32", p == 2 ? " + mirror" : "", worst);
+        assert_true(worst <= 1e-5);
+        ibl_specular_plan_rows r;
+        assert_int_equal(ibl_specular_plan_rows_info(plan, -1, &r), IBL_ERR_INVALID_ARGUMENT);
+        assert_int_equal(ibl_specular_plan_rows_info(plan, info->levels, &r), IBL_ERR_INVALID_ARGUMENT);
+        ibl_cubemap_free(ctx, &out);
+        ibl_specular_plan_destroy(plan);
+    }
+    ibl_cubemap out;
+    ibl_specular_plan_rows r;
+    ibl_specular_plan *gauss = plan_of(ctx, "dynamic-gauss32", &out);
+    assert_int_equal(ibl_specular_plan_rows_info(gauss, 0, &r), IBL_ERR_INVALID_ARGUMENT);
+    ibl_specular_plan_destroy(gauss);
+    ibl_cubemap_free(ctx, &out);
+    ibl_cubemap_free(ctx, &mips);
+    ibl_cubemap_free(ctx, &src);
+    ibl_context_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -487,6 +583,7 @@ int main(void)
         cmocka_unit_test(identical_at_any_thread_count),
         cmocka_unit_test(sh_matches_exact_projection),
         cmocka_unit_test(prefilter_preset_is_the_plan),
+        cmocka_unit_test(exported_rows_are_the_plan),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -177,6 +177,43 @@ const ibl_specular_info *ibl_specular_plan_info(const ibl_specular_plan *plan);
 ibl_status ibl_specular_plan_sh(const ibl_specular_plan *plan, int bands, struct ibl_sh *out);
 void ibl_specular_plan_destroy(ibl_specular_plan *plan);
 
+/* The lobe operator of a dynamic Phong-family plan (filter phong, blinn or ggx with .dynamic;
+ * the presets dynamic-phong16/32) in a form a GPU can run: one output level is a sparse
+ * matrix in CSR form, one row per output texel, over the texels of one box mip of the source
+ * (the area-weighted chain of ibl_cubemap_build_mips / shaders/ibl_box_mip.comp; mip m has
+ * edge source_size >> m). The plan stores only 1/48 of the rows (the cube's symmetries);
+ * here they are expanded to all six faces. docs/SHADERS.md "the Phong presets".
+ *
+ *   level[i] = sum over k in [row_offsets[r], row_offsets[r+1]) of weight[k] mip[column[k]]
+ *   r = (face n + y) n + x (output texel), column = (face M + y) M + x (mip texel, M its edge)
+ *
+ * The rows are normalised when the plan is made (each sums to 1 in double before the cast to
+ * float): there is no normalisation left to apply. Taps of weight 0 (the plan's eight-wide
+ * padding) are left out; the taps of a row come in the order the C sums them. A mirror level
+ * (filter's roughness 0) is the box mip of its own edge: rows of one tap of weight 1. After
+ * the rows the C applies `fixup` to the level: IBL_EDGE_FIXUP_NONE (nothing), or
+ * IBL_EDGE_FIXUP_OVERLAP / OVERLAP2 (tri-Ace's edge overlapping; on a 1x1 level any fixup
+ * but none is the mean of the six faces, reported as OVERLAP). The bent and warp fixups live
+ * in the rows' directions: a dynamic-phong level reports NONE except at 1x1. */
+typedef struct ibl_specular_plan_rows {
+    int size;          /* output edge n of the level                                         */
+    int source_mip;    /* the box mip of the source the rows read                            */
+    int source_size;   /* its edge M = source_size >> source_mip                             */
+    int mirror;        /* 1: a copy of the box mip (one tap of weight 1 per row)             */
+    ibl_edge_fixup fixup; /* applied by the C after the rows (see above)                     */
+    size_t rows;       /* 6 n^2: row_offsets has rows + 1 entries                             */
+    size_t taps;       /* entries of columns and weights                                      */
+} ibl_specular_plan_rows;
+
+/* The sizes of level `level` (and where it reads). IBL_ERR_INVALID_ARGUMENT for a plan without
+ * a lobe operator (not dynamic, or box/gauss) or a level out of range. Allocates nothing. */
+ibl_status ibl_specular_plan_rows_info(const ibl_specular_plan *plan, int level,
+                                       ibl_specular_plan_rows *out);
+/* Fills the caller's arrays of the sizes rows_info gave: row_offsets (rows + 1, from 0 to
+ * taps), columns and weights (taps each). Allocates nothing. */
+ibl_status ibl_specular_plan_rows_fill(const ibl_specular_plan *plan, int level,
+                                       uint32_t *row_offsets, uint32_t *columns, float *weights);
+
 #ifdef __cplusplus
 }
 #endif

@@ -9,6 +9,9 @@
  * projection of the 8x8x6 box mip (below).
  * Run:    box pyramid or chain -> per level: the level (copy, blur, or row products; a mirror
  *         level is the box level of its size) -> its edge fixup -> the SH mip kept.
+ * Export: the lobe engine's rows expanded to all six faces as CSR arrays
+ *         (ibl_specular_plan_rows_info / _fill, at the end), what shaders/ibl_dynamic_phong.comp
+ *         runs on the GPU.
  *
  * The diffuse SH. The talk computes the SH coefficients "from 6 texels at the center in each
  * face" of the small cube ("Optimize diffuse term"); ibl_sh_project_face_means does exactly
@@ -311,5 +314,109 @@ ibl_status ibl_specular_plan_sh(const ibl_specular_plan *plan, int bands, ibl_sh
         for (int k = 0; k < count; k++)
             for (int c = 0; c < 3; c++) out->c[k][c] += w[k] * p[c];
     }
+    return IBL_OK;
+}
+
+/* ---- the lobe operator exported as CSR rows (ibl/specular.h) ---- */
+
+/* The level's operator, or NULL (with the reason in the context) when there is none. */
+static const ibl__dynamic *rows_plan(const ibl_specular_plan *plan, int level)
+{
+    if (!plan) return NULL;
+    const ibl__dynamic *d = plan->dynamic;
+    if (!d || d->engine != ENGINE_LOBE || level < 0 || level >= d->L) {
+        ibl__fail(plan->ctx, IBL_ERR_INVALID_ARGUMENT, "specular plan: %s",
+                  !d || d->engine != ENGINE_LOBE
+                      ? "rows need a dynamic plan of the phong, blinn or ggx filter"
+                      : "rows: level out of range");
+        return NULL;
+    }
+    return d;
+}
+
+/* Texel index (face M + y) M + x of lane k of a chunk code, and whether the reversed weights
+ * apply: the code's offset points into the planar buffer (dynamic_internal.h), the faces'
+ * R plane or their transposed R plane. */
+static uint32_t code_texel(uint32_t code, int k, int M)
+{
+    size_t plane = (size_t)6 * M * M, offset = (code >> 1) - DYN_GUARD;
+    if (offset < plane) return (uint32_t)(offset + (size_t)k);
+    size_t rest = offset - 3 * plane, face = rest / ((size_t)M * M);
+    size_t p = rest % ((size_t)M * M) + (size_t)k; /* transposed: p = x M + y */
+    return (uint32_t)((face * M + p % M) * M + p / M);
+}
+
+/* The eight weights of chunk c of a row whose representative's weights start at w. */
+static const float *chunk_weights(const dyn_lobe_level *lv, uint32_t code, size_t w, uint32_t c)
+{
+    return ((code & 1) ? lv->reversed : lv->weights) + w + (size_t)c * DYN_CHUNK;
+}
+
+ibl_status ibl_specular_plan_rows_info(const ibl_specular_plan *plan, int level,
+                                       ibl_specular_plan_rows *out)
+{
+    if (!plan || !out) return IBL_ERR_INVALID_ARGUMENT;
+    const ibl__dynamic *d = rows_plan(plan, level);
+    if (!d) return IBL_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    const dyn_lobe_level *lv = &d->lobe[level];
+    int n = ibl_level_size(d->N, level);
+    out->size = n;
+    out->source_mip = d->source_mip[level];
+    out->source_size = d->S >> d->source_mip[level];
+    out->mirror = lv->edge == 0;
+    const dyn_fixup *fx = &d->fixup[level];
+    out->fixup = fx->method == IBL_EDGE_FIXUP_NONE ? IBL_EDGE_FIXUP_NONE
+                 : n == 1                          ? IBL_EDGE_FIXUP_OVERLAP
+                 : fx->method == IBL_EDGE_FIXUP_OVERLAP || fx->method == IBL_EDGE_FIXUP_OVERLAP2
+                     ? fx->method
+                     : IBL_EDGE_FIXUP_NONE;
+    out->rows = (size_t)6 * n * n;
+    if (out->mirror) {
+        out->taps = out->rows;
+        return IBL_OK;
+    }
+    size_t taps = 0;
+    for (size_t i = 0; i < out->rows; i++) {
+        uint32_t rep = lv->row_rep[i], first = lv->row_codes[i];
+        size_t w = (size_t)lv->rep_chunks[rep] * DYN_CHUNK;
+        for (uint32_t c = 0; c < lv->row_codes[i + 1] - first; c++) {
+            const float *cw = chunk_weights(lv, lv->codes[first + c], w, c);
+            for (int k = 0; k < DYN_CHUNK; k++) taps += cw[k] != 0.0f;
+        }
+    }
+    out->taps = taps;
+    return IBL_OK;
+}
+
+ibl_status ibl_specular_plan_rows_fill(const ibl_specular_plan *plan, int level,
+                                       uint32_t *row_offsets, uint32_t *columns, float *weights)
+{
+    ibl_specular_plan_rows info;
+    ibl_status st = ibl_specular_plan_rows_info(plan, level, &info);
+    if (st != IBL_OK) return st;
+    if (!row_offsets || (info.taps && (!columns || !weights))) return IBL_ERR_INVALID_ARGUMENT;
+    if (info.taps > UINT32_MAX)
+        return ibl__fail(plan->ctx, IBL_ERR_INVALID_ARGUMENT, "specular plan: rows: too many taps");
+    const ibl__dynamic *d = plan->dynamic;
+    const dyn_lobe_level *lv = &d->lobe[level];
+    int M = info.source_size;
+    size_t t = 0;
+    for (size_t i = 0; i < info.rows; i++) {
+        row_offsets[i] = (uint32_t)t;
+        if (info.mirror) {
+            columns[t] = (uint32_t)i, weights[t] = 1.0f, t++;
+            continue;
+        }
+        uint32_t rep = lv->row_rep[i], first = lv->row_codes[i];
+        size_t w = (size_t)lv->rep_chunks[rep] * DYN_CHUNK;
+        for (uint32_t c = 0; c < lv->row_codes[i + 1] - first; c++) {
+            uint32_t code = lv->codes[first + c];
+            const float *cw = chunk_weights(lv, code, w, c);
+            for (int k = 0; k < DYN_CHUNK; k++)
+                if (cw[k] != 0.0f) columns[t] = code_texel(code, k, M), weights[t] = cw[k], t++;
+        }
+    }
+    row_offsets[info.rows] = (uint32_t)t;
     return IBL_OK;
 }
