@@ -674,6 +674,56 @@ static GLuint compute_program(fixture *f, const char *name)
 }
 
 /* An empty RGBA32F cube with `levels` levels of edge n, complete (image units need that). */
+/* The solid angles of the box mips' child levels, 64 down to 2, one storage buffer each (the
+ * dynamic chains' area-correct box mips read them). */
+static void upload_solid_angles(const glh_gl *gl, GLuint buffers[8])
+{
+    float *table = malloc((size_t)64 * 64 * sizeof(float));
+    assert_non_null(table);
+    gl->GenBuffers(8, buffers);
+    for (int t = 0; t < 6; t++) {
+        int cn = 64 >> t;
+        ibl_cube_solid_angle_table(cn, table);
+        gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, buffers[t]);
+        gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((size_t)cn * cn * sizeof(float)),
+                       table, GL_STATIC_DRAW);
+    }
+    free(table);
+}
+
+/* The largest relative error of a GPU chain (texture tex, levels of edge `edge` down) against
+ * the C plan's cube, RGB, relative to max(|C|, 1e-3 of the level's mean). */
+static double chain_max_relative_error(const glh_gl *gl, GLuint tex, const ibl_cubemap *dst,
+                                       int edge, int levels)
+{
+    float *back = malloc((size_t)edge * edge * 4 * sizeof(float));
+    assert_non_null(back);
+    double worst = 0;
+    gl->BindTexture(GL_TEXTURE_CUBE_MAP, tex);
+    gl->PixelStorei(GL_PACK_ALIGNMENT, 4);
+    for (int l = 0; l < levels; l++) {
+        int n = ibl_level_size(edge, l);
+        double mean = 0;
+        for (int face = 0; face < 6; face++) {
+            const float *c = ibl_cubemap_face(dst, l, face);
+            for (int i = 0; i < n * n; i++) mean += (c[4 * i] + c[4 * i + 1] + c[4 * i + 2]) / 3.0;
+        }
+        mean /= 6.0 * n * n;
+        for (int face = 0; face < 6; face++) {
+            gl->GetTexImage(GL_TEXTURE_CUBE_MAP_POSITIVE_X + (GLenum)face, l, GL_RGBA, GL_FLOAT, back);
+            const float *c = ibl_cubemap_face(dst, l, face);
+            for (int i = 0; i < n * n; i++)
+                for (int k = 0; k < 3; k++) {
+                    double e = fabs((double)back[4 * i + k] - c[4 * i + k]) /
+                               fmax(fabs((double)c[4 * i + k]), 1e-3 * mean);
+                    if (e > worst) worst = e;
+                }
+        }
+    }
+    free(back);
+    return worst;
+}
+
 static GLuint empty_cube(const glh_gl *gl, int n, int levels)
 {
     GLuint tex;
@@ -776,16 +826,7 @@ static void dynamic_gauss_matches_plan(void **state)
     g.scratch = empty_cube(gl, g.edge, g.levels);
     g.blurred = empty_cube(gl, g.edge, g.levels);
     g.out = empty_cube(gl, g.edge, g.levels);
-    float *table = malloc((size_t)64 * 64 * sizeof(float));
-    assert_non_null(table);
-    gl->GenBuffers(8, g.angles);
-    for (int t = 0; t < 6; t++) {
-        int cn = 64 >> t;
-        ibl_cube_solid_angle_table(cn, table);
-        gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, g.angles[t]);
-        gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((size_t)cn * cn * sizeof(float)),
-                       table, GL_STATIC_DRAW);
-    }
+    upload_solid_angles(gl, g.angles);
     gauss_frame(gl, &g); /* the first frame compiles the pipelines' shaders in the driver */
     gl->Finish();
     enum { FRAMES = 5 };
@@ -793,30 +834,7 @@ static void dynamic_gauss_matches_plan(void **state)
     for (int i = 0; i < FRAMES; i++) gauss_frame(gl, &g);
     gl->Finish();
     double gpu_ms = (now_ms() - t0) / FRAMES;
-    float *back = malloc((size_t)g.edge * g.edge * 4 * sizeof(float));
-    assert_non_null(back);
-    double worst = 0;
-    gl->BindTexture(GL_TEXTURE_CUBE_MAP, g.out);
-    gl->PixelStorei(GL_PACK_ALIGNMENT, 4);
-    for (int l = 0; l < g.levels; l++) {
-        int n = ibl_level_size(g.edge, l);
-        double mean = 0;
-        for (int face = 0; face < 6; face++) {
-            const float *c = ibl_cubemap_face(&dst, l, face);
-            for (int i = 0; i < n * n; i++) mean += (c[4 * i] + c[4 * i + 1] + c[4 * i + 2]) / 3.0;
-        }
-        mean /= 6.0 * n * n;
-        for (int face = 0; face < 6; face++) {
-            gl->GetTexImage(GL_TEXTURE_CUBE_MAP_POSITIVE_X + (GLenum)face, l, GL_RGBA, GL_FLOAT, back);
-            const float *c = ibl_cubemap_face(&dst, l, face);
-            for (int i = 0; i < n * n; i++)
-                for (int k = 0; k < 3; k++) {
-                    double e = fabs((double)back[4 * i + k] - c[4 * i + k]) /
-                               fmax(fabs((double)c[4 * i + k]), 1e-3 * mean);
-                    if (e > worst) worst = e;
-                }
-        }
-    }
+    double worst = chain_max_relative_error(gl, g.out, &dst, g.edge, g.levels);
     assert_int_equal(gl->GetError(), GL_NO_ERROR);
     print_message("dynamic-gauss32 on the GPU (64 -> %d, %d levels): max relative error %.2e; "
                   "llvmpipe %.2f ms per frame (C plan %.2f ms, one run)\n",
@@ -829,8 +847,6 @@ static void dynamic_gauss_matches_plan(void **state)
     gl->DeleteProgram(g.box);
     gl->DeleteProgram(g.gauss);
     gl->DeleteProgram(g.fixup);
-    free(table);
-    free(back);
     ibl_specular_plan_destroy(plan);
     ibl_cubemap_free(f->ctx, &dst);
     ibl_cubemap_free(f->ctx, &src);
@@ -965,16 +981,7 @@ static void phong_preset_matches_plan(fixture *f, const char *preset)
     gl->TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
     g.filtered = empty_cube(gl, g.edge, g.levels);
     g.out = empty_cube(gl, g.edge, g.levels);
-    float *table = malloc((size_t)64 * 64 * sizeof(float));
-    assert_non_null(table);
-    gl->GenBuffers(8, g.angles);
-    for (int t = 0; t < 6; t++) {
-        int cn = 64 >> t;
-        ibl_cube_solid_angle_table(cn, table);
-        gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, g.angles[t]);
-        gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((size_t)cn * cn * sizeof(float)),
-                       table, GL_STATIC_DRAW);
-    }
+    upload_solid_angles(gl, g.angles);
     phong_frame(gl, &g); /* the first frame compiles the pipelines' shaders in the driver */
     gl->Finish();
     enum { FRAMES = 5 };
@@ -982,30 +989,7 @@ static void phong_preset_matches_plan(fixture *f, const char *preset)
     for (int i = 0; i < FRAMES; i++) phong_frame(gl, &g);
     gl->Finish();
     double gpu_ms = (now_ms() - t0) / FRAMES;
-    float *back = malloc((size_t)g.edge * g.edge * 4 * sizeof(float));
-    assert_non_null(back);
-    double worst = 0;
-    gl->BindTexture(GL_TEXTURE_CUBE_MAP, g.out);
-    gl->PixelStorei(GL_PACK_ALIGNMENT, 4);
-    for (int l = 0; l < g.levels; l++) {
-        int n = ibl_level_size(g.edge, l);
-        double mean = 0;
-        for (int face = 0; face < 6; face++) {
-            const float *c = ibl_cubemap_face(&dst, l, face);
-            for (int i = 0; i < n * n; i++) mean += (c[4 * i] + c[4 * i + 1] + c[4 * i + 2]) / 3.0;
-        }
-        mean /= 6.0 * n * n;
-        for (int face = 0; face < 6; face++) {
-            gl->GetTexImage(GL_TEXTURE_CUBE_MAP_POSITIVE_X + (GLenum)face, l, GL_RGBA, GL_FLOAT, back);
-            const float *c = ibl_cubemap_face(&dst, l, face);
-            for (int i = 0; i < n * n; i++)
-                for (int k = 0; k < 3; k++) {
-                    double e = fabs((double)back[4 * i + k] - c[4 * i + k]) /
-                               fmax(fabs((double)c[4 * i + k]), 1e-3 * mean);
-                    if (e > worst) worst = e;
-                }
-        }
-    }
+    double worst = chain_max_relative_error(gl, g.out, &dst, g.edge, g.levels);
     assert_int_equal(gl->GetError(), GL_NO_ERROR);
     print_message("%s on the GPU (64 -> %d, %d levels, box mips to %d, %zu taps): max relative "
                   "error %.2e; llvmpipe %.2f ms per frame (C plan %.2f ms, one run)\n",
@@ -1019,8 +1003,6 @@ static void phong_preset_matches_plan(fixture *f, const char *preset)
     gl->DeleteProgram(g.box);
     gl->DeleteProgram(g.phong);
     gl->DeleteProgram(g.fixup);
-    free(table);
-    free(back);
     ibl_specular_plan_destroy(plan);
     ibl_cubemap_free(f->ctx, &dst);
     ibl_cubemap_free(f->ctx, &src);
