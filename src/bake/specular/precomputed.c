@@ -240,8 +240,8 @@ static precomputed_piece *precomputed_new(ibl_specular_plan *p, const lobe_piece
 }
 
 /* Lays the rows found per base texel end to end, with their vectors' first cells; 0 when the
- * border was too narrow for some base or the weights would be too many (sum by leaves), -1 when
- * memory ran out. */
+ * border was too narrow for some base or the weights would crowd the memory budget (sum by
+ * leaves), -1 when memory ran out. */
 static int pack_rows(ibl_context *ctx, precomputed_piece *c, const weights_job *j)
 {
     size_t bases = (size_t)c->base_edge * c->base_edge, stride = (size_t)(2 * c->border + 1) * 3;
@@ -255,7 +255,10 @@ static int pack_rows(ibl_context *ctx, precomputed_piece *c, const weights_job *
     }
     c->first_row[bases] = (uint32_t)rows;
     c->first_weight[bases] = weights;
-    if (weights > PRECOMPUTED_MAX_WEIGHTS) return 0;
+    /* half floats, a 4-byte cell per 8 of them, 12 bytes a row */
+    double bytes = weights * (sizeof(uint16_t) + 0.5) + (double)rows * 3 * sizeof(int32_t);
+    uint64_t max = ibl_context_max_bytes(ctx), now = ibl_context_current_bytes(ctx);
+    if (now >= max || bytes > PRECOMPUTED_BUDGET_SHARE * (double)(max - now)) return 0;
     c->rows = ibl_alloc(ctx, (rows ? rows : 1) * 3 * sizeof(int32_t));
     c->weights = ibl_alloc(ctx, (weights ? weights : 1) * sizeof(uint16_t));
     c->vector_cells = ibl_alloc(ctx, (weights / 8 + 1) * 2 * sizeof(uint16_t));

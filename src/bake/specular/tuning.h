@@ -84,9 +84,13 @@
 /* A piece reaching beyond 1.2 radians is summed by leaves: the opposite face could be in reach,
  * and the padded face holds only the four neighbours. */
 #define PRECOMPUTED_MAX_REACH 1.2
-/* ... and so is one whose weights would pass 2^25 (128 MiB of half floats; the 1024 chain's
- * level 1). */
-#define PRECOMPUTED_MAX_WEIGHTS ((size_t)1 << 25)
+/* ... and so is one whose weights (with their cells and rows) would take more than half of
+ * what the context's memory budget has left. Nothing else caps them: a base texel's weights
+ * are bounded by the source level's rule (cores: 2.5-5 texels a half width; rings: 0.45 b), so
+ * they grow with the grid's points, and a leaf costs ~10x a weight and serves one point where a
+ * weight serves 24 (the 1024 chain's level 1 has 44 M weights: as leaves, 5.5 CPU s; as
+ * weights, 0.6). */
+#define PRECOMPUTED_BUDGET_SHARE 0.5
 /* The window scanned for a base texel's rows: 1.3 times its reach in local texels, plus 2 (the
  * whole border when something lies on the window's edge). */
 #define PRECOMPUTED_WINDOW_MARGIN 1.3
