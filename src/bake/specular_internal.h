@@ -75,6 +75,9 @@ typedef struct ibl__specular_stats {
     int precomputed_coarse; /* ... over a coarse level (with centroid corrections)      */
     int split;              /* rings on coarse grids whose bright texels go direct      */
     int bright_blocks, correction_blocks;
+    int coarse_cores;       /* cores on a grid coarser than the output, interpolated    */
+    int difference_corrections; /* precomputed pieces whose corrections ran in difference
+                                 * form on a coarser grid (last run)                   */
 } ibl__specular_stats;
 void ibl__specular_plan_stats(const ibl_specular_plan *plan, ibl__specular_stats *out);
 

@@ -167,6 +167,10 @@ typedef struct lobe_piece {
     psi_step outer, inner;
     int bright_apart;      /* a ring on a coarse grid whose bright texels are summed apart      */
     int bright_grid;       /* ... on this grid                                                 */
+    /* a core on the output texels, many of them a half width: the centroid corrections of its
+     * weights (if precomputed over a coarse level) go on this coarser grid, in difference form
+     * (gathering.c) */
+    int has_correction_grid, correction_grid;
     precomputed_piece *precomputed; /* its weights, when precomputed (NULL: summed by leaves) */
 } lobe_piece;
 
@@ -221,6 +225,9 @@ struct precomputed_piece {
      * moment leaf differs from its uniform leaf by at most P (mean |dm| + spread |de| +
      * covariance |dC|) per unit of the normaliser (gathering.c) */
     double bound_mean, bound_spread, bound_covariance;
+    int correction_difference; /* the corrections are summed as moment leaf minus uniform leaf on
+                                * the piece's correction grid; the corrected texels stay in the
+                                * padded source */
     int correction_capacity, correction_block_count;
     float *correction_records; /* run: in the plan's correction pool                           */
     float *correction_cones;
@@ -234,8 +241,10 @@ struct precomputed_piece {
 
 /* What a leaf sum accumulates: the normaliser (geometric moments, at plan time), or the
  * numerator from level 0 (texel radiance, geometric moments) or from a coarse level
- * (luminance-weighted moments and power). */
-enum leaf_mode { LEAF_NORMALISER = 0, LEAF_LEVEL0, LEAF_COARSE };
+ * (luminance-weighted moments and power), or a coarse texel's centroid correction in
+ * difference form (its moment leaf minus its uniform leaf, the power at the geometric moments:
+ * what the precomputed product already counted). */
+enum leaf_mode { LEAF_NORMALISER = 0, LEAF_LEVEL0, LEAF_COARSE, LEAF_DIFFERENCE };
 
 /* A block that may matter for a tile: only where cos_out <= R.centre <= cos_in. */
 typedef struct leaf_candidate {

@@ -190,29 +190,34 @@ IBL_TARGET_AVX2 static void sum_leaves(const leaf_batch *batch, const float R[3]
     const __m256 r0 = _mm256_set1_ps(R[0]), r1 = _mm256_set1_ps(R[1]), r2 = _mm256_set1_ps(R[2]);
     const __m256 q0 = _mm256_set1_ps(RR[0]), q1 = _mm256_set1_ps(RR[1]), q2 = _mm256_set1_ps(RR[2]);
     const __m256 q3 = _mm256_set1_ps(RR[3]), q4 = _mm256_set1_ps(RR[4]), q5 = _mm256_set1_ps(RR[5]);
-    int moments = batch->mode == LEAF_COARSE ? FIELD_LUM_MEAN : FIELD_MEAN;
-    int light = batch->mode == LEAF_COARSE
+    int moments = batch->mode == LEAF_COARSE || batch->mode == LEAF_DIFFERENCE ? FIELD_LUM_MEAN : FIELD_MEAN;
+    int light = batch->mode == LEAF_COARSE || batch->mode == LEAF_DIFFERENCE
                     ? (batch->without_bright ? FIELD_POWER_NOT_BRIGHT : FIELD_POWER)
                     : FIELD_RADIANCE;
-    int ggx = batch->piece->is_ggx;
+    int ggx = batch->piece->is_ggx, difference = batch->mode == LEAF_DIFFERENCE;
     __m256 ar = k.zero, ag = k.zero, ab = k.zero, aw = k.zero;
     for (int ci = 0; ci < batch->count; ci++) {
         const float *rec = candidate_record(batch, ci, R);
         if (!rec) continue;
-        const float *m = rec + moments * B;
-        __m256 dx = _mm256_sub_ps(r0, _mm256_loadu_ps(m));
-        __m256 dy = _mm256_sub_ps(r1, _mm256_loadu_ps(m + B));
-        __m256 dz = _mm256_sub_ps(r2, _mm256_loadu_ps(m + 2 * B));
-        __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
-        __m256 u = _mm256_fmadd_ps(k.half, d2, _mm256_loadu_ps(m + 3 * B));
-        const float *c = m + 4 * B;
-        __m256 q = _mm256_mul_ps(q0, _mm256_loadu_ps(c));
-        q = _mm256_fmadd_ps(q1, _mm256_loadu_ps(c + B), q);
-        q = _mm256_fmadd_ps(q2, _mm256_loadu_ps(c + 2 * B), q);
-        q = _mm256_fmadd_ps(q3, _mm256_loadu_ps(c + 3 * B), q);
-        q = _mm256_fmadd_ps(q4, _mm256_loadu_ps(c + 4 * B), q);
-        q = _mm256_fmadd_ps(q5, _mm256_loadu_ps(c + 5 * B), q);
-        __m256 w = vector_leaf(&k, ggx, u, q);
+        __m256 w = k.zero;
+        /* the difference form: the moment leaf, then minus the leaf at the geometric moments */
+        for (int pass = 0; pass <= difference; pass++) {
+            const float *m = rec + (pass ? FIELD_MEAN : moments) * B;
+            __m256 dx = _mm256_sub_ps(r0, _mm256_loadu_ps(m));
+            __m256 dy = _mm256_sub_ps(r1, _mm256_loadu_ps(m + B));
+            __m256 dz = _mm256_sub_ps(r2, _mm256_loadu_ps(m + 2 * B));
+            __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
+            __m256 u = _mm256_fmadd_ps(k.half, d2, _mm256_loadu_ps(m + 3 * B));
+            const float *c = m + 4 * B;
+            __m256 q = _mm256_mul_ps(q0, _mm256_loadu_ps(c));
+            q = _mm256_fmadd_ps(q1, _mm256_loadu_ps(c + B), q);
+            q = _mm256_fmadd_ps(q2, _mm256_loadu_ps(c + 2 * B), q);
+            q = _mm256_fmadd_ps(q3, _mm256_loadu_ps(c + 3 * B), q);
+            q = _mm256_fmadd_ps(q4, _mm256_loadu_ps(c + 4 * B), q);
+            q = _mm256_fmadd_ps(q5, _mm256_loadu_ps(c + 5 * B), q);
+            __m256 v = vector_leaf(&k, ggx, u, q);
+            w = pass ? _mm256_sub_ps(w, v) : v;
+        }
         if (batch->mode == LEAF_NORMALISER) {
             aw = _mm256_fmadd_ps(w, _mm256_loadu_ps(rec + FIELD_SOLID_ANGLE * B), aw);
             continue;

@@ -49,22 +49,28 @@ static float piece_leaf(const lobe_piece *pc, float u, float q)
 static void sum_leaves(const leaf_batch *batch, const float R[3], const float RR[6], double out[4])
 {
     const int B = BLOCK_TEXELS;
-    int moments = batch->mode == LEAF_COARSE ? FIELD_LUM_MEAN : FIELD_MEAN;
-    int light = batch->mode == LEAF_COARSE
+    int moments = batch->mode == LEAF_COARSE || batch->mode == LEAF_DIFFERENCE ? FIELD_LUM_MEAN : FIELD_MEAN;
+    int light = batch->mode == LEAF_COARSE || batch->mode == LEAF_DIFFERENCE
                     ? (batch->without_bright ? FIELD_POWER_NOT_BRIGHT : FIELD_POWER)
                     : FIELD_RADIANCE;
+    int difference = batch->mode == LEAF_DIFFERENCE;
     float acc[4] = {0, 0, 0, 0};
     for (int ci = 0; ci < batch->count; ci++) {
         const float *rec = candidate_record(batch, ci, R);
         if (!rec) continue;
-        const float *m = rec + moments * B, *e = m + 3 * B, *c = m + 4 * B;
         const float *om = rec + FIELD_SOLID_ANGLE * B, *L = rec + light * B;
         for (int t = 0; t < B; t++) {
-            float dx = R[0] - m[t], dy = R[1] - m[B + t], dz = R[2] - m[2 * B + t];
-            float u = 0.5f * (dx * dx + dy * dy + dz * dz) + e[t];
-            float q = RR[0] * c[t] + RR[1] * c[B + t] + RR[2] * c[2 * B + t] + RR[3] * c[3 * B + t] +
-                      RR[4] * c[4 * B + t] + RR[5] * c[5 * B + t];
-            float w = piece_leaf(batch->piece, u, q);
+            float w = 0;
+            /* the difference form: the moment leaf, then minus the leaf at the geometric moments */
+            for (int pass = 0; pass <= difference; pass++) {
+                const float *m = rec + (pass ? FIELD_MEAN : moments) * B, *e = m + 3 * B, *c = m + 4 * B;
+                float dx = R[0] - m[t], dy = R[1] - m[B + t], dz = R[2] - m[2 * B + t];
+                float u = 0.5f * (dx * dx + dy * dy + dz * dz) + e[t];
+                float q = RR[0] * c[t] + RR[1] * c[B + t] + RR[2] * c[2 * B + t] +
+                          RR[3] * c[3 * B + t] + RR[4] * c[4 * B + t] + RR[5] * c[5 * B + t];
+                float v = piece_leaf(batch->piece, u, q);
+                w = pass ? w - v : v;
+            }
             if (batch->mode == LEAF_NORMALISER) {
                 acc[3] += w * om[t];
                 continue;

@@ -196,11 +196,13 @@ static void sum_piece(const ibl_specular_plan *p, int mode, int g, const sum_gri
     int leaves = pc->grid == g && !c;
     int bright = pc->bright_apart && g == pc->bright_grid && mode != LEAF_NORMALISER &&
                  s->bright_block_count > 0;
-    int corrections = c && pc->grid == g && mode != LEAF_NORMALISER && c->correction_block_count > 0;
+    int corrections = c && g == (c->correction_difference ? pc->correction_grid : pc->grid) &&
+                      mode != LEAF_NORMALISER && c->correction_block_count > 0;
     if (!leaves && !bright && !corrections) return;
     leaf_batch batch = {mode == LEAF_NORMALISER ? LEAF_NORMALISER
                         : pc->source_level == 0 ? LEAF_LEVEL0 : LEAF_COARSE,
                         s, pc, list, 0, pc->bright_apart && !gr->at_output};
+    if (corrections && c->correction_difference) batch.mode = LEAF_DIFFERENCE;
     double rho = tp->radius, T = pc->angle_out + rho;
     reach_test reach = {tp->axis, T, cos(T), sin(T), pc->angle_in - rho, cos(pc->angle_in - rho),
                         sin(pc->angle_in - rho), pc->angle_out, pc->angle_in, cos(pc->angle_out),

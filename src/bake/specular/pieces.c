@@ -152,6 +152,30 @@ static void place_ring(const ibl_specular_plan *p, level_plan *lv, int output_ed
                                                  : grid_index(lv, bright_edge, 0);
 }
 
+/* Where the core is summed: on the output texels, or, when they are finer than the lobe needs,
+ * on a cube grid spaced by the lobe's half width, interpolated (the core of a wide lobe, whose
+ * result varies on the scale of its half width, not of the output's texels). The centroid
+ * corrections of its weights go to a coarser grid still when one is fine enough for them
+ * (gathering.c, difference form). */
+static void place_core(const ibl_specular_plan *p, level_plan *lv, int output_edge, double acc,
+                       lobe_piece *pc)
+{
+    double half = lv->lobe.half_angle;
+    int core_edge = MIN_GRID_EDGE, correction_edge = MIN_GRID_EDGE;
+    while (texel_angle(core_edge) > CORE_GRID_SPACING * acc * half) core_edge *= 2;
+    while (texel_angle(correction_edge) > CORRECTION_GRID_SPACING * acc * half) correction_edge *= 2;
+    if (!centred_directions(p)) {
+        pc->grid = grid_index(lv, output_edge, 1);
+        return;
+    }
+    int at_output = core_edge >= output_edge, edge = at_output ? output_edge : core_edge;
+    pc->grid = grid_index(lv, edge, at_output);
+    if (correction_edge < edge) {
+        pc->has_correction_grid = 1;
+        pc->correction_grid = grid_index(lv, correction_edge, 0);
+    }
+}
+
 /* Every grid's leaf-sum tasks (6 faces of tiles) and its sums. */
 static ibl_status allocate_grids(ibl_specular_plan *p, level_plan *lv)
 {
@@ -204,7 +228,7 @@ ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level)
         if (cull > 0 && j > 0 && ibl__lobe_f(lobe, 1.0 - pc->u_lo) < cull) break;
         if (j == 0) {
             pc->source_level = core_level;
-            pc->grid = grid_index(lv, n, 1);
+            place_core(p, lv, n, acc, pc);
         } else {
             place_ring(p, lv, n, acc, pc);
         }

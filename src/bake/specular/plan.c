@@ -239,10 +239,13 @@ void ibl__specular_plan_stats(const ibl_specular_plan *p, ibl__specular_stats *o
             const lobe_piece *pc = &p->levels[l].pieces[k];
             out->pieces++;
             out->split += pc->bright_apart;
+            out->coarse_cores += k == 0 && !p->levels[l].grids[pc->grid].at_output;
             if (!pc->precomputed) continue;
             out->precomputed++;
             out->precomputed_coarse += pc->precomputed->source_level > 0;
             out->correction_blocks += pc->precomputed->correction_block_count;
+            out->difference_corrections +=
+                pc->precomputed->correction_difference && pc->precomputed->correction_block_count > 0;
         }
     for (int l = 0; l < p->pyramid_levels; l++) out->bright_blocks += p->pyramid[l].bright_block_count;
 }

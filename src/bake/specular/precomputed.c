@@ -222,6 +222,7 @@ static precomputed_piece *precomputed_new(ibl_specular_plan *p, const lobe_piece
     c->source_level = pc->source_level;
     c->at_output = gr->at_output;
     c->without_bright = pc->bright_apart;
+    c->correction_difference = pc->has_correction_grid && pc->source_level > 0 && !pc->bright_apart;
     c->source_edge = S, c->border = W, c->origin = W + 8, c->padded_edge = S + 2 * W + 16;
     c->grid_edge = gr->edge, c->base_edge = (gr->edge + 1) / 2;
     size_t plane = (size_t)c->padded_edge * c->padded_edge, bases = (size_t)c->base_edge * c->base_edge;

@@ -8,7 +8,8 @@
  * so one set of rows serves all six faces. A base below the quadrant's diagonal reads its
  * mirror's weights on the transposed source with its flips swapped. A level-0 piece reads the
  * source texels; a coarse one reads the level's texels as uniform light, with the texels that
- * get a centroid correction left out (gathering.c sums them as leaves). */
+ * get a centroid correction left out (gathering.c sums them as leaves), unless the corrections
+ * are in difference form (moment leaf minus uniform leaf, on a coarser grid). */
 #include "bake/specular/fast_internal.h"
 
 typedef struct product_job {
@@ -36,7 +37,7 @@ static void padded_row_task(void *arg, int row)
     const float *uniform = c->without_bright ? s->uniform_not_bright : s->uniform;
     for (int g = 0; g < 6; g++)
         face[g] = c->source_level == 0 ? ibl_cubemap_face(j->src, 0, g) : uniform + (size_t)g * S * S * 4;
-    int corrected = c->source_level > 0 && c->correction_block_count > 0;
+    int corrected = c->source_level > 0 && c->correction_block_count > 0 && !c->correction_difference;
     /* inside the face itself the padded source is the face: copied by rows */
     int y = row - c->origin, inside = y >= 0 && y < S;
     if (inside) {
