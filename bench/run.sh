@@ -2,6 +2,8 @@
 # make bench: every benchmark program, then whole-command timings with hyperfine. Results go
 # to stdout; quote figures in docs/PERFORMANCE.md together with the command that made them.
 # BENCH_FULL=1 adds the prefilter's accuracy table against the reference (tens of minutes).
+# BENCH_LARGE=1 adds the prefilter at film sizes (bench/large.sh: 512 and 1024 chains from
+# 2048x1024 and 4096x2048 inputs it makes; minutes).
 set -eu
 BUILD=${1:-build}
 DATA=${IBL_TESTDATA:-tests/data}
@@ -49,3 +51,6 @@ hyperfine -w 1 -r 3 -N "$BUILD/ibl prefilter -q $OUT/big.exr -o $OUT/p512.ktx2 -
 hyperfine -w 1 -r 3 -N "$BUILD/ibl capture -q examples/rooms/scene.gltf --probes examples/rooms/probes.json -o $OUT/caps --size 32 --samples 64"
 hyperfine -w 1 -r 3 -N "$BUILD/ibl bake -q --probes examples/rooms/probes.json --captures $OUT/caps -o $OUT/probe_bake"
 run "$B/bench_probes" 20
+if [ "${BENCH_LARGE:-0}" = 1 ]; then
+  sh bench/large.sh "$BUILD"
+fi
