@@ -46,6 +46,12 @@ typedef struct dyn_symmetries {
 } dyn_symmetries;
 
 void ibl__dyn_symmetries(dyn_symmetries *out);
+/* A face's frame: its centre direction m and the steps s, t from the centre to the middle
+ * of its +x and +y edges (point = m + u s + v t for face coordinates u, v in [-1, 1]). */
+typedef struct dyn_face_frame {
+    double m[3], s[3], t[3];
+} dyn_face_frame;
+void ibl__dyn_face_frame(int face, dyn_face_frame *out);
 /* Texel (x, y) of face `face` (edge M) carried by a face map. */
 void ibl__dyn_map_texel(const dyn_face_map *m, int M, int x, int y, int *mx, int *my);
 /* The representative of output texel (face, x, y) of edge n: texel (a, b) of face 0 with

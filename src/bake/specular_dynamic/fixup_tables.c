@@ -14,27 +14,14 @@
 #include <math.h>
 #include <string.h>
 
-typedef struct frame {
-    double m[3], s[3], t[3];
-} frame;
-
-static void face_frame(int face, frame *f)
-{
-    double c[3], s1[3], t1[3];
-    ibl_cube_direction_d(face, 0.5, 0.5, c);
-    ibl_cube_direction_d(face, 1.0, 0.5, s1);
-    ibl_cube_direction_d(face, 0.5, 1.0, t1);
-    for (int i = 0; i < 3; i++) f->m[i] = c[i], f->s[i] = s1[i] - c[i], f->t[i] = t1[i] - c[i];
-}
-
 /* The texel index (face, y, x) of the texel across edge `edge` (0: x = 0, 1: x = n-1,
  * 2: y = 0, 3: y = n-1) at `depth` texels from the seam, beside texel (x, y) of `face`: the
  * point sign A + along B + (1 - (2 depth + 1) / n) M of the face's frame projects onto the
  * neighbour's texel centre. */
 static uint32_t partner(int face, int n, int x, int y, int edge, int depth)
 {
-    frame f;
-    face_frame(face, &f);
+    dyn_face_frame f;
+    ibl__dyn_face_frame(face, &f);
     double sign = (edge & 1) ? 1.0 : -1.0, major = 1.0 - (2.0 * depth + 1.0) / n;
     double sc = edge < 2 ? sign : (2.0 * x + 1.0) / n - 1.0;
     double tc = edge < 2 ? (2.0 * y + 1.0) / n - 1.0 : sign;

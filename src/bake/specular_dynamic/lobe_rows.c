@@ -38,21 +38,8 @@ static double angle_where(const ibl__lobe *lobe, double value)
     return hi;
 }
 
-typedef struct face_frame {
-    double m[3], s[3], t[3];
-} face_frame;
-
-static void frame_of(int face, face_frame *f)
-{
-    double c[3], s1[3], t1[3];
-    ibl_cube_direction_d(face, 0.5, 0.5, c);
-    ibl_cube_direction_d(face, 1.0, 0.5, s1);
-    ibl_cube_direction_d(face, 0.5, 1.0, t1);
-    for (int i = 0; i < 3; i++) f->m[i] = c[i], f->s[i] = s1[i] - c[i], f->t[i] = t1[i] - c[i];
-}
-
 /* f(R.l) dOmega at face-plane point (sc, tc), per unit of face-plane area */
-static double lobe_density(const ibl__lobe *lobe, const double R[3], const face_frame *fr,
+static double lobe_density(const ibl__lobe *lobe, const double R[3], const dyn_face_frame *fr,
                            double sc, double tc)
 {
     double d[3];
@@ -70,7 +57,7 @@ static const double gl4_weight[4] = {0.34785484513745386, 0.65214515486254614, 0
                                      0.34785484513745386};
 
 /* The lobe integrated over texel (x, y) of a face of edge M. */
-static double texel_weight(const ibl__lobe *lobe, const double R[3], const face_frame *fr, int M,
+static double texel_weight(const ibl__lobe *lobe, const double R[3], const dyn_face_frame *fr, int M,
                            int x, int y)
 {
     double h = 2.0 / M, u0 = -1.0 + x * h, v0 = -1.0 + y * h;
@@ -115,7 +102,7 @@ typedef struct rows_job {
     const ibl__lobe *lobe;
     int n, M;
     double reach, reach_cos, floor_value;
-    face_frame frames[6];
+    dyn_face_frame frames[6];
     double *centres; /* 6 M M x 3: texel centre directions of the mip (unit) */
     double *omega;   /* M M: texel solid angles */
     double *scratch; /* per task: M doubles of one face row's weights */
@@ -219,7 +206,7 @@ static ibl_status mip_geometry(ibl_context *ctx, rows_job *job)
     job->omega = ibl_alloc(ctx, (size_t)M * M * sizeof(double));
     if (!job->centres || !job->omega) return ibl_context_status(ctx);
     for (int f = 0; f < 6; f++) {
-        frame_of(f, &job->frames[f]);
+        ibl__dyn_face_frame(f, &job->frames[f]);
         for (int y = 0; y < M; y++)
             for (int x = 0; x < M; x++) {
                 double *c = job->centres + (((size_t)f * M + y) * M + x) * 3;

@@ -74,6 +74,15 @@ void ibl__dyn_symmetries(dyn_symmetries *out)
         }
 }
 
+void ibl__dyn_face_frame(int face, dyn_face_frame *f)
+{
+    double c[3], s1[3], t1[3];
+    ibl_cube_direction_d(face, 0.5, 0.5, c);
+    ibl_cube_direction_d(face, 1.0, 0.5, s1);
+    ibl_cube_direction_d(face, 0.5, 1.0, t1);
+    for (int i = 0; i < 3; i++) f->m[i] = c[i], f->s[i] = s1[i] - c[i], f->t[i] = t1[i] - c[i];
+}
+
 void ibl__dyn_map_texel(const dyn_face_map *m, int M, int x, int y, int *mx, int *my)
 {
     int fx = m->flip_x ? M - 1 - x : x, fy = m->flip_y ? M - 1 - y : y;
