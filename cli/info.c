@@ -167,7 +167,7 @@ int cli_cmd_info(int argc, char **argv)
     if (a.positional_count != 1) cli_usage_error(&a, "needs exactly one file");
     const char *path = a.positional[0];
     ibl_context *ctx = cli_context(&a.common);
-    ibl_read_desc rd = {1, 0}; /* report infinities instead of refusing */
+    ibl_read_desc rd = {.clamp_infinite = 1}; /* report infinities instead of refusing */
     ibl_texture tex;
     ibl_file_info info;
     ibl_status st = ibl_read_texture(ctx, path, &rd, &tex, &info);

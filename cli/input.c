@@ -32,7 +32,7 @@ int cli_input_option(cli_args *a, const char *arg, cli_input_options *o)
 int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
                      const cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out)
 {
-    ibl_read_desc rd = {c->clamp, 0};
+    ibl_read_desc rd = {.clamp_infinite = c->clamp};
     ibl_texture tex;
     ibl_file_info info;
     memset(out, 0, sizeof *out);
@@ -138,7 +138,7 @@ int cli_read_cubemap_faces(ibl_context *ctx, const cli_common *c, const char *co
                            const cli_input_options *o, ibl_cubemap *out)
 {
     static const char *const names[6] = {"+X", "-X", "+Y", "-Y", "+Z", "-Z"};
-    ibl_read_desc rd = {c->clamp, 0};
+    ibl_read_desc rd = {.clamp_infinite = c->clamp};
     ibl_image faces[6];
     memset(faces, 0, sizeof faces);
     memset(out, 0, sizeof *out);

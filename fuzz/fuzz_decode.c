@@ -18,7 +18,7 @@
 __attribute__((unused)) static ibl_status ibl_decode_any(ibl_context *ctx, const uint8_t *bytes, size_t size,
                                  const char *name, ibl_texture *out, ibl_file_info *info)
 {
-    ibl_read_desc rd = {1, 0};
+    ibl_read_desc rd = {.clamp_infinite = 1};
     return ibl_decode_texture(ctx, bytes, size, name, &rd, out, info);
 }
 

@@ -731,6 +731,8 @@ void ibl_atlas_uv(ibl_atlas_layout l, int level, vec3 dir, out float u, out floa
 {
     float s, t;
     int f = ibl_cube_face_st(dir, s, t);
+    s = clamp(s, 0.0, 1.0); /* rounding never leaves the face's cell (the gutter is there) */
+    t = clamp(t, 0.0, 1.0);
     int n = ibli_ivec(l.face_size, level);
     int c = n + 2 * l.gutter;
     int ox = ibli_ivec(l.x, level) + (f - 3 * (f / 3)) * c, oy = ibli_ivec(l.y, level) + (f / 3) * c;

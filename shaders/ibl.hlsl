@@ -726,6 +726,8 @@ void ibl_atlas_uv(ibl_atlas_layout l, int level, float3 dir, out float u, out fl
 {
     float s, t;
     int f = ibl_cube_face_st(dir, s, t);
+    s = saturate(s); /* rounding never leaves the face's cell (the gutter is there) */
+    t = saturate(t);
     int n = ibli_ivec(l.face_size, level);
     int c = n + 2 * l.gutter;
     int ox = ibli_ivec(l.x, level) + (f - 3 * (f / 3)) * c, oy = ibli_ivec(l.y, level) + (f / 3) * c;

@@ -684,7 +684,7 @@ static void non_finite_pixels(void **state)
     assert_null(back.pixels);
     assert_non_null(strstr(ibl_context_message(ctx), "bad.pfm"));
     assert_int_equal(fi.pixels.inf_count, 2);
-    ibl_read_desc rd = {1, 1000.0f};
+    ibl_read_desc rd = {.clamp_infinite = 1, .clamp_value = 1000.0f};
     assert_int_equal(ibl_read_image(ctx, path, &rd, &back, &fi), IBL_OK);
     assert_int_equal(fi.pixels.nan_count, 2);
     assert_int_equal(fi.pixels.negative_count, 2);
@@ -755,7 +755,7 @@ static void large_inputs_identical_at_any_thread_count(void **state)
         char want[80];
         snprintf(want, sizeof want, "%llu texels are infinite", (unsigned long long)inf);
         assert_non_null(strstr(ibl_context_message(ctx), want));
-        ibl_read_desc rd = {1, 0.0f};
+        ibl_read_desc rd = {.clamp_infinite = 1};
         assert_int_equal(ibl_read_image(ctx, path, &rd, &back, &fi), IBL_OK);
         assert_int_equal(fi.pixels.nan_count, nan);
         assert_int_equal(fi.pixels.inf_count, inf);

@@ -73,6 +73,12 @@ typedef struct ibl_bake_desc {
     int preview_width;          /* environment.png (equirect) width; 0: 1024; -1: none      */
     int keep_environment;       /* keep a copy of env in the bake (the probe's mirror and
                                    background, e.g. for `ibl render`); never written        */
+    int atlas;                  /* 1: also the chain as Daqi 2016's 2D mip atlas
+                                   (ibl_atlas_pack, 1-texel gutter): specular_atlas.ktx2 in
+                                   `format` (2D, key "ibl.atlas" = the table) and
+                                   specular_atlas.png (8-bit RGBM, range rgbm_range); the
+                                   table in the manifest's "atlas" (docs/ATLAS.md)          */
+    float rgbm_range;           /* RGBM's range (the atlas PNG, an rgbm format); 0: 8      */
     ibl_bake_source source;
 } ibl_bake_desc;
 
@@ -111,6 +117,9 @@ typedef struct ibl_bake_data {
     ibl_cubemap environment; /* with keep_environment: the unfiltered working cube, the
                                 probe's mirror and background; never written whole       */
     ibl_image preview;       /* linear equirect preview (environment.png), if asked        */
+    ibl_image atlas;         /* with desc.atlas: the chain as a 2D atlas (linear float)     */
+    ibl_atlas_layout atlas_layout; /* its coordinate table                                  */
+    float rgbm_range;        /* the range of the RGBM files (resolved, never 0)             */
     ibl_bake_timing timing_ms;
     uint64_t clamped_texels; /* cube texels past the storage format's largest value (e.g. a
                                 sun above 65504 in rgba16f), stored as that value          */
@@ -181,6 +190,12 @@ ibl_status ibl_bake_manifest(ibl_context *ctx, const ibl_bake_data *bake, char *
 ibl_status ibl_chain_manifest(ibl_context *ctx, const ibl_specular_info *info,
                               ibl_edge_fixup edge_fixup, ibl_format format,
                               const char *const *files, int file_count, char **json);
+/* The same for a chain written as one 2D mip atlas (`ibl prefilter --out-layout atlas`),
+ * with "atlas": the coordinate table (ibl_atlas_layout_to_json's keys) and its "files". */
+ibl_status ibl_atlas_chain_manifest(ibl_context *ctx, const ibl_specular_info *info,
+                                    ibl_edge_fixup edge_fixup, ibl_format format,
+                                    const ibl_atlas_layout *layout, const char *const *files,
+                                    int file_count, char **json);
 
 #ifdef __cplusplus
 }

@@ -149,6 +149,7 @@ typedef enum ibl_format {
     IBL_FORMAT_ASTC_8x5,
     IBL_FORMAT_ASTC_8x6,
     IBL_FORMAT_ASTC_8x8,
+    IBL_FORMAT_RGBA8_UNORM,  /* 8-bit linear data (PNG: packed material channels)           */
     IBL_FORMAT_COUNT
 } ibl_format;
 

@@ -47,6 +47,9 @@ int ibl_file_type_writes_format(ibl_file_type type, ibl_format format);
 typedef struct ibl_read_desc {
     int clamp_infinite; /* accept +-Inf and clamp them (the CLI's --clamp)              */
     float clamp_value;  /* value for +Inf when clamping; 0: 65504 (largest half)        */
+    int as_data;        /* PNG: samples as stored (code / 255 or / 65535) whatever the
+                           file's sRGB or gAMA chunk: material maps are data, not colours
+                           (`ibl pack`); RGBM files are not decoded                      */
 } ibl_read_desc;
 
 typedef struct ibl_file_info {

@@ -102,6 +102,8 @@ typedef enum ibl_sh_kind {
  * hand from in-memory parts and call ibl_probe_validate once, or get it from a bake with
  * ibl_bake_probe (bake.h), which loads folders. The SH basis and axes are sh.h's
  * (IBL_SH_BASIS_NAME, world x y z, +Y up). */
+struct ibl_atlas_layout;
+
 typedef struct ibl_probe {
     ibl_cubemap specular; /* prefiltered chain, level 0 the sharpest                      */
     ibl_level_mapping mapping;
@@ -115,6 +117,13 @@ typedef struct ibl_probe {
     ibl_splitsum_view splitsum;
     ibl_ambient_brdf_view ambient_brdf;
     float intensity; /* scales every radiance read from the probe; 0: 1             */
+    /* optional: the same chain as Daqi 2016's 2D mip atlas (ibl_atlas_pack; a bake made with
+     * atlas = 1 offers it). With use_atlas, ibl_probe_sample_specular reads it as
+     * shaders/ibl_atlas.glsl's ibl_atlas_probe_specular does (no mirror: an 8-slot device
+     * holds no cube for it; lod < 0 reads level 0) */
+    const ibl_image *atlas;
+    const struct ibl_atlas_layout *atlas_layout;
+    int use_atlas;
 } ibl_probe;
 
 /* Checks the probe's parts (sizes, a monotonic mapping, tables) and fills a missing
@@ -407,7 +416,16 @@ ibl_status ibl_atlas_pack(ibl_context *ctx, const ibl_cubemap *chain, const ibl_
 /* Reads the chain back (levels > 2 box-averaged down to their own size) into a new cube. */
 ibl_status ibl_atlas_unpack(ibl_context *ctx, const ibl_image *atlas,
                             const ibl_atlas_layout *layout, int size, ibl_cubemap *out);
-/* Atlas UV (u right, v down, in [0, 1]) of a direction on a level: what a shader computes. */
+/* The coordinate table as JSON text (NUL-terminated, ibl_free): {"width", "height",
+ * "levels", "gutter", "face_order", "rects": [[x, y, face_size] per level]}, what a bake's
+ * manifest.json ("atlas") and the atlas KTX2's key "ibl.atlas" hold (docs/ATLAS.md). */
+ibl_status ibl_atlas_layout_to_json(ibl_context *ctx, const ibl_atlas_layout *layout, char **text);
+/* Reads one back, refusing a table that is not ibl_atlas_plan's arrangement for its level-0
+ * face size, level count and gutter; messages name `name` and the field. */
+ibl_status ibl_atlas_layout_from_json(ibl_context *ctx, const char *text, const char *name,
+                                      ibl_atlas_layout *out);
+/* Atlas UV (u right, v down, in [0, 1]) of a direction on a level: what a shader computes.
+ * The face coordinates are clamped to the face, so rounding never reads another cell. */
 void ibl_atlas_uv(const ibl_atlas_layout *layout, int level, ibl_vec3 dir, float *u, float *v);
 /* Emulates the shader: bilinear in the atlas at the two levels around lod, then linear. */
 void ibl_atlas_sample(const ibl_image *atlas, const ibl_atlas_layout *layout, float lod,

@@ -24,6 +24,8 @@ static const ibl__bake_file_info file_table[IBL__BAKE_FILE_COUNT] = {
     {"brdf_extra.ktx2", "brdf_multiscatter_sheen", "2d: x = n.v, y = roughness"},
     {"ambient_brdf.ktx2", "ambient_brdf", "3d: x = n.v, y = shininess (log), z = F0"},
     {"environment.png", "preview", "equirect, filmic tone map"},
+    {"specular_atlas.ktx2", "specular_atlas", "2d: the chain's levels as a mip atlas (see atlas)"},
+    {"specular_atlas.png", "specular_atlas", "2d: the same atlas, 8-bit RGBM (see atlas)"},
     {"manifest.json", "manifest", "this file"},
 };
 
@@ -51,6 +53,8 @@ int ibl__bake_has_file(const ibl_bake_data *b, ibl__bake_file file)
     case IBL__BAKE_BRDF_EXTRA: return b->brdf_extra.pixels != NULL;
     case IBL__BAKE_AMBIENT_BRDF: return b->ambient_brdf.data != NULL;
     case IBL__BAKE_PREVIEW: return b->preview.pixels != NULL;
+    case IBL__BAKE_ATLAS_KTX2: return b->atlas.pixels != NULL;
+    case IBL__BAKE_ATLAS_PNG: return b->atlas.pixels != NULL;
     case IBL__BAKE_MANIFEST: return 1;
     case IBL__BAKE_FILE_COUNT: break;
     }
@@ -95,7 +99,9 @@ static ibl_bake_desc resolve_desc(const ibl_bake_desc *in)
 static ibl_status stage_specular(ibl_context *ctx, const ibl_cubemap *env, const ibl_bake_desc *d,
                                  ibl_bake_data *b)
 {
-    return ibl_specular_prefilter(ctx, env, &d->specular, &b->specular, &b->specular_info);
+    ibl_status st = ibl_specular_prefilter(ctx, env, &d->specular, &b->specular, &b->specular_info);
+    if (st == IBL_OK && d->atlas) st = ibl_atlas_pack(ctx, &b->specular, NULL, &b->atlas, &b->atlas_layout);
+    return st;
 }
 
 static ibl_status stage_diffuse(ibl_context *ctx, const ibl_cubemap *env, const ibl_bake_desc *d,
@@ -202,6 +208,7 @@ static ibl_status record_parameters(ibl_context *ctx, const ibl_cubemap *env,
     b->sh_window_width = d->sh_window_width;
     b->format = d->format;
     b->containers = d->containers;
+    b->rgbm_range = d->rgbm_range > 0.0f ? d->rgbm_range : IBL_RGBM_DEFAULT_RANGE;
     b->source_layout = d->source.layout;
     b->source_orientation = d->source.orientation;
     if (d->source.sky) {
@@ -272,6 +279,7 @@ void ibl_bake_free(ibl_context *ctx, ibl_bake_data *b)
     ibl_image_free(ctx, &b->splitsum);
     ibl_image_free(ctx, &b->brdf_extra);
     ibl_image_free(ctx, &b->preview);
+    ibl_image_free(ctx, &b->atlas);
     ibl_texture_free(ctx, &b->ambient_brdf);
     ibl_free(ctx, b->source_name);
     ibl_free(ctx, b->preset);
@@ -316,5 +324,9 @@ ibl_status ibl_bake_probe(ibl_context *ctx, const ibl_bake_data *b, ibl_probe *p
     if (b->ambient_brdf.data)
         p->ambient_brdf = (ibl_ambient_brdf_view){b->ambient_brdf.data, 4, b->ambient_n_dot_v,
                                                   b->ambient_shininess, b->ambient_f0};
+    if (b->atlas.pixels) { /* offered, not used: the caller sets probe.use_atlas */
+        p->atlas = &b->atlas;
+        p->atlas_layout = &b->atlas_layout;
+    }
     return ibl_probe_validate(ctx, p);
 }

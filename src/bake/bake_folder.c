@@ -288,10 +288,10 @@ ibl_status ibl__bake_write_staged(ibl_context *ctx, const char *dir, const char 
 }
 
 static ibl_status stage_texture(ibl_context *ctx, const char *dir, ibl__bake_file file,
-                                const ibl_texture *tex, ibl_format format)
+                                const ibl_texture *tex, ibl_format format, float rgbm_range)
 {
     const char *name = ibl__bake_file_info_of(file)->name;
-    ibl_write_desc wd = {.format = format};
+    ibl_write_desc wd = {.format = format, .rgbm_range = rgbm_range};
     void *bytes = NULL;
     size_t size = 0;
     ibl_status st = ibl_encode_texture(ctx, ibl_file_type_from_path(name), tex, &wd, &bytes, &size);
@@ -310,7 +310,7 @@ static ibl_status stage_cube(ibl_context *ctx, const char *dir, const ibl_bake_d
                                                         "irradiance / pi (multiply by albedo)");
     for (int i = 0; i < 2 && st == IBL_OK; i++)
         if (ibl__bake_has_file(b, (ibl__bake_file)(ktx2 + i)))
-            st = stage_texture(ctx, dir, (ibl__bake_file)(ktx2 + i), &tex, b->format);
+            st = stage_texture(ctx, dir, (ibl__bake_file)(ktx2 + i), &tex, b->format, b->rgbm_range);
     ibl_texture_free(ctx, &tex); /* the metadata; the texels stay with the bake */
     return st;
 }
@@ -321,8 +321,32 @@ static ibl_status stage_table(ibl_context *ctx, const char *dir, ibl__bake_file 
     ibl_texture tex = {.kind = IBL_TEXTURE_2D, .width = image->width, .height = image->height,
                        .depth = 1, .levels = 1, .data = image->pixels};
     ibl_status st = ibl_texture_set_metadata(ctx, &tex, "ibl.brdf", description);
-    if (st == IBL_OK) st = stage_texture(ctx, dir, file, &tex, format);
+    if (st == IBL_OK) st = stage_texture(ctx, dir, file, &tex, format, 0.0f);
     ibl_texture_free(ctx, &tex);
+    return st;
+}
+
+/* The atlas (Daqi 2016): a 2D KTX2 in the bake's format whose key "ibl.atlas" holds the
+ * coordinate table and whose ibl.specular.* keys describe the levels, and its 8-bit RGBM PNG
+ * twin for devices that take neither half floats nor KTX2. */
+static ibl_status stage_atlas(ibl_context *ctx, const char *dir, const ibl_bake_data *b)
+{
+    ibl_texture tex = {.kind = IBL_TEXTURE_2D, .width = b->atlas.width, .height = b->atlas.height,
+                       .depth = 1, .levels = 1, .data = b->atlas.pixels};
+    char *table = NULL;
+    ibl_status st = ibl_atlas_layout_to_json(ctx, &b->atlas_layout, &table);
+    if (st == IBL_OK) st = ibl_texture_set_metadata(ctx, &tex, "ibl.atlas", table);
+    if (st == IBL_OK) st = ibl_specular_set_metadata(ctx, &b->specular_info, &tex);
+    if (st == IBL_OK) st = stage_texture(ctx, dir, IBL__BAKE_ATLAS_KTX2, &tex, b->format, b->rgbm_range);
+    ibl_texture_free(ctx, &tex);
+    ibl_free(ctx, table);
+    ibl_write_desc wd = {.format = IBL_FORMAT_RGBM, .rgbm_range = b->rgbm_range};
+    void *bytes = NULL;
+    size_t size = 0;
+    const char *png = ibl__bake_file_info_of(IBL__BAKE_ATLAS_PNG)->name;
+    if (st == IBL_OK) st = ibl_encode_image(ctx, IBL_FILE_PNG, &b->atlas, &wd, &bytes, &size);
+    if (st == IBL_OK) st = ibl__bake_write_staged(ctx, dir, png, bytes, size);
+    ibl_free(ctx, bytes);
     return st;
 }
 
@@ -366,7 +390,8 @@ static ibl_status stage_all(ibl_context *ctx, const char *dir, const ibl_bake_da
                          "R = E (GGX directional albedo), G = E_avg, B = Charlie sheen albedo, "
                          "A = its average; x = n.v, y = roughness");
     if (st == IBL_OK && b->ambient_brdf.data)
-        st = stage_texture(ctx, dir, IBL__BAKE_AMBIENT_BRDF, &b->ambient_brdf, IBL_FORMAT_RG16F);
+        st = stage_texture(ctx, dir, IBL__BAKE_AMBIENT_BRDF, &b->ambient_brdf, IBL_FORMAT_RG16F, 0.0f);
+    if (st == IBL_OK && b->atlas.pixels) st = stage_atlas(ctx, dir, b);
     if (st == IBL_OK && b->preview.pixels) st = stage_preview(ctx, dir, b);
     if (st == IBL_OK && extra) st = extra->stage(ctx, dir, extra->user);
     if (st == IBL_OK) {
@@ -592,6 +617,35 @@ static ibl_status load_tables(ibl_context *ctx, const char *dir, const ibl__bake
     return st;
 }
 
+/* The atlas KTX2: a 2D texture of the manifest's size whose own table (key "ibl.atlas")
+ * is the manifest's. */
+static ibl_status load_atlas(ibl_context *ctx, const char *dir, const char *name,
+                             const ibl_read_desc *rd, ibl_bake_data *b)
+{
+    char *path = join(ctx, dir, name);
+    if (!path) return ibl__fail(ctx, IBL_ERR_OUT_OF_MEMORY, "%s: out of memory", dir);
+    ibl_texture t;
+    ibl_status st = read_table(ctx, path, rd, IBL_TEXTURE_2D, &t);
+    if (st == IBL_OK) {
+        b->atlas = (ibl_image){t.width, t.height, t.data};
+        t.owns_data = 0;
+        const ibl_atlas_layout *want = &b->atlas_layout;
+        const char *text = ibl_texture_get_metadata(&t, "ibl.atlas");
+        ibl_atlas_layout own;
+        if (t.width != want->width || t.height != want->height)
+            st = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: is %dx%d; the manifest's atlas is %dx%d", path,
+                           t.width, t.height, want->width, want->height);
+        else if (!text)
+            st = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: has no ibl.atlas table", path);
+        else if ((st = ibl_atlas_layout_from_json(ctx, text, path, &own)) == IBL_OK &&
+                 memcmp(&own, want, sizeof own) != 0)
+            st = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: its ibl.atlas table differs from the manifest's", path);
+        ibl_texture_free(ctx, &t);
+    }
+    ibl_free(ctx, path);
+    return st;
+}
+
 /* "path" as given: a bake folder or its manifest.json. */
 static ibl_status locate_manifest(ibl_context *ctx, const char *path, char **dir, char **manifest)
 {
@@ -640,6 +694,7 @@ ibl_status ibl_bake_load(ibl_context *ctx, const char *path, const ibl_read_desc
         ibl_free(ctx, p);
     }
     if (st == IBL_OK) st = load_tables(ctx, dir, &files, rd, out);
+    if (st == IBL_OK && files.atlas) st = load_atlas(ctx, dir, files.atlas, rd, out);
     ibl__bake_manifest_release(root);
     ibl_free(ctx, dir);
     ibl_free(ctx, manifest);

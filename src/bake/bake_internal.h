@@ -16,6 +16,8 @@ typedef enum ibl__bake_file {
     IBL__BAKE_BRDF_EXTRA,
     IBL__BAKE_AMBIENT_BRDF,
     IBL__BAKE_PREVIEW,
+    IBL__BAKE_ATLAS_KTX2,
+    IBL__BAKE_ATLAS_PNG,
     IBL__BAKE_MANIFEST,
     IBL__BAKE_FILE_COUNT
 } ibl__bake_file;
@@ -39,6 +41,7 @@ typedef struct ibl__bake_manifest_files {
     const char *irradiance[2];
     const char *splitsum;
     const char *ambient_brdf;
+    const char *atlas;         /* the atlas KTX2 (the PNG is its 8-bit twin)            */
 } ibl__bake_manifest_files;
 
 /* Parses manifest bytes into *bake (every number; no textures) and *files (pointers into

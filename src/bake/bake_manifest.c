@@ -6,6 +6,7 @@
 #include "core/context_internal.h"
 #include "core/defaults.h"
 #include "io/json.h"
+#include "shade/atlas_table.h"
 
 #include <math.h>
 #include <string.h>
@@ -236,6 +237,15 @@ ibl_status ibl_bake_manifest(ibl_context *ctx, const ibl_bake_data *b, char **js
         ibl__json_set(root, "sh", sh);
     }
     ibl__json_set(root, "brdf", brdf_json(b));
+    if (b->atlas.pixels) {
+        /* Daqi 2016's 2D mip atlas: the coordinate table beside its files (docs/ATLAS.md) */
+        json_t *at = ibl__atlas_layout_json(&b->atlas_layout);
+        ibl__json_set(at, "files", file_list(b, IBL__BAKE_ATLAS_KTX2, 2));
+        ibl__json_set(at, "format", ibl__json_string(ibl_format_name(b->format)));
+        ibl__json_set(at, "png_encoding", ibl__json_string("rgbm"));
+        ibl__json_set(at, "rgbm_range", ibl__json_float(b->rgbm_range));
+        ibl__json_set(root, "atlas", at);
+    }
     if (b->preview.pixels) {
         json_t *pv = json_object();
         ibl__json_set(pv, "file", ibl__json_string(ibl__bake_file_info_of(IBL__BAKE_PREVIEW)->name));
@@ -246,9 +256,10 @@ ibl_status ibl_bake_manifest(ibl_context *ctx, const ibl_bake_data *b, char **js
     return ibl__json_text(ctx, root, "manifest.json", json);
 }
 
-ibl_status ibl_chain_manifest(ibl_context *ctx, const ibl_specular_info *info,
-                              ibl_edge_fixup edge_fixup, ibl_format format,
-                              const char *const *files, int file_count, char **json)
+static ibl_status chain_manifest(ibl_context *ctx, const ibl_specular_info *info,
+                                 ibl_edge_fixup edge_fixup, ibl_format format,
+                                 const ibl_atlas_layout *layout, const char *const *files,
+                                 int file_count, char **json)
 {
     if (!json) return IBL_ERR_INVALID_ARGUMENT;
     *json = NULL;
@@ -261,8 +272,29 @@ ibl_status ibl_chain_manifest(ibl_context *ctx, const ibl_specular_info *info,
     ibl__json_set(root, "version", ibl__json_number(IBL_BAKE_MANIFEST_VERSION));
     ibl__json_set(root, "generator", ibl__json_string("ibl " IBL_VERSION_STRING));
     ibl__json_set(root, "conventions", conventions_json());
+    if (layout) {
+        json_t *at = ibl__atlas_layout_json(layout);
+        ibl__json_set(at, "files", json_deep_copy(list));
+        ibl__json_set(root, "atlas", at);
+    }
     ibl__json_set(root, "specular", specular_json(info, edge_fixup, format, list));
     return ibl__json_text(ctx, root, "chain manifest", json);
+}
+
+ibl_status ibl_chain_manifest(ibl_context *ctx, const ibl_specular_info *info,
+                              ibl_edge_fixup edge_fixup, ibl_format format,
+                              const char *const *files, int file_count, char **json)
+{
+    return chain_manifest(ctx, info, edge_fixup, format, NULL, files, file_count, json);
+}
+
+ibl_status ibl_atlas_chain_manifest(ibl_context *ctx, const ibl_specular_info *info,
+                                    ibl_edge_fixup edge_fixup, ibl_format format,
+                                    const ibl_atlas_layout *layout, const char *const *files,
+                                    int file_count, char **json)
+{
+    if (!layout) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "chain manifest: no atlas table");
+    return chain_manifest(ctx, info, edge_fixup, format, layout, files, file_count, json);
 }
 
 /* ---- reading ------------------------------------------------------------------------------ */
@@ -468,6 +500,37 @@ static void read_source(ibl__json_reader *r, json_t *root, ibl_bake_data *b, con
     }
 }
 
+/* The optional "atlas": its table, its KTX2 file (the PNG is the same texels in RGBM). */
+static void read_atlas(ibl__json_reader *r, json_t *root, ibl_bake_data *b,
+                       ibl__bake_manifest_files *files)
+{
+    json_t *at = json_object_get(root, "atlas");
+    if (!at) return;
+    if (!json_is_object(at)) {
+        ibl__json_fail(r, "", "atlas", "expected an object");
+        return;
+    }
+    ibl__atlas_layout_read(r, at, "atlas", &b->atlas_layout);
+    if (r->status == IBL_OK && b->atlas_layout.levels != b->specular_info.levels)
+        ibl__json_fail(r, "atlas", "levels", "%d; the chain has %d", b->atlas_layout.levels,
+                       b->specular_info.levels);
+    if (r->status == IBL_OK && b->atlas_layout.face_size[0] != b->specular_info.size)
+        ibl__json_fail(r, "atlas", "rects", "level 0 is %d texels; the chain's is %d",
+                       b->atlas_layout.face_size[0], b->specular_info.size);
+    b->rgbm_range = (float)ibl__json_opt_number(r, at, "atlas", "rgbm_range", IBL_RGBM_DEFAULT_RANGE);
+    json_t *list = ibl__json_array(r, at, "atlas", "files");
+    size_t i;
+    json_t *v;
+    if (!list) return;
+    json_array_foreach(list, i, v)
+    {
+        const char *name = part_file(r, v, "atlas", "files", IBL__BAKE_ATLAS_KTX2, IBL__BAKE_ATLAS_PNG);
+        if (name && ibl__bake_file_named(name) == IBL__BAKE_ATLAS_KTX2) files->atlas = name;
+    }
+    if (r->status == IBL_OK && !files->atlas)
+        ibl__json_fail(r, "atlas", "files", "lists no %s", ibl__bake_file_info_of(IBL__BAKE_ATLAS_KTX2)->name);
+}
+
 ibl_status ibl__bake_manifest_parse(ibl_context *ctx, const void *bytes, size_t size,
                                     const char *name, ibl_bake_data *b,
                                     ibl__bake_manifest_files *files, void **root_out)
@@ -497,6 +560,7 @@ ibl_status ibl__bake_manifest_parse(ibl_context *ctx, const void *bytes, size_t 
                             files->irradiance);
     if (r.status == IBL_OK) read_sh(&r, root, b);
     if (r.status == IBL_OK) read_brdf(&r, root, b, files);
+    if (r.status == IBL_OK) read_atlas(&r, root, b, files);
     if (r.status == IBL_OK) {
         b->source_name = ibl__strdup(ctx, source_name ? source_name : "unknown");
         b->preset = ibl__strdup(ctx, preset);

@@ -10,6 +10,7 @@ static const char *const format_names[IBL_FORMAT_COUNT] = {
     "default", "rgba16f", "rgba32f", "rg11b10f", "rgb9e5", "rg16f", "rg32f",
     "rgb32f", "rgb16f", "rgba8", "rgba16", "rgbe", "bc6h", "bc6h-signed", "rgbm", "rgbd",
     "astc4x4", "astc5x4", "astc5x5", "astc6x5", "astc6x6", "astc8x5", "astc8x6", "astc8x8",
+    "rgba8-linear",
 };
 
 const char *ibl_format_name(ibl_format format)

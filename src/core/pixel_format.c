@@ -301,6 +301,7 @@ float ibl_format_max_value(ibl_format format)
     case IBL_FORMAT_RG11B10F: return 65024.0f; /* 6-bit mantissa, exponent 30 */
     case IBL_FORMAT_RGB9E5: return 65408.0f;   /* (511/512) 2^16 */
     case IBL_FORMAT_RGBA8_SRGB:
+    case IBL_FORMAT_RGBA8_UNORM:
     case IBL_FORMAT_RGBA16_UNORM: return 1.0f;
     default: return FLT_MAX;
     }

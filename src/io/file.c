@@ -107,7 +107,9 @@ int ibl_file_type_writes_format(ibl_file_type type, ibl_format f)
     case IBL_FILE_EXR:
         return f == IBL_FORMAT_RGBA16F || f == IBL_FORMAT_RGB16F || f == IBL_FORMAT_RGBA32F ||
                f == IBL_FORMAT_RGB32F;
-    case IBL_FILE_PNG: return f == IBL_FORMAT_RGBA8_SRGB || f == IBL_FORMAT_RGBA16_UNORM;
+    case IBL_FILE_PNG:
+        return f == IBL_FORMAT_RGBA8_SRGB || f == IBL_FORMAT_RGBA8_UNORM ||
+               f == IBL_FORMAT_RGBA16_UNORM || f == IBL_FORMAT_RGBM;
     case IBL_FILE_JPEG: return f == IBL_FORMAT_RGBA8_SRGB;
     case IBL_FILE_HDR: return f == IBL_FORMAT_RGBE;
     case IBL_FILE_PFM: return f == IBL_FORMAT_RGB32F;
@@ -459,7 +461,7 @@ ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, 
     case IBL_FILE_HDR: s = ibl__hdr_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_EXR: s = ibl__exr_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_PFM: s = ibl__pfm_decode(ctx, b, size, name, out, &fi); break;
-    case IBL_FILE_PNG: s = ibl__png_decode(ctx, b, size, name, out, &fi); break;
+    case IBL_FILE_PNG: s = ibl__png_decode_as(ctx, b, size, name, rd.as_data, out, &fi); break;
     case IBL_FILE_JPEG: s = ibl__jpeg_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_KTX2: s = ibl__ktx2_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_KTX1: s = ibl__ktx1_decode(ctx, b, size, name, out, &fi); break;

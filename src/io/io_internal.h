@@ -17,10 +17,14 @@ ibl_status ibl__pfm_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
                            ibl_texture *out, ibl_file_info *info);
 ibl_status ibl__pfm_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size);
-/* PNG (src/io/png.c, libpng): 8/16-bit read, sRGB or gAMA decoded to linear; written as
- * 8-bit sRGB with exposure and tone map, or 16-bit linear (IBL_FORMAT_RGBA16_UNORM). */
+/* PNG (src/io/png.c, libpng): 8/16-bit read, sRGB or gAMA decoded to linear (RGBM files, tEXt
+ * ibl.encoding = rgbm, decoded); written as 8-bit sRGB with exposure and tone map, 8-bit or
+ * 16-bit linear (IBL_FORMAT_RGBA8_UNORM, IBL_FORMAT_RGBA16_UNORM) or 8-bit RGBM. */
 ibl_status ibl__png_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info);
+/* as_data: samples as stored (code / max) whatever the transfer function (ibl_read_desc). */
+ibl_status ibl__png_decode_as(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                              int as_data, ibl_texture *out, ibl_file_info *info);
 ibl_status ibl__png_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size);
 /* JPEG (src/io/jpeg.c, libjpeg-turbo): 8-bit grey, YCbCr or RGB, baseline or progressive,

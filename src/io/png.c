@@ -1,5 +1,5 @@
-/* PNG through libpng both ways: 8-bit and 16-bit reading, 8-bit sRGB previews and 16-bit
- * linear tables on writing. Also the two pieces the JPEG reader and writer (jpeg.c) share
+/* PNG through libpng both ways: 8-bit and 16-bit reading, 8-bit sRGB previews, 8-bit and
+ * 16-bit linear data (tables, packed material channels) and 8-bit RGBM on writing. Also the two pieces the JPEG reader and writer (jpeg.c) share
  * with it: RGBA samples to linear float, and the 8-bit display encoding.
  *
  * Transfer functions on read: a PNG with an sRGB chunk is sRGB; one with only a gAMA chunk
@@ -12,6 +12,7 @@
 #include <math.h>
 #include <png.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* IEC 61966-2-1 decoding (EOTF). */
@@ -44,6 +45,39 @@ static double png_decoding_power(const uint8_t *b, size_t size)
     if (has_srgb || gama == 0) return 0.0;
     /* gAMA stores the encoding exponent times 100000 (45455 for 1/2.2). */
     return 100000.0 / (double)gama;
+}
+
+/* The text of a tEXt chunk before the image data ("" when absent), at most cap - 1 bytes. */
+static void png_text_value(const uint8_t *b, size_t size, const char *keyword, char *out, size_t cap)
+{
+    size_t pos = 8, klen = strlen(keyword);
+    out[0] = 0;
+    while (size - pos >= 12) {
+        uint32_t len = be32(b + pos);
+        const uint8_t *type = b + pos + 4, *data = b + pos + 8;
+        if (len > size - pos - 12) break;
+        if (memcmp(type, "IDAT", 4) == 0 || memcmp(type, "IEND", 4) == 0) break;
+        if (memcmp(type, "tEXt", 4) == 0 && len > klen && memcmp(data, keyword, klen) == 0 &&
+            data[klen] == 0) {
+            size_t n = len - klen - 1 < cap - 1 ? len - klen - 1 : cap - 1;
+            memcpy(out, data + klen + 1, n);
+            out[n] = 0;
+            return;
+        }
+        pos += 12 + (size_t)len;
+    }
+}
+
+/* 8-bit RGBM samples (the tail of dst, as ibl__rgba_samples_to_linear) to linear RGB, A = 1. */
+static void rgbm_samples_to_linear(const uint8_t *pix, float range, size_t texels, float *dst)
+{
+    for (size_t i = 0; i < texels; i++) {
+        uint8_t q[4];
+        memcpy(q, pix + i * 4, 4); /* read whole before the float overwrites it */
+        float *o = dst + i * 4;
+        ibl_rgbm_decode(q, range, o);
+        o[3] = 1.0f;
+    }
 }
 
 ibl_status ibl__rgba_samples_to_linear(ibl_context *ctx, const uint8_t *pix, int is16, double power,
@@ -219,6 +253,12 @@ static int png_chunks_inside(const uint8_t *b, size_t size)
 ibl_status ibl__png_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info)
 {
+    return ibl__png_decode_as(ctx, bytes, size, name, 0, out, info);
+}
+
+ibl_status ibl__png_decode_as(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                              int as_data, ibl_texture *out, ibl_file_info *info)
+{
     /* the chunk walks below start after the signature */
     static const uint8_t signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
     if (size < sizeof signature || memcmp(bytes, signature, sizeof signature) != 0)
@@ -239,15 +279,30 @@ ibl_status ibl__png_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
         if (st->status == IBL_ERR_FORMAT) s = st->status; /* its message names the file */
         else if (st->status != IBL_OK) s = ibl__fail_named(ctx, st->status, name);
         else s = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: corrupt PNG (%s)", name, st->error);
-    } else {
+    }
+    char encoding[16], range_text[32];
+    png_text_value(bytes, size, "ibl.encoding", encoding, sizeof encoding);
+    int rgbm = !as_data && !st->is16 && strcmp(encoding, "rgbm") == 0;
+    if (ok && rgbm) {
+        png_text_value(bytes, size, "ibl.rgbm_range", range_text, sizeof range_text);
+        float range = (float)strtod(range_text, NULL);
+        if (!(range > 0.0f && range <= 65504.0f)) range = IBL_RGBM_DEFAULT_RANGE;
+        rgbm_samples_to_linear(st->raw, range, (size_t)out->width * (size_t)out->height, out->data);
+    } else if (ok) {
+        /* data (as_data) and gAMA 1.0 files: code / max, no curve */
         size_t texels = (size_t)out->width * (size_t)out->height;
-        s = ibl__rgba_samples_to_linear(ctx, st->raw, st->is16, png_decoding_power(bytes, size),
-                                        texels, out->data, name);
+        s = ibl__rgba_samples_to_linear(ctx, st->raw, st->is16,
+                                        as_data ? 1.0 : png_decoding_power(bytes, size), texels,
+                                        out->data, name);
     }
     if (s != IBL_OK) {
         ibl_texture_free(ctx, out);
     } else {
-        out->format = st->is16 ? IBL_FORMAT_RGBA16_UNORM : IBL_FORMAT_RGBA8_SRGB;
+        out->format = rgbm ? IBL_FORMAT_RGBM
+                    : st->is16 ? IBL_FORMAT_RGBA16_UNORM
+                    : as_data || png_decoding_power(bytes, size) == 1.0 ? IBL_FORMAT_RGBA8_UNORM
+                                                                         : IBL_FORMAT_RGBA8_SRGB;
+        if (rgbm) st->has_alpha = 0; /* alpha was the multiplier */
         info->format = out->format;
         info->has_alpha = st->has_alpha;
     }
@@ -341,10 +396,43 @@ static void png_on_flush(png_structp png)
     (void)png;
 }
 
-/* Runs libpng; everything it may touch after setjmp lives in *st (not in locals). */
-static int png_run(png_state *st, const ibl_image *im, int sixteen, int channels,
-                   const ibl__display_encoder *enc)
+/* How the writer turns floats into samples. */
+typedef enum png_samples {
+    PNG_SAMPLES_DISPLAY8, /* exposure, tone map, sRGB (previews)                          */
+    PNG_SAMPLES_LINEAR8,  /* round(v * 255), gAMA 1.0 (data)                              */
+    PNG_SAMPLES_LINEAR16, /* round(v * 65535), gAMA 1.0 (tables, data)                    */
+    PNG_SAMPLES_RGBM8     /* RGBM (ibl/compress.h), gAMA 1.0, tEXt ibl.encoding = rgbm      */
+} png_samples;
+
+static void png_fill_row(const float *src, int width, int channels, png_samples mode,
+                         float rgbm_range, const ibl__display_encoder *enc, uint8_t *o)
 {
+    for (int x = 0; x < width; x++) {
+        const float *p = src + (size_t)x * 4;
+        if (mode == PNG_SAMPLES_RGBM8) {
+            ibl_rgbm_encode(p, rgbm_range, o);
+            o += 4;
+            continue;
+        }
+        for (int c = 0; c < channels; c++) {
+            if (mode == PNG_SAMPLES_LINEAR16) {
+                uint16_t v = unit_code16(p[c]);
+                *o++ = (uint8_t)(v >> 8); /* PNG samples are big-endian */
+                *o++ = (uint8_t)(v & 0xFF);
+            } else if (mode == PNG_SAMPLES_LINEAR8 || c == 3) {
+                *o++ = unit_code8(p[c]);
+            } else {
+                *o++ = ibl__display_code(enc, p[c]);
+            }
+        }
+    }
+}
+
+/* Runs libpng; everything it may touch after setjmp lives in *st (not in locals). */
+static int png_run(png_state *st, const ibl_image *im, png_samples mode, int channels,
+                   float rgbm_range, const ibl__display_encoder *enc)
+{
+    int sixteen = mode == PNG_SAMPLES_LINEAR16;
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, st, png_on_error, png_on_warning);
     if (!png) {
         snprintf(st->error, sizeof st->error, "cannot start libpng");
@@ -364,28 +452,29 @@ static int png_run(png_state *st, const ibl_image *im, int sixteen, int channels
     png_set_IHDR(png, pinfo, (png_uint_32)im->width, (png_uint_32)im->height, sixteen ? 16 : 8,
                  channels == 4 ? PNG_COLOR_TYPE_RGBA : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                  PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-    if (sixteen) png_set_gAMA(png, pinfo, 1.0); /* linear: read back without a curve */
+    if (mode != PNG_SAMPLES_DISPLAY8) png_set_gAMA(png, pinfo, 1.0); /* read back without a curve */
     else png_set_sRGB_gAMA_and_cHRM(png, pinfo, PNG_sRGB_INTENT_PERCEPTUAL);
+    char range_text[32];
+    png_text text[2];
+    if (mode == PNG_SAMPLES_RGBM8) {
+        /* the KTX2 writer's key names (src/io/ktx2.c), so either file says what it holds */
+        snprintf(range_text, sizeof range_text, "%.9g", (double)rgbm_range);
+        memset(text, 0, sizeof text);
+        text[0].compression = text[1].compression = PNG_TEXT_COMPRESSION_NONE;
+        text[0].key = (png_charp) "ibl.encoding";
+        text[0].text = (png_charp) "rgbm";
+        text[1].key = (png_charp) "ibl.rgbm_range";
+        text[1].text = range_text;
+        png_set_text(png, pinfo, text, 2);
+    }
     /* Fast settings (zlib level 3, Paeth filter only): about twice as fast as libpng's
      * defaults for ~3% larger files (docs/PERFORMANCE.md). */
     png_set_compression_level(png, 3);
     png_set_filter(png, 0, PNG_FILTER_PAETH);
     png_write_info(png, pinfo);
     for (int y = 0; y < im->height; y++) {
-        const float *src = im->pixels + (size_t)y * (size_t)im->width * 4;
-        uint8_t *o = st->row;
-        for (int x = 0; x < im->width; x++) {
-            const float *p = src + (size_t)x * 4;
-            for (int c = 0; c < channels; c++) {
-                if (sixteen) {
-                    uint16_t v = unit_code16(p[c]);
-                    *o++ = (uint8_t)(v >> 8); /* PNG samples are big-endian */
-                    *o++ = (uint8_t)(v & 0xFF);
-                } else {
-                    *o++ = c == 3 ? unit_code8(p[3]) : ibl__display_code(enc, p[c]);
-                }
-            }
-        }
+        png_fill_row(im->pixels + (size_t)y * (size_t)im->width * 4, im->width, channels, mode,
+                     rgbm_range, enc, st->row);
         png_write_row(png, st->row);
     }
     png_write_end(png, pinfo);
@@ -396,17 +485,21 @@ static int png_run(png_state *st, const ibl_image *im, int sixteen, int channels
 ibl_status ibl__png_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size)
 {
-    int sixteen;
-    if (desc->format == IBL_FORMAT_DEFAULT || desc->format == IBL_FORMAT_RGBA8_SRGB) sixteen = 0;
-    else if (desc->format == IBL_FORMAT_RGBA16_UNORM) sixteen = 1;
+    png_samples mode;
+    if (desc->format == IBL_FORMAT_DEFAULT || desc->format == IBL_FORMAT_RGBA8_SRGB) mode = PNG_SAMPLES_DISPLAY8;
+    else if (desc->format == IBL_FORMAT_RGBA8_UNORM) mode = PNG_SAMPLES_LINEAR8;
+    else if (desc->format == IBL_FORMAT_RGBA16_UNORM) mode = PNG_SAMPLES_LINEAR16;
+    else if (desc->format == IBL_FORMAT_RGBM) mode = PNG_SAMPLES_RGBM8;
     else
         return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
-                        "%s: PNG stores rgba8 (sRGB preview) or rgba16 (linear), not %s", name,
-                        ibl_format_name(desc->format));
+                        "%s: PNG stores rgba8 (sRGB preview), rgba8-linear, rgba16 (linear) or "
+                        "rgbm, not %s", name, ibl_format_name(desc->format));
+    int sixteen = mode == PNG_SAMPLES_LINEAR16;
+    float rgbm_range = desc->rgbm_range > 0.0f ? desc->rgbm_range : IBL_RGBM_DEFAULT_RANGE;
     if (image->width > IBL_MAX_DIMENSION || image->height > IBL_MAX_DIMENSION)
         return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: image %dx%d too large", name, image->width,
                         image->height);
-    int channels = image_has_alpha(image) ? 4 : 3;
+    int channels = mode == PNG_SAMPLES_RGBM8 || image_has_alpha(image) ? 4 : 3;
     png_state *st = ibl_calloc(ctx, 1, sizeof *st);
     if (!st) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
     st->ctx = ctx;
@@ -417,7 +510,7 @@ ibl_status ibl__png_encode(ibl_context *ctx, const ibl_image *image, const ibl_w
     }
     ibl__display_encoder enc;
     ibl__display_encoder_init(&enc, desc);
-    int ok = png_run(st, image, sixteen, channels, &enc);
+    int ok = png_run(st, image, mode, channels, rgbm_range, &enc);
     ibl_free(ctx, st->row);
     if (!ok) {
         ibl_free(ctx, st->buf);

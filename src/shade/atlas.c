@@ -156,6 +156,10 @@ static void atlas_pixel(const ibl_atlas_layout *l, int level, ibl_vec3 dir, floa
 {
     float s, t;
     int f = ibl_cube_face_st(dir, &s, &t);
+    /* Daqi 2016's edge problem (UVs falling outside a small level): s, t stay on the face,
+     * the gutter holds the neighbours for the bilinear footprint at the edge */
+    s = s < 0.0f ? 0.0f : s > 1.0f ? 1.0f : s;
+    t = t < 0.0f ? 0.0f : t > 1.0f ? 1.0f : t;
     int ox, oy;
     face_origin(l, level, f, &ox, &oy);
     float n = (float)l->face_size[level];

@@ -65,6 +65,12 @@ ibl_status ibl_probe_validate(ibl_context *ctx, ibl_probe *p)
     }
     if (p->mirror.data && !cube_ok(&p->mirror))
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: bad mirror cube");
+    if (p->use_atlas && (!p->atlas || !p->atlas->pixels || !p->atlas_layout ||
+                         p->atlas_layout->levels < m->levels ||
+                         p->atlas_layout->width != p->atlas->width ||
+                         p->atlas_layout->height != p->atlas->height))
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "probe: use_atlas without an atlas of the chain's %d levels", m->levels);
     if (p->sh_kind == IBL_SH_KIND_NONE && !cube_ok(&p->irradiance))
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "probe: neither irradiance cube nor SH");
     const ibl_splitsum_view *ss = &p->splitsum;
@@ -123,6 +129,12 @@ void ibl_probe_sample_specular(const ibl_probe *p, float lod, ibl_vec3 dir, floa
     float t[4];
     float scale = p->intensity > 0.0f ? p->intensity : 1.0f;
     float last = (float)(p->mapping.levels - 1);
+    if (p->use_atlas) {
+        ibl_atlas_sample(p->atlas, p->atlas_layout, lod < 0.0f ? 0.0f : lod > last ? last : lod,
+                         dir, t);
+        for (int c = 0; c < 3; c++) out[c] = scale * t[c];
+        return;
+    }
     if (lod < 0.0f && p->mirror.data) {
         float a[4], b[4], f = -lod > 1.0f ? 1.0f : -lod;
         ibl_cubemap_sample_bilinear(&p->specular, 0, dir, a);
