@@ -34,6 +34,10 @@ static const char usage[] =
     "  --working-size N       face edge the input is read at (default: the chain's, at least\n"
     "                         128; 256 without --size)\n"
     "  --preview-width W      width of environment.png (default 1024; 0: no preview)\n"
+    "  --out-layout L         cube (default), or atlas: the chain also as Daqi 2016's 2D mip\n"
+    "                         atlas, specular_atlas.ktx2 (--format) and specular_atlas.png\n"
+    "                         (8-bit RGBM), its coordinate table in the manifest's \"atlas\"\n"
+    "                         and the KTX2's key ibl.atlas (docs/ATLAS.md)\n"
     CLI_INPUT_HELP
     "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n"
     "\n"
@@ -68,6 +72,11 @@ static void parse(cli_args *a, bake_options *o)
         else if (cli_is(a, arg, "--preview-width", NULL)) {
             int w = cli_int(a, arg, 0, 16384);
             o->desc.preview_width = w > 0 ? w : -1;
+        }
+        else if (cli_is(a, arg, "--out-layout", NULL)) {
+            const char *v = cli_value(a, arg);
+            if (strcmp(v, "atlas") == 0) o->desc.atlas = 1;
+            else if (strcmp(v, "cube") != 0) cli_usage_error(a, "--out-layout wants cube or atlas, not '%s'", v);
         }
         else if (cli_is(a, arg, "--window", NULL))
             cli_sh_window_value(a, arg, &o->desc.sh_window, &o->desc.sh_window_width);
@@ -138,6 +147,7 @@ int cli_cmd_bake(int argc, char **argv)
     parse(&a, &o);
     if (o.probes.probes) {
         if (a.positional_count) cli_usage_error(&a, "--probes takes no input file (the set names its global probe)");
+        if (o.desc.atlas) cli_usage_error(&a, "--out-layout atlas is for one environment, not --probes");
         o.probes.format = o.desc.format;
         return cli_bake_probes(&a, &o.probes);
     }

@@ -17,8 +17,14 @@ static const char usage[] =
     "image per face and level, STEM_l<level>_<face>.EXT with <face> in px nx py ny pz nz.\n"
     "STEM.manifest.json beside OUT lists the files, the filter, the mapping and every level's\n"
     "roughness or shininess (docs/FORMATS.md). Every file appears at once, or none.\n"
+    "With --out-layout atlas, OUT (.ktx2 .exr .png) is one 2D image holding every level as\n"
+    "Daqi 2016's mip atlas; its coordinate table goes to the manifest's \"atlas\" and, in a\n"
+    "KTX2, to the key ibl.atlas (docs/ATLAS.md). PNG atlases are 8-bit RGBM unless --format\n"
+    "rgba8 asks for a tone-mapped picture of it.\n"
     "\n"
     "  -o, --output OUT     output file\n"
+    "  --out-layout L       cube (default: a cube container or one image per face and level)\n"
+    "                       or atlas (one 2D image, levels >= 2 at level 2's size)\n"
     CLI_SPECULAR_HELP
     "  --format F           storage format (rgba16f, rgba32f, rg11b10f, rgb9e5, rg16f, rg32f,\n"
     "                       bc6h, bc6h-signed for containers; rgbm, rgbd, rgbe for KTX2; rgb32f,\n"
@@ -78,10 +84,43 @@ static ibl_status add_chain(ibl_context *ctx, ibl_output_set *set, const char *o
     return st;
 }
 
+/* The chain as one 2D atlas into the set (a KTX2 also carries the table and the levels'
+ * description in its key/value data); *layout receives the table. */
+static ibl_status add_atlas(ibl_context *ctx, ibl_output_set *set, const char *out,
+                            const ibl_cubemap *chain, const ibl_specular_info *info,
+                            const ibl_write_desc *wd, ibl_atlas_layout *layout, char **names,
+                            int *count)
+{
+    ibl_image atlas;
+    *count = 0;
+    ibl_status st = ibl_atlas_pack(ctx, chain, NULL, &atlas, layout);
+    if (st != IBL_OK) return st;
+    ibl_write_desc d = *wd;
+    if (ibl_file_type_from_path(out) == IBL_FILE_PNG && d.format == IBL_FORMAT_DEFAULT)
+        d.format = IBL_FORMAT_RGBM;
+    if (d.format == IBL_FORMAT_RGBA8_SRGB) d.exposure_ev = ibl_image_auto_exposure(&atlas);
+    if (ibl_file_type_from_path(out) == IBL_FILE_KTX2) {
+        ibl_texture t = {.kind = IBL_TEXTURE_2D, .width = atlas.width, .height = atlas.height,
+                         .depth = 1, .levels = 1, .data = atlas.pixels};
+        char *table = NULL;
+        st = ibl_atlas_layout_to_json(ctx, layout, &table);
+        if (st == IBL_OK) st = ibl_texture_set_metadata(ctx, &t, "ibl.atlas", table);
+        if (st == IBL_OK) st = ibl_specular_set_metadata(ctx, info, &t);
+        if (st == IBL_OK) st = ibl_output_set_add_texture(set, out, &t, &d);
+        ibl_texture_free(ctx, &t); /* the metadata */
+        ibl_free(ctx, table);
+    } else {
+        st = ibl_output_set_add_image(set, out, &atlas, &d);
+    }
+    ibl_image_free(ctx, &atlas);
+    if (st == IBL_OK && !(names[(*count)++] = strdup(base_name(out)))) st = IBL_ERR_OUT_OF_MEMORY;
+    return st;
+}
+
 /* The chain and its manifest, all or nothing. */
 static ibl_status write_outputs(ibl_context *ctx, const char *in, const char *out,
                                 const ibl_cubemap *chain, const ibl_specular_info *info,
-                                const ibl_specular_desc *d, const ibl_write_desc *wd)
+                                const ibl_specular_desc *d, const ibl_write_desc *wd, int atlas)
 {
     ibl_output_set *set;
     ibl_status st = ibl_output_set_create(ctx, &set);
@@ -89,9 +128,14 @@ static ibl_status write_outputs(ibl_context *ctx, const char *in, const char *ou
     char *names[6 * IBL_MAX_LEVELS] = {0};
     int count = 0;
     st = ibl_output_set_protect(set, in);
-    if (st == IBL_OK) st = add_chain(ctx, set, out, chain, info, wd, names, &count);
+    ibl_atlas_layout layout;
+    if (st == IBL_OK && atlas) st = add_atlas(ctx, set, out, chain, info, wd, &layout, names, &count);
+    else if (st == IBL_OK) st = add_chain(ctx, set, out, chain, info, wd, names, &count);
     char *json = NULL;
-    if (st == IBL_OK)
+    if (st == IBL_OK && atlas)
+        st = ibl_atlas_chain_manifest(ctx, info, d->edge_fixup, wd->format, &layout,
+                                      (const char *const *)names, count, &json);
+    else if (st == IBL_OK)
         st = ibl_chain_manifest(ctx, info, d->edge_fixup, wd->format, (const char *const *)names,
                                 count, &json);
     for (int i = 0; i < count; i++) free(names[i]);
@@ -116,6 +160,7 @@ int cli_cmd_prefilter(int argc, char **argv)
     memset(&so, 0, sizeof so);
     ibl_write_desc wd = {0};
     cli_input_options io = {0};
+    int atlas = 0;
     const char *arg;
     while ((arg = cli_next(&a))) {
         if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io) ||
@@ -123,6 +168,11 @@ int cli_cmd_prefilter(int argc, char **argv)
             continue;
         if (cli_is(&a, arg, "--output", "-o")) {
             out = cli_value(&a, arg);
+        } else if (cli_is(&a, arg, "--out-layout", NULL)) {
+            const char *v = cli_value(&a, arg);
+            if (strcmp(v, "atlas") == 0) atlas = 1;
+            else if (strcmp(v, "cube") == 0) atlas = 0;
+            else cli_usage_error(&a, "--out-layout wants cube or atlas, not '%s'", v);
         } else if (cli_is(&a, arg, "--source-size", NULL)) {
             io.size = cli_int(&a, arg, 1, 16384);
         } else if (cli_is(&a, arg, "--format", NULL)) {
@@ -135,7 +185,12 @@ int cli_cmd_prefilter(int argc, char **argv)
     if (a.positional_count != 1) cli_usage_error(&a, "wants exactly one input file");
     if (!out) cli_usage_error(&a, "wants an output file (-o OUT)");
     ibl_file_type type = cli_check_output(&a, out);
-    if (!ibl_file_type_writes_format(type, wd.format))
+    if (atlas && type != IBL_FILE_KTX2 && type != IBL_FILE_EXR && type != IBL_FILE_PNG)
+        cli_usage_error(&a, "%s: an atlas is written as .ktx2, .exr or .png", out);
+    if (atlas && type == IBL_FILE_PNG && wd.format != IBL_FORMAT_DEFAULT &&
+        wd.format != IBL_FORMAT_RGBM && wd.format != IBL_FORMAT_RGBA8_SRGB)
+        cli_usage_error(&a, "%s: a PNG atlas is rgbm (default) or rgba8 (a tone-mapped picture)", out);
+    if (!(atlas && type == IBL_FILE_PNG) && !ibl_file_type_writes_format(type, wd.format))
         cli_usage_error(&a, "%s cannot store %s pixels", out, ibl_format_name(wd.format));
     cli_format_check(&a, &wd, type, out);
     ibl_specular_desc d = cli_specular_resolve(&a, &so, NULL);
@@ -154,7 +209,7 @@ int cli_cmd_prefilter(int argc, char **argv)
     ibl_status st = ibl_specular_prefilter(ctx, &cube, &d, &chain, &info);
     double t_filter = cli_seconds();
     ibl_cubemap_free(ctx, &cube);
-    if (st == IBL_OK) st = write_outputs(ctx, in, out, &chain, &info, &d, &wd);
+    if (st == IBL_OK) st = write_outputs(ctx, in, out, &chain, &info, &d, &wd, atlas);
     ibl_cubemap_free(ctx, &chain);
     if (st != IBL_OK) {
         cli_report_failure(ctx, out, st);

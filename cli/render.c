@@ -34,6 +34,9 @@ static const char usage[] =
     "                        stays the background, mirror and SH source; with --lut FILE\n"
     "                        (split-sum table) and --ambient FILE (AmbientBRDF volume, as\n"
     "                        `ibl lut` writes them; --ambient-range A:B, default 1:2000)\n"
+    "  --atlas               read the chain from the bake's 2D mip atlas (a bake made with\n"
+    "                        --out-layout atlas), bilinear in each level then linear, as\n"
+    "                        shaders/ibl_atlas.glsl does on an 8-slot GLES device (no mirror)\n"
     "  --so FORMULA          specular occlusion: none ao triace triace-shininess triace-fast\n"
     "                        frostbite cone (default none)\n"
     "  --mix MODE            ambient composition: multiply lerp-albedo lerp-ao ao-lerp-ao\n"
@@ -252,7 +255,7 @@ typedef struct render_options {
     const char *output, *scene, *environment, *cmp[2];
     ibl_light lights[MAX_LIGHTS];
     double exposure;
-    int exposure_given, specular_size, report;
+    int exposure_given, specular_size, report, atlas;
     cli_input_options input;
     ibl_bake_parts parts;
     ibl_render_desc base;
@@ -306,6 +309,7 @@ static void parse(cli_args *a, render_options *o)
         else if (cli_is(a, arg, "--height", NULL)) o->base.height = cli_int(a, arg, 4, 16384);
         else if (cli_is(a, arg, "--specular-size", NULL)) o->specular_size = cli_int(a, arg, 4, 1024);
         else if (cli_is(a, arg, "--report", NULL)) o->report = 1;
+        else if (cli_is(a, arg, "--atlas", NULL)) o->atlas = 1;
         else if (cli_is(a, arg, "--light", NULL)) {
             if (o->base.light_count == MAX_LIGHTS) cli_usage_error(a, "at most %d lights", MAX_LIGHTS);
             parse_light(a, cli_value(a, arg), &o->lights[o->base.light_count++]);
@@ -458,10 +462,18 @@ int cli_cmd_render(int argc, char **argv)
     ibl_status st = IBL_OK;
     if (rc == CLI_EXIT_OK) {
         st = ibl_bake_probe(ctx, &bake, &probe);
-        if (st == IBL_OK && o.scene && strcmp(o.scene, "balls") != 0)
+        if (st == IBL_OK && o.atlas && !probe.atlas) {
+            cli_error("%s: holds no mip atlas (bake it with --out-layout atlas)", a.positional[0]);
+            rc = CLI_EXIT_BAD_INPUT;
+        } else if (st == IBL_OK && o.atlas) {
+            probe.use_atlas = 1;
+            st = ibl_probe_validate(ctx, &probe);
+        }
+        if (rc == CLI_EXIT_OK && st == IBL_OK && o.scene && strcmp(o.scene, "balls") != 0)
             st = ibl_mesh_load_obj(ctx, o.scene, 0, &mesh);
-        if (st == IBL_OK) cli_info(&a.common, "probe ready in %.2f s\n", cli_seconds() - t0);
-        if (st == IBL_OK) st = render_and_write(ctx, &a, &o, &probe, mesh.positions ? &mesh : NULL);
+        if (rc == CLI_EXIT_OK && st == IBL_OK)
+            cli_info(&a.common, "probe ready in %.2f s\n", cli_seconds() - t0);
+        if (rc == CLI_EXIT_OK && st == IBL_OK) st = render_and_write(ctx, &a, &o, &probe, mesh.positions ? &mesh : NULL);
         if (st != IBL_OK) cli_report_failure(ctx, a.positional[0], st), rc = CLI_EXIT_BAD_INPUT;
     }
     ibl_mesh_free(ctx, &mesh);

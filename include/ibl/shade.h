@@ -416,7 +416,7 @@ ibl_status ibl_atlas_pack(ibl_context *ctx, const ibl_cubemap *chain, const ibl_
 /* Reads the chain back (levels > 2 box-averaged down to their own size) into a new cube. */
 ibl_status ibl_atlas_unpack(ibl_context *ctx, const ibl_image *atlas,
                             const ibl_atlas_layout *layout, int size, ibl_cubemap *out);
-/* The coordinate table as JSON text (NUL-terminated, ibl_free): {"width", "height",
+/* The coordinate table as one line of JSON (NUL-terminated, ibl_free): {"width", "height",
  * "levels", "gutter", "face_order", "rects": [[x, y, face_size] per level]}, what a bake's
  * manifest.json ("atlas") and the atlas KTX2's key "ibl.atlas" hold (docs/ATLAS.md). */
 ibl_status ibl_atlas_layout_to_json(ibl_context *ctx, const ibl_atlas_layout *layout, char **text);

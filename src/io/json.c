@@ -130,14 +130,15 @@ static int tree_complete(const json_t *v)
     return 1;
 }
 
-ibl_status ibl__json_text(ibl_context *ctx, json_t *root, const char *name, char **text)
+static ibl_status json_text(ibl_context *ctx, json_t *root, const char *name, size_t flags,
+                           char **text)
 {
     *text = NULL;
     if (!root || !tree_complete(root)) {
         json_decref(root);
         return ibl__fail(ctx, IBL_ERR_OUT_OF_MEMORY, "%s: out of memory building the JSON", name);
     }
-    char *s = json_dumps(root, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(9));
+    char *s = json_dumps(root, flags | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(9));
     json_decref(root);
     if (!s) return ibl__fail(ctx, IBL_ERR_OUT_OF_MEMORY, "%s: out of memory writing the JSON", name);
     size_t n = strlen(s);
@@ -152,6 +153,18 @@ ibl_status ibl__json_text(ibl_context *ctx, json_t *root, const char *name, char
     free(s);
     *text = out;
     return IBL_OK;
+}
+
+ibl_status ibl__json_text(ibl_context *ctx, json_t *root, const char *name, char **text)
+{
+    return json_text(ctx, root, name, JSON_INDENT(2), text);
+}
+
+ibl_status ibl__json_text_compact(ibl_context *ctx, json_t *root, const char *name, char **text)
+{
+    ibl_status st = json_text(ctx, root, name, JSON_COMPACT, text);
+    if (st == IBL_OK) (*text)[strlen(*text) - 1] = 0; /* one line, no newline */
+    return st;
 }
 
 /* ---- reading ---------------------------------------------------------------------------- */

@@ -25,6 +25,8 @@ void ibl__json_set(json_t *object, const char *key, json_t *value);
 void ibl__json_append(json_t *array, json_t *value);
 /* The text of root (NUL-terminated, from ibl_alloc, freed with ibl_free); consumes root. */
 ibl_status ibl__json_text(ibl_context *ctx, json_t *root, const char *name, char **text);
+/* The same on one line without spaces or a final newline (key/value metadata). */
+ibl_status ibl__json_text_compact(ibl_context *ctx, json_t *root, const char *name, char **text);
 
 /* ---- reading ---- */
 

@@ -87,7 +87,7 @@ ibl_status ibl_atlas_layout_to_json(ibl_context *ctx, const ibl_atlas_layout *la
     *text = NULL;
     if (!layout || layout->levels < 1 || layout->levels > IBL_MAX_LEVELS)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "atlas table: no layout");
-    return ibl__json_text(ctx, ibl__atlas_layout_json(layout), "atlas table", text);
+    return ibl__json_text_compact(ctx, ibl__atlas_layout_json(layout), "atlas table", text);
 }
 
 ibl_status ibl_atlas_layout_from_json(ibl_context *ctx, const char *text, const char *name,
