@@ -34,7 +34,7 @@ static ibl_status read_map(ibl_context *ctx, const char *path, ibl_image *out, i
 {
     if (ibl_file_type_from_path(path) == IBL_FILE_JPEG) {
         cli_error("%s: a JPEG is read as sRGB colour, not data; give the map as PNG", path);
-        return IBL_ERR_INVALID_ARGUMENT;
+        return IBL_ERR_FORMAT;
     }
     ibl_read_desc rd = {.as_data = 1};
     ibl_file_info info;
@@ -65,6 +65,8 @@ int cli_cmd_pack(int argc, char **argv)
     if (!in[0] && !in[1] && !in[2] && !in[3]) cli_usage_error(&a, "needs at least one map");
     if (!out) cli_usage_error(&a, "needs an output: -o OUT.png");
     if (cli_check_output(&a, out) != IBL_FILE_PNG) cli_usage_error(&a, "%s: the packed texture is a PNG", out);
+    for (int i = 0; i < 4; i++)
+        if (in[i]) cli_check_distinct(&a, in[i], out);
     ibl_context *ctx = cli_context(&a.common);
     ibl_image maps[4] = {{0}}, packed = {0};
     int sixteen = 0, first = -1;
@@ -77,7 +79,7 @@ int cli_cmd_pack(int argc, char **argv)
         else if (maps[i].width != maps[first].width || maps[i].height != maps[first].height) {
             cli_error("%s: is %dx%d, but %s is %dx%d (the maps must share one size)", in[i],
                       maps[i].width, maps[i].height, in[first], maps[first].width, maps[first].height);
-            st = IBL_ERR_INVALID_ARGUMENT;
+            st = IBL_ERR_FORMAT;
         }
     }
     if (st == IBL_OK) {
