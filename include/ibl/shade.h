@@ -410,7 +410,7 @@ typedef struct ibl_atlas_desc {
 } ibl_atlas_desc;
 
 ibl_status ibl_atlas_plan(int size, int levels, const ibl_atlas_desc *desc, ibl_atlas_layout *out);
-/* Packs a chain into a new image (zero where no level is). */
+/* Packs a chain into a new image (opaque black where no level is). */
 ibl_status ibl_atlas_pack(ibl_context *ctx, const ibl_cubemap *chain, const ibl_atlas_desc *desc,
                           ibl_image *out, ibl_atlas_layout *layout);
 /* Reads the chain back (levels > 2 box-averaged down to their own size) into a new cube. */

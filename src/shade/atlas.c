@@ -71,7 +71,11 @@ ibl_status ibl_atlas_pack(ibl_context *ctx, const ibl_cubemap *chain, const ibl_
                         chain->size, chain->levels);
     ibl_status st = ibl_image_alloc(ctx, layout->width, layout->height, out);
     if (st != IBL_OK) return st;
-    memset(out->pixels, 0, (size_t)out->width * out->height * 4 * sizeof(float));
+    /* opaque black where no level is: no reader samples there, and pictures of it show the
+     * arrangement (a zero alpha would let a viewer's background through) */
+    size_t texels = (size_t)out->width * out->height;
+    memset(out->pixels, 0, texels * 4 * sizeof(float));
+    for (size_t i = 0; i < texels; i++) out->pixels[i * 4 + 3] = 1.0f;
     int nearest = desc && desc->filter == IBL_ATLAS_NEAREST;
     int g = layout->gutter;
     for (int k = 0; k < layout->levels; k++) {
