@@ -190,6 +190,7 @@ int cli_cmd_prefilter(int argc, char **argv)
     if (atlas && type == IBL_FILE_PNG && wd.format != IBL_FORMAT_DEFAULT &&
         wd.format != IBL_FORMAT_RGBM && wd.format != IBL_FORMAT_RGBA8_SRGB)
         cli_usage_error(&a, "%s: a PNG atlas is rgbm (default) or rgba8 (a tone-mapped picture)", out);
+    if (atlas && type == IBL_FILE_PNG && wd.format == IBL_FORMAT_DEFAULT) wd.format = IBL_FORMAT_RGBM;
     if (!(atlas && type == IBL_FILE_PNG) && !ibl_file_type_writes_format(type, wd.format))
         cli_usage_error(&a, "%s cannot store %s pixels", out, ibl_format_name(wd.format));
     cli_format_check(&a, &wd, type, out);

@@ -298,10 +298,7 @@ ibl_status ibl__png_decode_as(ibl_context *ctx, const uint8_t *bytes, size_t siz
     if (s != IBL_OK) {
         ibl_texture_free(ctx, out);
     } else {
-        out->format = rgbm ? IBL_FORMAT_RGBM
-                    : st->is16 ? IBL_FORMAT_RGBA16_UNORM
-                    : as_data || png_decoding_power(bytes, size) == 1.0 ? IBL_FORMAT_RGBA8_UNORM
-                                                                         : IBL_FORMAT_RGBA8_SRGB;
+        out->format = rgbm ? IBL_FORMAT_RGBM : st->is16 ? IBL_FORMAT_RGBA16_UNORM : IBL_FORMAT_RGBA8_SRGB;
         if (rgbm) st->has_alpha = 0; /* alpha was the multiplier */
         info->format = out->format;
         info->has_alpha = st->has_alpha;
