@@ -25,6 +25,7 @@
 #include "scene.h"
 #include "shade.h"
 #include "shader.h"
+#include "skin.h"
 #include "sky.h"
 #include "specular.h"
 

@@ -59,6 +59,9 @@ ibl_status ibl_scene_create(ibl_context *ctx, const ibl_scene_desc *desc, ibl_sc
 /* Reads a glTF 2.0 file (.gltf with its .bin and images, or .glb). Every node's transform is
  * applied; polygons are triangulated; missing normals are computed. Errors name the file. */
 ibl_status ibl_scene_load_gltf(ibl_context *ctx, const char *path, ibl_scene **out);
+/* The same, or a Wavefront OBJ (.obj, by the extension; Assimp's reader, its .mtl colours as
+ * base colours; v flipped so that v = 0 is the image's top, as in glTF). */
+ibl_status ibl_scene_load(ibl_context *ctx, const char *path, ibl_scene **out);
 void ibl_scene_destroy(ibl_scene *scene);
 
 typedef struct ibl_scene_info {

@@ -384,6 +384,56 @@ ibl_status ibl_tile_probes(ibl_context *ctx, const ibl_screen_rect *rects, const
 void ibl_tile_lists_free(ibl_context *ctx, ibl_tile_lists *lists);
 
 /* ------------------------------------------------------------------------------------------ */
+/* Skin (src/shade/skin.c; the offline half is skin.h)                                       */
+
+enum { IBL_SKIN_MAX_GAUSSIANS = 16 };
+/* Thickness (mm) that a transmittance map value of 0 stands for (skin.h). */
+#define IBL_SKIN_THICKNESS_RANGE_MM 8.0f
+
+/* A diffusion profile as a sum of 2D Gaussians: variance v_i (mm^2) and an RGB weight each. */
+typedef struct ibl_skin_profile {
+    int count;
+    float variance_mm2[IBL_SKIN_MAX_GAUSSIANS];
+    float weight[IBL_SKIN_MAX_GAUSSIANS][3];
+} ibl_skin_profile;
+
+/* d'Eon and Luebke's six-Gaussian fit of the three-layer skin profile (Donner and Jensen
+ * 2005), GPU Gems 3, ch. 14 "Advanced Techniques for Realistic Real-Time Skin Rendering"
+ * (2007), its table "sum-of-Gaussians parameters for a three-layer skin model": variances
+ * 0.0064, 0.0484, 0.187, 0.567, 1.99, 7.41 mm^2; each channel's weights sum to 1. */
+ibl_skin_profile ibl_skin_profile_deon(void);
+
+/* Transmittance through skin of thickness d (mm): T_c(d) = sum_i w_ci exp(-d^2 / v_i), the
+ * profile's Gaussians without their normalisation (Jimenez, Whelan, Sundstedt and Gutierrez
+ * 2010, "Real-Time Realistic Skin Translucency", IEEE CG&A 30(4)). T(0) = the
+ * weights' sums. profile NULL: ibl_skin_profile_deon(). */
+void ibl_skin_transmittance(const ibl_skin_profile *profile, float thickness_mm, float out[3]);
+
+typedef struct ibl_skin_surface {
+    ibl_vec3 n[3];             /* world-space normals from the red, green and blue scattered
+                                  normal maps (unit)                                        */
+    ibl_vec3 geometric_normal; /* the surface's own (unit): translucency arrives from -N       */
+    float albedo[3];           /* diffuse albedo                                             */
+    float transmittance;       /* the map's value t in [0, 1] (skin.h); 0: no translucency   */
+    float thickness_range_mm;  /* what t = 0 stands for; 0: IBL_SKIN_THICKNESS_RANGE_MM      */
+    float translucency;        /* scale of the translucent term; 0: 1                        */
+} ibl_skin_surface;
+
+typedef struct ibl_skin_result {
+    float diffuse[3];      /* albedo_c IEM_c(n_c): each channel lit along its own normal      */
+    float translucent[3];  /* albedo_c T_c(d) IEM_c(-N) scale                                 */
+    float color[3];        /* the sum                                                         */
+} ibl_skin_result;
+
+/* Ambient diffuse of skin: channel c of the irradiance (ibl_probe_irradiance, E/pi) read along
+ * normal n[c] (Daqi 2016's scattered normals), plus light from behind through a thin region:
+ * the irradiance about -N times the profile's transmittance at d = (1 - t) range_mm
+ * (Jimenez et al. 2010, with the ambient irradiance E(-N) in place of their punctual light's
+ * E_L saturate(0.3 + dot(-N, L)); docs/SKIN.md). profile NULL: d'Eon's. */
+void ibl_skin_shade(const ibl_probe *probe, const ibl_skin_profile *profile,
+                    const ibl_skin_surface *s, ibl_skin_result *out);
+
+/* ------------------------------------------------------------------------------------------ */
 /* The mip atlas of Daqi 2016 (src/shade/atlas.c)                                             */
 
 /* A prefiltered chain in one 2D image: every level as a 3x2 grid of its faces

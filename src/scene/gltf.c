@@ -19,6 +19,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 typedef struct loader {
     ibl_context *ctx;
@@ -29,6 +30,7 @@ typedef struct loader {
     ibl_image *textures;
     char (*texture_names)[512];
     int texture_count, texture_cap;
+    int obj; /* a Wavefront OBJ (ibl_scene_load), not glTF */
 } loader;
 
 /* ---- KHR_materials_emissive_strength, from the JSON of a .gltf or the JSON chunk of a .glb - */
@@ -49,6 +51,11 @@ static ibl_status read_strengths(loader *l)
         json_size = len <= size - 20 ? len : size - 20;
     }
     json_t *root = NULL;
+    if (l->obj) { /* Wavefront OBJ: no JSON, no emissive strengths */
+        ibl_free(l->ctx, bytes);
+        l->strengths = ibl_alloc(l->ctx, sizeof(double));
+        return l->strengths ? IBL_OK : IBL_ERR_OUT_OF_MEMORY;
+    }
     st = ibl__json_parse(l->ctx, json, json_size, l->path, &root);
     ibl_free(l->ctx, bytes);
     if (st != IBL_OK) return st;
@@ -259,8 +266,8 @@ static ibl_status assimp_failure(loader *l)
         if (*p == '\n' || *p == '\r' || *p == '\t') *p = ' ';
     size_t n = strlen(msg);
     while (n && msg[n - 1] == ' ') msg[--n] = '\0';
-    return ibl__fail(l->ctx, IBL_ERR_FORMAT, "%s: not a glTF scene Assimp can read (%s)",
-                     l->path, n ? msg : "no reason given");
+    return ibl__fail(l->ctx, IBL_ERR_FORMAT, "%s: not a %s Assimp can read (%s)", l->path,
+                     l->obj ? "Wavefront OBJ mesh" : "glTF scene", n ? msg : "no reason given");
 }
 
 static void loader_free(loader *l, arrays *a, ibl_scene_material *mats)
@@ -278,11 +285,11 @@ static void loader_free(loader *l, arrays *a, ibl_scene_material *mats)
     if (l->ai) aiReleaseImport(l->ai);
 }
 
-ibl_status ibl_scene_load_gltf(ibl_context *ctx, const char *path, ibl_scene **out)
+static ibl_status load_scene(ibl_context *ctx, const char *path, int obj, ibl_scene **out)
 {
     if (!ctx || !path || !out) return IBL_ERR_INVALID_ARGUMENT;
     *out = NULL;
-    loader l = {ctx, path, NULL, NULL, 0, NULL, NULL, 0, 0};
+    loader l = {ctx, path, NULL, NULL, 0, NULL, NULL, 0, 0, obj};
     arrays a;
     memset(&a, 0, sizeof a);
     ibl_scene_material *mats = NULL;
@@ -321,4 +328,16 @@ ibl_status ibl_scene_load_gltf(ibl_context *ctx, const char *path, ibl_scene **o
     }
     loader_free(&l, &a, mats);
     return st;
+}
+
+ibl_status ibl_scene_load_gltf(ibl_context *ctx, const char *path, ibl_scene **out)
+{
+    return load_scene(ctx, path, 0, out);
+}
+
+ibl_status ibl_scene_load(ibl_context *ctx, const char *path, ibl_scene **out)
+{
+    size_t n = path ? strlen(path) : 0;
+    int obj = n >= 4 && strcasecmp(path + n - 4, ".obj") == 0;
+    return load_scene(ctx, path, obj, out);
 }
