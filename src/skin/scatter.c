@@ -149,13 +149,25 @@ static void blur_u_row(void *arg, int y)
             continue;
         }
         int r = j->kernels->radius[b];
-        const float *w = j->kernels->weights + (size_t)b * j->kernels->stride;
-        float s0 = 0, s1 = 0, s2 = 0;
-        for (int k = -r; k <= r; k++) {
-            int xx = ibl__clampi(x + k, 0, l->w - 1);
-            s0 += w[k + r] * src[3 * xx];
-            s1 += w[k + r] * src[3 * xx + 1];
-            s2 += w[k + r] * src[3 * xx + 2];
+        const float *w = j->kernels->weights + (size_t)b * j->kernels->stride + r; /* w[0]: centre */
+        const float *c = src + 3 * x;
+        float s0 = w[0] * c[0], s1 = w[0] * c[1], s2 = w[0] * c[2];
+        if (x - r >= 0 && x + r < l->w) {
+            /* inside the row: the kernel is symmetric, one weight per pair of taps */
+            for (int k = 1; k <= r; k++) {
+                const float *lo = c - 3 * k, *hi = c + 3 * k;
+                s0 += w[k] * (lo[0] + hi[0]);
+                s1 += w[k] * (lo[1] + hi[1]);
+                s2 += w[k] * (lo[2] + hi[2]);
+            }
+        } else {
+            for (int k = 1; k <= r; k++) {
+                const float *lo = src + 3 * ibl__clampi(x - k, 0, l->w - 1);
+                const float *hi = src + 3 * ibl__clampi(x + k, 0, l->w - 1);
+                s0 += w[k] * (lo[0] + hi[0]);
+                s1 += w[k] * (lo[1] + hi[1]);
+                s2 += w[k] * (lo[2] + hi[2]);
+            }
         }
         dst[3 * x] = s0, dst[3 * x + 1] = s1, dst[3 * x + 2] = s2;
     }
@@ -174,13 +186,15 @@ static void blur_v_row(void *arg, int y)
             continue;
         }
         int r = j->kernels->radius[b];
-        const float *w = j->kernels->weights + (size_t)b * j->kernels->stride;
-        float s0 = 0, s1 = 0, s2 = 0;
-        for (int k = -r; k <= r; k++) {
-            const float *p = col + (size_t)ibl__clampi(y + k, 0, l->h - 1) * l->w * 3;
-            s0 += w[k + r] * p[0];
-            s1 += w[k + r] * p[1];
-            s2 += w[k + r] * p[2];
+        const float *w = j->kernels->weights + (size_t)b * j->kernels->stride + r; /* w[0]: centre */
+        const float *c = col + (size_t)y * l->w * 3;
+        float s0 = w[0] * c[0], s1 = w[0] * c[1], s2 = w[0] * c[2];
+        for (int k = 1; k <= r; k++) {
+            const float *lo = col + (size_t)ibl__clampi(y - k, 0, l->h - 1) * l->w * 3;
+            const float *hi = col + (size_t)ibl__clampi(y + k, 0, l->h - 1) * l->w * 3;
+            s0 += w[k] * (lo[0] + hi[0]);
+            s1 += w[k] * (lo[1] + hi[1]);
+            s2 += w[k] * (lo[2] + hi[2]);
         }
         dst[3 * x] = s0, dst[3 * x + 1] = s1, dst[3 * x + 2] = s2;
     }
