@@ -34,7 +34,7 @@ static int write_data(const char *dir, int size)
     ibl_context_create(NULL, &ctx);
     ibl_image n;
     if (ibl_image_alloc(ctx, size, size, &n) != IBL_OK) return 1;
-    skin_pores_normal_map(&n, size / 16, 2.0);
+    skin_pores_normal_map(&n, size / 8, 1.0);
     snprintf(path, sizeof path, "%s/pores.png", dir);
     ibl_status st = ibl_write_image(ctx, path, &n, &(ibl_write_desc){.format = IBL_FORMAT_RGBA16_UNORM});
     if (st != IBL_OK) fprintf(stderr, "%s\n", ibl_context_message(ctx));
@@ -47,7 +47,7 @@ static void run(const ibl_scene *mesh, ibl_context *c1, ibl_context *c2, int siz
 {
     ibl_image normal, stretch, out1[3], out2[3], thick;
     if (ibl_image_alloc(c2, size, size, &normal) != IBL_OK) return;
-    skin_pores_normal_map(&normal, size / 16, 2.0);
+    skin_pores_normal_map(&normal, size / 8, 1.0);
     ibl_skin_map_desc md = {size, size, 0};
     double ts[3], t1[3], t2[3], c1s[3], c2s[3], tt = 0;
     for (int r = 0; r < 3; r++) {

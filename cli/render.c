@@ -75,9 +75,17 @@ static const char usage[] =
     "  --compare A B         two variants side by side, labelled; each is a comma-separated\n"
     "                        list of so=, mix=, energy=, bp-diffuse=ambient-brdf|f0, samples=,\n"
     "                        sphere-ao=, light-size=, horizon, mirror-direction, nearest-level,\n"
-    "                        reference, applied over the other options, e.g.\n"
+    "                        reference, skin=off|on, applied over the other options, e.g.\n"
     "                        --compare so=none so=triace-fast,sphere-ao=0.2\n"
     "                        --compare '' reference,samples=512\n"
+    "                        --compare skin=off skin=on\n"
+    "skin (docs/SKIN.md; --scene is then a glTF or OBJ mesh with texture coordinates):\n"
+    "  --scattered BASE      the scattered normal maps BASE_r, _g, _b (what `ibl sss -o BASE`\n"
+    "                        wrote), each colour channel lit along its own normal\n"
+    "  --normal FILE         the unscattered normal map (specular, and skin=off)\n"
+    "  --transmittance FILE  the grey transmittance map (`ibl sss --transmittance`)\n"
+    "  --range MM            the thickness its 0 stands for (default 8)\n"
+    "  --albedo R,G,B        the skin's diffuse albedo (default 0.8,0.55,0.45)\n"
     CLI_INPUT_HELP
     "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n";
 
@@ -98,6 +106,11 @@ static int apply_setting(ibl_render_desc *d, const char *key, const char *value)
     if (strcmp(key, "nearest-level") == 0) return d->shade.nearest_level = 1;
     if (strcmp(key, "mirror-direction") == 0) return d->shade.mirror_direction = 1;
     if (strcmp(key, "reference") == 0) return d->reference = 1;
+    if (strcmp(key, "skin") == 0) {
+        if (!value || (strcmp(value, "off") != 0 && strcmp(value, "on") != 0)) return 0;
+        d->skin_off = strcmp(value, "off") == 0;
+        return 1;
+    }
     if (strcmp(key, "bp-diffuse") == 0) {
         if (!value) return 0;
         if (strcmp(value, "ambient-brdf") == 0)
@@ -253,6 +266,8 @@ static void parse_light(cli_args *a, const char *spec, ibl_light *light)
 /* What the command line asked for besides the variants. */
 typedef struct render_options {
     const char *output, *scene, *environment, *cmp[2];
+    const char *scattered, *normal, *transmittance;
+    ibl_render_skin skin;
     ibl_light lights[MAX_LIGHTS];
     double exposure;
     int exposure_given, specular_size, report, atlas;
@@ -318,6 +333,16 @@ static void parse(cli_args *a, render_options *o)
             if (!ibl_light_size_model_from_name(v, &o->base.shade.light_size))
                 cli_usage_error(a, "unknown --light-size '%s'", v);
         }
+        else if (cli_is(a, arg, "--scattered", NULL)) o->scattered = cli_value(a, arg);
+        else if (cli_is(a, arg, "--normal", NULL)) o->normal = cli_value(a, arg);
+        else if (cli_is(a, arg, "--transmittance", NULL)) o->transmittance = cli_value(a, arg);
+        else if (cli_is(a, arg, "--range", NULL)) o->skin.thickness_range_mm = (float)cli_double(a, arg, 1e-3, 1e6);
+        else if (cli_is(a, arg, "--albedo", NULL)) {
+            const char *v = cli_value(a, arg);
+            if (!parse_numbers(v, o->skin.albedo, 3) || !(o->skin.albedo[0] >= 0 && o->skin.albedo[1] >= 0 &&
+                                                          o->skin.albedo[2] >= 0))
+                cli_usage_error(a, "--albedo wants R,G,B >= 0, not '%s'", v);
+        }
         else if (cli_is(a, arg, "--chain", NULL)) o->parts.specular = cli_value(a, arg);
         else if (cli_is(a, arg, "--lut", NULL)) o->parts.splitsum = cli_value(a, arg);
         else if (cli_is(a, arg, "--ambient", NULL)) o->parts.ambient_brdf = cli_value(a, arg);
@@ -336,6 +361,10 @@ static void parse(cli_args *a, render_options *o)
     cli_check_output(a, o->output);
     if ((o->parts.splitsum || o->parts.ambient_brdf) && !o->parts.specular)
         cli_usage_error(a, "--lut and --ambient go with --chain");
+    if ((o->normal || o->transmittance) && !o->scattered)
+        cli_usage_error(a, "--normal and --transmittance go with --scattered");
+    if (o->scattered && (!o->normal || !o->scene || strcmp(o->scene, "balls") == 0))
+        cli_usage_error(a, "--scattered needs --normal and --scene MESH");
 }
 
 static int is_bake(const char *path)
@@ -442,6 +471,41 @@ static ibl_status render_and_write(ibl_context *ctx, const cli_args *a, const re
     return st;
 }
 
+/* The skin's mesh and maps (--scattered): five images, freed by the caller. */
+typedef struct skin_data {
+    ibl_scene *mesh;
+    ibl_image maps[5]; /* normal, scattered r g b, transmittance */
+} skin_data;
+
+static ibl_status load_skin(ibl_context *ctx, render_options *o, skin_data *sd)
+{
+    const char *failed = o->scene;
+    ibl_status st = ibl_scene_load(ctx, o->scene, &sd->mesh);
+    char paths[5][4096];
+    snprintf(paths[0], sizeof paths[0], "%s", o->normal);
+    const char *dot = strrchr(o->scattered, '.'), *slash = strrchr(o->scattered, '/');
+    if (!dot || (slash && dot < slash)) dot = o->scattered + strlen(o->scattered);
+    for (int c = 0; c < 3; c++)
+        snprintf(paths[1 + c], sizeof paths[1 + c], "%.*s_%c%s", (int)(dot - o->scattered),
+                 o->scattered, "rgb"[c], dot);
+    snprintf(paths[4], sizeof paths[4], "%s", o->transmittance ? o->transmittance : "");
+    for (int i = 0; i < 5 && st == IBL_OK; i++) {
+        if (!paths[i][0]) continue;
+        failed = paths[i];
+        st = ibl_read_data_image(ctx, paths[i], NULL, &sd->maps[i]);
+    }
+    if (st != IBL_OK) {
+        cli_report_failure(ctx, failed, st);
+        return st;
+    }
+    o->skin.mesh = sd->mesh;
+    o->skin.normal = &sd->maps[0];
+    for (int c = 0; c < 3; c++) o->skin.scattered[c] = &sd->maps[1 + c];
+    o->skin.transmittance = o->transmittance ? &sd->maps[4] : NULL;
+    o->base.skin = &o->skin;
+    return IBL_OK;
+}
+
 int cli_cmd_render(int argc, char **argv)
 {
     cli_args a = {argc, argv, 0, "render", usage, {0}, {0}, 0};
@@ -460,6 +524,9 @@ int cli_cmd_render(int argc, char **argv)
         o.base.environment = &environment;
     }
     ibl_status st = IBL_OK;
+    skin_data sd;
+    memset(&sd, 0, sizeof sd);
+    if (rc == CLI_EXIT_OK && o.scattered && load_skin(ctx, &o, &sd) != IBL_OK) rc = CLI_EXIT_BAD_INPUT;
     if (rc == CLI_EXIT_OK) {
         st = ibl_bake_probe(ctx, &bake, &probe);
         if (st == IBL_OK && o.atlas && !probe.atlas) {
@@ -469,7 +536,7 @@ int cli_cmd_render(int argc, char **argv)
             probe.use_atlas = 1;
             st = ibl_probe_validate(ctx, &probe);
         }
-        if (rc == CLI_EXIT_OK && st == IBL_OK && o.scene && strcmp(o.scene, "balls") != 0)
+        if (rc == CLI_EXIT_OK && st == IBL_OK && o.scene && strcmp(o.scene, "balls") != 0 && !o.scattered)
             st = ibl_mesh_load_obj(ctx, o.scene, 0, &mesh);
         if (rc == CLI_EXIT_OK && st == IBL_OK)
             cli_info(&a.common, "probe ready in %.2f s\n", cli_seconds() - t0);
@@ -477,6 +544,8 @@ int cli_cmd_render(int argc, char **argv)
         if (st != IBL_OK) cli_report_failure(ctx, a.positional[0], st), rc = CLI_EXIT_BAD_INPUT;
     }
     ibl_mesh_free(ctx, &mesh);
+    ibl_scene_destroy(sd.mesh);
+    for (int i = 0; i < 5; i++) ibl_image_free(ctx, &sd.maps[i]);
     ibl_cubemap_free(ctx, &environment);
     ibl_bake_free(ctx, &bake);
     ibl_context_destroy(ctx);

@@ -18,6 +18,7 @@
 #include "bake.h"
 #include "shade.h"
 #include "light.h"
+#include "scene.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -40,6 +41,20 @@ typedef struct ibl_mesh {
 ibl_status ibl_mesh_load_obj(ibl_context *ctx, const char *path, int ao_rays, ibl_mesh *out);
 void ibl_mesh_free(ibl_context *ctx, ibl_mesh *mesh);
 
+/* Skin on a mesh with texture coordinates (skin.h; shade.h "Skin"): the diffuse term of each
+ * colour channel lit along its own scattered normal plus the translucency, and a glTF
+ * dielectric specular (F0 0.04) on the unscattered normal map. */
+typedef struct ibl_render_skin {
+    const ibl_scene *mesh;           /* drawn centred and scaled like ibl_render_desc.mesh    */
+    const ibl_image *normal;         /* the tangent-space normal map (0.5 n + 0.5)             */
+    const ibl_image *scattered[3];   /* its red, green, blue scatterings (ibl sss)            */
+    const ibl_image *transmittance;  /* grey map of ibl_skin_transmittance_from_thickness, or
+                                        NULL for no translucency                             */
+    float albedo[3];                 /* diffuse albedo; all zero: (0.8, 0.55, 0.45)            */
+    float roughness;                 /* of the specular; 0: 0.45                               */
+    float thickness_range_mm;        /* of the transmittance map; 0: the default               */
+} ibl_render_skin;
+
 typedef struct ibl_render_desc {
     int width, height;              /* 0: 1024 x 512                                            */
     ibl_shade_desc shade;           /* specular occlusion, mix, energy compensation, ...         */
@@ -60,6 +75,10 @@ typedef struct ibl_render_desc {
                                     directional light: a disc of angular radius atan(size)) of
                                     uniform radiance, sampled over its solid angle            */
     int light_count;
+    const ibl_render_skin *skin;    /* draw this skin instead of the spheres or the mesh (runtime
+                                       shading only)                                          */
+    int skin_off;                   /* the skin mesh with its unscattered normal map for all
+                                       three channels and no translucency: the "before"       */
 } ibl_render_desc;
 
 /* One object of the scene, for per-object measurements. */

@@ -256,6 +256,7 @@ typedef struct hit {
     int id;
     ibl_vec3 d, n, p; /* ray direction, normal and position of the hit */
     ibl_material mat;
+    ibl__skin_hit skin; /* with desc->skin */
 } hit;
 
 /* The primary ray through the continuous pixel position (fx, fy) (pixel x covers [x, x+1)). */
@@ -268,7 +269,11 @@ static void trace_primary(const render_job *job, float fx, float fy, hit *h)
     float py = 1.0f - fy / (float)im->height * 2.0f;
     h->d = ibl__norm(ibl__v3(px * job->half_w, py * job->half_h, -EYE_Z));
     float t = 0.0f, ao = 1.0f;
-    if (desc->mesh) {
+    if (desc->skin) {
+        h->id = ibl__skin_intersect(desc->skin, eye, h->d, &t, &h->skin) ? 0 : -1;
+        h->n = h->skin.n;
+        memset(&h->mat, 0, sizeof h->mat);
+    } else if (desc->mesh) {
         h->id = ibl__mesh_intersect(desc->mesh, eye, h->d, &t, &h->n, &ao) ? 0 : -1;
         static const float grey[3] = {0.9f, 0.9f, 0.9f};
         h->mat = ibl_material_gltf(grey, 1.0f, 0.3f);
@@ -293,6 +298,10 @@ static void trace_primary(const render_job *job, float fx, float fy, hit *h)
 static void runtime_shade(const render_job *job, const hit *h, float out[3])
 {
     const ibl_render_desc *desc = job->desc;
+    if (desc->skin) {
+        ibl__skin_shade(job->probe, desc, &h->skin, ibl__v3(-h->d.x, -h->d.y, -h->d.z), out);
+        return;
+    }
     ibl_surface surf;
     memset(&surf, 0, sizeof surf);
     surf.n = h->n;
@@ -411,6 +420,13 @@ ibl_status ibl_render(ibl_context *ctx, const ibl_probe *probe, const ibl_render
         ibl_status ls = ibl_light_validate(ctx, &desc->lights[i], i);
         if (ls != IBL_OK) return ls;
     }
+    const ibl_render_skin *skin = desc->skin;
+    if (skin && (!skin->mesh || !skin->normal || !skin->scattered[0] || !skin->scattered[1] ||
+                 !skin->scattered[2]))
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "render: skin without its mesh or maps");
+    if (skin && (desc->reference || desc->light_count > 0))
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "render: skin is drawn by the runtime shading "
+                         "of the probe only (no reference, no punctual lights)");
     int w = desc->width > 0 ? desc->width : 1024;
     int h = desc->height > 0 ? desc->height : (desc->width > 0 ? (w + 1) / 2 : 512);
     render_job *job = ibl_calloc(ctx, 1, sizeof *job);

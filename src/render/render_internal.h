@@ -35,4 +35,16 @@ void ibl__env_sampler_destroy(ibl_context *ctx, ibl__env_sampler *s);
 ibl_vec3 ibl__env_sampler_sample(const ibl__env_sampler *s, float u0, float u1, float *pdf);
 float ibl__env_sampler_pdf(const ibl__env_sampler *s, ibl_vec3 d);
 
+/* Skin (skin.c): a hit on ibl_render_desc.skin's mesh, rays in render space. */
+typedef struct ibl__skin_hit {
+    ibl_vec3 n, geometric_normal; /* interpolated and the triangle's, facing the ray */
+    float uv[2];
+    int triangle;
+} ibl__skin_hit;
+int ibl__skin_intersect(const ibl_render_skin *skin, ibl_vec3 o, ibl_vec3 d, float *t,
+                        ibl__skin_hit *out);
+/* Radiance toward v (unit, toward the eye) at a hit: ibl_skin_shade plus the specular. */
+void ibl__skin_shade(const ibl_probe *probe, const ibl_render_desc *desc, const ibl__skin_hit *h,
+                     ibl_vec3 v, float out[3]);
+
 #endif
