@@ -326,6 +326,67 @@ static void shade_reads_each_channel_along_its_normal(void **state)
     for (int c = 0; c < 3; c++) assert_true(r.translucent[c] == 0.0f);
 }
 
+/* ---- the preview renderer ----------------------------------------------------------------- */
+
+/* Skin in ibl_render: with scattered maps equal to the normal map and no transmittance, skin on
+ * and skin off are the same image bit for bit (the wiring reads the maps it is given); flat
+ * scattered maps change it; the reference refuses skin. */
+static void render_skin_wiring(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(2);
+    const char *path = test_path("render_ball.obj");
+    assert_int_equal(skin_write_sphere_obj(path, 0.1, 48, 24, 0.0), 0);
+    ibl_scene *mesh = load_mesh(ctx, path);
+    ibl_cubemap env;
+    assert_int_equal(ibl_cubemap_alloc(ctx, 16, 1, &env), IBL_OK);
+    test_fill_smooth(&env);
+    ibl_bake_desc bd;
+    ibl_render_bake_desc(&env, 16, &bd);
+    ibl_bake_data bake;
+    ibl_probe probe;
+    assert_int_equal(ibl_bake_compute(ctx, &env, &bd, &bake), IBL_OK);
+    assert_int_equal(ibl_bake_probe(ctx, &bake, &probe), IBL_OK);
+    ibl_image normal, flat;
+    assert_int_equal(ibl_image_alloc(ctx, 64, 32, &normal), IBL_OK);
+    assert_int_equal(ibl_image_alloc(ctx, 64, 32, &flat), IBL_OK);
+    skin_pores_normal_map(&normal, 8, 1.0);
+    for (int i = 0; i < 64 * 32; i++) {
+        flat.pixels[4 * i] = flat.pixels[4 * i + 1] = 0.5f;
+        flat.pixels[4 * i + 2] = flat.pixels[4 * i + 3] = 1.0f;
+    }
+    ibl_render_skin skin = {mesh, &normal, {&normal, &normal, &normal}, NULL, {0, 0, 0}, 0, 0};
+    ibl_render_desc d;
+    memset(&d, 0, sizeof d);
+    d.width = 96;
+    d.height = 48;
+    d.skin = &skin;
+    ibl_image on, off, smooth;
+    assert_int_equal(ibl_render(ctx, &probe, &d, &on, NULL), IBL_OK);
+    d.skin_off = 1;
+    assert_int_equal(ibl_render(ctx, &probe, &d, &off, NULL), IBL_OK);
+    assert_memory_equal(on.pixels, off.pixels, sizeof(float) * 4 * 96 * 48);
+    d.skin_off = 0;
+    for (int c = 0; c < 3; c++) skin.scattered[c] = &flat;
+    assert_int_equal(ibl_render(ctx, &probe, &d, &smooth, NULL), IBL_OK);
+    assert_memory_not_equal(on.pixels, smooth.pixels, sizeof(float) * 4 * 96 * 48);
+    /* the centre pixel hits the ball: its colour is finite and positive */
+    const float *centre = ibl_image_texel(&smooth, 48, 24);
+    assert_true(centre[0] > 0.0f && centre[0] < 1e6f);
+    d.reference = 1;
+    ibl_image ref;
+    assert_int_equal(ibl_render(ctx, &probe, &d, &ref, NULL), IBL_ERR_UNSUPPORTED);
+    ibl_image_free(ctx, &on);
+    ibl_image_free(ctx, &off);
+    ibl_image_free(ctx, &smooth);
+    ibl_image_free(ctx, &normal);
+    ibl_image_free(ctx, &flat);
+    ibl_bake_free(ctx, &bake);
+    ibl_cubemap_free(ctx, &env);
+    ibl_scene_destroy(mesh);
+    ibl_context_destroy(ctx);
+}
+
 /* ---- the command line ----------------------------------------------------------------------- */
 
 static int count_lines(const char *s)
@@ -414,6 +475,19 @@ static void cli_writes_maps_and_refuses_bad_inputs(void **state)
         assert_non_null(strstr(text, cases[i][1]));
         assert_false(test_file_exists(test_path("bad_out_r.png")));
     }
+    /* ibl render with a missing scattered map: one line naming it, no image */
+    assert_int_equal(test_run_cli(&out, "render -q sky --scene %s --scattered %s/none.png --normal %s "
+                                  "--width 32 -o %s", mesh, test_tmpdir(), normal,
+                                  test_path("render_out.png")), 1);
+    assert_int_equal(count_lines(out), 1);
+    assert_non_null(strstr(out, "none_r.png"));
+    assert_false(test_file_exists(test_path("render_out.png")));
+    /* and with the maps it draws skin on and off side by side */
+    assert_int_equal(test_run_cli(&out, "render -q sky --scene %s --scattered %s --normal %s "
+                                  "--transmittance %s --width 64 --compare skin=off skin=on -o %s",
+                                  mesh, base, normal, test_path("trans.png"),
+                                  test_path("render_out.png")), 0);
+    assert_true(test_file_exists(test_path("render_out.png")));
     ibl_image_free(ctx, &n);
     ibl_context_destroy(ctx);
 }
@@ -429,6 +503,7 @@ int main(void)
         cmocka_unit_test(scatter_flat_plane_matches_gaussian_blur),
         cmocka_unit_test(shade_constant_light),
         cmocka_unit_test(shade_reads_each_channel_along_its_normal),
+        cmocka_unit_test(render_skin_wiring),
         cmocka_unit_test(cli_writes_maps_and_refuses_bad_inputs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
