@@ -4,7 +4,8 @@
  * a procedural pore normal map, both made here (tests/support/skin_data.c).
  *
  *   bench_skin [SIZE...]          sizes of the square maps (default 1024 2048 4096)
- *   bench_skin --write DIR [SIZE] writes DIR/head.obj and DIR/pores.png (SIZE, default 1024)
+ *   bench_skin --write DIR [SIZE] writes DIR/head.obj, DIR/ear.obj (a thin flap) and
+ *                                 DIR/pores.png (SIZE, default 1024)
  *                                 for `ibl sss` and `ibl render` (docs/SKIN.md) and exits
  * Wall-clock seconds, median of 3 runs; thickness: 16 rays per texel, at most 1024. */
 #include "ibl/ibl.h"
@@ -30,6 +31,9 @@ static int write_data(const char *dir, int size)
     char path[1024];
     snprintf(path, sizeof path, "%s/head.obj", dir);
     if (skin_write_sphere_obj(path, 0.1, 256, 128, 0.25) != 0) return fprintf(stderr, "cannot write %s\n", path), 1;
+    /* a thin flap for translucency: 60 x 80 mm, 5 mm thick at its centre */
+    snprintf(path, sizeof path, "%s/ear.obj", dir);
+    if (skin_write_ellipsoid_obj(path, 0.03, 0.04, 0.0025, 128, 64) != 0) return fprintf(stderr, "cannot write %s\n", path), 1;
     ibl_context *ctx;
     ibl_context_create(NULL, &ctx);
     ibl_image n;

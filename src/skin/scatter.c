@@ -20,7 +20,7 @@
 #include <math.h>
 #include <string.h>
 
-enum { MAX_LEVELS = 12, BINS_PER_OCTAVE = 128, OCTAVE_MIN = -4, OCTAVE_MAX = 8 };
+enum { MAX_LEVELS = 12, BINS_PER_OCTAVE = 128, OCTAVE_MIN = -4, OCTAVE_MAX = 8, V_BAND_ROWS = 16 };
 enum { BIN_COUNT = (OCTAVE_MAX - OCTAVE_MIN) * BINS_PER_OCTAVE + 1 };
 
 /* ---- the kernel table ------------------------------------------------------------------------ */
@@ -79,6 +79,7 @@ typedef struct scatter_job {
     const kernel_table *kernels;
     const ibl_skin_profile *profile;
     float *tmp, *blurred;        /* scratch: one level's worth of float3                      */
+    int *v_bins;                 /* scratch of the V pass: a row of kernel bins per band       */
     float *acc[3];               /* level-0 float3 sums per output channel                    */
     /* the Gaussian of the current pass */
     int gaussian, lvl;
@@ -173,30 +174,40 @@ static void blur_u_row(void *arg, int y)
     }
 }
 
-static void blur_v_row(void *arg, int y)
+/* The V pass, a band of rows per task: each row is summed tap by tap over whole rows (k outer,
+ * x inner), so that it reads rows y - k and y + k contiguously instead of a column per texel;
+ * each texel keeps its own kernel (bin and radius) and stops at its radius. The sums are the
+ * same in the same order whatever the band, so the output does not depend on the threads. */
+static void blur_v_band(void *arg, int band)
 {
     scatter_job *j = arg;
     const level *l = &j->levels[j->lvl];
-    float *dst = j->blurred + (size_t)y * l->w * 3;
-    for (int x = 0; x < l->w; x++) {
-        int b = texel_bin(j, l, (size_t)y * l->w + x, 1);
-        const float *col = j->tmp + 3 * (size_t)x;
-        if (b < 0) {
-            memcpy(dst + 3 * x, col + (size_t)y * l->w * 3, 3 * sizeof(float));
-            continue;
+    int w = l->w, y0 = band * V_BAND_ROWS, y1 = y0 + V_BAND_ROWS < l->h ? y0 + V_BAND_ROWS : l->h;
+    int *bins = j->v_bins + (size_t)band * j->levels[0].w;
+    const float *table = j->kernels->weights;
+    for (int y = y0; y < y1; y++) {
+        float *dst = j->blurred + (size_t)y * w * 3;
+        const float *centre = j->tmp + (size_t)y * w * 3;
+        int rmax = 0;
+        for (int x = 0; x < w; x++) {
+            int b = texel_bin(j, l, (size_t)y * w + x, 1);
+            bins[x] = b;
+            float c = b < 0 ? 1.0f : table[(size_t)b * j->kernels->stride + j->kernels->radius[b]];
+            for (int k = 0; k < 3; k++) dst[3 * x + k] = c * centre[3 * x + k];
+            if (b >= 0 && j->kernels->radius[b] > rmax) rmax = j->kernels->radius[b];
         }
-        int r = j->kernels->radius[b];
-        const float *w = j->kernels->weights + (size_t)b * j->kernels->stride + r; /* w[0]: centre */
-        const float *c = col + (size_t)y * l->w * 3;
-        float s0 = w[0] * c[0], s1 = w[0] * c[1], s2 = w[0] * c[2];
-        for (int k = 1; k <= r; k++) {
-            const float *lo = col + (size_t)ibl__clampi(y - k, 0, l->h - 1) * l->w * 3;
-            const float *hi = col + (size_t)ibl__clampi(y + k, 0, l->h - 1) * l->w * 3;
-            s0 += w[k] * (lo[0] + hi[0]);
-            s1 += w[k] * (lo[1] + hi[1]);
-            s2 += w[k] * (lo[2] + hi[2]);
+        for (int k = 1; k <= rmax; k++) {
+            const float *lo = j->tmp + (size_t)ibl__clampi(y - k, 0, l->h - 1) * w * 3;
+            const float *hi = j->tmp + (size_t)ibl__clampi(y + k, 0, l->h - 1) * w * 3;
+            for (int x = 0; x < w; x++) {
+                int b = bins[x];
+                if (b < 0 || k > j->kernels->radius[b]) continue;
+                float wk = table[(size_t)b * j->kernels->stride + j->kernels->radius[b] + k];
+                dst[3 * x] += wk * (lo[3 * x] + hi[3 * x]);
+                dst[3 * x + 1] += wk * (lo[3 * x + 1] + hi[3 * x + 1]);
+                dst[3 * x + 2] += wk * (lo[3 * x + 2] + hi[3 * x + 2]);
+            }
         }
-        dst[3 * x] = s0, dst[3 * x + 1] = s1, dst[3 * x + 2] = s2;
     }
 }
 
@@ -332,7 +343,7 @@ static void run_gaussians(ibl_context *ctx, scatter_job *j)
         j->scale2 = (float)(1.0 / f);
         const level *l = &j->levels[j->lvl];
         ibl_parallel_for(ctx, l->h, blur_u_row, j);
-        ibl_parallel_for(ctx, l->h, blur_v_row, j);
+        ibl_parallel_for(ctx, (l->h + V_BAND_ROWS - 1) / V_BAND_ROWS, blur_v_band, j);
         ibl_parallel_for(ctx, j->levels[0].h, accumulate_row, j);
     }
 }
@@ -366,8 +377,10 @@ ibl_status ibl_skin_scatter_normals(ibl_context *ctx, const ibl_image *normal_ma
     if (st == IBL_OK) {
         j.tmp = ibl_alloc(ctx, n3 * sizeof(float));
         j.blurred = ibl_alloc(ctx, n3 * sizeof(float));
+        j.v_bins = ibl_alloc(ctx, (size_t)((h + V_BAND_ROWS - 1) / V_BAND_ROWS) * w * sizeof(int));
         for (int c = 0; c < 3; c++) j.acc[c] = ibl_calloc(ctx, n3, sizeof(float));
-        if (!j.tmp || !j.blurred || !j.acc[0] || !j.acc[1] || !j.acc[2]) st = ibl_context_status(ctx);
+        if (!j.tmp || !j.blurred || !j.v_bins || !j.acc[0] || !j.acc[1] || !j.acc[2])
+            st = ibl_context_status(ctx);
     }
     if (st == IBL_OK) run_gaussians(ctx, &j);
     for (int c = 0; c < 3 && st == IBL_OK; c++) st = ibl_image_alloc(ctx, w, h, &out[c]);
@@ -380,6 +393,7 @@ ibl_status ibl_skin_scatter_normals(ibl_context *ctx, const ibl_image *normal_ma
     for (int c = 0; c < 3; c++) ibl_free(ctx, j.acc[c]);
     ibl_free(ctx, j.tmp);
     ibl_free(ctx, j.blurred);
+    ibl_free(ctx, j.v_bins);
     for (int l = 0; l < MAX_LEVELS; l++) {
         ibl_free(ctx, j.levels[l].normal);
         ibl_free(ctx, j.levels[l].texels_per_mm);

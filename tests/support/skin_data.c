@@ -46,6 +46,28 @@ int skin_write_sphere_obj(const char *path, double r, int seg_u, int seg_v, doub
     return fclose(f) == 0 ? 0 : -1;
 }
 
+int skin_write_ellipsoid_obj(const char *path, double rx, double ry, double rz, int seg_u, int seg_v)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return -1;
+    for (int j = 0; j <= seg_v; j++)
+        for (int i = 0; i <= seg_u; i++) {
+            double u = (double)i / seg_u, v = (double)j / seg_v;
+            double theta = PI * v, phi = 2 * PI * u;
+            double x = sin(theta) * cos(phi), y = cos(theta), z = -sin(theta) * sin(phi);
+            double n[3] = {x / rx, y / ry, z / rz}, len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            fprintf(f, "v %.9g %.9g %.9g\nvt %.9g %.9g\nvn %.9g %.9g %.9g\n", rx * x, ry * y, rz * z,
+                    u, 1.0 - v, n[0] / len, n[1] / len, n[2] / len);
+        }
+    for (int j = 0; j < seg_v; j++)
+        for (int i = 0; i < seg_u; i++) {
+            int a = j * (seg_u + 1) + i + 1, b = a + 1, c = a + seg_u + 1, d = c + 1;
+            fprintf(f, "f %d/%d/%d %d/%d/%d %d/%d/%d\n", a, a, a, c, c, c, d, d, d);
+            fprintf(f, "f %d/%d/%d %d/%d/%d %d/%d/%d\n", a, a, a, d, d, d, b, b, b);
+        }
+    return fclose(f) == 0 ? 0 : -1;
+}
+
 int skin_write_slab_obj(const char *path, double sx, double sz, double depth)
 {
     FILE *f = fopen(path, "w");

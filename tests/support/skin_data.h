@@ -11,6 +11,9 @@
  * head-like shape instead (stretched along Y, a nose and brow bumps of that relative height;
  * normals from the faces then). Returns 0 on success. */
 int skin_write_sphere_obj(const char *path, double r, int seg_u, int seg_v, double blob);
+/* An ellipsoid of radii (rx, ry, rz) with the sphere's UVs and its true normals: with a small
+ * rz, a thin flap (an ear) whose thickness falls to 0 at the rim. */
+int skin_write_ellipsoid_obj(const char *path, double rx, double ry, double rz, int seg_u, int seg_v);
 /* A closed box [-sx/2, sx/2] x [-depth, 0] x [-sz/2, sz/2]: its top face (y = 0) carries the
  * whole texture (u along +x, image v along +z), the other faces have no texture area. */
 int skin_write_slab_obj(const char *path, double sx, double sz, double depth);
