@@ -15,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static double median_ms(double t[3]) { return bench_median(t, 3); }
 
@@ -98,7 +99,9 @@ int main(int argc, char **argv)
     ibl_context *c1, *c2;
     ibl_context_create(&(ibl_context_desc){.threads = 1}, &c1);
     ibl_context_create(&(ibl_context_desc){.threads = 2}, &c2);
-    const char *path = "bench_skin_head.obj";
+    char dir[] = "/tmp/bench_skin_XXXXXX", path[64];
+    if (!mkdtemp(dir)) return 1;
+    snprintf(path, sizeof path, "%s/head.obj", dir);
     if (skin_write_sphere_obj(path, 0.1, 256, 128, 0.25) != 0) return 1;
     ibl_scene *mesh;
     if (ibl_scene_load(c2, path, &mesh) != IBL_OK) return fprintf(stderr, "%s\n", ibl_context_message(c2)), 1;
@@ -112,6 +115,7 @@ int main(int argc, char **argv)
     for (int i = 0; i < count; i++) run(mesh, c1, c2, sizes[i]);
     ibl_scene_destroy(mesh);
     remove(path);
+    remove(dir);
     ibl_context_destroy(c1);
     ibl_context_destroy(c2);
     return 0;

@@ -20,6 +20,7 @@ run "$B/bench_triace_kernels"
 run "$B/bench_sh" "$HDRI"
 run "$B/bench_dynamic" 64 201 1
 run "$B/bench_scene" 2000000
+run "$B/bench_skin"
 run sh bench/compress_tables.sh "$BUILD" "$HDRI"
 if [ "${BENCH_FULL:-0}" = 1 ]; then
   mkdir -p "$BUILD/refcache"

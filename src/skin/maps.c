@@ -60,6 +60,7 @@ ibl_status ibl__skin_rasterize(ibl_context *ctx, const ibl_scene *mesh, int w, i
         if (!barycentric(xy, 0.0, 0.0, b)) continue; /* no area in UV space */
         double x0 = fmin(xy[0][0], fmin(xy[1][0], xy[2][0])), x1 = fmax(xy[0][0], fmax(xy[1][0], xy[2][0]));
         double y0 = fmin(xy[0][1], fmin(xy[1][1], xy[2][1])), y1 = fmax(xy[0][1], fmax(xy[1][1], xy[2][1]));
+        if (!(x0 < w && y0 < h && x1 >= 0 && y1 >= 0)) continue; /* off the texture, or NaN */
         int i0 = (int)fmax(0.0, ceil(x0 - 0.5)), i1 = (int)fmin(w - 1.0, floor(x1 - 0.5));
         int j0 = (int)fmax(0.0, ceil(y0 - 0.5)), j1 = (int)fmin(h - 1.0, floor(y1 - 0.5));
         for (int j = j0; j <= j1; j++)

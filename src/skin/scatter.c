@@ -59,6 +59,7 @@ static void kernels_free(ibl_context *ctx, kernel_table *k)
 static int kernel_bin(float sigma)
 {
     if (!(sigma >= exp2f(OCTAVE_MIN))) return -1;
+    if (!(sigma < exp2f(OCTAVE_MAX))) return BIN_COUNT - 1; /* also +inf (no stretch at all) */
     int b = (int)lrintf(log2f(sigma) * BINS_PER_OCTAVE) - OCTAVE_MIN * BINS_PER_OCTAVE;
     return b < BIN_COUNT ? b : BIN_COUNT - 1;
 }
