@@ -54,7 +54,7 @@ static void run(const ibl_scene *mesh, ibl_context *c1, ibl_context *c2, int siz
     if (ibl_image_alloc(c2, size, size, &normal) != IBL_OK) return;
     skin_pores_normal_map(&normal, size / 8, 1.0);
     ibl_skin_map_desc md = {size, size, 0};
-    double ts[3], t1[3], t2[3], c1s[3], c2s[3], tt = 0;
+    double ts[3], t1[3], t2[3], c1s[3], c2s[3], tt = 0, tc = 0;
     for (int r = 0; r < 3; r++) {
         double t0 = bench_now_ms();
         ibl_skin_stretch_map(c2, mesh, &md, &stretch);
@@ -80,14 +80,15 @@ static void run(const ibl_scene *mesh, ibl_context *c1, ibl_context *c2, int siz
         if (!same) printf("  (1 and 2 threads differ!)\n");
     }
     if (size <= 1024 && !getenv("BENCH_SKIN_NO_THICKNESS")) {
-        double t0 = bench_now_ms();
+        double t0 = bench_now_ms(), p0 = cpu_s();
         ibl_skin_thickness_map(c2, mesh, &(ibl_skin_thickness_desc){md, 16, 0, 0}, &thick);
         tt = bench_now_ms() - t0;
+        tc = cpu_s() - p0;
         ibl_image_free(c2, &thick);
     }
     printf("| %5d | %7.2f | %7.2f (%.2f CPU) | %7.2f (%.2f CPU) | ", size, median_ms(ts) / 1e3,
            median_ms(t1) / 1e3, bench_median(c1s, 3), median_ms(t2) / 1e3, bench_median(c2s, 3));
-    if (tt > 0) printf("%7.2f |\n", tt / 1e3);
+    if (tt > 0) printf("%7.2f (%.2f CPU) |\n", tt / 1e3, tc);
     else printf("      - |\n");
     ibl_image_free(c2, &stretch);
     ibl_image_free(c2, &normal);

@@ -476,14 +476,14 @@ static void cli_writes_maps_and_refuses_bad_inputs(void **state)
         assert_false(test_file_exists(test_path("bad_out_r.png")));
     }
     /* ibl render with a missing scattered map: one line naming it, no image */
-    assert_int_equal(test_run_cli(&out, "render -q sky --scene %s --scattered %s/none.png --normal %s "
+    assert_int_equal(test_run_cli(&out, "render -q sky --specular-size 16 --scene %s --scattered %s/none.png --normal %s "
                                   "--width 32 -o %s", mesh, test_tmpdir(), normal,
                                   test_path("render_out.png")), 1);
     assert_int_equal(count_lines(out), 1);
     assert_non_null(strstr(out, "none_r.png"));
     assert_false(test_file_exists(test_path("render_out.png")));
     /* and with the maps it draws skin on and off side by side */
-    assert_int_equal(test_run_cli(&out, "render -q sky --scene %s --scattered %s --normal %s "
+    assert_int_equal(test_run_cli(&out, "render -q sky --specular-size 16 --scene %s --scattered %s --normal %s "
                                   "--transmittance %s --width 64 --compare skin=off skin=on -o %s",
                                   mesh, base, normal, test_path("trans.png"),
                                   test_path("render_out.png")), 0);
