@@ -38,6 +38,31 @@ static void profile_integrates_to_one(void **state)
     assert_true(t1[0] > t1[1] && t1[1] > t1[2]);
 }
 
+/* A profile table read from JSON holds exactly the numbers written (here d'Eon's). */
+static void profile_from_json(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    const char *path = test_path("deon.json");
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    ibl_skin_profile p = ibl_skin_profile_deon(), q;
+    fprintf(f, "{\"gaussians\": [");
+    for (int i = 0; i < p.count; i++)
+        fprintf(f, "%s{\"variance_mm2\": %.9g, \"weights\": [%.9g, %.9g, %.9g]}", i ? ", " : "",
+                (double)p.variance_mm2[i], (double)p.weight[i][0], (double)p.weight[i][1],
+                (double)p.weight[i][2]);
+    fprintf(f, "]}\n");
+    fclose(f);
+    assert_int_equal(ibl_skin_profile_load(ctx, path, &q), IBL_OK);
+    assert_int_equal(q.count, p.count);
+    for (int i = 0; i < p.count; i++) {
+        assert_true(q.variance_mm2[i] == p.variance_mm2[i]);
+        for (int c = 0; c < 3; c++) assert_true(q.weight[i][c] == p.weight[i][c]);
+    }
+    ibl_context_destroy(ctx);
+}
+
 static ibl_scene *load_mesh(ibl_context *ctx, const char *path)
 {
     ibl_scene *s = NULL;
@@ -134,6 +159,12 @@ static void thickness_of_sphere(void **state)
     d.rays = 64;
     d.cone_degrees = 40;
     assert_int_equal(ibl_skin_thickness_map(ctx, mesh, &d, &cone), IBL_OK);
+    ibl_context *one_thread = test_context(1);
+    ibl_image again;
+    assert_int_equal(ibl_skin_thickness_map(one_thread, mesh, &d, &again), IBL_OK);
+    assert_memory_equal(again.pixels, cone.pixels, sizeof(float) * 4 * 64 * 32);
+    ibl_image_free(one_thread, &again);
+    ibl_context_destroy(one_thread);
     double cone_mean = radius * (1 + cos(40 * PI / 180));
     for (int y = 2; y < 30; y++) /* away from the poles' fans */
         for (int x = 0; x < 64; x++) {
@@ -449,13 +480,15 @@ static void cli_writes_maps_and_refuses_bad_inputs(void **state)
     const char *flat = test_path("flat.obj"), *bad_profile = test_path("bad.json");
     write_text(flat, "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\n");
     write_text(bad_profile, "{\"gaussians\": [{\"variance_mm2\": -1, \"weights\": [1, 1, 1]}]}");
+    write_text(test_path("junk.gltf"), "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [{\"primitives\": 7}]}");
     const char *cases[][2] = {
         {"--mesh %s/none.obj --normal %s -o %s", "none.obj"},
         {"--mesh %s/flat.obj --normal %s -o %s", "flat.obj"},
         {"--mesh %s/cli_ball.obj --normal %s.missing -o %s", "pores.png.missing"},
         {"--mesh %s/cli_ball.obj --normal %s -o %s --profile bad.json", "bad.json"},
+        {"--mesh %s/junk.gltf --normal %s -o %s", "junk.gltf"},
     };
-    for (int i = 0; i < 4; i++) {
+    for (int i = 0; i < 5; i++) {
         char fmt[256], outp[512];
         snprintf(outp, sizeof outp, "%s", test_path("bad_out.png"));
         snprintf(fmt, sizeof fmt, "cd %s && %s sss -q %s", test_tmpdir(), IBL_CLI_PATH, cases[i][0]);
@@ -496,6 +529,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(profile_integrates_to_one),
+        cmocka_unit_test(profile_from_json),
         cmocka_unit_test(stretch_of_uv_sphere),
         cmocka_unit_test(stretch_dilates_past_charts),
         cmocka_unit_test(thickness_of_sphere),
