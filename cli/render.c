@@ -492,7 +492,7 @@ static ibl_status load_skin(ibl_context *ctx, render_options *o, skin_data *sd)
     for (int i = 0; i < 5 && st == IBL_OK; i++) {
         if (!paths[i][0]) continue;
         failed = paths[i];
-        st = ibl_read_data_image(ctx, paths[i], NULL, &sd->maps[i]);
+        st = ibl_read_image(ctx, paths[i], &(ibl_read_desc){.as_data = 1}, &sd->maps[i], NULL);
     }
     if (st != IBL_OK) {
         cli_report_failure(ctx, failed, st);

@@ -116,7 +116,7 @@ static ibl_status bake(ibl_context *ctx, const cli_args *a, sss_options *o, ibl_
     }
     if (st == IBL_OK) {
         failed = o->normal;
-        st = ibl_read_data_image(ctx, o->normal, NULL, &normal);
+        st = ibl_read_image(ctx, o->normal, &(ibl_read_desc){.as_data = 1}, &normal, NULL);
     }
     ibl_skin_map_desc md = {normal.width, normal.height, o->thickness.map.dilate};
     double t0 = cli_seconds();

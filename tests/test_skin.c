@@ -459,8 +459,8 @@ static void cli_writes_maps_and_refuses_bad_inputs(void **state)
     assert_true(test_file_exists(test_path("trans.png")));
     /* the maps read back as data: unit normals, red flatter than blue on average */
     ibl_image r, b;
-    assert_int_equal(ibl_read_data_image(ctx, test_path("scattered_r.png"), NULL, &r), IBL_OK);
-    assert_int_equal(ibl_read_data_image(ctx, test_path("scattered_b.png"), NULL, &b), IBL_OK);
+    assert_int_equal(ibl_read_image(ctx, test_path("scattered_r.png"), &(ibl_read_desc){.as_data = 1}, &r, NULL), IBL_OK);
+    assert_int_equal(ibl_read_image(ctx, test_path("scattered_b.png"), &(ibl_read_desc){.as_data = 1}, &b, NULL), IBL_OK);
     double tilt_r = 0, tilt_b = 0;
     for (int i = 0; i < 64 * 32; i++) {
         double v[3], len = 0;

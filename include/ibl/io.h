@@ -64,10 +64,6 @@ typedef struct ibl_file_info {
 /* Reads a flat image (for containers: level 0 of a 2D texture). desc and info may be NULL. */
 ibl_status ibl_read_image(ibl_context *ctx, const char *path, const ibl_read_desc *desc,
                           ibl_image *out, ibl_file_info *info);
-/* Reads a flat image of data (normal maps, masks) like ibl_read_image, except that a PNG's
- * samples are taken as they are, s / (2^bits - 1), whatever its sRGB or gAMA chunks say. */
-ibl_status ibl_read_data_image(ibl_context *ctx, const char *path, const ibl_read_desc *desc,
-                               ibl_image *out);
 /* Reads any supported file as a texture (flat images become one-level 2D textures). */
 ibl_status ibl_read_texture(ibl_context *ctx, const char *path, const ibl_read_desc *desc,
                             ibl_texture *out, ibl_file_info *info);

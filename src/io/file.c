@@ -739,13 +739,3 @@ float ibl_image_auto_exposure(const ibl_image *image)
     if (!(mean > 0)) return 0.0f;
     return (float)log2(0.18 / mean);
 }
-
-ibl_status ibl_read_data_image(ibl_context *ctx, const char *path, const ibl_read_desc *desc,
-                               ibl_image *out)
-{
-    ibl_read_desc rd;
-    memset(&rd, 0, sizeof rd);
-    if (desc) rd = *desc;
-    rd.as_data = 1;
-    return ibl_read_image(ctx, path, &rd, out, NULL);
-}
