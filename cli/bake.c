@@ -23,6 +23,7 @@ static const char usage[] =
     "other files is refused.\n"
     "\n"
     "  -o, --output DIR       the bake folder\n"
+    CLI_TARGET_HELP
     CLI_SPECULAR_HELP
     "  --irradiance-size N    irradiance face edge (default 16)\n"
     "  --sh-bands N           1..5 (default 3)\n"
@@ -59,6 +60,13 @@ static void parse(cli_args *a, bake_options *o)
         if (cli_common_option(a, arg) || cli_input_option(a, arg, &o->input) ||
             cli_specular_option(a, arg, &o->specular))
             continue;
+        const ibl_target_profile *target = cli_target_option(a, arg, &o->specular, &o->input);
+        if (target) {
+            o->desc.target = target->target;
+            o->desc.format = target->format;
+            o->desc.containers = target->containers;
+            continue;
+        }
         if (cli_is(a, arg, "--output", "-o")) o->dir = o->probes.dir = cli_value(a, arg);
         else if (cli_is(a, arg, "--probes", NULL)) o->probes.probes = cli_value(a, arg);
         else if (cli_is(a, arg, "--captures", NULL)) o->probes.captures = cli_value(a, arg);
@@ -88,6 +96,7 @@ static void parse(cli_args *a, bake_options *o)
                                    "rg32f, bc6h, bc6h-signed, rgbm, rgbd or rgbe, not '%s'", v);
             /* DDS has no key/value data to name an 8-bit encoding: those bakes are KTX2 only */
             if (!ibl_file_type_writes_format(IBL_FILE_DDS, o->desc.format)) o->desc.containers = IBL_BAKE_KTX2;
+            else if (o->desc.target == IBL_TARGET_NONE) o->desc.containers = 0;
         } else {
             cli_positional_or_unknown(a, arg);
         }
@@ -95,8 +104,8 @@ static void parse(cli_args *a, bake_options *o)
     if (a->positional_count > 1) cli_usage_error(a, "takes at most one input file");
     if (!o->dir) cli_usage_error(a, "needs an output folder: -o DIR");
     if (a->positional_count) cli_check_not_inside(a, a->positional[0], o->dir);
-    o->desc.specular = cli_specular_resolve(a, &o->specular, "gltf");
-    o->desc.preset = o->specular.preset ? o->specular.preset : "gltf";
+    o->desc.specular = cli_specular_resolve(a, &o->specular, o->desc.target ? NULL : "gltf");
+    o->desc.preset = o->specular.preset ? o->specular.preset : o->desc.target ? NULL : "gltf";
     if (!o->input.size) {
         int s = o->desc.specular.size;
         o->input.size = s > 0 ? (s < 128 ? 128 : s) : 256;

@@ -1,6 +1,7 @@
 /* ibl irradiance: the irradiance environment map (diffuse cubemap) of an environment. */
 #include "cli.h"
 #include "input.h"
+#include "specular_options.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -27,6 +28,7 @@ static const char usage[] =
     "  --format F           storage format (rgba16f, rgba32f, rg11b10f, rgb9e5, ...)\n"
     "  --out-layout NAME    flat outputs: hcross (default), vcross, hstrip, vstrip, equirect\n"
     CLI_INPUT_HELP
+    "  --target ENGINE      read the environment in the engine's cube frame (docs/ENGINES.md)\n"
     "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n";
 
 int cli_cmd_irradiance(int argc, char **argv)
@@ -39,7 +41,9 @@ int cli_cmd_irradiance(int argc, char **argv)
     ibl_layout out_layout = IBL_LAYOUT_HCROSS;
     const char *arg;
     while ((arg = cli_next(&a))) {
-        if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io)) continue;
+        if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io) ||
+            cli_target_option(&a, arg, NULL, &io))
+            continue;
         if (cli_is(&a, arg, "--output", "-o")) {
             out_path = cli_value(&a, arg);
         } else if (cli_is(&a, arg, "--size", NULL)) {

@@ -32,6 +32,7 @@ static const char usage[] =
     CLI_FORMAT_HELP
     "  --source-size N      face edge the input is converted to first (default: its own)\n"
     CLI_INPUT_HELP
+    CLI_TARGET_HELP
     "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n";
 
 static const char *const face_names[6] = {"px", "nx", "py", "ny", "pz", "nz"};
@@ -164,7 +165,8 @@ int cli_cmd_prefilter(int argc, char **argv)
     const char *arg;
     while ((arg = cli_next(&a))) {
         if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io) ||
-            cli_specular_option(&a, arg, &so) || cli_format_option(&a, arg, &wd))
+            cli_specular_option(&a, arg, &so) || cli_format_option(&a, arg, &wd) ||
+            cli_target_option(&a, arg, &so, &io))
             continue;
         if (cli_is(&a, arg, "--output", "-o")) {
             out = cli_value(&a, arg);

@@ -1,6 +1,7 @@
 /* ibl sh: spherical-harmonic coefficients of an environment, in every normalisation. */
 #include "cli.h"
 #include "input.h"
+#include "specular_options.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,6 +24,7 @@ static const char usage[] =
     "                       docs/DIFFUSE.md has the errors of both\n"
     "  --json               one JSON object instead of text\n"
     CLI_INPUT_HELP
+    "  --target ENGINE      read the environment in the engine's cube frame (docs/ENGINES.md)\n"
     "                       (with an orientation, equirect inputs are projected through a\n"
     "                       cube)\n"
     "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n"
@@ -79,7 +81,9 @@ int cli_cmd_sh(int argc, char **argv)
     cli_input_options io = {0};
     const char *arg;
     while ((arg = cli_next(&a))) {
-        if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io)) continue;
+        if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io) ||
+            cli_target_option(&a, arg, NULL, &io))
+            continue;
         if (cli_is(&a, arg, "--bands", NULL)) {
             bands = cli_int(&a, arg, 1, IBL_SH_MAX_BANDS);
         } else if (cli_is(&a, arg, "--window", NULL)) {

@@ -71,6 +71,8 @@ int cli_specular_option(cli_args *a, const char *arg, cli_specular_options *o)
         s->shininess_max = (float)cli_double(a, arg, 1e-3, 1e7);
     } else if (cli_is(a, arg, "--blinn-factor", NULL)) {
         s->blinn_factor = (float)cli_double(a, arg, 0.1, 100);
+    } else if (cli_is(a, arg, "--babylon-lod-scale", NULL)) {
+        s->babylon_lod_scale = (float)cli_double(a, arg, 0.05, 10);
     } else if (cli_is(a, arg, "--accuracy", NULL)) {
         s->accuracy = (float)cli_double(a, arg, 0.01, 2);
     } else if (cli_is(a, arg, "--edge-fixup", NULL)) {
@@ -91,6 +93,31 @@ int cli_specular_option(cli_args *a, const char *arg, cli_specular_options *o)
         return 0;
     }
     return 1;
+}
+
+const ibl_target_profile *cli_target_option(cli_args *a, const char *arg, cli_specular_options *spec,
+                                            cli_input_options *input)
+{
+    if (!cli_is(a, arg, "--target", NULL)) return NULL;
+    const char *v = cli_value(a, arg);
+    ibl_target t;
+    if (!ibl_target_from_name(v, &t))
+        cli_usage_error(a, "--target wants three, babylon, filament, unity, unreal, godot or gltf, "
+                           "not '%s'", v);
+    const ibl_target_profile *p = ibl_target_profile_of(t);
+    if (p->not_ready) cli_usage_error(a, "--target %s: %s", v, p->not_ready);
+    if (input) input->orientation = p->orientation;
+    if (spec) {
+        ibl_specular_desc *s = &spec->set;
+        s->filter = p->filter;
+        s->mapping = p->mapping;
+        s->size = p->size;
+        s->babylon_lod_scale = p->babylon_lod_scale;
+        spec->given |= GIVEN_FILTER | GIVEN_MAPPING | GIVEN_SIZE;
+        spec->given &= ~(unsigned)GIVEN_LEVELS;
+        spec->last_level_size = p->last_level_size;
+    }
+    return p;
 }
 
 ibl_specular_desc cli_specular_resolve(const cli_args *a, const cli_specular_options *o,
@@ -117,6 +144,9 @@ ibl_specular_desc cli_specular_resolve(const cli_args *a, const cli_specular_opt
     if (s->shininess_max > 0) d.shininess_max = s->shininess_max;
     if (s->blinn_factor > 0) d.blinn_factor = s->blinn_factor;
     if (s->accuracy > 0) d.accuracy = s->accuracy;
+    if (s->babylon_lod_scale > 0) d.babylon_lod_scale = s->babylon_lod_scale;
+    if (o->last_level_size > 0 && !(o->given & GIVEN_LEVELS))
+        d.levels = ibl_target_levels(d.size > 0 ? d.size : 256, o->last_level_size);
     if (d.mapping == IBL_MAPPING_TABLE && !d.table)
         cli_usage_error(a, "--mapping table needs --table V,V,... (one value per level)");
     if (d.table && d.mapping != IBL_MAPPING_TABLE)

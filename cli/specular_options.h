@@ -4,12 +4,14 @@
 #define IBL_CLI_SPECULAR_OPTIONS_H
 
 #include "cli.h"
+#include "input.h"
 
 typedef struct cli_specular_options {
     const char *preset;     /* --preset (NULL: the command's default)              */
     ibl_specular_desc set;  /* the values given explicitly                          */
     unsigned given;         /* which of them (bits of cli_specular_options.c)        */
     float table[IBL_MAX_LEVELS];
+    int last_level_size;    /* --target: the chain ends at this edge unless --levels says */
 } cli_specular_options;
 
 #define CLI_SPECULAR_HELP                                                                       \
@@ -30,7 +32,19 @@ typedef struct cli_specular_options {
     "  --mirror             level 0 is the unfiltered source (mirror-like materials)\n"        \
     "  --method M           fast (default) or reference (exact double integral: slow)\n"       \
     "  --accuracy A         fast method's quadrature step scale (default 0.35; smaller: more\n" \
-    "                       exact, slower)\n"
+    "                       exact, slower)\n"                                                  \
+    "  --babylon-lod-scale S  the babylon mapping's lodGenerationScale (default 0.8)\n"
+
+#define CLI_TARGET_HELP                                                                         \
+    "  --target ENGINE      three, babylon, gltf (filament, unity, unreal, godot: reserved):\n"  \
+    "                       the engine's orientation, mapping, levels, container, format and\n" \
+    "                       SH form (docs/ENGINES.md); options after it override it\n"
+
+/* --target NAME: applies the row's chain to spec and its orientation to input (either may be
+ * NULL) as if they had been given there, so later options override them. Returns the row, or
+ * NULL when arg is not --target; an unknown or reserved target is a usage error. */
+const ibl_target_profile *cli_target_option(cli_args *a, const char *arg, cli_specular_options *spec,
+                                            cli_input_options *input);
 
 /* Parses one of the options above into o; returns 1 if arg was one of them. */
 int cli_specular_option(cli_args *a, const char *arg, cli_specular_options *o);

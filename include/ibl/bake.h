@@ -34,6 +34,7 @@
 #include "shade.h"
 #include "sky.h"
 #include "specular.h"
+#include "target.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -80,7 +81,14 @@ typedef struct ibl_bake_desc {
                                    table in the manifest's "atlas" (docs/ATLAS.md)          */
     float rgbm_range;           /* RGBM's range (the atlas PNG, an rgbm format); 0: 8      */
     ibl_bake_source source;
+    ibl_target target;          /* the engine the bake is for (target.h): adds README.txt and
+                                   the engine's files and records it; the chain, format and
+                                   containers are the caller's (ibl_bake_desc_for_target)  */
 } ibl_bake_desc;
+
+/* A desc with a target row's chain, pixel format, containers, target and (in source) its
+ * orientation, everything else zero (default). NULL: all zero. */
+void ibl_bake_desc_for_target(const ibl_target_profile *profile, ibl_bake_desc *desc);
 
 /* Wall time of each stage of ibl_bake_compute, milliseconds (also in the manifest). */
 typedef struct ibl_bake_timing {
@@ -103,6 +111,7 @@ typedef struct ibl_bake_data {
     ibl_orientation source_orientation;
     int has_sky;
     ibl_sky_desc sky;    /* defaults resolved */
+    ibl_target target;   /* the engine the folder is for (IBL_TARGET_NONE: none)          */
 
     ibl_cubemap specular;    /* the prefiltered chain, level 0 the sharpest               */
     ibl_cubemap irradiance;  /* E/pi per texel (one level)                                 */

@@ -28,5 +28,6 @@
 #include "skin.h"
 #include "sky.h"
 #include "specular.h"
+#include "target.h"
 
 #endif

@@ -62,7 +62,7 @@ typedef enum ibl_specular_mapping {
     IBL_MAPPING_FILAMENT,    /* Filament: lod/(levels-1) = r (2 - r)                          */
     IBL_MAPPING_UNREAL,      /* UE4: mip = levels - 1 - (1 - 1.2 log2 r)                      */
     IBL_MAPPING_UNITY,       /* Unity: mip = 6 r (1.7 - 0.7 r)                                */
-    IBL_MAPPING_BABYLON,     /* Babylon.js: alpha = 2^(lod / 0.8) / size, lod 0 mirror        */
+    IBL_MAPPING_BABYLON,     /* Babylon.js: alpha = 2^(lod / scale) / size (scale 0.8), lod 0 mirror */
     IBL_MAPPING_TABLE,       /* the caller's table of roughness or shininess per level        */
     IBL_MAPPING_COUNT
 } ibl_specular_mapping;
@@ -84,6 +84,8 @@ typedef struct ibl_specular_desc {
     int source_size;             /* plans only: face edge of the cubes ibl_specular_plan_run gets     */
     float accuracy;              /* fast method: quadrature step scale; 0: 0.35 (smaller: more
                                     exact, slower)                                               */
+    float babylon_lod_scale;     /* IBL_MAPPING_BABYLON: the engine's lodGenerationScale,
+                                    alpha = 2^(lod / scale) / size; 0: 0.8 (Babylon's default)  */
     int dynamic;                 /* the per-frame path (the dynamic presets set it): a plan of
                                     precomputed tables for every filter, box and gauss included
                                     (Phong family: less exact next to small bright lights; see
@@ -98,6 +100,7 @@ typedef struct ibl_specular_info {
     float blinn_factor;
     float shininess_min, shininess_max;
     float lod_offset;                     /* IBL_MAPPING_TRIACE: the fitted a                        */
+    float babylon_lod_scale;              /* IBL_MAPPING_BABYLON: the lod scale used (else 0)        */
     float roughness[IBL_MAX_LEVELS];  /* GGX: perceptual roughness per level (alpha = r^2)     */
     float shininess[IBL_MAX_LEVELS];  /* Phong family, in the chain's units (see the top)      */
 } ibl_specular_info;

@@ -211,6 +211,7 @@ static ibl_status record_parameters(ibl_context *ctx, const ibl_cubemap *env,
     b->rgbm_range = d->rgbm_range > 0.0f ? d->rgbm_range : IBL_RGBM_DEFAULT_RANGE;
     b->source_layout = d->source.layout;
     b->source_orientation = d->source.orientation;
+    b->target = d->target;
     if (d->source.sky) {
         ibl_sky_model model;
         ibl_status st = ibl_sky_model_init(ctx, d->source.sky, &model);
@@ -247,6 +248,11 @@ ibl_status ibl_bake_compute(ibl_context *ctx, const ibl_cubemap *env, const ibl_
     ibl_bake_desc d = resolve_desc(desc);
     if (d.containers & ~(unsigned)(IBL_BAKE_KTX2 | IBL_BAKE_DDS))
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "bake: unknown containers 0x%x", d.containers);
+    if (d.target != IBL_TARGET_NONE) {
+        const ibl_target_profile *p = ibl_target_profile_of(d.target);
+        if (!p) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "bake: unknown target %d", (int)d.target);
+        if (p->not_ready) return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "bake: %s", p->not_ready);
+    }
     double t0 = now_ms(), t = t0;
     ibl_status st = record_parameters(ctx, env, &d, out);
     if (st == IBL_OK) st = stage_specular(ctx, env, &d, out);

@@ -162,7 +162,9 @@ static ibl_status take_lock(ibl_context *ctx, target_folder *t)
  * temporary of one (".NAME.tmp-..."). */
 static int is_bake_entry(const char *name)
 {
-    if (ibl__bake_file_named(name) != IBL__BAKE_FILE_COUNT || ibl__bake_probe_entry(name)) return 1;
+    if (ibl__bake_file_named(name) != IBL__BAKE_FILE_COUNT || ibl__bake_probe_entry(name) ||
+        ibl__bake_target_entry(name))
+        return 1;
     if (name[0] != '.') return 0;
     const char *tmp = strstr(name, ".tmp-");
     if (!tmp) return 0;
@@ -171,7 +173,8 @@ static int is_bake_entry(const char *name)
     if (n >= sizeof base) return 0;
     memcpy(base, name + 1, n);
     base[n] = 0;
-    return ibl__bake_file_named(base) != IBL__BAKE_FILE_COUNT || ibl__bake_probe_entry(base);
+    return ibl__bake_file_named(base) != IBL__BAKE_FILE_COUNT || ibl__bake_probe_entry(base) ||
+           ibl__bake_target_entry(base);
 }
 
 int ibl__bake_is_entry(const char *name)
@@ -393,6 +396,7 @@ static ibl_status stage_all(ibl_context *ctx, const char *dir, const ibl_bake_da
         st = stage_texture(ctx, dir, IBL__BAKE_AMBIENT_BRDF, &b->ambient_brdf, IBL_FORMAT_RG16F, 0.0f);
     if (st == IBL_OK && b->atlas.pixels) st = stage_atlas(ctx, dir, b);
     if (st == IBL_OK && b->preview.pixels) st = stage_preview(ctx, dir, b);
+    if (st == IBL_OK) st = ibl__bake_stage_target(ctx, dir, b);
     if (st == IBL_OK && extra) st = extra->stage(ctx, dir, extra->user);
     if (st == IBL_OK) {
         char *manifest = NULL;

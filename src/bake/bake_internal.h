@@ -71,5 +71,10 @@ int ibl__bake_is_entry(const char *name);
 /* bake_probes.c: is name one of the probe array's files (probes.ktx2, probes.bin,
  * probes.json, probe-HASH.ktx2)? */
 int ibl__bake_probe_entry(const char *name);
+/* target_files.c: is name one of the files a target adds (README.txt, engine_*)? */
+int ibl__bake_target_entry(const char *name);
+/* target_files.c: writes the target's files (README.txt, the engine's own) of bake into the
+ * staging folder; nothing when the bake has no target. */
+ibl_status ibl__bake_stage_target(ibl_context *ctx, const char *staging, const ibl_bake_data *bake);
 
 #endif

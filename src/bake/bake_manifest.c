@@ -112,6 +112,8 @@ static json_t *specular_json(const ibl_specular_info *info, ibl_edge_fixup edge_
     ibl__json_set(range, "unit", ibl__json_string(info->filter == IBL_FILTER_PHONG ? "phong_exponent"
                                                                                   : "shininess"));
     ibl__json_set(o, "mapping_range", range);
+    if (info->mapping == IBL_MAPPING_BABYLON)
+        ibl__json_set(o, "babylon_lod_scale", ibl__json_float(info->babylon_lod_scale));
     if (info->mapping == IBL_MAPPING_TRIACE) {
         ibl__json_set(o, "lod_offset", ibl__json_float(info->lod_offset));
         ibl__json_set(o, "lod_formula", ibl__json_string("lod = lod_offset - 0.5 * log2(s), s in "
@@ -205,6 +207,8 @@ ibl_status ibl_bake_manifest(ibl_context *ctx, const ibl_bake_data *b, char **js
     ibl__json_set(params, "preset", ibl__json_string(b->preset));
     ibl__json_set(params, "working_size", ibl__json_number(b->working_size));
     ibl__json_set(params, "lut_size", ibl__json_number(b->lut_size));
+    if (b->target != IBL_TARGET_NONE)
+        ibl__json_set(params, "target", ibl__json_string(ibl_target_name(b->target)));
     ibl__json_set(root, "parameters", params);
     ibl__json_set(root, "timings_ms", timing_json(&b->timing_ms));
     ibl__json_set(root, "specular", specular_json(&b->specular_info, b->edge_fixup, b->format,
@@ -384,6 +388,7 @@ static void read_specular(ibl__json_reader *r, json_t *root, ibl_bake_data *b,
     if (r->status == IBL_OK && !(info->blinn_factor > 0 && info->blinn_factor < 1e3))
         ibl__json_fail(r, P, "blinn_factor", "must be a positive number");
     info->lod_offset = (float)ibl__json_opt_number(r, spec, P, "lod_offset", 0.0);
+    info->babylon_lod_scale = (float)ibl__json_opt_number(r, spec, P, "babylon_lod_scale", 0.0);
     json_t *range = json_object_get(spec, "mapping_range");
     if (range) {
         info->shininess_min = (float)ibl__json_get_number(r, range, "specular.mapping_range", "min");
@@ -497,6 +502,9 @@ static void read_source(ibl__json_reader *r, json_t *root, ibl_bake_data *b, con
     if (params) {
         b->working_size = (int)ibl__json_opt_number(r, params, "parameters", "working_size", 0);
         b->lut_size = (int)ibl__json_opt_number(r, params, "parameters", "lut_size", 0);
+        const char *target = ibl__json_opt_string(r, params, "parameters", "target", NULL);
+        if (target && !ibl_target_from_name(target, &b->target))
+            ibl__json_fail(r, "parameters", "target", "unknown target '%s'", target);
     }
 }
 

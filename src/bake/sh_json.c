@@ -2,6 +2,7 @@
  * renderer can take the coefficients in the normalisation it uses (radiance for three.js's
  * LightProbe, irradiance/pi for a Lambertian term, the R&H 2001 matrices for GLSL). */
 #include "ibl/sh.h"
+#include "ibl/target.h"
 #include "core/context_internal.h"
 #include "core/numeric.h"
 #include "io/json.h"
@@ -68,6 +69,38 @@ static json_t *polynomial(const ibl_sh *radiance)
     return p;
 }
 
+/* The SH in the form each engine takes (ibl/target.h), each labelled with its basis,
+ * normalisation, sign convention and frame. */
+static json_t *engine_forms(ibl_context *ctx, const ibl_sh *radiance)
+{
+    static const struct { const char *key; ibl_target_sh_form form; } forms[] = {
+        {"three", IBL_TARGET_SH_THREE},
+        {"babylon", IBL_TARGET_SH_BABYLON},
+        {"gltf", IBL_TARGET_SH_GLTF_IRRADIANCE}};
+    json_t *o = json_object();
+    for (size_t i = 0; i < sizeof forms / sizeof forms[0]; i++) {
+        ibl_target_sh sh;
+        if (ibl_target_sh_form_of(ctx, forms[i].form, radiance, &sh) != IBL_OK) continue;
+        json_t *e = json_object();
+        ibl__json_set(e, "engine", ibl__json_string(sh.engine));
+        ibl__json_set(e, "basis", ibl__json_string(sh.basis));
+        ibl__json_set(e, "normalisation", ibl__json_string(sh.normalisation));
+        ibl__json_set(e, "signs", ibl__json_string(sh.signs));
+        ibl__json_set(e, "frame", ibl__json_string(sh.frame));
+        json_t *names = json_array(), *values = json_array();
+        for (int k = 0; k < sh.count; k++) {
+            ibl__json_append(names, ibl__json_string(sh.names[k]));
+            json_t *rgb = json_array();
+            for (int c = 0; c < 3; c++) ibl__json_append(rgb, ibl__json_number(sh.values[k][c]));
+            ibl__json_append(values, rgb);
+        }
+        ibl__json_set(e, "names", names);
+        ibl__json_set(e, "values", values);
+        ibl__json_set(o, forms[i].key, e);
+    }
+    return o;
+}
+
 ibl_status ibl_sh_json(ibl_context *ctx, const ibl_sh *radiance, ibl_sh_window requested,
                        const ibl_sh_window_report *window, const char *input,
                        const char *projection, char **json)
@@ -113,5 +146,6 @@ ibl_status ibl_sh_json(ibl_context *ctx, const ibl_sh *radiance, ibl_sh_window r
     ibl__json_set(o, "irradiance", coefficients(&irradiance));
     ibl__json_set(o, "irradiance_over_pi", coefficients(&over_pi));
     ibl__json_set(o, "polynomial", polynomial(radiance));
+    if (bands >= 3) ibl__json_set(o, "engines", engine_forms(ctx, radiance));
     return ibl__json_text(ctx, o, "sh", json);
 }

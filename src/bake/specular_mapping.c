@@ -8,7 +8,7 @@
 #include <string.h>
 
 /* GGX roughness of level l of a chain of L levels, edge `size`, for a roughness mapping. */
-static double mapped_roughness(ibl_specular_mapping m, int l, int L, int size)
+static double mapped_roughness(ibl_specular_mapping m, int l, int L, int size, double babylon_scale)
 {
     double last = L > 1 ? L - 1 : 1;
     double lod = l / last, r;
@@ -32,10 +32,10 @@ static double mapped_roughness(ibl_specular_mapping m, int l, int L, int size)
         else r = (1.7 - sqrt(1.7 * 1.7 - 2.8 * l / 6.0)) / 1.4;
         break;
     case IBL_MAPPING_BABYLON:
-        /* Babylon.js HDRFiltering: alphaG = 2^((lod - 0) / 0.8) / width, lod 0 unfiltered;
-         * alpha = r^2 */
+        /* Babylon.js HDRFiltering: alphaG = 2^(lod / lodGenerationScale) / width (the scale
+         * is 0.8 unless the texture says otherwise), lod 0 unfiltered; alpha = r^2 */
         if (l == 0) r = 0.0;
-        else r = sqrt(pow(2.0, l / 0.8) / size);
+        else r = sqrt(pow(2.0, l / babylon_scale) / size);
         break;
     case IBL_MAPPING_LINEAR:
     default:
@@ -142,6 +142,13 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: unknown mapping %d", m);
     if (m == IBL_MAPPING_DEFAULT) m = desc->filter == IBL_FILTER_GGX ? IBL_MAPPING_LINEAR : IBL_MAPPING_TRIACE;
     info->mapping = m;
+    if (m == IBL_MAPPING_BABYLON) {
+        if (desc->babylon_lod_scale < 0 || !(desc->babylon_lod_scale < 100.0f))
+            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                             "prefilter: the babylon lod scale %g is not in (0, 100)",
+                             (double)desc->babylon_lod_scale);
+        info->babylon_lod_scale = desc->babylon_lod_scale > 0 ? desc->babylon_lod_scale : 0.8f;
+    }
     int distinct = ibl__mapping_distinct_levels(desc);
     if (levels > distinct)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
@@ -192,7 +199,7 @@ ibl_status ibl__specular_mapping(ibl_context *ctx, const ibl_specular_desc *desc
             else info->shininess[l] = (float)s;
             continue;
         }
-        double r = mapped_roughness(m, ml, L, size);
+        double r = mapped_roughness(m, ml, L, size, info->babylon_lod_scale > 0 ? info->babylon_lod_scale : 0.8);
         if (ggx) {
             info->roughness[l] = (float)r;
         } else {

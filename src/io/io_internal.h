@@ -27,6 +27,9 @@ ibl_status ibl__png_decode_as(ibl_context *ctx, const uint8_t *bytes, size_t siz
                               int as_data, ibl_texture *out, ibl_file_info *info);
 ibl_status ibl__png_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size);
+/* Stores 8-bit RGBA bytes as they are (no colour chunk, no curve): packed data such as RGBD. */
+ibl_status ibl__png_encode_rgba8(ibl_context *ctx, const uint8_t *rgba, int width, int height,
+                                 const char *name, void **bytes, size_t *size);
 /* JPEG (src/io/jpeg.c, libjpeg-turbo): 8-bit grey, YCbCr or RGB, baseline or progressive,
  * read as sRGB; written as 8-bit sRGB previews like PNG's. */
 ibl_status ibl__jpeg_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,

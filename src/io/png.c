@@ -352,6 +352,7 @@ typedef struct png_state {
     uint8_t *buf;
     size_t len, cap;
     uint8_t *row;
+    const uint8_t *raw; /* PNG_SAMPLES_RAW8: the RGBA rows */
     char error[200];
 } png_state;
 
@@ -398,7 +399,9 @@ typedef enum png_samples {
     PNG_SAMPLES_DISPLAY8, /* exposure, tone map, sRGB (previews)                          */
     PNG_SAMPLES_LINEAR8,  /* round(v * 255), gAMA 1.0 (data)                              */
     PNG_SAMPLES_LINEAR16, /* round(v * 65535), gAMA 1.0 (tables, data)                    */
-    PNG_SAMPLES_RGBM8     /* RGBM (ibl/compress.h), gAMA 1.0, tEXt ibl.encoding = rgbm      */
+    PNG_SAMPLES_RGBM8,    /* RGBM (ibl/compress.h), gAMA 1.0, tEXt ibl.encoding = rgbm      */
+    PNG_SAMPLES_RAW8      /* 8-bit RGBA bytes as given (png_state.raw), no colour chunk:
+                             packed data such as Babylon's RGBD                            */
 } png_samples;
 
 static void png_fill_row(const float *src, int width, int channels, png_samples mode,
@@ -449,8 +452,8 @@ static int png_run(png_state *st, const ibl_image *im, png_samples mode, int cha
     png_set_IHDR(png, pinfo, (png_uint_32)im->width, (png_uint_32)im->height, sixteen ? 16 : 8,
                  channels == 4 ? PNG_COLOR_TYPE_RGBA : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                  PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-    if (mode != PNG_SAMPLES_DISPLAY8) png_set_gAMA(png, pinfo, 1.0); /* read back without a curve */
-    else png_set_sRGB_gAMA_and_cHRM(png, pinfo, PNG_sRGB_INTENT_PERCEPTUAL);
+    if (mode == PNG_SAMPLES_DISPLAY8) png_set_sRGB_gAMA_and_cHRM(png, pinfo, PNG_sRGB_INTENT_PERCEPTUAL);
+    else if (mode != PNG_SAMPLES_RAW8) png_set_gAMA(png, pinfo, 1.0); /* read back without a curve */
     char range_text[32];
     png_text text[2];
     if (mode == PNG_SAMPLES_RGBM8) {
@@ -470,6 +473,10 @@ static int png_run(png_state *st, const ibl_image *im, png_samples mode, int cha
     png_set_filter(png, 0, PNG_FILTER_PAETH);
     png_write_info(png, pinfo);
     for (int y = 0; y < im->height; y++) {
+        if (mode == PNG_SAMPLES_RAW8) {
+            png_write_row(png, (png_bytep)(st->raw + (size_t)y * (size_t)im->width * 4));
+            continue;
+        }
         png_fill_row(im->pixels + (size_t)y * (size_t)im->width * 4, im->width, channels, mode,
                      rgbm_range, enc, st->row);
         png_write_row(png, st->row);
@@ -509,6 +516,28 @@ ibl_status ibl__png_encode(ibl_context *ctx, const ibl_image *image, const ibl_w
     ibl__display_encoder_init(&enc, desc);
     int ok = png_run(st, image, mode, channels, rgbm_range, &enc);
     ibl_free(ctx, st->row);
+    if (!ok) {
+        ibl_free(ctx, st->buf);
+        ibl_status s = strcmp(st->error, "out of memory") == 0 ? IBL_ERR_OUT_OF_MEMORY : IBL_ERR_IO;
+        ibl__fail(ctx, s, "%s: cannot encode PNG: %s", name, st->error);
+        ibl_free(ctx, st);
+        return s;
+    }
+    *bytes = st->buf;
+    *size = st->len;
+    ibl_free(ctx, st);
+    return IBL_OK;
+}
+
+ibl_status ibl__png_encode_rgba8(ibl_context *ctx, const uint8_t *rgba, int width, int height,
+                                 const char *name, void **bytes, size_t *size)
+{
+    ibl_image shape = {width, height, NULL};
+    png_state *st = ibl_calloc(ctx, 1, sizeof *st);
+    if (!st) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
+    st->ctx = ctx;
+    st->raw = rgba;
+    int ok = png_run(st, &shape, PNG_SAMPLES_RAW8, 4, 0.0f, NULL);
     if (!ok) {
         ibl_free(ctx, st->buf);
         ibl_status s = strcmp(st->error, "out of memory") == 0 ? IBL_ERR_OUT_OF_MEMORY : IBL_ERR_IO;

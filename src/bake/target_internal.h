@@ -1,0 +1,21 @@
+/* Internal contract of the target files (target_files.c, target_gltf.c). */
+#ifndef IBL_TARGET_INTERNAL_H
+#define IBL_TARGET_INTERNAL_H
+
+#include "ibl/bake.h"
+
+#include <stdint.h>
+
+/* Babylon.js's RGBD (helperFunctions toRGBD / fromRGBD), which EXT_lights_image_based's PNGs
+ * use: a = floor(max(255 / max(rgb), 1)) (at most 255), rgb8 = round(255 (rgb a / 255)^(1/2.2));
+ * decoded as rgb = (rgb8 / 255)^2.2 / (a / 255). Not the library's linear RGBD of compress.h. */
+void ibl__rgbd_babylon_encode(const float rgb[3], uint8_t out[4]);
+void ibl__rgbd_babylon_decode(const uint8_t in[4], float rgb[3]);
+/* One face of one level as an RGBD PNG (bytes freed with ibl_free); errors name `name`. */
+ibl_status ibl__rgbd_face_png(ibl_context *ctx, const ibl_cubemap *cube, int level, int face,
+                              const char *name, void **bytes, size_t *size);
+/* engine_gltf.gltf (EXT_lights_image_based), its PNG faces, and
+ * engine_khr_lights_environment.gltf, into the staging folder. */
+ibl_status ibl__stage_gltf_lights(ibl_context *ctx, const char *dir, const ibl_bake_data *bake);
+
+#endif
