@@ -20,8 +20,10 @@
 #   viewer:    chromium (the headless browser of the `ibl view` tests, software WebGL2),
 #              nodejs and npm (npm only when no npm is on PATH: a nodejs that bundles it
 #              conflicts with Debian's); then `npm ci` in tests/viewer installs the exact
-#              playwright-core of its package-lock.json from the npm registry (no browser
-#              download: the tests drive /usr/bin/chromium)
+#              versions of its package-lock.json from the npm registry (no browser
+#              download: the tests drive /usr/bin/chromium): playwright-core; three and
+#              @babylonjs/core (the engines `ibl bake --target` is tested in, served
+#              locally); ktx-parse (the KTX2 round trip of every file ibl writes)
 #   fuzzing:   clang libclang-rt-14-dev (libFuzzer, sanitizer runtimes), dpkg-dev (apt-get
 #              source unpacks with dpkg-source), zlib1g-dev libimath-dev (their versions name
 #              the sources to fetch), python3 libjpeg-turbo-progs (cjpeg) for

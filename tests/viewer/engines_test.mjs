@@ -1,0 +1,321 @@
+// Browser tests of `ibl bake --target ENGINE` (run by tests/viewer/run_engines.sh through
+// CTest): headless Debian chromium (playwright-core, software WebGL2), three.js and
+// Babylon.js from tests/viewer/node_modules served by a local HTTP server (no network).
+// For each engine a sphere grid is rendered twice in the same page: lit by the engine's own
+// import of an HDRI (three: PMREMGenerator.fromEquirectangular; Babylon: HDRCubeTexture with
+// prefilterOnLoad) and lit by the bake (three: the ktx-parse loader of README.txt; Babylon:
+// the DDS and the .env). The two renders must agree. Two environments: a small HDRI of
+// tests/data and an axes environment made here (one colour per axis direction, a dot beside
+// each axis that moves to the other side under a mirror): a wrong yaw or mirror moves whole
+// colours across the spheres and fails the bound by far.
+// Usage: node engines_test.mjs IBL WORKDIR [SCREENSHOT_DIR]
+import { spawnSync } from 'node:child_process';
+import fs from 'node:fs';
+import http from 'node:http';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+const [ibl, work, shots] = process.argv.slice(2);
+const here = path.dirname(fileURLToPath(import.meta.url));
+const repo = path.resolve(here, '..', '..');
+const CHROMIUM = process.env.IBL_CHROMIUM || '/usr/bin/chromium';
+const { chromium } = await import('playwright-core');
+
+let passed = 0, failed = 0;
+function check(name, ok, detail) {
+  if (ok) passed++;
+  else failed++;
+  console.log((ok ? 'ok   ' : 'FAIL ') + name + (detail ? '  (' + detail + ')' : ''));
+}
+
+// ---- the axes environment: a Radiance .hdr (flat RGBE scanlines) in ibl's equirect layout
+// (centre column -Z, right quarter +X, top row +Y; docs/CONVENTIONS.md) ----
+function axesHdr(file, W = 256, H = 128) {
+  const axes = [ // direction, colour, the dot's offset (a turn about +Y, then up)
+    [[1, 0, 0], [3.0, 0.15, 0.1]], [[-1, 0, 0], [0.1, 0.9, 1.2]],
+    [[0, 1, 0], [0.2, 2.0, 0.2]], [[0, -1, 0], [0.6, 0.1, 0.9]],
+    [[0, 0, 1], [0.15, 0.3, 3.0]], [[0, 0, -1], [1.6, 1.4, 0.1]]];
+  const head = Buffer.from(`#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y ${H} +X ${W}\n`, 'latin1');
+  const body = Buffer.alloc(W * H * 4);
+  for (let y = 0; y < H; y++)
+    for (let x = 0; x < W; x++) {
+      const phi = 2 * Math.PI * ((x + 0.5) / W - 0.5), th = Math.PI * (y + 0.5) / H;
+      const d = [Math.sin(th) * Math.sin(phi), Math.cos(th), -Math.sin(th) * Math.cos(phi)];
+      let best = 0, bestDot = -2;
+      axes.forEach(([a], i) => { const t = a[0] * d[0] + a[1] * d[1] + a[2] * d[2]; if (t > bestDot) { bestDot = t; best = i; } });
+      let c = axes[best][1].map((v) => v * (0.35 + 0.65 * bestDot));
+      // a white dot 25 degrees to the right of +X, +Z and -Z seen from inside, 20 up: mirrored
+      // images put it on the left
+      const dots = [[-Math.PI / 2 + 0.44, 0.35], [Math.PI + 0.44, 0.35], [0.44, 0.35], [0.44 - Math.PI, 0.35]];
+      for (const [p0, e0] of dots) {
+        const dd = [Math.cos(e0) * -Math.sin(-p0), Math.sin(e0), -Math.cos(e0) * Math.cos(-p0)];
+        const t = dd[0] * d[0] + dd[1] * d[1] + dd[2] * d[2];
+        if (t > Math.cos(0.16)) c = [8, 8, 8];
+      }
+      const m = Math.max(...c);
+      const i = (y * W + x) * 4;
+      if (m < 1e-32) continue;
+      const e = Math.ceil(Math.log2(m) + 1e-9), f = 256 / 2 ** e;
+      for (let k = 0; k < 3; k++) body[i + k] = Math.min(255, Math.floor(c[k] * f));
+      body[i + 3] = e + 128;
+    }
+  fs.writeFileSync(file, Buffer.concat([head, body]));
+}
+
+// ---- a local server: /nm/ -> node_modules, /w/ -> the work folder, /page/NAME -> pages ----
+const pages = {};
+const types = { '.js': 'text/javascript', '.mjs': 'text/javascript', '.html': 'text/html' };
+let requests = 0;
+const server = http.createServer((req, res) => {
+  requests++;
+  const url = decodeURIComponent(req.url.split('?')[0]);
+  let file = null;
+  if (url.startsWith('/page/')) {
+    res.writeHead(200, { 'content-type': 'text/html' });
+    return res.end(pages[url.slice(6)] || '');
+  }
+  if (url.startsWith('/nm/')) file = path.join(here, 'node_modules', url.slice(4));
+  else if (url.startsWith('/w/')) file = path.join(work, url.slice(3));
+  if (!file || !fs.existsSync(file) || !fs.statSync(file).isFile()) {
+    res.writeHead(404);
+    return res.end();
+  }
+  res.writeHead(200, { 'content-type': types[path.extname(file)] || 'application/octet-stream' });
+  fs.createReadStream(file).pipe(res);
+});
+await new Promise((r) => server.listen(0, '127.0.0.1', r));
+const base = `http://127.0.0.1:${server.address().port}`;
+
+function bake(input, target, dir, extra = []) {
+  const size = target === 'three' ? 256 : SIZE; // three's PMREMGenerator makes 256 at least
+  const r = spawnSync(ibl, ['bake', input, '--target', target, '--size', String(size), ...extra, '-o', dir, '-q'], { encoding: 'utf8' });
+  if (r.status !== 0) throw new Error(`ibl bake --target ${target}: ${r.stderr}`);
+}
+
+// ---- comparison: sphere pixels (alpha > 0 where the clear colour is transparent) ----
+function compare(a, b) {
+  let sum = 0, n = 0, worst = 0;
+  for (let i = 0; i < a.length; i += 4) {
+    if (a[i + 3] === 0 && b[i + 3] === 0) continue;
+    for (let k = 0; k < 3; k++) {
+      const d = Math.abs(a[i + k] - b[i + k]);
+      sum += d;
+      if (d > worst) worst = d;
+    }
+    n += 3;
+  }
+  return { mean: n ? sum / n : Infinity, worst, pixels: n / 3 };
+}
+
+const W = 320, H = 128, SIZE = Number(process.env.IBL_ENGINES_SIZE || 128);
+const threePage = `<!doctype html><body style="margin:0;background:#000">
+<canvas id="c" width="${W}" height="${H}"></canvas>
+<script type="importmap">{"imports":{"three":"/nm/three/build/three.module.js","ktx-parse":"/nm/ktx-parse/dist/index.mjs"}}</script>
+<script type="module">
+import * as THREE from 'three';
+import { HDRLoader } from '/nm/three/examples/jsm/loaders/HDRLoader.js';
+import { read } from 'ktx-parse';
+// README.txt's loader (ibl bake --target three)
+async function loadIblCube(url) {
+  const ktx = read(new Uint8Array(await (await fetch(url)).arrayBuffer()));
+  const faces = [];
+  for (let f = 0; f < 6; f++) {
+    const mipmaps = ktx.levels.map((level, l) => {
+      const s = Math.max(1, ktx.pixelWidth >> l), n = s * s * 4;
+      const data = new Uint16Array(level.levelData.buffer.slice(level.levelData.byteOffset + f * n * 2,
+                                                                level.levelData.byteOffset + (f + 1) * n * 2));
+      return { data, width: s, height: s };
+    });
+    faces.push({ width: ktx.pixelWidth, height: ktx.pixelHeight, mipmaps });
+  }
+  const cube = new THREE.CompressedCubeTexture(faces, THREE.RGBAFormat, THREE.HalfFloatType);
+  cube.isPMREMTexture = true;
+  cube.minFilter = THREE.LinearMipmapLinearFilter;
+  cube.magFilter = THREE.LinearFilter;
+  cube.generateMipmaps = false;
+  cube.colorSpace = THREE.LinearSRGBColorSpace;
+  cube.needsUpdate = true;
+  return cube;
+}
+const renderer = new THREE.WebGLRenderer({ canvas: document.getElementById('c'), preserveDrawingBuffer: true, alpha: true });
+renderer.toneMapping = THREE.NoToneMapping;
+renderer.setClearColor(0x000000, 0);
+const scene = new THREE.Scene();
+const camera = new THREE.OrthographicCamera(-5, 5, 2, -2, 0.1, 100);
+camera.position.set(0, 0, 10);
+const geo = new THREE.SphereGeometry(0.9, 64, 32);
+const rough = [0, 0.25, 0.5, 0.75, 1];
+rough.forEach((r, i) => [1, 0].forEach((metal, j) => {
+  const m = new THREE.Mesh(geo, new THREE.MeshStandardMaterial({ color: 0xffffff, roughness: r, metalness: metal }));
+  m.position.set(-4 + 2 * i, j ? -1 : 1, 0);
+  scene.add(m);
+}));
+function grab() {
+  renderer.render(scene, camera);
+  const gl = renderer.getContext(), px = new Uint8Array(${W} * ${H} * 4);
+  gl.readPixels(0, 0, ${W}, ${H}, gl.RGBA, gl.UNSIGNED_BYTE, px);
+  return Array.from(px);
+}
+window.run = async (hdr, ktx2, wrong) => {
+  const pmrem = new THREE.PMREMGenerator(renderer);
+  const eq = await new HDRLoader().loadAsync(hdr);
+  eq.mapping = THREE.EquirectangularReflectionMapping;
+  scene.environment = pmrem.fromEquirectangular(eq).texture;
+  const own = grab();
+  scene.environment = await loadIblCube(ktx2);
+  const baked = grab();
+  let turned = null;
+  if (wrong) {
+    scene.environment = await loadIblCube(wrong);
+    turned = grab();
+  }
+  return { own, baked, turned };
+};
+window.ready = true;
+</script>`;
+
+const babylonPage = `<!doctype html><body style="margin:0;background:#000">
+<canvas id="c" width="${W}" height="${H}"></canvas>
+<script type="module">
+const SIZE = ${SIZE};
+const C = '/nm/@babylonjs/core/';
+const mods = await Promise.all(['Engines/engine.js', 'scene.js', 'Cameras/freeCamera.js', 'Cameras/camera.js',
+  'Meshes/Builders/sphereBuilder.js', 'Materials/PBR/pbrMaterial.js', 'Materials/Textures/hdrCubeTexture.js',
+  'Materials/Textures/cubeTexture.js', 'Maths/math.vector.js', 'Maths/math.color.js',
+  'Materials/Textures/Loaders/ddsTextureLoader.js', 'Materials/Textures/Loaders/envTextureLoader.js']
+  .map((m) => import(C + m)));
+const B = Object.assign({}, ...mods);
+const engine = new B.Engine(document.getElementById('c'), false, { preserveDrawingBuffer: true, premultipliedAlpha: false });
+const scene = new B.Scene(engine);
+scene.clearColor = new B.Color4(0, 0, 0, 0);
+scene.imageProcessingConfiguration.toneMappingEnabled = false;
+const camera = new B.FreeCamera('c', new B.Vector3(0, 0, -10), scene);
+camera.mode = B.Camera.ORTHOGRAPHIC_CAMERA;
+camera.orthoLeft = -5; camera.orthoRight = 5; camera.orthoTop = 2; camera.orthoBottom = -2;
+camera.setTarget(B.Vector3.Zero());
+const rough = [0, 0.25, 0.5, 0.75, 1];
+rough.forEach((r, i) => [1, 0].forEach((metal, j) => {
+  const s = B.CreateSphere('s' + i + j, { diameter: 1.8, segments: 48 }, scene);
+  s.position.set(-4 + 2 * i, j ? -1 : 1, 0);
+  const m = new B.PBRMaterial('m' + i + j, scene);
+  m.albedoColor = new B.Color3(1, 1, 1);
+  m.metallic = metal;
+  m.roughness = r;
+  s.material = m;
+}));
+function whenReady(tex) { return new Promise((res) => { const t = () => tex.isReady() ? res() : setTimeout(t, 20); t(); }); }
+async function grab(tex) {
+  scene.environmentTexture = tex;
+  await whenReady(tex);
+  await scene.whenReadyAsync();
+  scene.render();
+  scene.render();
+  const px = await engine.readPixels(0, 0, ${W}, ${H});
+  return Array.from(new Uint8Array(px.buffer));
+}
+window.run = async (hdr, dds, env, wrong) => {
+  const t = [performance.now()];
+  const own = await grab(new B.HDRCubeTexture(hdr, scene, SIZE, false, true, false, true));
+  t.push(performance.now());
+  const d = B.CubeTexture.CreateFromPrefilteredData(dds, scene);
+  d.gammaSpace = false;
+  const fromDds = await grab(d);
+  t.push(performance.now());
+  const fromEnv = await grab(new B.CubeTexture(env, scene));
+  t.push(performance.now());
+  let turned = null;
+  if (wrong) {
+    const w = B.CubeTexture.CreateFromPrefilteredData(wrong, scene);
+    w.gammaSpace = false;
+    turned = await grab(w);
+  }
+  return { own, dds: fromDds, env: fromEnv, turned, ms: t.map((x) => x - t[0]) };
+};
+window.ready = true;
+</script>`;
+pages['three.html'] = threePage;
+pages['babylon.html'] = babylonPage;
+
+const t0 = Date.now();
+fs.mkdirSync(work, { recursive: true });
+const axes = path.join(work, 'axes.hdr');
+axesHdr(axes);
+fs.copyFileSync(path.join(repo, 'tests/data/uffizi_latlong_256x128.hdr'), path.join(work, 'uffizi.hdr'));
+const inputs = [['uffizi', path.join(work, 'uffizi.hdr')], ['axes', axes]];
+for (const [name, file] of inputs)
+  for (const t of ['three', 'babylon']) bake(file, t, path.join(work, `${name}-${t}`));
+// negative controls: the axes environment a quarter turn off (an explicit --yaw after --target
+// overrides the row's); each engine's comparison must fail them
+bake(axes, 'three', path.join(work, 'axes-three-turned'), ['--yaw', '0']);
+bake(axes, 'babylon', path.join(work, 'axes-babylon-turned'), ['--yaw', '90']);
+
+const browser = await chromium.launch({
+  executablePath: CHROMIUM,
+  args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
+});
+async function open(page) {
+  const p = await browser.newPage();
+  const errors = [];
+  p.on('pageerror', (e) => errors.push(String(e)));
+  await p.goto(`${base}/page/${page}`);
+  await p.waitForFunction(() => window.ready === true, null, { timeout: 30000 });
+  return { p, errors };
+}
+
+// Bounds (mean |difference| over the sphere pixels, 8-bit sRGB): the engine's own import and
+// the bake are two different filters of the same HDRI (three: GGX VNDF samples and a 16x16
+// integration; Babylon: its own importance sampling, at 128 texels here to keep the test
+// short), and the mirror spheres show each one's own equirect-to-cube resampling, so they
+// differ by sampling noise and interpolation: measured 0.25-0.45 (three), about 1.0 (Babylon,
+// DDS) on this machine (docs/ENGINES.md). 2/255 leaves room for that and still fails the
+// bake a quarter turn off (the negative controls below: 10-20/255 on the axes environment).
+// The .env adds 8-bit RGBD: half a code of a gamma-2.2 value per channel, about 1/255 more
+// on average where the radiance is above 1 (its D falls below 1), hence 3/255.
+const BOUND = 2.0, BOUND_RGBD = 3.0;
+{
+  const { p, errors } = await open('three.html');
+  console.log('three page loaded after ' + ((Date.now() - t0) / 1000).toFixed(1) + ' s, ' + requests + ' requests');
+  for (const [name] of inputs) {
+    const r = await p.evaluate(([h, k, w]) => window.run(h, k, w), [`/w/${name === 'axes' ? 'axes.hdr' : 'uffizi.hdr'}`,
+      `/w/${name}-three/specular.ktx2`, name === 'axes' ? '/w/axes-three-turned/specular.ktx2' : null]);
+    const c = compare(r.own, r.baked);
+    check(`three.js: ${name}: PMREM of the HDRI vs ibl bake --target three`, c.mean < BOUND && c.pixels > 5000,
+      `mean ${c.mean.toFixed(3)}/255, worst ${c.worst}/255 over ${c.pixels} px`);
+    if (r.turned) {
+      const t = compare(r.own, r.turned);
+      check('three.js: axes: the bake a quarter turn off fails the same bound', t.mean > 4 * BOUND,
+        `mean ${t.mean.toFixed(3)}/255`);
+    }
+    if (shots && name === 'uffizi') fs.writeFileSync(path.join(shots, 'engines_three.json'), JSON.stringify({ w: W, h: H, ...r }));
+  }
+  check('three.js: no page errors', errors.length === 0, errors.join('; '));
+  await p.close();
+}
+{
+  const { p, errors } = await open('babylon.html');
+  console.log('babylon page loaded after ' + ((Date.now() - t0) / 1000).toFixed(1) + ' s, ' + requests + ' requests');
+  for (const [name] of inputs) {
+    const r = await p.evaluate(([h, d, e, w]) => window.run(h, d, e, w), [`/w/${name === 'axes' ? 'axes.hdr' : 'uffizi.hdr'}`,
+      `/w/${name}-babylon/specular.dds`, `/w/${name}-babylon/engine_babylon.env`,
+      name === 'axes' ? '/w/axes-babylon-turned/specular.dds' : null]);
+    console.log('babylon ms', r.ms.map((x) => x.toFixed(0)).join(' '));
+    const c = compare(r.own, r.dds);
+    check(`Babylon.js: ${name}: HDRCubeTexture prefiltered vs ibl bake --target babylon (DDS)`, c.mean < BOUND && c.pixels > 5000,
+      `mean ${c.mean.toFixed(3)}/255, worst ${c.worst}/255 over ${c.pixels} px`);
+    const e = compare(r.own, r.env);
+    check(`Babylon.js: ${name}: HDRCubeTexture prefiltered vs the bake's .env`, e.mean < BOUND_RGBD && e.pixels > 5000,
+      `mean ${e.mean.toFixed(3)}/255, worst ${e.worst}/255 over ${e.pixels} px`);
+    if (r.turned) {
+      const t = compare(r.own, r.turned);
+      check('Babylon.js: axes: the bake a quarter turn off fails the same bound', t.mean > 4 * BOUND,
+        `mean ${t.mean.toFixed(3)}/255`);
+    }
+    if (shots && name === 'uffizi') fs.writeFileSync(path.join(shots, 'engines_babylon.json'), JSON.stringify({ w: W, h: H, ...r }));
+  }
+  check('Babylon.js: no page errors', errors.length === 0, errors.join('; '));
+  await p.close();
+}
+await browser.close();
+server.close();
+console.log(`engines test: ${passed} passed, ${failed} failed in ${((Date.now() - t0) / 1000).toFixed(1)} s`);
+process.exit(failed ? 1 : 0);
