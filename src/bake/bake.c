@@ -2,6 +2,7 @@
  * view of the result (ibl_bake_probe) and the table of the files a bake folder holds.
  * Writing and reading folders: bake_folder.c; the manifest: bake_manifest.c. */
 #include "bake/bake_internal.h"
+#include "bake/target_internal.h"
 #include "core/context_internal.h"
 #include "core/defaults.h"
 
@@ -249,9 +250,8 @@ ibl_status ibl_bake_compute(ibl_context *ctx, const ibl_cubemap *env, const ibl_
     if (d.containers & ~(unsigned)(IBL_BAKE_KTX2 | IBL_BAKE_DDS))
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "bake: unknown containers 0x%x", d.containers);
     if (d.target != IBL_TARGET_NONE) {
-        const ibl_target_profile *p = ibl_target_profile_of(d.target);
-        if (!p) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "bake: unknown target %d", (int)d.target);
-        if (p->not_ready) return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "bake: %s", p->not_ready);
+        ibl_status st = ibl__target_check(ctx, d.target, &d.specular, env->size);
+        if (st != IBL_OK) return st;
     }
     double t0 = now_ms(), t = t0;
     ibl_status st = record_parameters(ctx, env, &d, out);

@@ -90,6 +90,29 @@ int ibl_target_levels(int size, int last_level_size)
     return levels;
 }
 
+ibl_status ibl__target_check(ibl_context *ctx, ibl_target target, const ibl_specular_desc *chain,
+                             int source_size)
+{
+    const ibl_target_profile *p = ibl_target_profile_of(target);
+    if (!p) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "bake: unknown target %d", (int)target);
+    if (p->not_ready) return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "bake: %s", p->not_ready);
+    if (!(p->files & (IBL_TARGET_FILE_BABYLON_ENV | IBL_TARGET_FILE_GLTF))) return IBL_OK;
+    ibl_specular_info info;
+    ibl_status st = ibl_specular_levels(ctx, chain, source_size, &info);
+    if (st != IBL_OK) return st;
+    if (info.size & (info.size - 1))
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "bake: the %s target's images want power-of-two faces, the chain has %d "
+                         "texels", p->name, info.size);
+    int full = 1;
+    while ((1 << (full - 1)) < info.size) full++;
+    if ((p->files & IBL_TARGET_FILE_BABYLON_ENV) && info.levels != full)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "bake: Babylon's .env (engine_babylon.env) needs the whole chain, %d "
+                         "levels for %d texels, not %d", full, info.size, info.levels);
+    return IBL_OK;
+}
+
 void ibl_bake_desc_for_target(const ibl_target_profile *p, ibl_bake_desc *d)
 {
     memset(d, 0, sizeof *d);
@@ -163,15 +186,18 @@ static void gltf_form(const ibl_sh *r, ibl_target_sh *out)
 /* Babylon's SphericalPolynomial.updateFromHarmonics with its own constants (0.886277 is
  * Babylon's spelling of sqrt(pi)/2 = 0.886227; kept so that the numbers equal the engine's)
  * applied to the harmonics ConvertCubeMapToSphericalPolynomial builds: Condon-Shortley-signed
- * radiance SH, times A_l / pi. */
+ * radiance SH, times A_l / pi (irradiance / pi). updateFromHarmonics scales band l by A_l / pi
+ * once more; FromPolynomial undoes it. */
 static void babylon_form(const ibl_sh *r, ibl_target_sh *out)
 {
     static const char *const poly_names[9] = {"x", "y", "z", "xx", "yy", "zz", "yz", "zx", "xy"};
     out->engine = "Babylon.js SphericalPolynomial (.env \"irradiance\", "
                   "CubeTexture.sphericalPolynomial)";
-    out->basis = "polynomial E(n)/pi = x n.x + y n.y + z n.z + xx n.x^2 + yy n.y^2 + zz n.z^2 + "
-                 "yz n.y n.z + zx n.z n.x + xy n.x n.y (Babylon's shader evaluates it)";
-    out->normalisation = "irradiance / pi (Lambertian radiance for albedo 1)";
+    out->basis = "SphericalPolynomial.FromHarmonics of the harmonics h_lm = E_lm / pi: x y z "
+                 "xx yy zz yz zx xy; Babylon turns it back into h (FromPolynomial) for its "
+                 "shader, which sums h_lm Y_lm(n) = E(n) / pi";
+    out->normalisation = "h = irradiance / pi (Lambertian radiance for albedo 1); the "
+                         "polynomial's terms carry one more A_l / pi, as Babylon writes them";
     out->signs = "made from Condon-Shortley-signed harmonics, as Babylon makes them";
     out->frame = "the cube texture's own frame (Babylon projects the cube as stored)";
     for (int c = 0; c < 3; c++) {

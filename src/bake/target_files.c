@@ -146,13 +146,17 @@ void ibl__rgbd_babylon_decode(const uint8_t in[4], float rgb[3])
 }
 
 ibl_status ibl__rgbd_face_png(ibl_context *ctx, const ibl_cubemap *cube, int level, int face,
-                              const char *name, void **bytes, size_t *size)
+                              int flip_rows, const char *name, void **bytes, size_t *size)
 {
     int s = ibl_level_size(cube->size, level);
     uint8_t *rgba = ibl_alloc(ctx, (size_t)s * (size_t)s * 4);
     if (!rgba) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
     const float *src = ibl_cubemap_face(cube, level, face);
-    for (size_t i = 0; i < (size_t)s * (size_t)s; i++) ibl__rgbd_babylon_encode(src + i * 4, rgba + i * 4);
+    for (int y = 0; y < s; y++) {
+        const float *row = src + (size_t)(flip_rows ? s - 1 - y : y) * (size_t)s * 4;
+        for (int x = 0; x < s; x++)
+            ibl__rgbd_babylon_encode(row + (size_t)x * 4, rgba + ((size_t)y * (size_t)s + (size_t)x) * 4);
+    }
     ibl_status st = ibl__png_encode_rgba8(ctx, rgba, s, s, name, bytes, size);
     ibl_free(ctx, rgba);
     return st;
@@ -203,17 +207,17 @@ static ibl_status stage_babylon_env(ibl_context *ctx, const char *dir, const ibl
     while ((1 << (full - 1)) < c->size) full++;
     if (c->levels != full || (c->size & (c->size - 1)))
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
-                         "%s/%s: Babylon's .env needs the whole chain of a power-of-two cube "
-                         "(%d levels for %d texels), the bake has %d levels", dir, name, full,
+                         "%s: Babylon's .env needs the whole chain of a power-of-two cube "
+                         "(%d levels for %d texels), the bake has %d levels", name, full,
                          c->size, c->levels);
     ibl_target_sh poly;
     ibl_status st = ibl_target_sh_form_of(ctx, IBL_TARGET_SH_BABYLON, &b->sh, &poly);
-    if (st != IBL_OK) return ibl__fail(ctx, st, "%s/%s: %s", dir, name, ibl_context_message(ctx));
+    if (st != IBL_OK) return ibl__fail(ctx, st, "%s: %s", name, ibl_context_message(ctx));
     int images = c->levels * 6;
     void *png[6 * IBL_MAX_LEVELS] = {0};
     size_t lengths[6 * IBL_MAX_LEVELS] = {0};
     for (int i = 0; st == IBL_OK && i < images; i++)
-        st = ibl__rgbd_face_png(ctx, c, i / 6, i % 6, name, &png[i], &lengths[i]);
+        st = ibl__rgbd_face_png(ctx, c, i / 6, i % 6, 1, name, &png[i], &lengths[i]);
     char *manifest = NULL;
     if (st == IBL_OK) st = ibl__json_text(ctx, env_manifest(b, lengths, images, &poly), name, &manifest);
     uint8_t *file = NULL;

@@ -153,19 +153,19 @@ ibl_status ibl__stage_gltf_lights(ibl_context *ctx, const char *dir, const ibl_b
     const ibl_cubemap *c = &b->specular;
     if (c->size & (c->size - 1))
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
-                         "%s/engine_gltf.gltf: EXT_lights_image_based wants power-of-two faces, "
-                         "the chain is %d texels", dir, c->size);
+                         "engine_gltf.gltf: EXT_lights_image_based wants power-of-two faces, "
+                         "the chain is %d texels", c->size);
     ibl_target_sh sh;
     ibl_status st = ibl_target_sh_form_of(ctx, IBL_TARGET_SH_GLTF_IRRADIANCE, &b->sh, &sh);
     if (st != IBL_OK)
-        return ibl__fail(ctx, st, "%s/engine_gltf.gltf: %s", dir, ibl_context_message(ctx));
+        return ibl__fail(ctx, st, "engine_gltf.gltf: %s", ibl_context_message(ctx));
     for (int l = 0; st == IBL_OK && l < c->levels; l++)
         for (int f = 0; st == IBL_OK && f < 6; f++) {
             char name[64];
             face_name(name, sizeof name, l, f);
             void *png = NULL;
             size_t size = 0;
-            st = ibl__rgbd_face_png(ctx, c, l, f, name, &png, &size);
+            st = ibl__rgbd_face_png(ctx, c, l, f, 1, name, &png, &size);
             if (st == IBL_OK) st = ibl__bake_write_staged(ctx, dir, name, png, size);
             ibl_free(ctx, png);
         }

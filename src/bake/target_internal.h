@@ -11,9 +11,14 @@
  * decoded as rgb = (rgb8 / 255)^2.2 / (a / 255). Not the library's linear RGBD of compress.h. */
 void ibl__rgbd_babylon_encode(const float rgb[3], uint8_t out[4]);
 void ibl__rgbd_babylon_decode(const uint8_t in[4], float rgb[3]);
-/* One face of one level as an RGBD PNG (bytes freed with ibl_free); errors name `name`. */
+/* One face of one level as an RGBD PNG (bytes freed with ibl_free), its rows in memory order
+ * or, with flip_rows, bottom row first; errors name `name`. */
 ibl_status ibl__rgbd_face_png(ibl_context *ctx, const ibl_cubemap *cube, int level, int face,
-                              const char *name, void **bytes, size_t *size);
+                              int flip_rows, const char *name, void **bytes, size_t *size);
+/* Refuses, before any work, a target whose files this chain cannot make (reserved rows, a
+ * .env without the whole chain, glTF images of a size that is not a power of two). */
+ibl_status ibl__target_check(ibl_context *ctx, ibl_target target, const ibl_specular_desc *chain,
+                             int source_size);
 /* engine_gltf.gltf (EXT_lights_image_based), its PNG faces, and
  * engine_khr_lights_environment.gltf, into the staging folder. */
 ibl_status ibl__stage_gltf_lights(ibl_context *ctx, const char *dir, const ibl_bake_data *bake);
