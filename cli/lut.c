@@ -20,10 +20,13 @@ static const char usage[] =
     "                           splitsum-separable: the same with Schlick-GGX k = alpha/2 (UE4)\n"
     "                           multiscatter: RG = (E, E_avg), directional albedo and its average\n"
     "                           sheen: RG = (E, E_avg) of the Charlie sheen lobe\n"
+    "                           sheen-khr: RG = (E, E_avg) of KHR_materials_sheen's BRDF (Charlie\n"
+    "                             visibility of Conty Estevez & Kulla 2017, alpha = y)\n"
     "                           ambient-brdf: tri-Ace AmbientBRDF volume, U = n.v, V = shininess,\n"
     "                             W = F0; R = specular albedo, G = exact diffuse factor 1 - F0\n"
     "  --size N                 texels per axis (default 128; ambient-brdf: n.v and shininess, 32)\n"
-    "  --channels LIST          split-sum kinds: up to 4 of a,b,e,eavg,sheen,sheenavg,0,1\n"
+    "  --channels LIST          split-sum kinds: up to 4 of a,b,e,eavg,sheen,sheenavg,\n"
+    "                           sheenkhr,sheenkhravg,0,1\n"
     "  --shininess-range A:B    ambient-brdf shininess range (default 1:2000)\n"
     "  --shininess-spacing S    log (default) or linear\n"
     "  --f0-steps K             ambient-brdf F0 slices (default 16)\n"
@@ -39,7 +42,9 @@ static const char usage[] =
     "Flat images (.png .exr .hdr .pfm) of the 3D ambient-brdf volume stack the F0 slices\n"
     "top to bottom. See docs/BRDF.md for the maths and the shader code.\n";
 
-typedef enum lut_kind { KIND_SPLITSUM, KIND_SEPARABLE, KIND_MULTISCATTER, KIND_SHEEN, KIND_AMBIENT } lut_kind;
+typedef enum lut_kind {
+    KIND_SPLITSUM, KIND_SEPARABLE, KIND_MULTISCATTER, KIND_SHEEN, KIND_SHEEN_KHR, KIND_AMBIENT
+} lut_kind;
 
 static int ends_with(const char *s, const char *suffix)
 {
@@ -55,6 +60,7 @@ static int parse_channels(const char *list, ibl_brdf_channel out[4])
     } names[] = {{"a", IBL_BRDF_SCALE},       {"b", IBL_BRDF_BIAS},
                  {"e", IBL_BRDF_ALBEDO},      {"eavg", IBL_BRDF_ALBEDO_AVG},
                  {"sheen", IBL_BRDF_SHEEN},   {"sheenavg", IBL_BRDF_SHEEN_AVG},
+                 {"sheenkhr", IBL_BRDF_SHEEN_KHR}, {"sheenkhravg", IBL_BRDF_SHEEN_KHR_AVG},
                  {"0", IBL_BRDF_ZERO},        {"1", IBL_BRDF_ONE}};
     char buf[128];
     if (strlen(list) >= sizeof buf) return 0;
@@ -95,12 +101,12 @@ static lut_kind kind_from_name(cli_args *a, const char *k)
         const char *name;
         lut_kind kind;
     } kinds[] = {{"splitsum", KIND_SPLITSUM},         {"splitsum-separable", KIND_SEPARABLE},
-                 {"multiscatter", KIND_MULTISCATTER}, {"sheen", KIND_SHEEN},
+                 {"multiscatter", KIND_MULTISCATTER}, {"sheen", KIND_SHEEN}, {"sheen-khr", KIND_SHEEN_KHR},
                  {"ambient-brdf", KIND_AMBIENT}};
     for (size_t i = 0; i < sizeof kinds / sizeof kinds[0]; i++)
         if (strcmp(k, kinds[i].name) == 0) return kinds[i].kind;
     cli_usage_error(a, "unknown --kind '%s' (splitsum, splitsum-separable, multiscatter, sheen, "
-                       "ambient-brdf)", k);
+                       "sheen-khr, ambient-brdf)", k);
 }
 
 /* The AmbientBRDF options; returns 1 if arg was one of them. */
@@ -209,16 +215,23 @@ static ibl_status compute_splitsum(ibl_context *ctx, const cli_args *a, const lu
         d.channels[1] = IBL_BRDF_SHEEN_AVG;
         what = "Charlie sheen (Estevez-Kulla 2017, Neubelt-Pettineo visibility) directional albedo "
                "E and its average";
+    } else if (o->kind == KIND_SHEEN_KHR) {
+        d.channels[0] = IBL_BRDF_SHEEN_KHR;
+        d.channels[1] = IBL_BRDF_SHEEN_KHR_AVG;
+        what = "KHR_materials_sheen: Charlie distribution and Charlie visibility (Conty Estevez & "
+               "Kulla 2017), directional albedo E and its average; y = sheenRoughness = alpha";
     }
     if (o->channels) {
         memset(d.channels, 0, sizeof d.channels);
         if (!parse_channels(o->channels, d.channels))
-            cli_usage_error(a, "--channels wants up to 4 of a,b,e,eavg,sheen,sheenavg,0,1, not '%s'",
+            cli_usage_error(a, "--channels wants up to 4 of a,b,e,eavg,sheen,sheenavg,sheenkhr,"
+                               "sheenkhravg,0,1, not '%s'",
                             o->channels);
         what = "custom channels (see --channels)";
     }
-    snprintf(comment, cap, "%s.\nx = n.v, y = perceptual roughness r (alpha = r^2); row 0 is r ~ 0.",
-             what);
+    snprintf(comment, cap, "%s.\nx = n.v, y = %s; row 0 is r ~ 0.", what,
+             o->kind == KIND_SHEEN_KHR && !o->channels ? "sheenRoughness r (alpha = r)"
+                                                      : "perceptual roughness r (alpha = r^2)");
     *channels = ibl_brdf_lut_channel_count(&d);
     return ibl_brdf_lut(ctx, &d, img);
 }

@@ -123,6 +123,9 @@ typedef struct ibl_bake_data {
     ibl_texture ambient_brdf; /* 3D [F0][shininess][n.v], R = AmbientBRDF (kind 3D)          */
     ibl_table_axis ambient_n_dot_v, ambient_shininess, ambient_f0;
     ibl_blinn_normalization ambient_normalization;
+    ibl_cubemap sheen;       /* the glTF target: the prefiltered Charlie (sheen) chain, at
+                                most 64 texels, the specular chain's number of levels
+                                (target.h ibl_charlie_prefilter); not read back by load     */
     ibl_cubemap environment; /* with keep_environment: the unfiltered working cube, the
                                 probe's mirror and background; never written whole       */
     ibl_image preview;       /* linear equirect preview (environment.png), if asked        */

@@ -50,6 +50,10 @@ typedef enum ibl_brdf_channel {
     IBL_BRDF_ALBEDO_AVG,     /* E_avg(r) = 2 * integral E(mu) mu dmu (same along a row)   */
     IBL_BRDF_SHEEN,          /* Charlie sheen directional albedo (F = 1)                  */
     IBL_BRDF_SHEEN_AVG,      /* its cosine-weighted average (same along a row)            */
+    IBL_BRDF_SHEEN_KHR,      /* KHR_materials_sheen's E(x): Charlie D with alpha = the
+                                table's y (sheenRoughness, not squared), the extension's
+                                Charlie visibility (Conty Estevez & Kulla 2017), F = 1      */
+    IBL_BRDF_SHEEN_KHR_AVG,  /* its cosine-weighted average (same along a row)            */
     IBL_BRDF_ZERO,           /* constant 0                                                */
     IBL_BRDF_ONE             /* constant 1                                                */
 } ibl_brdf_channel;
@@ -77,6 +81,9 @@ void ibl_brdf_splitsum(double nv, double r, ibl_brdf_visibility visibility, int 
 double ibl_brdf_albedo_average(double r, ibl_brdf_visibility visibility, int order);
 double ibl_brdf_sheen_albedo(double nv, double r, int order);
 double ibl_brdf_sheen_albedo_average(double r, int order);
+/* KHR_materials_sheen's albedo E(nv) at sheenRoughness r (alpha = r), and its average */
+double ibl_brdf_sheen_khr_albedo(double nv, double r, int order);
+double ibl_brdf_sheen_khr_albedo_average(double r, int order);
 
 /* ------------------------------------------------------------------------------------------ */
 /* tri-Ace AmbientBRDF                                                                        */

@@ -105,6 +105,13 @@ typedef struct ibl_target_sh {
 ibl_status ibl_target_sh_form_of(ibl_context *ctx, ibl_target_sh_form form, const ibl_sh *radiance,
                                  ibl_target_sh *out);
 
+/* The prefiltered Charlie (sheen) chain of KHR_materials_sheen (src/bake/target_sheen.c has
+ * the definition): level l of `levels` levels of edge size >> l, for sheenRoughness
+ * ibl_charlie_level_roughness(l, levels) = l / (levels - 1), at least 1/64. out is allocated. */
+ibl_status ibl_charlie_prefilter(ibl_context *ctx, const ibl_cubemap *env, int size, int levels,
+                                 ibl_cubemap *out);
+float ibl_charlie_level_roughness(int level, int levels);
+
 #ifdef __cplusplus
 }
 #endif

@@ -256,6 +256,11 @@ ibl_status ibl_bake_compute(ibl_context *ctx, const ibl_cubemap *env, const ibl_
     double t0 = now_ms(), t = t0;
     ibl_status st = record_parameters(ctx, env, &d, out);
     if (st == IBL_OK) st = stage_specular(ctx, env, &d, out);
+    /* the glTF target's sheen chain (target_sheen.c): at most 64 texels, the chain's levels */
+    if (st == IBL_OK && d.target != IBL_TARGET_NONE &&
+        (ibl_target_profile_of(d.target)->files & IBL_TARGET_FILE_GLTF))
+        st = ibl_charlie_prefilter(ctx, env, out->specular.size < 64 ? out->specular.size : 64,
+                                   out->specular.levels, &out->sheen);
     if (st == IBL_OK) out->timing_ms.specular = now_ms() - t, t = now_ms();
     if (st == IBL_OK) st = ibl__progress(ctx, "bake", 0.7);
     if (st == IBL_OK) st = stage_diffuse(ctx, env, &d, out);
@@ -280,6 +285,7 @@ void ibl_bake_free(ibl_context *ctx, ibl_bake_data *b)
 {
     if (!b) return;
     ibl_cubemap_free(ctx, &b->specular);
+    ibl_cubemap_free(ctx, &b->sheen);
     ibl_cubemap_free(ctx, &b->irradiance);
     ibl_cubemap_free(ctx, &b->environment);
     ibl_image_free(ctx, &b->splitsum);

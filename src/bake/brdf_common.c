@@ -61,7 +61,8 @@ static void lobe_angle(const ibl__lobe_params *p, double z, double *c2, double *
         *s2 = a2 * (1.0 - z2) / den;
         break;
     }
-    case IBL__LOBE_CHARLIE: {
+    case IBL__LOBE_CHARLIE:
+    case IBL__LOBE_CHARLIE_KHR: {
         /* Estevez-Kulla 2017: CDF of D(h)(n.h) in theta is sin^(2 + 1/alpha) theta. */
         double l = 2.0 / (2.0 + 1.0 / p->alpha) * log1p(-z2);
         *s2 = exp(l);
@@ -90,6 +91,7 @@ static double lobe_zeta(const ibl__lobe_params *p, double theta)
         return sqrt(a2 * c * c / (s * s + a2 * c * c));
     }
     case IBL__LOBE_CHARLIE:
+    case IBL__LOBE_CHARLIE_KHR:
         return sqrt(-expm1((2.0 + 1.0 / p->alpha) * log(s)));
     default:
         return exp(0.25 * (p->shininess + 1.0) * log(c * c));
@@ -127,6 +129,24 @@ static inline double cos_0_pi(double phi)
 }
 
 enum { MAX_PHI = 2 * IBL__GL_MAX };
+
+/* KHR_materials_sheen's "Charlie" visibility: Lambda(cos) of Conty Estevez & Kulla 2017
+ * ("Production Friendly Microfacet Sheen BRDF"), their fitted curve l(x) interpolated in
+ * (1 - alpha)^2, mirrored about x = 0.5 for cos >= 0.5 as the extension writes it. */
+static double sheen_l(double x, double alpha)
+{
+    double t = (1.0 - alpha) * (1.0 - alpha);
+    double a = 21.5473 + (25.3245 - 21.5473) * t, b = 3.82987 + (3.32435 - 3.82987) * t;
+    double c = 0.19823 + (0.16801 - 0.19823) * t, d = -1.97760 + (-1.27393 + 1.97760) * t;
+    double e = -4.32054 + (-4.85967 + 4.32054) * t;
+    return a / (1.0 + b * pow(x, c)) + d * x + e;
+}
+
+static double sheen_lambda(double cos_theta, double alpha)
+{
+    double x = fabs(cos_theta);
+    return x < 0.5 ? exp(sheen_l(x, alpha)) : exp(2.0 * sheen_l(0.5, alpha) - sheen_l(1.0 - x, alpha));
+}
 
 /* Integrand per unit weight measure at the n phi nodes of one theta_h node, times the node
  * weights wgt[]; writes g * w into wgt[] and the Schlick factor (1 - v.h)^5 into fc[]. One
@@ -169,6 +189,17 @@ static void evaluate(const ibl__lobe_params *p, double mu, double sv, double ch,
             wgt[j] *= nl * vhv[j] * inv_ch / (nl + mu - nl * mu);
         }
         break;
+    case IBL__LOBE_CHARLIE_KHR: {
+        /* V = 1 / ((1 + Lambda(nv) + Lambda(nl)) 4 nv nl), so g = 4 V nl (v.h) / (n.h) =
+         * (v.h) / ((n.h) nv (1 + Lambda(nv) + Lambda(nl))) */
+        double lambda_v = sheen_lambda(mu, p->alpha);
+        for (int j = 0; j < n; j++) {
+            double nl = nlv[j];
+            double g = nl > 0 ? vhv[j] * inv_ch / (mu * (1.0 + lambda_v + sheen_lambda(nl, p->alpha))) : 0.0;
+            wgt[j] *= g;
+        }
+        break;
+    }
     default:
         /* tri-Ace 2010: norm (n.h)^s F / max(n.l, n.v), with (n.h)^s dh the measure. */
         for (int j = 0; j < n; j++) {

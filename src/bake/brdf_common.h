@@ -39,6 +39,8 @@ typedef enum ibl__lobe {
     IBL__LOBE_GGX_CORRELATED, /* GGX D, height-correlated Smith G2                     */
     IBL__LOBE_GGX_SEPARABLE,  /* GGX D, Schlick-GGX G1(l) G1(v) with k = alpha / 2        */
     IBL__LOBE_CHARLIE,        /* Charlie D (Estevez-Kulla), Neubelt-Pettineo visibility */
+    IBL__LOBE_CHARLIE_KHR,    /* Charlie D, KHR_materials_sheen's Charlie visibility (Conty &
+                                 Kulla 2017's fitted Lambda)                             */
     IBL__LOBE_BLINN           /* tri-Ace's (c1 s + c2) (n.h)^s / max(n.l, n.v)           */
 } ibl__lobe;
 

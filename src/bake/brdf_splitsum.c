@@ -57,13 +57,15 @@ static void splitsum_rules(double nv, double r, ibl_brdf_visibility vis, const r
     *b = m[1];
 }
 
-static double sheen_rules(double nv, double r, const rules *R)
+/* sheen: 1 the table's Charlie (alpha = r^2, Neubelt-Pettineo visibility), 2 the
+ * KHR_materials_sheen form (alpha = r, the extension's Charlie visibility) */
+static double sheen_rules(double nv, double r, const rules *R, int sheen)
 {
     if (!(r > 0)) return 0; /* the Charlie lobe collapses onto the horizon: no valid l */
     ibl__lobe_params p;
     memset(&p, 0, sizeof p);
-    p.lobe = IBL__LOBE_CHARLIE;
-    p.alpha = r > 1 ? 1 : r * r;
+    p.lobe = sheen == 2 ? IBL__LOBE_CHARLIE_KHR : IBL__LOBE_CHARLIE;
+    p.alpha = r > 1 ? 1 : sheen == 2 ? r : r * r;
     double m[2];
     ibl__albedo_moments(&p, clamp_mu(nv), &R->q, m);
     return m[0] + m[1];
@@ -77,7 +79,7 @@ static double average_rules(double r, int sheen, ibl_brdf_visibility vis, const 
     for (int k = 0; k < R->mu.n; k++) {
         double t = R->mu.x[k], mu = t * t, e;
         if (sheen) {
-            e = sheen_rules(mu, r, R);
+            e = sheen_rules(mu, r, R, sheen);
         } else {
             double a, b;
             splitsum_rules(mu, r, vis, R, &a, &b);
@@ -110,7 +112,21 @@ double ibl_brdf_sheen_albedo(double nv, double r, int order)
 {
     rules R;
     make_rules(order, &R);
-    return sheen_rules(nv, r, &R);
+    return sheen_rules(nv, r, &R, 1);
+}
+
+double ibl_brdf_sheen_khr_albedo(double nv, double r, int order)
+{
+    rules R;
+    make_rules(order, &R);
+    return sheen_rules(nv, r, &R, 2);
+}
+
+double ibl_brdf_sheen_khr_albedo_average(double r, int order)
+{
+    rules R;
+    make_rules(order, &R);
+    return average_rules(r, 2, IBL_VISIBILITY_HEIGHT_CORRELATED, &R);
 }
 
 double ibl_brdf_sheen_albedo_average(double r, int order)
@@ -144,7 +160,7 @@ typedef struct lut_job {
     const ibl_brdf_channel *channels;
     int nchannels, size;
     rules R;
-    int need_ab, need_sheen, need_avg, need_sheen_avg;
+    int need_ab, need_sheen, need_avg, need_sheen_avg, need_khr, need_khr_avg;
     ibl_image *out;
 } lut_job;
 
@@ -154,13 +170,15 @@ static void lut_row(void *arg, int j)
     const lut_job *job = arg;
     int n = job->size;
     double r = (j + 0.5) / n;
-    double avg = 0, sheen_avg = 0;
+    double avg = 0, sheen_avg = 0, khr_avg = 0;
     if (job->need_avg) avg = average_rules(r, 0, job->desc->visibility, &job->R);
     if (job->need_sheen_avg) sheen_avg = average_rules(r, 1, job->desc->visibility, &job->R);
+    if (job->need_khr_avg) khr_avg = average_rules(r, 2, job->desc->visibility, &job->R);
     for (int i = 0; i < n; i++) {
-        double mu = (i + 0.5) / n, a = 0, b = 0, sheen = 0;
+        double mu = (i + 0.5) / n, a = 0, b = 0, sheen = 0, khr = 0;
         if (job->need_ab) splitsum_rules(mu, r, job->desc->visibility, &job->R, &a, &b);
-        if (job->need_sheen) sheen = sheen_rules(mu, r, &job->R);
+        if (job->need_sheen) sheen = sheen_rules(mu, r, &job->R, 1);
+        if (job->need_khr) khr = sheen_rules(mu, r, &job->R, 2);
         float *px = ibl_image_texel(job->out, i, j);
         px[0] = px[1] = px[2] = 0;
         px[3] = 1;
@@ -173,6 +191,8 @@ static void lut_row(void *arg, int j)
             case IBL_BRDF_ALBEDO_AVG: v = avg; break;
             case IBL_BRDF_SHEEN: v = sheen; break;
             case IBL_BRDF_SHEEN_AVG: v = sheen_avg; break;
+            case IBL_BRDF_SHEEN_KHR: v = khr; break;
+            case IBL_BRDF_SHEEN_KHR_AVG: v = khr_avg; break;
             case IBL_BRDF_ONE: v = 1; break;
             default: v = 0; break;
             }
@@ -211,6 +231,8 @@ ibl_status ibl_brdf_lut(ibl_context *ctx, const ibl_brdf_lut_desc *desc, ibl_ima
         case IBL_BRDF_ALBEDO_AVG: job.need_avg = 1; break;
         case IBL_BRDF_SHEEN: job.need_sheen = 1; break;
         case IBL_BRDF_SHEEN_AVG: job.need_sheen_avg = 1; break;
+        case IBL_BRDF_SHEEN_KHR: job.need_khr = 1; break;
+        case IBL_BRDF_SHEEN_KHR_AVG: job.need_khr_avg = 1; break;
         case IBL_BRDF_ZERO:
         case IBL_BRDF_ONE: break;
         default:

@@ -93,7 +93,12 @@ static const char gltf_readme[] =
     "engine_khr_lights_environment.gltf is the same light in the KHR_lights_environment draft's\n"
     "form (a KTX2 cube texture, specular.ktx2, and the SH), referenced as\n"
     "  \"scenes\": [{ \"extensions\": { \"KHR_lights_environment\": { \"environment\": 0 } } }]\n"
-    "The draft is not ratified: its field names may still change.\n";
+    "The draft is not ratified: its field names may still change.\n"
+    "\n"
+    "For KHR_materials_sheen: engine_gltf_charlie.ktx2 is the prefiltered Charlie chain (at most\n"
+    "64 texels, the GGX chain's number of levels, sheenRoughness = lod / (levels - 1)), and\n"
+    "engine_gltf_sheen_lut.ktx2 the sheen albedo E(n.v, sheenRoughness) with the extension's\n"
+    "Charlie visibility (R = E, G = its average) for the albedo-scaling of the base layer.\n";
 
 static char *readme_text(ibl_context *ctx, const ibl_bake_data *b)
 {

@@ -172,5 +172,6 @@ ibl_status ibl__stage_gltf_lights(ibl_context *ctx, const char *dir, const ibl_b
     if (st == IBL_OK) st = stage_json(ctx, dir, "engine_gltf.gltf", ext_lights_json(b, &sh));
     if (st == IBL_OK && (b->containers & IBL_BAKE_KTX2))
         st = stage_json(ctx, dir, "engine_khr_lights_environment.gltf", khr_environment_json(b, &sh));
+    if (st == IBL_OK) st = ibl__stage_gltf_sheen(ctx, dir, b);
     return st;
 }

@@ -23,4 +23,8 @@ ibl_status ibl__target_check(ibl_context *ctx, ibl_target target, const ibl_spec
  * engine_khr_lights_environment.gltf, into the staging folder. */
 ibl_status ibl__stage_gltf_lights(ibl_context *ctx, const char *dir, const ibl_bake_data *bake);
 
+/* target_sheen.c: engine_gltf_charlie.ktx2 (bake->sheen) and engine_gltf_sheen_lut.ktx2 (the
+ * KHR_materials_sheen albedo table at the bake's table size). */
+ibl_status ibl__stage_gltf_sheen(ibl_context *ctx, const char *dir, const ibl_bake_data *bake);
+
 #endif

@@ -8,10 +8,11 @@
 // tests/data and an axes environment made here (one colour per axis direction, a dot beside
 // each axis that moves to the other side under a mirror): a wrong yaw or mirror moves whole
 // colours across the spheres and fails the bound by far.
-// Usage: node engines_test.mjs IBL WORKDIR [SCREENSHOT_DIR]
+// Usage: node engines_test.mjs IBL WORKDIR [SCREENSHOT_DIR] (the PNGs of docs/ENGINES.md)
 import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import http from 'node:http';
+import zlib from 'node:zlib';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 
@@ -90,6 +91,31 @@ function bake(input, target, dir, extra = []) {
   const size = target === 'three' ? 256 : SIZE; // three's PMREMGenerator makes 256 at least
   const r = spawnSync(ibl, ['bake', input, '--target', target, '--size', String(size), ...extra, '-o', dir, '-q'], { encoding: 'utf8' });
   if (r.status !== 0) throw new Error(`ibl bake --target ${target}: ${r.stderr}`);
+}
+
+// ---- a PNG of renders stacked top to bottom (readPixels rows are bottom-up), for the docs ----
+function writeStack(file, w, h, images) {
+  const rows = [];
+  for (const img of images)
+    for (let y = h - 1; y >= 0; y--) {
+      const row = Buffer.alloc(1 + w * 3);
+      for (let x = 0; x < w; x++)
+        for (let k = 0; k < 3; k++) row[1 + x * 3 + k] = img[(y * w + x) * 4 + k];
+      rows.push(row);
+    }
+  const chunk = (type, data) => {
+    const len = Buffer.alloc(4), crc = Buffer.alloc(4), body = Buffer.concat([Buffer.from(type, 'latin1'), data]);
+    len.writeUInt32BE(data.length);
+    crc.writeUInt32BE(zlib.crc32(body) >>> 0);
+    return Buffer.concat([len, body, crc]);
+  };
+  const ihdr = Buffer.alloc(13);
+  ihdr.writeUInt32BE(w, 0);
+  ihdr.writeUInt32BE(h * images.length, 4);
+  ihdr[8] = 8;
+  ihdr[9] = 2;
+  fs.writeFileSync(file, Buffer.concat([Buffer.from([137, 80, 78, 71, 13, 10, 26, 10]), chunk('IHDR', ihdr),
+    chunk('IDAT', zlib.deflateSync(Buffer.concat(rows))), chunk('IEND', Buffer.alloc(0))]));
 }
 
 // ---- comparison: sphere pixels (alpha > 0 where the clear colour is transparent) ----
@@ -286,7 +312,7 @@ const BOUND = 2.0, BOUND_RGBD = 3.0;
       check('three.js: axes: the bake a quarter turn off fails the same bound', t.mean > 4 * BOUND,
         `mean ${t.mean.toFixed(3)}/255`);
     }
-    if (shots && name === 'uffizi') fs.writeFileSync(path.join(shots, 'engines_three.json'), JSON.stringify({ w: W, h: H, ...r }));
+    if (shots && name === 'uffizi') writeStack(path.join(shots, 'engines_three.png'), W, H, [r.own, r.baked]);
   }
   check('three.js: no page errors', errors.length === 0, errors.join('; '));
   await p.close();
@@ -310,7 +336,7 @@ const BOUND = 2.0, BOUND_RGBD = 3.0;
       check('Babylon.js: axes: the bake a quarter turn off fails the same bound', t.mean > 4 * BOUND,
         `mean ${t.mean.toFixed(3)}/255`);
     }
-    if (shots && name === 'uffizi') fs.writeFileSync(path.join(shots, 'engines_babylon.json'), JSON.stringify({ w: W, h: H, ...r }));
+    if (shots && name === 'uffizi') writeStack(path.join(shots, 'engines_babylon.png'), W, H, [r.own, r.dds, r.env]);
   }
   check('Babylon.js: no page errors', errors.length === 0, errors.join('; '));
   await p.close();
