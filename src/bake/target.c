@@ -5,16 +5,16 @@
  * `not_ready` is set are reserved: every use refuses with that message.
  *
  * Where each row's values come from (read in the engines' sources, then measured by
- * rendering the engine's own import next to the bake: tests/viewer/engines_test.mjs):
- *  - three.js r187: WebGLCubeUVMaps / PMREMGenerator (cube sampling with flipEnvMap = -1 for
- *    a cube that is not a render target, so the stored cube is the mirror image of the world;
- *    the lod of roughness is Filament's, the chain ends at 8x8 (PMREMGenerator's cubeUV_minMipLevel
- *    4 -> 16 texels ... the prefiltered loader path takes a cube whose last level is 8x8);
- *    yaw 90: three's equirect import puts u = 0.5 on +X... measured.
- *  - Babylon.js 9.35: HDRFiltering (alphaG = 2^(lod / lodGenerationScale) / width, scale 0.8),
- *    its left-handed world (the cube is read mirrored), SphericalPolynomial.
- *  - glTF: EXT_lights_image_based (Hsu, Bond; Khronos glTF vendor extension): mips mapping
- *    roughness 0..1 linearly, ending at 16x16, RGBD PNG faces, irradiance SH. */
+ * rendering the engine's own import next to the bake: tests/viewer/engines_test.mjs,
+ * docs/ENGINES.md):
+ *  - three.js r187: a cube marked isPMREMTexture is sampled at ENVMAP_MAX_LOD r (2 - r)
+ *    (Filament's mapping), its last level times pi is the irradiance, PMREMGenerator's own
+ *    chains end at 8x8 (LOD_MIN 3); a cube that is not a render target is sampled with x
+ *    negated, and three's equirect import is a quarter turn from ibl's: mirror, yaw 90.
+ *  - Babylon.js 9.35: HDRFiltering's alphaG = 2^(lod / lodGenerationScale) / width (0.8), a
+ *    left-handed world (mirror, yaw 180), SphericalPolynomial, DDS and .env.
+ *  - glTF: EXT_lights_image_based (Hsu, Bond; Khronos glTF vendor extension): mips spaced
+ *    linearly in roughness down to 16x16, RGBD PNG faces, irradiance SH. */
 #include "ibl/target.h"
 #include "ibl/bake.h"
 #include "core/context_internal.h"
