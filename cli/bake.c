@@ -157,6 +157,7 @@ int cli_cmd_bake(int argc, char **argv)
     if (o.probes.probes) {
         if (a.positional_count) cli_usage_error(&a, "--probes takes no input file (the set names its global probe)");
         if (o.desc.atlas) cli_usage_error(&a, "--out-layout atlas is for one environment, not --probes");
+        if (o.desc.target) cli_usage_error(&a, "--target makes a single environment's bake, not a probe array's");
         o.probes.format = o.desc.format;
         return cli_bake_probes(&a, &o.probes);
     }
