@@ -39,6 +39,13 @@ static const char usage[] =
     "                         atlas, specular_atlas.ktx2 (--format) and specular_atlas.png\n"
     "                         (8-bit RGBM), its coordinate table in the manifest's \"atlas\"\n"
     "                         and the KTX2's key ibl.atlas (docs/ATLAS.md)\n"
+    "  --units U              nits (cd/m^2) or kcd (kcd/m^2): the units of every output,\n"
+    "                         recorded in the manifest. The built-in sky is made in kcd/m^2\n"
+    "                         and scaled (nits: x 1000); a file's values are taken to be in\n"
+    "                         U already (stated, not scaled). Default: kcd for the sky,\n"
+    "                         unstated for a file\n"
+    "  --dds-header H         auto (default: legacy FourCC header where the format has one,\n"
+    "                         else DX10), legacy or dx10\n"
     CLI_INPUT_HELP
     "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n"
     "\n"
@@ -47,6 +54,7 @@ static const char usage[] =
 
 typedef struct bake_options {
     const char *dir;
+    int units_nits;     /* --units: 1 nits (cd/m^2), 0 kcd/m^2, -1 not given */
     cli_input_options input;
     cli_specular_options specular;
     ibl_bake_desc desc;
@@ -68,6 +76,19 @@ static void parse(cli_args *a, bake_options *o)
             continue;
         }
         if (cli_is(a, arg, "--output", "-o")) o->dir = o->probes.dir = cli_value(a, arg);
+        else if (cli_is(a, arg, "--units", NULL)) {
+            const char *v = cli_value(a, arg);
+            if (strcmp(v, "nits") == 0) o->units_nits = 1;
+            else if (strcmp(v, "kcd") == 0) o->units_nits = 0;
+            else cli_usage_error(a, "--units wants nits (cd/m^2) or kcd (kcd/m^2), not '%s'", v);
+        }
+        else if (cli_is(a, arg, "--dds-header", NULL)) {
+            const char *v = cli_value(a, arg);
+            if (strcmp(v, "auto") == 0) o->desc.dds_header = IBL_DDS_HEADER_AUTO;
+            else if (strcmp(v, "legacy") == 0) o->desc.dds_header = IBL_DDS_HEADER_LEGACY;
+            else if (strcmp(v, "dx10") == 0) o->desc.dds_header = IBL_DDS_HEADER_DX10;
+            else cli_usage_error(a, "--dds-header wants auto, legacy or dx10, not '%s'", v);
+        }
         else if (cli_is(a, arg, "--probes", NULL)) o->probes.probes = cli_value(a, arg);
         else if (cli_is(a, arg, "--captures", NULL)) o->probes.captures = cli_value(a, arg);
         else if (cli_is(a, arg, "--scene", NULL)) o->probes.scene = cli_value(a, arg);
@@ -102,6 +123,11 @@ static void parse(cli_args *a, bake_options *o)
         }
     }
     if (a->positional_count > 1) cli_usage_error(a, "takes at most one input file");
+    ibl_format f = o->desc.format ? o->desc.format : IBL_FORMAT_RGBA16F;
+    if (o->desc.dds_header == IBL_DDS_HEADER_LEGACY && f != IBL_FORMAT_RGBA16F &&
+        f != IBL_FORMAT_RGBA32F)
+        cli_usage_error(a, "--dds-header legacy: %s has no legacy DDS FourCC (rgba16f and "
+                           "rgba32f have one)", ibl_format_name(f));
     if (!o->dir) cli_usage_error(a, "needs an output folder: -o DIR");
     if (a->positional_count) cli_check_not_inside(a, a->positional[0], o->dir);
     o->desc.specular = cli_specular_resolve(a, &o->specular, o->desc.target ? NULL : "gltf");
@@ -112,9 +138,9 @@ static void parse(cli_args *a, bake_options *o)
     }
 }
 
-/* The environment: IN read as a cube of the working size, or the built-in sky. */
-static int read_environment(ibl_context *ctx, const cli_args *a, bake_options *o,
-                            ibl_sky_desc *sky, ibl_cubemap *env)
+/* IN read as a cube of the working size, or the built-in sky. */
+static int read_input(ibl_context *ctx, const cli_args *a, bake_options *o, ibl_sky_desc *sky,
+                      ibl_cubemap *env)
 {
     if (a->positional_count) {
         o->desc.source.name = a->positional[0];
@@ -131,6 +157,30 @@ static int read_environment(ibl_context *ctx, const cli_args *a, bake_options *o
     o->desc.source.orientation = o->input.orientation;
     return cli_read_sky(ctx, sky, &o->input, env);
 }
+
+/* --units: the outputs' units in the manifest; the sky (made in kcd/m^2) scaled to them. */
+static void apply_units(bake_options *o, int is_sky, ibl_cubemap *env)
+{
+    if (o->units_nits < 0) {
+        o->desc.units = is_sky ? "kcd/m^2" : NULL;
+        return;
+    }
+    o->desc.units = o->units_nits ? "cd/m^2" : "kcd/m^2";
+    if (!is_sky || !o->units_nits) return;
+    size_t n = ibl_cubemap_floats(env->size, env->levels);
+    for (size_t i = 0; i < n; i++)
+        if (i % 4 != 3) env->data[i] *= 1000.0f; /* kcd/m^2 -> cd/m^2; alpha stays */
+}
+
+/* The environment: IN read as a cube of the working size, or the built-in sky. */
+static int read_environment(ibl_context *ctx, const cli_args *a, bake_options *o,
+                            ibl_sky_desc *sky, ibl_cubemap *env)
+{
+    int rc = read_input(ctx, a, o, sky, env);
+    if (rc == CLI_EXIT_OK) apply_units(o, a->positional_count == 0, env);
+    return rc;
+}
+
 
 static void print_summary(const cli_common *c, const char *dir, const ibl_bake_data *b)
 {
@@ -153,6 +203,7 @@ int cli_cmd_bake(int argc, char **argv)
     cli_args a = {argc, argv, 0, "bake", usage, {0}, {0}, 0};
     bake_options o;
     memset(&o, 0, sizeof o);
+    o.units_nits = -1;
     parse(&a, &o);
     if (o.probes.probes) {
         if (a.positional_count) cli_usage_error(&a, "--probes takes no input file (the set names its global probe)");
@@ -178,6 +229,8 @@ int cli_cmd_bake(int argc, char **argv)
                      (unsigned long long)bake.clamped_texels,
                      (double)ibl_format_max_value(bake.format), (double)ibl_format_max_value(bake.format),
                      ibl_format_name(bake.format));
+        if (st == IBL_OK && a.positional_count)
+            cli_warn_upsampling(&a.common, a.positional[0], &o.input, bake.specular_info.size);
         if (st == IBL_OK) print_summary(&a.common, o.dir, &bake);
         else cli_report_failure(ctx, o.dir, st), rc = cli_exit_code(st);
         if (st == IBL_OK) ibl_bake_free(ctx, &bake);

@@ -72,6 +72,7 @@ static void parse(cli_args *a, convert_options *o)
     if (!ibl_file_type_writes_format(type, o->wd.format))
         cli_usage_error(a, "%s cannot store %s pixels", o->out, ibl_format_name(o->wd.format));
     cli_format_check(a, &o->wd, type, o->out);
+    cli_check_not_in_bake(a, o->out);
     if (o->mips && !ibl_file_type_is_container(type))
         cli_usage_error(a, "--mips needs a container output (.ktx2 .ktx .dds)");
 }
@@ -148,6 +149,7 @@ int cli_cmd_convert(int argc, char **argv)
         ibl_context_destroy(ctx);
         return rc;
     }
+    if (a.positional_count == 1) cli_warn_upsampling(&a.common, input, &o.input, cube.size);
     ibl_write_report report = {0};
     o.wd.report = &report;
     ibl_output_set *set;

@@ -29,8 +29,34 @@ int cli_input_option(cli_args *a, const char *arg, cli_input_options *o)
     return 0;
 }
 
+/* The face edge a flat input's pixels carry: its pixels per 90 degrees at the horizon for
+ * the sphere layouts (equirect, angular: W/4; octahedral: centre to edge, W/2, spans 90
+ * degrees), a cell's edge for the cube layouts. */
+static int layout_detail(ibl_layout layout, int width, int height)
+{
+    switch (layout) {
+    case IBL_LAYOUT_EQUIRECT:
+    case IBL_LAYOUT_ANGULAR: return width / 4;
+    case IBL_LAYOUT_OCTAHEDRAL: return width / 2;
+    case IBL_LAYOUT_HCROSS: return width / 4;
+    case IBL_LAYOUT_VCROSS: return height / 4;
+    case IBL_LAYOUT_HSTRIP: return width / 6;
+    case IBL_LAYOUT_VSTRIP: return width;
+    default: return 0; /* unknown: no warning */
+    }
+}
+
+void cli_warn_upsampling(const cli_common *c, const char *path, const cli_input_options *o,
+                         int out_size)
+{
+    if (o->detail > 0 && out_size > o->detail)
+        cli_info(c, "ibl: warning: %s: a %d-texel cube from an input that carries about %d texels "
+                    "per face edge; the extra texels are interpolated, not detail (use --size %d "
+                    "or a larger input)\n", path, out_size, o->detail, o->detail);
+}
+
 int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
-                     const cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out)
+                     cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out)
 {
     ibl_read_desc rd = {.clamp_infinite = c->clamp};
     ibl_texture tex;
@@ -45,6 +71,7 @@ int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
     if (tex.kind == IBL_TEXTURE_CUBE) {
         ibl_cubemap view;
         ibl_cubemap_from_texture(&tex, &view);
+        o->detail = view.size;
         int size = o->size > 0 ? o->size : view.size;
         st = ibl_cubemap_alloc(ctx, size, 1, out);
         int reoriented = o->orientation.mirror || o->orientation.z_up ||
@@ -80,6 +107,7 @@ int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
     ibl_to_cube_desc d;
     memset(&d, 0, sizeof d);
     d.layout = o->layout ? o->layout : ibl_layout_detect(image.width, image.height);
+    o->detail = layout_detail(d.layout, image.width, image.height);
     d.size = o->size;
     d.orientation = o->orientation;
     if (d.layout == IBL_LAYOUT_AUTO) {
@@ -189,4 +217,42 @@ void cli_check_not_inside(const cli_args *a, const char *input, const char *fold
         si.st_dev == sf.st_dev && si.st_ino == sf.st_ino)
         cli_usage_error(a, "the input %s is inside %s, which the bake replaces whole; move it or "
                            "bake elsewhere", input, folder);
+}
+
+/* The "format" value of a manifest file (first 4 KiB), or "" when it has none; -1 when the
+ * file cannot be read (absent). */
+static int manifest_format(const char *path, char *format, size_t cap)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return -1;
+    char head[4096];
+    size_t n = fread(head, 1, sizeof head - 1, f);
+    fclose(f);
+    head[n] = 0;
+    format[0] = 0;
+    const char *key = strstr(head, "\"format\"");
+    if (!key) return 0;
+    const char *q = strchr(key + 8, '"');
+    const char *end = q ? strchr(q + 1, '"') : NULL;
+    if (q && end && (size_t)(end - q - 1) < cap) snprintf(format, cap, "%.*s", (int)(end - q - 1), q + 1);
+    return 0;
+}
+
+void cli_check_not_in_bake(const cli_args *a, const char *output)
+{
+    char manifest[4200], format[64];
+    const char *slash = strrchr(output, '/');
+    if (slash) snprintf(manifest, sizeof manifest, "%.*smanifest.json", (int)(slash - output + 1), output);
+    else snprintf(manifest, sizeof manifest, "manifest.json");
+    if (manifest_format(manifest, format, sizeof format) == 0 && strcmp(format, "ibl-bake") == 0)
+        cli_usage_error(a, "%s: its folder is a bake (%s); only 'ibl bake' writes there, so write "
+                           "this output elsewhere", output, manifest);
+}
+
+void cli_check_manifest_replaceable(const cli_args *a, const char *path, const char *format)
+{
+    char found[64];
+    if (manifest_format(path, found, sizeof found) == 0 && strcmp(found, format) != 0)
+        cli_usage_error(a, "%s exists and is not an %s manifest (%s); it is not replaced: choose "
+                           "another output name", path, format, found[0] ? found : "no format");
 }

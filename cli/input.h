@@ -8,6 +8,8 @@ typedef struct cli_input_options {
     ibl_layout layout;           /* --layout (0: detect)              */
     ibl_orientation orientation; /* --yaw --mirror-input --z-up       */
     int size;                    /* the cube's edge (0: the input's)  */
+    int detail;                  /* set by cli_read_cubemap: the face edge the input's
+                                    pixels carry (an equirect W wide: W/4 at the horizon) */
 } cli_input_options;
 
 /* The one table of options that say how an environment is read; every command that reads one
@@ -26,7 +28,7 @@ int cli_input_option(cli_args *a, const char *arg, cli_input_options *o);
  * of a cube texture; other levels are dropped). Prints the error and returns the exit code
  * (0 on success). If layout_out is not NULL it receives the layout used. */
 int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
-                     const cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out);
+                     cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out);
 
 /* The built-in clear sky (desc may be NULL: the defaults) as a one-level cube of edge
  * o->size (0: 256), oriented by o. Prints the error and returns the exit code. */
@@ -45,5 +47,19 @@ void cli_check_not_inside(const cli_args *a, const char *input, const char *fold
 /* The container of an output path, checked before any work: an unknown extension or an output
  * that is one of the command's input files is a usage error. */
 ibl_file_type cli_check_output(const cli_args *a, const char *output);
+
+/* Warns (stderr, unless -q) when an output cube of edge out_size is larger than the input's
+ * detail (o->detail, from cli_read_cubemap): its extra texels are interpolated, not new. */
+void cli_warn_upsampling(const cli_common *c, const char *path, const cli_input_options *o,
+                         int out_size);
+
+/* Refuses (usage error, before any work) an output of prefilter, irradiance or convert in a
+ * bake folder (one whose manifest.json says "ibl-bake"): the bake owns that folder, a file
+ * written there would replace one of its files behind its manifest's back or be a stranger
+ * that makes the next `ibl bake` of the folder refuse it. docs/FORMATS.md "Bake folder". */
+void cli_check_not_in_bake(const cli_args *a, const char *output);
+/* Refuses (usage error) to replace the file `path` unless it is absent or a manifest of the
+ * kind `format` ("ibl-chain"): a manifest another command wrote is not overwritten. */
+void cli_check_manifest_replaceable(const cli_args *a, const char *path, const char *format);
 
 #endif

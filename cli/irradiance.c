@@ -1,5 +1,6 @@
 /* ibl irradiance: the irradiance environment map (diffuse cubemap) of an environment. */
 #include "cli.h"
+#include "format_options.h"
 #include "input.h"
 #include "specular_options.h"
 
@@ -42,7 +43,7 @@ int cli_cmd_irradiance(int argc, char **argv)
     const char *arg;
     while ((arg = cli_next(&a))) {
         if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io) ||
-            cli_target_option(&a, arg, NULL, &io))
+            cli_format_option(&a, arg, &wd) || cli_target_option(&a, arg, NULL, &io))
             continue;
         if (cli_is(&a, arg, "--output", "-o")) {
             out_path = cli_value(&a, arg);
@@ -83,6 +84,8 @@ int cli_cmd_irradiance(int argc, char **argv)
     ibl_file_type out_type = cli_check_output(&a, out_path);
     if (!ibl_file_type_writes_format(out_type, wd.format))
         cli_usage_error(&a, "%s cannot store %s pixels", out_path, ibl_format_name(wd.format));
+    cli_format_check(&a, &wd, out_type, out_path);
+    cli_check_not_in_bake(&a, out_path);
     const char *in = a.positional[0];
     ibl_context *ctx = cli_context(&a.common);
     double t0 = cli_seconds();

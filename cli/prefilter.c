@@ -16,7 +16,9 @@ static const char usage[] =
     "also describes its levels in its metadata, ibl.specular.*); .exr .hdr .pfm .png get one\n"
     "image per face and level, STEM_l<level>_<face>.EXT with <face> in px nx py ny pz nz.\n"
     "STEM.manifest.json beside OUT lists the files, the filter, the mapping and every level's\n"
-    "roughness or shininess (docs/FORMATS.md). Every file appears at once, or none.\n"
+    "roughness or shininess (docs/FORMATS.md). Every file appears at once, or none. OUT may\n"
+    "not be in a bake folder (only 'ibl bake' writes there), and an existing STEM.manifest.json\n"
+    "is replaced only when it is a chain manifest.\n"
     "With --out-layout atlas, OUT (.ktx2 .exr .png) is one 2D image holding every level as\n"
     "Daqi 2016's mip atlas; its coordinate table goes to the manifest's \"atlas\" and, in a\n"
     "KTX2, to the key ibl.atlas (docs/ATLAS.md). PNG atlases are 8-bit RGBM unless --format\n"
@@ -162,12 +164,16 @@ int cli_cmd_prefilter(int argc, char **argv)
     ibl_write_desc wd = {0};
     cli_input_options io = {0};
     int atlas = 0;
+    const ibl_target_profile *target = NULL, *t;
     const char *arg;
     while ((arg = cli_next(&a))) {
         if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io) ||
-            cli_specular_option(&a, arg, &so) || cli_format_option(&a, arg, &wd) ||
-            cli_target_option(&a, arg, &so, &io))
+            cli_specular_option(&a, arg, &so) || cli_format_option(&a, arg, &wd))
             continue;
+        if ((t = cli_target_option(&a, arg, &so, &io))) {
+            target = t;
+            continue;
+        }
         if (cli_is(&a, arg, "--output", "-o")) {
             out = cli_value(&a, arg);
         } else if (cli_is(&a, arg, "--out-layout", NULL)) {
@@ -196,6 +202,16 @@ int cli_cmd_prefilter(int argc, char **argv)
     if (!(atlas && type == IBL_FILE_PNG) && !ibl_file_type_writes_format(type, wd.format))
         cli_usage_error(&a, "%s cannot store %s pixels", out, ibl_format_name(wd.format));
     cli_format_check(&a, &wd, type, out);
+    /* a KTX1 chain for Filament: cmgen's glType for rg11b10f, the only one Filament reads */
+    if (target && target->target == IBL_TARGET_FILAMENT && type == IBL_FILE_KTX1) wd.ktx1_cmgen_types = 1;
+    cli_check_not_in_bake(&a, out);
+    {
+        char stem[4096], manifest[4200];
+        const char *ext;
+        split_ext(out, stem, sizeof stem, &ext);
+        snprintf(manifest, sizeof manifest, "%s.manifest.json", stem);
+        cli_check_manifest_replaceable(&a, manifest, "ibl-chain");
+    }
     ibl_specular_desc d = cli_specular_resolve(&a, &so, NULL);
     const char *in = a.positional[0];
     ibl_context *ctx = cli_context(&a.common);
@@ -212,6 +228,7 @@ int cli_cmd_prefilter(int argc, char **argv)
     ibl_status st = ibl_specular_prefilter(ctx, &cube, &d, &chain, &info);
     double t_filter = cli_seconds();
     ibl_cubemap_free(ctx, &cube);
+    if (st == IBL_OK) cli_warn_upsampling(&a.common, in, &io, info.size);
     if (st == IBL_OK) st = write_outputs(ctx, in, out, &chain, &info, &d, &wd, atlas);
     ibl_cubemap_free(ctx, &chain);
     if (st != IBL_OK) {

@@ -379,7 +379,8 @@ static int is_bake(const char *path)
 static int read_environment(ibl_context *ctx, const cli_args *a, const render_options *o,
                             const char *input, ibl_cubemap *env)
 {
-    if (strcmp(input, "sky") != 0) return cli_read_cubemap(ctx, &a->common, input, &o->input, env, NULL);
+    cli_input_options in = o->input; /* a copy: the read records the input's detail in it */
+    if (strcmp(input, "sky") != 0) return cli_read_cubemap(ctx, &a->common, input, &in, env, NULL);
     return cli_read_sky(ctx, NULL, &o->input, env);
 }
 

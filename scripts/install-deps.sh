@@ -23,7 +23,9 @@
 #              versions of its package-lock.json from the npm registry (no browser
 #              download: the tests drive /usr/bin/chromium): playwright-core; three and
 #              @babylonjs/core (the engines `ibl bake --target` is tested in, served
-#              locally); ktx-parse (the KTX2 round trip of every file ibl writes)
+#              locally); ktx-parse (the KTX2 round trip of every file ibl writes);
+#              filament (Filament's WebAssembly build, which `ibl bake --target filament`
+#              is rendered in; @babylonjs/core's DDSTools also reads ibl's DDS files)
 #   fuzzing:   clang libclang-rt-14-dev (libFuzzer, sanitizer runtimes), dpkg-dev (apt-get
 #              source unpacks with dpkg-source), zlib1g-dev libimath-dev (their versions name
 #              the sources to fetch), python3 libjpeg-turbo-progs (cjpeg) for

@@ -67,12 +67,35 @@ static void outputs_never_replace_inputs(void **state)
     snprintf(preview, sizeof preview, "%s/environment.png", dir);
     assert_int_equal(test_run_cli(&out, "bake -q '%s' -o '%s'", preview, dir), 2);
     assert_true(test_file_exists(preview));
-    /* a chain written into a bake folder leaves the bake's manifest alone */
-    char manifest[700];
+    /* the bake owns its folder: a chain or an irradiance map written there is refused before
+     * any work (it would replace a bake file behind the manifest, or be a stranger the next
+     * bake of the folder refuses), and the bake's files are left alone */
+    char manifest[700], specular[700];
     snprintf(manifest, sizeof manifest, "%s/manifest.json", dir);
+    snprintf(specular, sizeof specular, "%s/specular.ktx2", dir);
     before = file_size(manifest);
-    assert_int_equal(test_run_cli(&out, "prefilter -q '%s' -o '%s/x.ktx2' --size 4", in, dir), 0);
+    long spec_before = file_size(specular);
+    assert_int_equal(test_run_cli(&out, "prefilter -q '%s' -o '%s/x.ktx2' --size 4", in, dir), 2);
+    assert_non_null(strstr(out, "is a bake"));
+    assert_int_equal(test_run_cli(&out, "prefilter -q '%s' -o '%s' --size 4", in, specular), 2);
+    assert_int_equal(test_run_cli(&out, "irradiance -q '%s' -o '%s/irradiance.ktx2'", in, dir), 2);
     assert_int_equal(file_size(manifest), before);
+    assert_int_equal(file_size(specular), spec_before);
+    assert_false(test_file_exists(test_path("bakedir/x.ktx2")));
+    assert_false(test_file_exists(test_path("bakedir/x.manifest.json")));
+    /* a chain's STEM.manifest.json replaces only an earlier chain manifest */
+    char chain[700], chain_manifest[700];
+    snprintf(chain, sizeof chain, "%s", test_path("own.ktx2"));
+    snprintf(chain_manifest, sizeof chain_manifest, "%s", test_path("own.manifest.json"));
+    FILE *f = fopen(chain_manifest, "w");
+    assert_non_null(f);
+    fputs("{\"format\": \"someone-else\"}\n", f);
+    fclose(f);
+    assert_int_equal(test_run_cli(&out, "prefilter -q '%s' -o '%s' --size 4", in, chain), 2);
+    assert_false(test_file_exists(chain));
+    remove(chain_manifest);
+    assert_int_equal(test_run_cli(&out, "prefilter -q '%s' -o '%s' --size 4", in, chain), 0);
+    assert_int_equal(test_run_cli(&out, "prefilter -q '%s' -o '%s' --size 4", in, chain), 0);
 }
 
 /* Contradictory or invalid options: exit 2 at once, before the input is even read. */

@@ -429,6 +429,29 @@ static void ktx1_and_dds_bytes_by_hand(void **state)
         at += 4 + 6 * face;
     }
     ibl_free(ctx, vb);
+
+    /* the cmgen form Filament's KTX1 reader needs: glType R11F_G11F_B10F, read back as the
+     * same texels; and cmgen's pre-1.8 glFormat R11F_G11F_B10F is read too */
+    void *vc;
+    size_t csize;
+    ibl_write_desc cmgen = {.ktx1_cmgen_types = 1};
+    assert_int_equal(ibl__ktx1_encode(ctx, &t, &cmgen, "cmgen.ktx", &vc, &csize), IBL_OK);
+    uint8_t *c = vc;
+    assert_int_equal(rd32(c + 16), 0x8C3A);
+    assert_int_equal(rd32(c + 24), 0x1907);
+    assert_int_equal(rd32(c + 28), 0x8C3A);
+    for (int old_format = 0; old_format < 2; old_format++) {
+        if (old_format) wr32(c + 24, 0x8C3A);
+        ibl_texture back;
+        assert_int_equal(ibl__ktx1_decode(ctx, c, csize, "cmgen.ktx", &back, NULL), IBL_OK);
+        assert_int_equal(back.format, IBL_FORMAT_RG11B10F);
+        assert_int_equal(back.levels, 4);
+        /* level 0 of face 3: R = level + 1 = 1, G = face + 1 = 4 (exact in 11-bit floats) */
+        const float *px = ibl_texture_level(&back, 0, 3);
+        assert_true(px[0] == 1.0f && px[1] == 4.0f);
+        ibl_texture_free(ctx, &back);
+    }
+    ibl_free(ctx, vc);
     ibl_texture_free(ctx, &t);
 
     /* KTX1 format enums for the other formats */
@@ -449,8 +472,9 @@ static void ktx1_and_dds_bytes_by_hand(void **state)
     }
 
     /* DDS + DX10: cube, mips, face-major data order */
+    ibl_write_desc dx10 = {.dds_header = IBL_DDS_HEADER_DX10};
     t = cube8(ctx, IBL_FORMAT_RGBA16F);
-    assert_int_equal(ibl__dds_encode(ctx, &t, NULL, "hand.dds", &vb, &size), IBL_OK);
+    assert_int_equal(ibl__dds_encode(ctx, &t, &dx10, "hand.dds", &vb, &size), IBL_OK);
     b = vb;
     assert_memory_equal(b, "DDS ", 4);
     assert_int_equal(rd32(b + 4), 124);
@@ -481,13 +505,40 @@ static void ktx1_and_dds_bytes_by_hand(void **state)
         }
     }
     ibl_free(ctx, vb);
+
+    /* the default for a format with a FourCC: the legacy header (113), the same caps and data
+     * with no DX10 block; a legacy request for a format without one is refused, AUTO falls
+     * back to DX10 for it */
+    assert_int_equal(ibl__dds_encode(ctx, &t, NULL, "legacy.dds", &vb, &size), IBL_OK);
+    b = vb;
+    assert_int_equal(rd32(b + 80), 0x4);
+    assert_int_equal(rd32(b + 84), 113);
+    assert_int_equal(rd32(b + 108), 0x1000u | 0x8u | 0x400000u);
+    assert_int_equal(rd32(b + 112), 0x200u | 0xFC00u);
+    assert_int_equal(size, 128 + 6 * face_bytes);
+    ibl_texture back;
+    assert_int_equal(ibl__dds_decode(ctx, b, size, "legacy.dds", &back, NULL), IBL_OK);
+    assert_int_equal(back.kind, IBL_TEXTURE_CUBE);
+    assert_int_equal(back.levels, 4);
+    assert_memory_equal(back.data, t.data, ibl_cubemap_floats(8, 4) * sizeof(float));
+    ibl_texture_free(ctx, &back);
+    ibl_free(ctx, vb);
+    ibl_texture_free(ctx, &t);
+    ibl_write_desc legacy = {.dds_header = IBL_DDS_HEADER_LEGACY};
+    t = cube8(ctx, IBL_FORMAT_RG11B10F);
+    assert_int_equal(ibl__dds_encode(ctx, &t, &legacy, "legacy.dds", &vb, &size), IBL_ERR_UNSUPPORTED);
+    assert_message_named(ctx, "legacy.dds");
+    assert_int_equal(ibl__dds_encode(ctx, &t, NULL, "auto.dds", &vb, &size), IBL_OK);
+    assert_memory_equal((uint8_t *)vb + 84, "DX10", 4);
+    assert_int_equal(rd32((uint8_t *)vb + 128), 26);
+    ibl_free(ctx, vb);
     ibl_texture_free(ctx, &t);
 
     /* DDS 3D: DEPTH flag, VOLUME caps, TEXTURE3D */
     ibl_texture v;
     assert_int_equal(ibl_texture_alloc(ctx, IBL_TEXTURE_3D, 4, 4, 2, 1, &v), IBL_OK);
     v.format = IBL_FORMAT_RG32F;
-    assert_int_equal(ibl__dds_encode(ctx, &v, NULL, "hand.dds", &vb, &size), IBL_OK);
+    assert_int_equal(ibl__dds_encode(ctx, &v, &dx10, "hand.dds", &vb, &size), IBL_OK);
     b = vb;
     assert_true(rd32(b + 8) & 0x800000u);
     assert_int_equal(rd32(b + 24), 2);
@@ -626,7 +677,10 @@ static void malformed_inputs(void **state)
         ibl_texture t = cube8(ctx, IBL_FORMAT_RGBA16F);
         void *vb;
         size_t size;
-        assert_int_equal(ct->encode(ctx, &t, NULL, ct->name, &vb, &size), IBL_OK);
+        /* DDS with the DX10 block: the mutations below reach its fields */
+        ibl_write_desc dx10 = {.dds_header = IBL_DDS_HEADER_DX10};
+        assert_int_equal(ct->encode(ctx, &t, ct->type == IBL_FILE_DDS ? &dx10 : NULL, ct->name,
+                                    &vb, &size), IBL_OK);
         ibl_texture_free(ctx, &t);
         uint8_t *good = vb;
         uint8_t *bad = malloc(size);

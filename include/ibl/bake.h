@@ -71,6 +71,8 @@ typedef struct ibl_bake_desc {
                                    last rows are centred on the range's ends               */
     ibl_format format;          /* storage of the cube textures; 0: rgba16f                 */
     unsigned containers;        /* IBL_BAKE_KTX2 | IBL_BAKE_DDS; 0: both                    */
+    ibl_dds_header dds_header;  /* the DDS files' header (io.h; 0: legacy where the format
+                                   has a FourCC, else DX10)                                */
     int preview_width;          /* environment.png (equirect) width; 0: 1024; -1: none      */
     int keep_environment;       /* keep a copy of env in the bake (the probe's mirror and
                                    background, e.g. for `ibl render`); never written        */
@@ -81,6 +83,9 @@ typedef struct ibl_bake_desc {
                                    table in the manifest's "atlas" (docs/ATLAS.md)          */
     float rgbm_range;           /* RGBM's range (the atlas PNG, an rgbm format); 0: 8      */
     ibl_bake_source source;
+    const char *units;          /* recorded only: what the radiance values are in, e.g.
+                                   "cd/m^2" (NULL: not stated; the built-in sky is kcd/m^2);
+                                   the caller scales the environment (`ibl bake --units`)   */
     ibl_target target;          /* the engine the bake is for (target.h): adds README.txt and
                                    the engine's files and records it; the chain, format and
                                    containers are the caller's (ibl_bake_desc_for_target)  */
@@ -105,6 +110,7 @@ typedef struct ibl_bake_data {
     double sh_window_width;
     ibl_format format;
     unsigned containers;
+    ibl_dds_header dds_header;
     char *source_name;   /* owned */
     char *preset;        /* owned; NULL when none was recorded */
     ibl_layout source_layout;
@@ -112,6 +118,7 @@ typedef struct ibl_bake_data {
     int has_sky;
     ibl_sky_desc sky;    /* defaults resolved */
     ibl_target target;   /* the engine the folder is for (IBL_TARGET_NONE: none)          */
+    char *units;         /* owned; the stated units of the radiance, NULL when not stated */
 
     ibl_cubemap specular;    /* the prefiltered chain, level 0 the sharpest               */
     ibl_cubemap irradiance;  /* E/pi per texel (one level)                                 */

@@ -86,6 +86,18 @@ typedef enum ibl_exr_compression {
     IBL_EXR_PIZ
 } ibl_exr_compression;
 
+/* The header a DDS file is written with. The legacy header names the pixel format by a
+ * Direct3D 9 FourCC (113 D3DFMT_A16B16G16R16F, 116 A32B32G32R32F, 112 G16R16F, 115
+ * G32R32F); the DX10 extension by a DXGI format. Every DDS reader that knows DX10 also knows
+ * these FourCCs, while several (OpenImageIO 2.4, Pillow, three.js) read half and float
+ * texels only through the FourCC: AUTO writes the legacy header where the format has a
+ * FourCC and DX10 where it has none (rg11b10f, rgb9e5, BC6H). docs/FORMATS.md "DDS". */
+typedef enum ibl_dds_header {
+    IBL_DDS_HEADER_AUTO = 0,
+    IBL_DDS_HEADER_LEGACY, /* refused for formats without a FourCC */
+    IBL_DDS_HEADER_DX10
+} ibl_dds_header;
+
 /* What a writer changed to fit the file's format. */
 typedef struct ibl_write_report {
     uint64_t clamped_texels; /* texels with a value past the format's largest, stored as it
@@ -102,6 +114,12 @@ typedef struct ibl_write_desc {
     ibl_quality quality;      /* BC6H: encoder effort (ibl/compress.h)                  */
     float rgbm_range;         /* RGBM: the range (0: IBL_RGBM_DEFAULT_RANGE)            */
     int zstd_level;           /* KTX2: Zstandard supercompression level 1..22 (0: none) */
+    ibl_dds_header dds_header; /* DDS: legacy FourCC or DX10 header (0: AUTO, see above)  */
+    int ktx1_cmgen_types;     /* KTX1 rg11b10f: glType = glFormat = R11F_G11F_B10F (0x8C3A),
+                                 as Filament's cmgen writes and Filament's KTX1 reader needs
+                                 (it knows no other glType for these texels); 0: the KTX
+                                 1.1 spec's glType UNSIGNED_INT_10F_11F_11F_REV (0x8C3B)
+                                 with glFormat RGB, which every other reader expects     */
 } ibl_write_desc;
 
 /* Writes one flat image; the container follows the extension (.hdr .exr .pfm .png .jpg, or

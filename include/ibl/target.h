@@ -45,16 +45,27 @@ typedef enum ibl_target_sh_form {
     IBL_TARGET_SH_THREE,             /* three.js LightProbe / SphericalHarmonics3: radiance in
                                         three's world frame                                     */
     IBL_TARGET_SH_BABYLON,           /* Babylon.js SphericalPolynomial (x, y, z, xx, ...)       */
-    IBL_TARGET_SH_GLTF_IRRADIANCE    /* EXT_lights_image_based irradianceCoefficients: E_lm    */
+    IBL_TARGET_SH_GLTF_IRRADIANCE,   /* EXT_lights_image_based irradianceCoefficients: E_lm    */
+    IBL_TARGET_SH_FILAMENT,          /* Filament IndirectLight irradiance(3, sh): cmgen's
+                                        pre-scaled form sh[i] = c_i (E / pi)_i                 */
+    IBL_TARGET_SH_UNITY              /* Unity SphericalHarmonicsL2 (RenderSettings.ambientProbe):
+                                        E / pi, Condon-Shortley signed, Unity's frame          */
 } ibl_target_sh_form;
 
 /* Files a target adds to the bake folder. */
 enum {
     IBL_TARGET_FILE_README = 1u << 0,       /* README.txt: the loading code                  */
     IBL_TARGET_FILE_BABYLON_ENV = 1u << 1,  /* engine_babylon.env                             */
-    IBL_TARGET_FILE_GLTF = 1u << 2          /* engine_gltf.gltf (EXT_lights_image_based),
+    IBL_TARGET_FILE_GLTF = 1u << 2,         /* engine_gltf.gltf (EXT_lights_image_based),
                                                engine_khr_lights_environment.gltf and the RGBD
                                                faces engine_gltf_L_F.png                     */
+    IBL_TARGET_FILE_FILAMENT = 1u << 3,     /* what `cmgen --deploy --format=ktx` writes:
+                                               engine_filament_ibl.ktx (the chain, KTX1 with
+                                               the "sh" key), engine_filament_skybox.ktx,
+                                               engine_filament_irradiance.ktx and sh.txt     */
+    IBL_TARGET_FILE_EQUIRECT_EXR = 1u << 4  /* engine_environment.exr: the unfiltered
+                                               environment as an equirect float EXR, for the
+                                               engines that filter it themselves             */
 };
 
 typedef struct ibl_target_profile {

@@ -210,6 +210,7 @@ static ibl_status record_parameters(ibl_context *ctx, const ibl_cubemap *env,
     b->format = d->format;
     b->containers = d->containers;
     b->rgbm_range = d->rgbm_range > 0.0f ? d->rgbm_range : IBL_RGBM_DEFAULT_RANGE;
+    b->dds_header = d->dds_header;
     b->source_layout = d->source.layout;
     b->source_orientation = d->source.orientation;
     b->target = d->target;
@@ -223,7 +224,9 @@ static ibl_status record_parameters(ibl_context *ctx, const ibl_cubemap *env,
     const char *name = d->source.name ? d->source.name : d->source.sky ? "built-in sky" : "environment";
     b->source_name = ibl__strdup(ctx, name);
     b->preset = ibl__strdup(ctx, d->preset);
-    if (!b->source_name || (d->preset && !b->preset)) return ibl_context_status(ctx);
+    b->units = ibl__strdup(ctx, d->units);
+    if (!b->source_name || (d->preset && !b->preset) || (d->units && !b->units))
+        return ibl_context_status(ctx);
     return IBL_OK;
 }
 
@@ -252,6 +255,9 @@ ibl_status ibl_bake_compute(ibl_context *ctx, const ibl_cubemap *env, const ibl_
     if (d.target != IBL_TARGET_NONE) {
         ibl_status st = ibl__target_check(ctx, d.target, &d.specular, env->size);
         if (st != IBL_OK) return st;
+        /* the skybox and the equirect EXR are made from the unfiltered environment */
+        if (ibl_target_profile_of(d.target)->files & (IBL_TARGET_FILE_FILAMENT | IBL_TARGET_FILE_EQUIRECT_EXR))
+            d.keep_environment = 1;
     }
     double t0 = now_ms(), t = t0;
     ibl_status st = record_parameters(ctx, env, &d, out);
@@ -295,6 +301,7 @@ void ibl_bake_free(ibl_context *ctx, ibl_bake_data *b)
     ibl_texture_free(ctx, &b->ambient_brdf);
     ibl_free(ctx, b->source_name);
     ibl_free(ctx, b->preset);
+    ibl_free(ctx, b->units);
     memset(b, 0, sizeof *b);
 }
 

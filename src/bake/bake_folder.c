@@ -291,10 +291,11 @@ ibl_status ibl__bake_write_staged(ibl_context *ctx, const char *dir, const char 
 }
 
 static ibl_status stage_texture(ibl_context *ctx, const char *dir, ibl__bake_file file,
-                                const ibl_texture *tex, ibl_format format, float rgbm_range)
+                                const ibl_texture *tex, ibl_format format, float rgbm_range,
+                                ibl_dds_header header)
 {
     const char *name = ibl__bake_file_info_of(file)->name;
-    ibl_write_desc wd = {.format = format, .rgbm_range = rgbm_range};
+    ibl_write_desc wd = {.format = format, .rgbm_range = rgbm_range, .dds_header = header};
     void *bytes = NULL;
     size_t size = 0;
     ibl_status st = ibl_encode_texture(ctx, ibl_file_type_from_path(name), tex, &wd, &bytes, &size);
@@ -313,7 +314,8 @@ static ibl_status stage_cube(ibl_context *ctx, const char *dir, const ibl_bake_d
                                                         "irradiance / pi (multiply by albedo)");
     for (int i = 0; i < 2 && st == IBL_OK; i++)
         if (ibl__bake_has_file(b, (ibl__bake_file)(ktx2 + i)))
-            st = stage_texture(ctx, dir, (ibl__bake_file)(ktx2 + i), &tex, b->format, b->rgbm_range);
+            st = stage_texture(ctx, dir, (ibl__bake_file)(ktx2 + i), &tex, b->format, b->rgbm_range,
+                               b->dds_header);
     ibl_texture_free(ctx, &tex); /* the metadata; the texels stay with the bake */
     return st;
 }
@@ -324,7 +326,7 @@ static ibl_status stage_table(ibl_context *ctx, const char *dir, ibl__bake_file 
     ibl_texture tex = {.kind = IBL_TEXTURE_2D, .width = image->width, .height = image->height,
                        .depth = 1, .levels = 1, .data = image->pixels};
     ibl_status st = ibl_texture_set_metadata(ctx, &tex, "ibl.brdf", description);
-    if (st == IBL_OK) st = stage_texture(ctx, dir, file, &tex, format, 0.0f);
+    if (st == IBL_OK) st = stage_texture(ctx, dir, file, &tex, format, 0.0f, IBL_DDS_HEADER_AUTO);
     ibl_texture_free(ctx, &tex);
     return st;
 }
@@ -340,7 +342,9 @@ static ibl_status stage_atlas(ibl_context *ctx, const char *dir, const ibl_bake_
     ibl_status st = ibl_atlas_layout_to_json(ctx, &b->atlas_layout, &table);
     if (st == IBL_OK) st = ibl_texture_set_metadata(ctx, &tex, "ibl.atlas", table);
     if (st == IBL_OK) st = ibl_specular_set_metadata(ctx, &b->specular_info, &tex);
-    if (st == IBL_OK) st = stage_texture(ctx, dir, IBL__BAKE_ATLAS_KTX2, &tex, b->format, b->rgbm_range);
+    if (st == IBL_OK)
+        st = stage_texture(ctx, dir, IBL__BAKE_ATLAS_KTX2, &tex, b->format, b->rgbm_range,
+                           IBL_DDS_HEADER_AUTO);
     ibl_texture_free(ctx, &tex);
     ibl_free(ctx, table);
     ibl_write_desc wd = {.format = IBL_FORMAT_RGBM, .rgbm_range = b->rgbm_range};
@@ -393,7 +397,8 @@ static ibl_status stage_all(ibl_context *ctx, const char *dir, const ibl_bake_da
                          "R = E (GGX directional albedo), G = E_avg, B = Charlie sheen albedo, "
                          "A = its average; x = n.v, y = roughness");
     if (st == IBL_OK && b->ambient_brdf.data)
-        st = stage_texture(ctx, dir, IBL__BAKE_AMBIENT_BRDF, &b->ambient_brdf, IBL_FORMAT_RG16F, 0.0f);
+        st = stage_texture(ctx, dir, IBL__BAKE_AMBIENT_BRDF, &b->ambient_brdf, IBL_FORMAT_RG16F, 0.0f,
+                           IBL_DDS_HEADER_AUTO);
     if (st == IBL_OK && b->atlas.pixels) st = stage_atlas(ctx, dir, b);
     if (st == IBL_OK && b->preview.pixels) st = stage_preview(ctx, dir, b);
     if (st == IBL_OK) st = ibl__bake_stage_target(ctx, dir, b);

@@ -209,6 +209,7 @@ ibl_status ibl_bake_manifest(ibl_context *ctx, const ibl_bake_data *b, char **js
     ibl__json_set(params, "lut_size", ibl__json_number(b->lut_size));
     if (b->target != IBL_TARGET_NONE)
         ibl__json_set(params, "target", ibl__json_string(ibl_target_name(b->target)));
+    if (b->units) ibl__json_set(params, "units", ibl__json_string(b->units));
     ibl__json_set(root, "parameters", params);
     ibl__json_set(root, "timings_ms", timing_json(&b->timing_ms));
     ibl__json_set(root, "specular", specular_json(&b->specular_info, b->edge_fixup, b->format,
@@ -505,6 +506,9 @@ static void read_source(ibl__json_reader *r, json_t *root, ibl_bake_data *b, con
         const char *target = ibl__json_opt_string(r, params, "parameters", "target", NULL);
         if (target && !ibl_target_from_name(target, &b->target))
             ibl__json_fail(r, "parameters", "target", "unknown target '%s'", target);
+        const char *units = ibl__json_opt_string(r, params, "parameters", "units", NULL);
+        if (units && r->status == IBL_OK && !(b->units = ibl__strdup(r->ctx, units)))
+            r->status = ibl__fail(r->ctx, IBL_ERR_OUT_OF_MEMORY, "%s: out of memory", r->name);
     }
 }
 
@@ -578,6 +582,7 @@ ibl_status ibl__bake_manifest_parse(ibl_context *ctx, const void *bytes, size_t 
     if (r.status != IBL_OK) {
         ibl_free(ctx, b->source_name);
         ibl_free(ctx, b->preset);
+        ibl_free(ctx, b->units);
         memset(b, 0, sizeof *b);
         memset(files, 0, sizeof *files);
         json_decref(root);

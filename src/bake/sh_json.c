@@ -76,7 +76,9 @@ static json_t *engine_forms(ibl_context *ctx, const ibl_sh *radiance)
     static const struct { const char *key; ibl_target_sh_form form; } forms[] = {
         {"three", IBL_TARGET_SH_THREE},
         {"babylon", IBL_TARGET_SH_BABYLON},
-        {"gltf", IBL_TARGET_SH_GLTF_IRRADIANCE}};
+        {"gltf", IBL_TARGET_SH_GLTF_IRRADIANCE},
+        {"filament", IBL_TARGET_SH_FILAMENT},
+        {"unity", IBL_TARGET_SH_UNITY}};
     json_t *o = json_object();
     for (size_t i = 0; i < sizeof forms / sizeof forms[0]; i++) {
         ibl_target_sh sh;

@@ -22,8 +22,6 @@
 
 #include <string.h>
 
-#define NOT_YET(engine) "the " engine " target is not yet available in this build (its row is reserved)"
-
 static const ibl_target_profile profiles[IBL_TARGET_COUNT] = {
     [IBL_TARGET_THREE] = {
         .target = IBL_TARGET_THREE, .name = "three", .engine = "three.js r187",
@@ -38,14 +36,36 @@ static const ibl_target_profile profiles[IBL_TARGET_COUNT] = {
         .size = 256, .last_level_size = 0, .format = IBL_FORMAT_RGBA16F,
         .containers = IBL_BAKE_DDS | IBL_BAKE_KTX2, .sh_form = IBL_TARGET_SH_BABYLON,
         .files = IBL_TARGET_FILE_README | IBL_TARGET_FILE_BABYLON_ENV},
-    [IBL_TARGET_FILAMENT] = {.target = IBL_TARGET_FILAMENT, .name = "filament", .engine = "Filament",
-                             .not_ready = NOT_YET("filament")},
-    [IBL_TARGET_UNITY] = {.target = IBL_TARGET_UNITY, .name = "unity", .engine = "Unity",
-                          .not_ready = NOT_YET("unity")},
-    [IBL_TARGET_UNREAL] = {.target = IBL_TARGET_UNREAL, .name = "unreal", .engine = "Unreal Engine",
-                           .not_ready = NOT_YET("unreal")},
-    [IBL_TARGET_GODOT] = {.target = IBL_TARGET_GODOT, .name = "godot", .engine = "Godot",
-                          .not_ready = NOT_YET("godot")},
+    /* cmgen --deploy: 256..16 (IBL_DEFAULT_MIN_LOD_SIZE 16), R11F_G11F_B10F, its frame is ibl's
+     * turned by 180 degrees about +Y (measured against cmgen-equivalent output in Filament's
+     * own renderer, tests/viewer/filament_test.mjs) */
+    [IBL_TARGET_FILAMENT] = {
+        .target = IBL_TARGET_FILAMENT, .name = "filament", .engine = "Filament 1.53.4",
+        .orientation = {.yaw_degrees = 180.0f},
+        .filter = IBL_FILTER_GGX, .mapping = IBL_MAPPING_FILAMENT, .size = 256,
+        .last_level_size = 16, .format = IBL_FORMAT_RG11B10F, .containers = IBL_BAKE_KTX2,
+        .sh_form = IBL_TARGET_SH_FILAMENT, .files = IBL_TARGET_FILE_README | IBL_TARGET_FILE_FILAMENT},
+    /* Unity, Unreal and Godot filter their own probes from an equirect: the chain is ibl's
+     * default for their level mappings; what they take is engine_environment.exr */
+    /* the picture turned so that the engine's import shows the input's (x, y, z) at Unity's
+     * (x, y, -z) (the left-handed flip of z) and at Godot's (x, y, z) */
+    [IBL_TARGET_UNITY] = {
+        .target = IBL_TARGET_UNITY, .name = "unity", .engine = "Unity (2022.3 documentation)",
+        .orientation = {.yaw_degrees = 90.0f},
+        .filter = IBL_FILTER_GGX, .mapping = IBL_MAPPING_UNITY, .size = 256,
+        .format = IBL_FORMAT_RGBA16F, .containers = IBL_BAKE_KTX2 | IBL_BAKE_DDS,
+        .sh_form = IBL_TARGET_SH_UNITY, .files = IBL_TARGET_FILE_README | IBL_TARGET_FILE_EQUIRECT_EXR},
+    [IBL_TARGET_UNREAL] = {
+        .target = IBL_TARGET_UNREAL, .name = "unreal", .engine = "Unreal Engine 5 (documentation)",
+        .filter = IBL_FILTER_GGX, .mapping = IBL_MAPPING_UNREAL, .size = 256,
+        .format = IBL_FORMAT_RGBA16F, .containers = IBL_BAKE_KTX2 | IBL_BAKE_DDS,
+        .sh_form = IBL_TARGET_SH_RADIANCE, .files = IBL_TARGET_FILE_README | IBL_TARGET_FILE_EQUIRECT_EXR},
+    [IBL_TARGET_GODOT] = {
+        .target = IBL_TARGET_GODOT, .name = "godot", .engine = "Godot 4 (sky shader source)",
+        .orientation = {.yaw_degrees = 180.0f},
+        .filter = IBL_FILTER_GGX, .mapping = IBL_MAPPING_LINEAR, .size = 256,
+        .format = IBL_FORMAT_RGBA16F, .containers = IBL_BAKE_KTX2 | IBL_BAKE_DDS,
+        .sh_form = IBL_TARGET_SH_RADIANCE, .files = IBL_TARGET_FILE_README | IBL_TARGET_FILE_EQUIRECT_EXR},
     [IBL_TARGET_GLTF] = {
         .target = IBL_TARGET_GLTF, .name = "gltf", .engine = "glTF 2.0 EXT_lights_image_based",
         .orientation = {0},
@@ -220,6 +240,99 @@ static void babylon_form(const ibl_sh *r, ibl_target_sh *out)
     out->count = 9;
 }
 
+/* The positive constants k_i of the real SH basis, Y_i = +-k_i P_i with P_i = 1, y, z, x, xy,
+ * yz, 3z^2 - 1, xz, x^2 - y^2 (Sloan, "Stupid Spherical Harmonics (SH) Tricks", 2008). */
+static const double sh_basis_constant[9] = {0.282094791773878143, 0.488602511902919921,
+                                            0.488602511902919921, 0.488602511902919921,
+                                            1.092548430592079070, 1.092548430592079070,
+                                            0.315391565252520006, 1.092548430592079070,
+                                            0.546274215296039535};
+
+/* Filament's cmgen (tools/cmgen: CubemapSH::computeSH with irradiance, then
+ * preprocessSHForShader) stores sh[i] = c_i E_i / pi, with E_i the irradiance coefficient in
+ * its Condon-Shortley-signed basis Y_i = c_i P_i; its shader then evaluates sum sh[i] P_i(n).
+ * c_i E_i = c_i^2 A_l int L P_i = k_i A_l L_i for ibl's unsigned coefficients L_i = k_i int L P_i,
+ * so the sign convention drops out: sh[i] = k_i (A_l / pi) L_i, in the cube's own frame. */
+static void filament_form(const ibl_sh *r, ibl_target_sh *out)
+{
+    static const char *const poly_names[9] = {"1", "y", "z", "x", "yx", "yz", "3z^2-1", "zx",
+                                              "x^2-y^2"};
+    out->engine = "Filament IndirectLight::Builder::irradiance(3, sh) (cmgen's sh.txt and the "
+                  "KTX1 \"sh\" key)";
+    out->basis = "polynomial E(n)/pi = sum sh[i] P_i(n), P = 1, y, z, x, yx, yz, 3z^2-1, zx, "
+                 "x^2-y^2 (cmgen's pre-scaled SH, renderPreScaledSH3Bands)";
+    out->normalisation = "sh[i] = c_i (E/pi)_i: the irradiance coefficient over pi times its "
+                         "basis constant, so sh[0] is the mean of E/pi";
+    out->signs = "none left: the product c_i E_i is the same with or without the "
+                 "Condon-Shortley phase";
+    out->frame = "the cube's own frame: the faces of engine_filament_ibl.ktx as stored";
+    for (int i = 0; i < 9; i++) {
+        for (int c = 0; c < 3; c++)
+            out->values[i][c] = sh_basis_constant[i] * cosine_lobe(i) / IBL_PI * r->c[i][c];
+        out->names[i] = poly_names[i];
+    }
+    out->count = 9;
+}
+
+/* Unity's SphericalHarmonicsL2 as RenderSettings.ambientProbe holds it and the render
+ * pipelines read it (SphericalHarmonicMath.PremultiplyCoefficients multiplies by k0, -k1, k1,
+ * -k1, k2, -k2, k3, -k2, k4 and the shader adds the polynomial terms): coefficients of E/pi
+ * in the Condon-Shortley-signed real basis, index l(l+1)+m, in Unity's world frame. Unity is
+ * left-handed, +Y up; its panoramic import (Skybox/Panoramic, ToRadialCoords: u = 0.5 -
+ * atan2(z, x) / 2pi) puts an equirect's centre on +X and its right quarter on -Z, where ibl
+ * puts them on -Z and +X: a direction (x, y, z) of the cube is (-z, y, -x) in Unity. */
+static void unity_form(const ibl_sh *r, ibl_target_sh *out)
+{
+    static const char *const basis_names[9] = {"sh[c,0] Y00", "sh[c,1] Y1-1 (y)", "sh[c,2] Y10 (z)",
+                                               "sh[c,3] Y11 (x)", "sh[c,4] Y2-2 (xy)",
+                                               "sh[c,5] Y2-1 (yz)", "sh[c,6] Y20 (3z^2-1)",
+                                               "sh[c,7] Y21 (xz)", "sh[c,8] Y22 (x^2-y^2)"};
+    out->engine = "Unity SphericalHarmonicsL2 (RenderSettings.ambientProbe, LightProbes): "
+                  "values[i] = {sh[0,i], sh[1,i], sh[2,i]}";
+    out->basis = "real orthonormal SH, index l(l+1)+m: 1, y, z, x, xy, yz, 3z^2-1, xz, x^2-y^2";
+    out->normalisation = "irradiance / pi: (A_l / pi) L_lm (A = pi, 2pi/3, pi/4), so that "
+                         "sum sh_i Y_i(n) is the diffuse light of albedo 1";
+    out->signs = "Condon-Shortley: Y1-1 = -0.488603 y, Y11 = -0.488603 x, Y2-1 = -1.092548 yz, "
+                 "Y21 = -1.092548 xz";
+    out->frame = "Unity's world frame (left-handed, +Y up) with engine_environment.exr imported "
+                 "as a latitude-longitude cubemap: the cube's (x, y, z) is Unity's (-z, y, -x) "
+                 "(with --target unity's turn, the input's (x, y, z) is Unity's (x, y, -z))";
+    /* ibl's unsigned L_i in the cube frame, re-projected into Unity's frame: the substitution
+     * x_u = -z, y_u = y, z_u = -x maps the basis polynomials onto each other:
+     *   y_u = y, z_u = -x, x_u = -z, x_u y_u = -zy, y_u z_u = -xy, 3 z_u^2 - 1 = 3x^2 - 1,
+     *   x_u z_u = xz, x_u^2 - y_u^2 = z^2 - y^2.
+     * The quadratic terms mix: 3x^2 - 1 and z^2 - y^2 are combinations of the cube frame's
+     * (3z^2 - 1) and (x^2 - y^2) (with x^2 + y^2 + z^2 = 1), computed below in P-space. */
+    for (int c = 0; c < 3; c++) {
+        double p[9]; /* coefficients of the polynomials P_i in the cube frame: f = sum p_i P_i */
+        for (int i = 0; i < 9; i++) p[i] = sh_basis_constant[i] * cosine_lobe(i) / IBL_PI * r->c[i][c];
+        /* f(n) = p0 + p1 y + p2 z + p3 x + p4 xy + p5 yz + p6 (3z^2-1) + p7 xz + p8 (x^2-y^2);
+         * write it with x = -z_u, y = y_u, z = -x_u, then read Unity's P coefficients q_i */
+        double q[9];
+        q[1] = p[1];          /* y       -> y_u             */
+        q[3] = -p[2];         /* z       -> -x_u            */
+        q[2] = -p[3];         /* x       -> -z_u            */
+        q[5] = -p[4];         /* xy      -> -z_u y_u        */
+        q[4] = -p[5];         /* yz      -> -y_u x_u        */
+        q[7] = p[7];          /* xz      -> z_u x_u         */
+        /* p6 (3 x_u^2 - 1) + p8 (z_u^2 - y_u^2) in the basis 1, (3z_u^2-1), (x_u^2-y_u^2): on
+         * the sphere x^2 = 1/3 - (3z^2-1)/6 + (x^2-y^2)/2, y^2 = 1/3 - (3z^2-1)/6 - (x^2-y^2)/2,
+         * z^2 = 1/3 + (3z^2-1)/3, so 3 x_u^2 - 1 = -(3z_u^2-1)/2 + 3 (x_u^2-y_u^2)/2 and
+         * z_u^2 - y_u^2 = (3z_u^2-1)/2 + (x_u^2-y_u^2)/2 (no constant term in either) */
+        double a = p[6], b = p[8];
+        q[0] = p[0];
+        q[6] = -a / 2.0 + b / 2.0;
+        q[8] = 3.0 * a / 2.0 + b / 2.0;
+        for (int i = 0; i < 9; i++) {
+            /* back from P-space to Unity's signed orthonormal coefficients: f = sum q_i P_i
+             * = sum u_i Y_i with Y_i = s_i k_i P_i, so u_i = q_i / (s_i k_i) */
+            out->values[i][c] = q[i] / (condon_shortley_sign(i) * sh_basis_constant[i]);
+        }
+    }
+    for (int i = 0; i < 9; i++) out->names[i] = basis_names[i];
+    out->count = 9;
+}
+
 ibl_status ibl_target_sh_form_of(ibl_context *ctx, ibl_target_sh_form form, const ibl_sh *radiance,
                                  ibl_target_sh *out)
 {
@@ -233,6 +346,8 @@ ibl_status ibl_target_sh_form_of(ibl_context *ctx, ibl_target_sh_form form, cons
     case IBL_TARGET_SH_THREE: three_form(radiance, out); break;
     case IBL_TARGET_SH_GLTF_IRRADIANCE: gltf_form(radiance, out); break;
     case IBL_TARGET_SH_BABYLON: babylon_form(radiance, out); break;
+    case IBL_TARGET_SH_FILAMENT: filament_form(radiance, out); break;
+    case IBL_TARGET_SH_UNITY: unity_form(radiance, out); break;
     case IBL_TARGET_SH_RADIANCE:
     default:
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "sh form: %d is not an engine form", (int)form);

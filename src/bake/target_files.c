@@ -13,7 +13,8 @@
 
 int ibl__bake_target_entry(const char *name)
 {
-    return strcmp(name, "README.txt") == 0 || strncmp(name, "engine_", 7) == 0;
+    return strcmp(name, "README.txt") == 0 || strcmp(name, "sh.txt") == 0 ||
+           strncmp(name, "engine_", 7) == 0;
 }
 
 /* ---- README.txt ---------------------------------------------------------------------------- */
@@ -116,7 +117,8 @@ static char *readme_text(ibl_context *ctx, const ibl_bake_data *b)
         snprintf(text, 8192, gltf_readme, info->levels, first, last);
         break;
     default:
-        snprintf(text, 8192, "%s\n", ibl_target_name(b->target));
+        if (!ibl__engine_readme(b, b->units ? b->units : "the input's units", text, 8192))
+            snprintf(text, 8192, "%s\n", ibl_target_name(b->target));
         break;
     }
     return text;
@@ -258,5 +260,7 @@ ibl_status ibl__bake_stage_target(ibl_context *ctx, const char *dir, const ibl_b
     }
     if (st == IBL_OK && (p->files & IBL_TARGET_FILE_BABYLON_ENV)) st = stage_babylon_env(ctx, dir, b);
     if (st == IBL_OK && (p->files & IBL_TARGET_FILE_GLTF)) st = ibl__stage_gltf_lights(ctx, dir, b);
+    if (st == IBL_OK && (p->files & IBL_TARGET_FILE_FILAMENT)) st = ibl__stage_filament(ctx, dir, b);
+    if (st == IBL_OK && (p->files & IBL_TARGET_FILE_EQUIRECT_EXR)) st = ibl__stage_equirect_exr(ctx, dir, b);
     return st;
 }

@@ -1,6 +1,7 @@
 /* DDS read and write (Microsoft "DDS Programming Guide": DDS_HEADER, DDS_PIXELFORMAT and
- * DDS_HEADER_DXT10). We write the DX10 extended header with a DXGI format; we read it and the
- * legacy float FourCCs (D3DFMT_A16B16G16R16F 113, A32B32G32R32F 116, G16R16F 112, G32R32F
+ * DDS_HEADER_DXT10). We write the legacy header with a Direct3D 9 FourCC where the format has
+ * one (the form the most readers take) or the DX10 extended header with a DXGI format
+ * (ibl_write_desc.dds_header); we read both: DX10 and the legacy float FourCCs (D3DFMT_A16B16G16R16F 113, A32B32G32R32F 116, G16R16F 112, G32R32F
  * 115). BC6H (DXGI 95 BC6H_UF16, 96 BC6H_SF16) is read (decoded) and written (encoded) in
  * 4x4 blocks, pitchOrLinearSize then being the top level's bytes. Data order differs from KTX: for each face (array slice), all its mip levels, each
  * level being all its depth slices, rows top first. DDS has no metadata. */
@@ -114,10 +115,17 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
                         "%s: DDS output does not support pixel format %s (use rgba16f, rgba32f, "
                         "rg11b10f, rgb9e5, rg16f, rg32f, bc6h or bc6h-signed)",
                         name, ibl_format_name(fmt));
+    ibl_dds_header header = desc ? desc->dds_header : IBL_DDS_HEADER_AUTO;
+    if (header == IBL_DDS_HEADER_LEGACY && !dx->legacy_fourcc)
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
+                        "%s: %s has no legacy DDS FourCC (only rgba16f, rgba32f, rg16f and rg32f "
+                        "do); it needs the DX10 header", name, ibl_format_name(fmt));
+    int legacy = header != IBL_DDS_HEADER_DX10 && dx->legacy_fourcc;
+    size_t data_offset = legacy ? DATA_OFFSET_LEGACY : DATA_OFFSET_DX10;
     int faces = ibl_texture_faces(tex);
     int is3d = tex->kind == IBL_TEXTURE_3D, block = ibl__format_is_block(fmt);
 
-    uint64_t total = DATA_OFFSET_DX10;
+    uint64_t total = data_offset;
     for (int l = 0; l < tex->levels; l++)
         total += ibl__level_bytes(fmt, tex->kind, tex->width, tex->height, tex->depth, l) *
                  (uint64_t)faces;
@@ -153,17 +161,19 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
     /* dwReserved1[11] stays zero; DDS_PIXELFORMAT at 72 */
     ibl__wr32(h + 72, PIXELFORMAT_SIZE);
     ibl__wr32(h + 76, DDPF_FOURCC);
-    ibl__wr32(h + 80, FOURCC_DX10);
+    ibl__wr32(h + 80, legacy ? dx->legacy_fourcc : FOURCC_DX10);
     ibl__wr32(h + 104, caps);
     ibl__wr32(h + 108, caps2);
-    uint8_t *x = buf + 4 + HEADER_SIZE;
-    ibl__wr32(x + 0, dx->dxgi);
-    ibl__wr32(x + 4, is3d ? DIM_TEXTURE3D : DIM_TEXTURE2D);
-    ibl__wr32(x + 8, tex->kind == IBL_TEXTURE_CUBE ? MISC_TEXTURECUBE : 0);
-    ibl__wr32(x + 12, 1); /* arraySize: one texture (one cube for cube maps) */
-    ibl__wr32(x + 16, ibl_format_channels(fmt) == 4 ? ALPHA_MODE_STRAIGHT : ALPHA_MODE_UNKNOWN);
+    if (!legacy) {
+        uint8_t *x = buf + 4 + HEADER_SIZE;
+        ibl__wr32(x + 0, dx->dxgi);
+        ibl__wr32(x + 4, is3d ? DIM_TEXTURE3D : DIM_TEXTURE2D);
+        ibl__wr32(x + 8, tex->kind == IBL_TEXTURE_CUBE ? MISC_TEXTURECUBE : 0);
+        ibl__wr32(x + 12, 1); /* arraySize: one texture (one cube for cube maps) */
+        ibl__wr32(x + 16, ibl_format_channels(fmt) == 4 ? ALPHA_MODE_STRAIGHT : ALPHA_MODE_UNKNOWN);
+    }
 
-    size_t at = DATA_OFFSET_DX10;
+    size_t at = data_offset;
     for (int f = 0; f < faces; f++) {
         for (int l = 0; l < tex->levels; l++) {
             clamped += ibl__encode_level(ctx, fmt, desc, tex, l, f, buf + at, &st);

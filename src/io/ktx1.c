@@ -124,7 +124,11 @@ ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     }
     memcpy(buf, KTX1_IDENTIFIER, 12);
     ibl__wr32(buf + 12, ENDIAN_REF);
-    ibl__wr32(buf + 16, gl->type);
+    /* Filament's cmgen writes R11F_G11F_B10F into glType (and glFormat) and Filament's KTX1
+     * reader maps only that glType to these texels; on request we write its form, else the
+     * spec's packed type, which every other reader (libktx, our own) expects. */
+    int cmgen = desc && desc->ktx1_cmgen_types && fmt == IBL_FORMAT_RG11B10F;
+    ibl__wr32(buf + 16, cmgen ? GL_R11F_G11F_B10F : gl->type);
     ibl__wr32(buf + 20, gl->type_size);
     ibl__wr32(buf + 24, gl->gl_format);
     ibl__wr32(buf + 28, gl->internal_format);
@@ -207,6 +211,10 @@ ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
     uint32_t kvd_len = ibl__rd32(bytes + 60);
 
     const gl_map *gl = map_gl(internal);
+    /* Filament's cmgen stores R11F_G11F_B10F as glType, and as glFormat up to Filament
+     * 1.8: read that form too */
+    if (gl && gl->format == IBL_FORMAT_RG11B10F && type == GL_R11F_G11F_B10F) type = gl->type;
+    if (gl && gl->format == IBL_FORMAT_RG11B10F && gl_format == GL_R11F_G11F_B10F) gl_format = gl->gl_format;
     if (!gl || gl->type != type || gl->gl_format != gl_format)
         return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: unsupported GL format (glInternalFormat 0x%04x, glFormat 0x%04x, "

@@ -1,6 +1,7 @@
 #!/bin/sh
-# CTest's driver of the browser tests of `ibl view` (tests/viewer/viewer_test.mjs): checks
-# that what they need is installed, then runs them. Usage: run.sh IBL WORKDIR
+# CTest's driver of the browser tests (tests/viewer/*.mjs; default viewer_test.mjs, the tests
+# of `ibl view`): checks that what they need is installed, then runs one. Usage:
+#   run.sh IBL WORKDIR [SCRIPT]
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 missing=""
@@ -12,4 +13,4 @@ if [ -n "$missing" ]; then
   echo "viewer test: missing:$missing; run scripts/install-deps.sh (it installs them)" >&2
   exit 1
 fi
-exec node "$here/viewer_test.mjs" "$1" "$2"
+exec node "$here/${3:-viewer_test.mjs}" "$1" "$2"
