@@ -6,6 +6,9 @@
 # 1024, and the peak RSS of each (GNU time). LARGE_2048=1 adds the 2048 chain from 8192x4096
 # (1.1 GB of input files). With OTHER_IBL (another build's ibl, e.g. the previous commit's in a
 # git worktree) every timing runs both binaries side by side in one hyperfine call.
+# INPUT_ACCURACY=1 adds docs/SPECULAR.md "Accuracy against the input": the GGX chains at 512
+# and 1024 (rgba32f) against the exact integral over their input (bench_input_accuracy, levels
+# 1-3; minutes of CPU at 1024).
 set -eu
 BUILD=${1:-build}
 OTHER=${2:-}
@@ -34,3 +37,10 @@ echo "$cases" | while IFS='|' read -r in size extra; do
   fi
   /usr/bin/time -f "peak RSS %M KB: $cmd" "$IBL" $cmd
 done
+if [ "${INPUT_ACCURACY:-0}" = 1 ]; then
+  for pair in city2048.exr:512 city4096.exr:1024; do
+    in=${pair%%:*} size=${pair##*:}
+    "$IBL" prefilter -q "$DIR/$in" -o "$DIR/acc$size.ktx2" --size "$size" --format rgba32f
+    "$BUILD/bench/bench_input_accuracy" "$DIR/$in" "$DIR/acc$size.ktx2" --samples 100 --max-level 3
+  done
+fi

@@ -30,5 +30,8 @@ float ibl__box_fit_shininess(int n);
 /* The Gaussian profile's per-axis sigma, in texels of a face of edge n, for a Phong lobe of
  * the given exponent: sqrt(max(0, (n / 2)^2 / (shininess + 3) - 1/12)). */
 double ibl__gauss_sigma(float shininess, int n);
+/* How many times coarser than the level (edge n) a blur of sigma texels runs: 1 for the exact
+ * blur, else a power of two (specular_gauss.c, "wide blurs through a Gaussian pyramid"). */
+int ibl__gauss_coarse_factor(double sigma, int n);
 
 #endif
