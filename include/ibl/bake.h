@@ -69,6 +69,8 @@ typedef struct ibl_bake_desc {
                                    range (brdf.h; zero: 1..100000, any chain); the first and
                                    last rows are centred on the range's ends               */
     ibl_format format;          /* storage of the cube textures; 0: rgba16f                 */
+    ibl_quality quality;        /* BC6H / ASTC encoder effort (ibl/compress.h)              */
+    int zstd_level;             /* KTX2 files: Zstandard level 1..22; 0: none (DDS never)   */
     unsigned containers;        /* IBL_BAKE_KTX2 | IBL_BAKE_DDS; 0: both                    */
     int preview_width;          /* environment.png (equirect) width; 0: 1024; -1: none      */
     int keep_environment;       /* keep a copy of env in the bake (the probe's mirror and
@@ -96,6 +98,8 @@ typedef struct ibl_bake_data {
     ibl_sh_window sh_window_requested;
     double sh_window_width;
     ibl_format format;
+    ibl_quality quality;
+    int zstd_level;
     unsigned containers;
     char *source_name;   /* owned */
     char *preset;        /* owned; NULL when none was recorded */

@@ -161,6 +161,9 @@ const char *ibl_format_name(ibl_format format);
 /* Parses a name as above (case-insensitive; also "b10g11r11", "e5b9g9r9"); 0 if unknown
  * (*out untouched). */
 int ibl_format_from_name(const char *name, ibl_format *out);
+/* Non-zero for the block-compressed formats (BC6H, ASTC): the ones an encoder quality
+ * (ibl_write_desc.quality) applies to. */
+int ibl_format_is_block(ibl_format format);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Images: one 2D float RGBA picture (a reader's output, a layout's input).                 */

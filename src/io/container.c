@@ -323,6 +323,11 @@ int ibl__format_is_block(ibl_format format)
     return ibl__format_block(format, NULL, NULL);
 }
 
+int ibl_format_is_block(ibl_format format)
+{
+    return ibl__format_is_block(format);
+}
+
 size_t ibl__format_unit_bytes(ibl_format format)
 {
     if (ibl__format_is_block(format)) return 16; /* BC6H and ASTC blocks */
