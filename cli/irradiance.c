@@ -1,5 +1,6 @@
 /* ibl irradiance: the irradiance environment map (diffuse cubemap) of an environment. */
 #include "cli.h"
+#include "format_options.h"
 #include "input.h"
 
 #include <stdio.h>
@@ -24,7 +25,9 @@ static const char usage[] =
     "  --scale S            over-pi (default) or full (E itself)\n"
     "  --bands N            sh: 1..5 (default 3)\n"
     "  --window W           sh: none (default), auto, or a Hanning width\n"
-    "  --format F           storage format (rgba16f, rgba32f, rg11b10f, rgb9e5, ...)\n"
+    "  --format F           storage format (rgba16f, rgba32f, rg11b10f, rgb9e5, bc6h, astc4x4,\n"
+    "                       rgbm, ...: see 'ibl convert --help')\n"
+    CLI_FORMAT_HELP
     "  --out-layout NAME    flat outputs: hcross (default), vcross, hstrip, vstrip, equirect\n"
     CLI_INPUT_HELP
     "  -q, -j N, --clamp, --max-memory MiB: see 'ibl --help'\n";
@@ -39,7 +42,8 @@ int cli_cmd_irradiance(int argc, char **argv)
     ibl_layout out_layout = IBL_LAYOUT_HCROSS;
     const char *arg;
     while ((arg = cli_next(&a))) {
-        if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io)) continue;
+        if (cli_common_option(&a, arg) || cli_input_option(&a, arg, &io) || cli_format_option(&a, arg, &wd))
+            continue;
         if (cli_is(&a, arg, "--output", "-o")) {
             out_path = cli_value(&a, arg);
         } else if (cli_is(&a, arg, "--size", NULL)) {
@@ -79,6 +83,7 @@ int cli_cmd_irradiance(int argc, char **argv)
     ibl_file_type out_type = cli_check_output(&a, out_path);
     if (!ibl_file_type_writes_format(out_type, wd.format))
         cli_usage_error(&a, "%s cannot store %s pixels", out_path, ibl_format_name(wd.format));
+    cli_format_check(&a, &wd, out_type, out_path);
     const char *in = a.positional[0];
     ibl_context *ctx = cli_context(&a.common);
     double t0 = cli_seconds();
