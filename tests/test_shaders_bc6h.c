@@ -56,6 +56,7 @@ static int setup(void **state)
     if (!f->fetch_program) {
         print_error("fetch shader: %s\n", log);
         teardown(state);
+        *state = NULL; /* cmocka may call the group teardown after a failed setup */
         return -1;
     }
     return 0;
@@ -64,6 +65,7 @@ static int setup(void **state)
 static int teardown(void **state)
 {
     fixture *f = *state;
+    if (!f) return 0;
     if (f->fetch_program) f->gl.gl.DeleteProgram(f->fetch_program);
     glh_destroy(&f->gl);
     ibl_context_destroy(f->ctx);

@@ -36,6 +36,7 @@ static char *read_shader(const char *name)
 static int teardown(void **state)
 {
     fixture *f = *state;
+    if (!f) return 0;
     glh_destroy(&f->gl);
     ibl_context_destroy(f->ctx);
     free(f->glsl);
@@ -61,6 +62,7 @@ static int setup(void **state)
     f->hlsl = read_shader("ibl_hdr8.hlsl");
     if (!f->glsl || !f->hlsl) {
         teardown(state);
+        *state = NULL; /* cmocka may call the group teardown after a failed setup */
         return -1;
     }
     return 0;
