@@ -240,7 +240,8 @@ static float *load_hdri(fixture *f, const char *name, int negate)
 }
 
 /* The encoder's blocks for the six HDRIs: unsigned at every quality, signed (both signs) at
- * the default quality; 2048 blocks each. */
+ * the default quality; 2048 blocks each, 512 for thorough (the 32 rows around the horizon,
+ * where the detail is: thorough costs 13x default, too slow for the sanitizer build). */
 static void encoder_blocks(void **state)
 {
     static const char *const files[] = {"city.exr",  "forest.exr", "interior.exr",
@@ -256,26 +257,32 @@ static void encoder_blocks(void **state)
     assert_true(blocks && expected && gpu);
     long total_bad = 0;
     int mode_seen[32] = {0}, modes = 0;
-    for (size_t i = 0; i < sizeof files / sizeof *files; i++)
+    int total_blocks = 0;
+    for (size_t i = 0; i < sizeof files / sizeof *files; i++) {
+        float *image[2] = {load_hdri(f, files[i], 0), load_hdri(f, files[i], 1)};
         for (size_t r = 0; r < sizeof runs / sizeof *runs; r++) {
-            float *rgba = load_hdri(f, files[i], runs[r].is_signed);
             ibl_bc6h_desc d = {runs[r].is_signed, runs[r].q};
-            assert_int_equal(ibl_bc6h_encode(f->ctx, &d, rgba, HDRI_W, HDRI_H, blocks), IBL_OK);
-            for (int b = 0; b < COUNT; b++) {
+            int rows = d.quality == IBL_QUALITY_THOROUGH ? 32 : HDRI_H, count = BX * rows / 4;
+            const float *rgba = image[d.is_signed] + (size_t)((HDRI_H - rows) / 2) * HDRI_W * 4;
+            assert_int_equal(ibl_bc6h_encode(f->ctx, &d, rgba, HDRI_W, rows, blocks), IBL_OK);
+            total_blocks += count;
+            for (int b = 0; b < count; b++) {
                 int mode = ibl_bc6h_decode_block(blocks + 16 * b, d.is_signed,
                                                  expected + (size_t)b * 48);
                 assert_true(mode >= 0);
                 if (!mode_seen[mode]++) modes++;
             }
-            gpu_decode(f, d.is_signed, blocks, BX, BY, gpu);
+            gpu_decode(f, d.is_signed, blocks, BX, rows / 4, gpu);
             char what[96];
             snprintf(what, sizeof what, "%s %s %s", files[i], d.is_signed ? "signed" : "unsigned",
                      ibl_quality_name(d.quality));
-            total_bad += compare_blocks(blocks, expected, COUNT, BX, gpu, what);
-            free(rgba);
+            total_bad += compare_blocks(blocks, expected, count, BX, gpu, what);
         }
-    print_message("encoder blocks: 6 HDRIs x 4 runs x %d blocks, %d modes used, %ld channels differ\n",
-                  COUNT, modes, total_bad);
+        free(image[0]);
+        free(image[1]);
+    }
+    print_message("encoder blocks: 6 HDRIs x 4 runs, %d blocks, %d modes used, %ld channels differ\n",
+                  total_blocks, modes, total_bad);
     assert_int_equal(total_bad, 0);
     free(blocks);
     free(expected);
