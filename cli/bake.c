@@ -2,6 +2,7 @@
  * A thin client of bake.h: the library names the files, writes the manifest and swaps the
  * folder in whole. */
 #include "bake_probes.h"
+#include "format_options.h"
 #include "input.h"
 #include "specular_options.h"
 
@@ -30,8 +31,13 @@ static const char usage[] =
     "  --window W             SH window: none (default), auto, or a Hanning width\n"
     "  --lut-size N           split-sum table edge (default 128)\n"
     "  --format F             pixel format of the cube textures: rgba16f (default), rgba32f,\n"
-    "                         rg11b10f, rgb9e5, bc6h, bc6h-signed (default quality); rgbm,\n"
-    "                         rgbd, rgbe (8-bit HDR: KTX2 only, no DDS)\n"
+    "                         rg11b10f, rgb9e5, bc6h, bc6h-signed; astc4x4 .. astc8x8 and\n"
+    "                         rgbm, rgbd, rgbe (KTX2 only: the bake writes no DDS)\n"
+    "  --quality Q            BC6H / ASTC encoder effort: fast, default or thorough\n"
+    "  --zstd [LEVEL]         Zstandard supercompression of the KTX2 files, level 1..22\n"
+    "                         (default 3; DDS files have none)\n"
+    "  --rgbm-range R         RGBM's range: the largest value stored (default 8), for\n"
+    "                         --format rgbm and the RGBM PNG of --out-layout atlas\n"
     "  --working-size N       face edge the input is read at (default: the chain's, at least\n"
     "                         128; 256 without --size)\n"
     "  --preview-width W      width of environment.png (default 1024; 0: no preview)\n"
@@ -59,6 +65,7 @@ typedef struct bake_options {
     cli_specular_options specular;
     ibl_bake_desc desc;
     cli_probe_bake_options probes;
+    ibl_write_desc storage; /* --quality, --zstd, --rgbm-range */
 } bake_options;
 
 static void parse(cli_args *a, bake_options *o)
@@ -66,7 +73,7 @@ static void parse(cli_args *a, bake_options *o)
     const char *arg;
     while ((arg = cli_next(a))) {
         if (cli_common_option(a, arg) || cli_input_option(a, arg, &o->input) ||
-            cli_specular_option(a, arg, &o->specular))
+            cli_specular_option(a, arg, &o->specular) || cli_format_option(a, arg, &o->storage))
             continue;
         const ibl_target_profile *target = cli_target_option(a, arg, &o->specular, &o->input);
         if (target) {
@@ -114,7 +121,8 @@ static void parse(cli_args *a, bake_options *o)
             if (!ibl_format_from_name(v, &o->desc.format) ||
                 !ibl_file_type_writes_format(IBL_FILE_KTX2, o->desc.format))
                 cli_usage_error(a, "--format wants rgba16f, rgba32f, rg11b10f, rgb9e5, rg16f, "
-                                   "rg32f, bc6h, bc6h-signed, rgbm, rgbd or rgbe, not '%s'", v);
+                                   "rg32f, bc6h, bc6h-signed, astc4x4 .. astc8x8, rgbm, rgbd or "
+                                   "rgbe, not '%s'", v);
             /* DDS has no key/value data to name an 8-bit encoding: those bakes are KTX2 only */
             if (!ibl_file_type_writes_format(IBL_FILE_DDS, o->desc.format)) o->desc.containers = IBL_BAKE_KTX2;
             else if (o->desc.target == IBL_TARGET_NONE) o->desc.containers = 0;
@@ -129,6 +137,17 @@ static void parse(cli_args *a, bake_options *o)
         cli_usage_error(a, "--dds-header legacy: %s has no legacy DDS FourCC (rgba16f and "
                            "rgba32f have one)", ibl_format_name(f));
     if (!o->dir) cli_usage_error(a, "needs an output folder: -o DIR");
+    /* the same rules as convert and prefilter, for the bake's KTX2 files */
+    o->storage.format = o->desc.format;
+    ibl_write_desc check = o->storage;
+    if (o->desc.atlas) check.rgbm_range = 0.0f; /* the atlas PNG is RGBM whatever --format */
+    cli_format_check(a, &check, IBL_FILE_KTX2, o->dir);
+    if (o->probes.probes && (o->storage.quality || o->storage.zstd_level || o->storage.rgbm_range > 0.0f))
+        cli_usage_error(a, "--quality, --zstd and --rgbm-range apply to an environment bake, not "
+                           "to --probes (whose parts and array use the encoders' defaults)");
+    o->desc.quality = o->storage.quality;
+    o->desc.zstd_level = o->storage.zstd_level;
+    o->desc.rgbm_range = o->storage.rgbm_range;
     if (a->positional_count) cli_check_not_inside(a, a->positional[0], o->dir);
     o->desc.specular = cli_specular_resolve(a, &o->specular, o->desc.target ? NULL : "gltf");
     o->desc.preset = o->specular.preset ? o->specular.preset : o->desc.target ? NULL : "gltf";

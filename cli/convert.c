@@ -132,6 +132,50 @@ static ibl_status add_layout(ibl_context *ctx, ibl_output_set *set, convert_opti
     return st;
 }
 
+/* A cube-map array (KTX2 or DDS) to another container, layer for layer, every level it has,
+ * in the asked format; tex is freed. Resizing, mips and reorienting work on one cube, so they
+ * are refused here. */
+static int convert_cube_array(ibl_context *ctx, const cli_args *a, const convert_options *o,
+                              const char *input, ibl_texture *tex)
+{
+    ibl_file_type type = ibl_file_type_from_path(o->out);
+    const char *refused = type != IBL_FILE_KTX2 && type != IBL_FILE_DDS ? "an output other than .ktx2 or .dds"
+                          : o->input.size ? "--size"
+                          : o->mips ? "--mips"
+                          : o->input.orientation.mirror || o->input.orientation.z_up ||
+                                    o->input.orientation.yaw_degrees != 0.0f
+                              ? "--yaw, --mirror-input or --z-up"
+                              : NULL;
+    if (refused) {
+        cli_error("%s: a cube-map array of %d layers converts only to .ktx2 or .dds, as it is "
+                  "(not with %s)", input, tex->depth, refused);
+        ibl_texture_free(ctx, tex);
+        return CLI_EXIT_USAGE;
+    }
+    double t0 = cli_seconds();
+    ibl_write_report report = {0};
+    ibl_write_desc wd = o->wd;
+    wd.report = &report;
+    ibl_output_set *set;
+    ibl_status st = ibl_output_set_create(ctx, &set);
+    if (st == IBL_OK) st = ibl_output_set_protect(set, input);
+    if (st == IBL_OK) st = ibl_texture_set_metadata(ctx, tex, "ibl.source", input);
+    if (st == IBL_OK) st = ibl_output_set_add_texture(set, o->out, tex, &wd);
+    if (st == IBL_OK) st = ibl_output_set_commit(set);
+    ibl_output_set_destroy(set);
+    int rc = CLI_EXIT_OK;
+    if (st != IBL_OK) {
+        cli_report_failure(ctx, o->out, st);
+        rc = cli_exit_code(st);
+    } else {
+        cli_warn_clamped(&a->common, o->out, &report, wd.format);
+        cli_info(&a->common, "wrote %s (%d layers of %dx%d faces, %d levels) in %.0f ms\n", o->out,
+                 tex->depth, tex->width, tex->width, tex->levels, (cli_seconds() - t0) * 1000.0);
+    }
+    ibl_texture_free(ctx, tex);
+    return rc;
+}
+
 int cli_cmd_convert(int argc, char **argv)
 {
     cli_args a = {argc, argv, 0, "convert", usage, {0}, {0}, 0};
@@ -143,8 +187,19 @@ int cli_cmd_convert(int argc, char **argv)
     ibl_context *ctx = cli_context(&a.common);
     double t0 = cli_seconds();
     ibl_cubemap cube;
-    int rc = a.positional_count == 6 ? cli_read_cubemap_faces(ctx, &a.common, a.positional, &o.input, &cube)
-                                     : cli_read_cubemap(ctx, &a.common, input, &o.input, &cube, NULL);
+    ibl_texture tex;
+    int rc;
+    if (a.positional_count == 6) {
+        rc = cli_read_cubemap_faces(ctx, &a.common, a.positional, &o.input, &cube);
+    } else {
+        rc = cli_read_input_texture(ctx, &a.common, input, &tex);
+        if (rc == CLI_EXIT_OK && tex.kind == IBL_TEXTURE_CUBE_ARRAY) {
+            rc = convert_cube_array(ctx, &a, &o, input, &tex);
+            ibl_context_destroy(ctx);
+            return rc;
+        }
+        if (rc == CLI_EXIT_OK) rc = cli_texture_to_cubemap(ctx, input, &o.input, &tex, &cube, NULL);
+    }
     if (rc != CLI_EXIT_OK) {
         ibl_context_destroy(ctx);
         return rc;

@@ -65,4 +65,7 @@ void cli_format_check(cli_args *a, const ibl_write_desc *wd, ibl_file_type type,
         cli_usage_error(a, "--ktx1-gltype cmgen applies to a .ktx output in --format rg11b10f");
     if (wd->rgbm_range > 0.0f && wd->format != IBL_FORMAT_RGBM)
         cli_usage_error(a, "--rgbm-range applies to --format rgbm only");
+    if (wd->quality != IBL_QUALITY_DEFAULT && !ibl_format_is_block(wd->format))
+        cli_usage_error(a, "--quality applies to the block formats (bc6h, bc6h-signed, astc4x4 .. "
+                           "astc8x8), not %s", ibl_format_name(wd->format));
 }

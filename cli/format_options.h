@@ -6,7 +6,7 @@
 #include "cli.h"
 
 #define CLI_FORMAT_HELP                                                                        \
-    "  --quality Q          BC6H encoder effort: fast, default or thorough\n"                   \
+    "  --quality Q          BC6H / ASTC encoder effort: fast, default or thorough\n"                   \
     "  --zstd [LEVEL]       KTX2 Zstandard supercompression, level 1..22 (default 3)\n"         \
     "  --rgbm-range R       RGBM's range: the largest value stored (default 8)\n"             \
     "  --dds-header H       DDS header: auto (default: the legacy FourCC header where the\n"   \

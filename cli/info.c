@@ -12,7 +12,8 @@ static const char usage[] =
     "\n"
     "Prints the size, layout, pixel format, mip levels, min/max/mean per channel, the\n"
     "solid-angle-weighted mean radiance (what a white diffuse sphere would average), the counts\n"
-    "of NaN/infinite/negative pixels and the metadata of an image or texture.\n"
+    "of NaN/infinite/negative pixels and the metadata of an image or texture; for a cube-map\n"
+    "array (KTX2 or DDS) the layer count and each layer's mean radiance.\n"
     "\n"
     "  --layout L   layout of a flat image (default: from the aspect ratio)\n"
     "  --json       one JSON object on stdout\n"
@@ -22,6 +23,8 @@ typedef struct file_stats {
     double min[4], max[4], mean[4];
     double radiance[3]; /* solid-angle weighted; NaN when the layout is unknown */
     ibl_layout layout;
+    int layers;              /* cube-map arrays: the layer count; else 0 */
+    double *layer_radiance;  /* cube-map arrays: 3 per layer (malloc) */
 } file_stats;
 
 /* Per-channel statistics over level 0 (every face and slice) and the mean radiance. */
@@ -42,7 +45,28 @@ static void measure(ibl_context *ctx, const ibl_texture *tex, ibl_layout asked, 
     s->radiance[0] = s->radiance[1] = s->radiance[2] = NAN;
     s->layout = IBL_LAYOUT_AUTO;
     double m[4];
-    if (tex->kind == IBL_TEXTURE_CUBE) {
+    if (tex->kind == IBL_TEXTURE_CUBE_ARRAY) {
+        /* each layer's mean radiance, and their mean */
+        s->layers = tex->depth;
+        s->layer_radiance = calloc((size_t)tex->depth * 3, sizeof *s->layer_radiance);
+        s->layout = IBL_LAYOUT_CUBE;
+        if (!s->layer_radiance) return;
+        for (int c = 0; c < 3; c++) s->radiance[c] = 0.0;
+        for (int i = 0; i < tex->depth; i++) {
+            ibl_texture one = *tex;
+            one.kind = IBL_TEXTURE_CUBE;
+            one.depth = 1;
+            one.levels = 1;
+            one.data = ibl_texture_level(tex, 0, 6 * i);
+            ibl_cubemap view;
+            ibl_cubemap_from_texture(&one, &view);
+            ibl_cubemap_mean(&view, 0, m);
+            for (int c = 0; c < 3; c++) {
+                s->layer_radiance[3 * i + c] = m[c];
+                s->radiance[c] += m[c] / tex->depth;
+            }
+        }
+    } else if (tex->kind == IBL_TEXTURE_CUBE) {
         ibl_cubemap view;
         ibl_cubemap_from_texture(tex, &view);
         ibl_cubemap_mean(&view, 0, m);
@@ -58,7 +82,10 @@ static void measure(ibl_context *ctx, const ibl_texture *tex, ibl_layout asked, 
 
 static const char *kind_name(const ibl_texture *tex)
 {
-    return tex->kind == IBL_TEXTURE_CUBE ? "cube" : tex->kind == IBL_TEXTURE_3D ? "3d" : "2d";
+    return tex->kind == IBL_TEXTURE_CUBE         ? "cube"
+           : tex->kind == IBL_TEXTURE_CUBE_ARRAY ? "cube-array"
+           : tex->kind == IBL_TEXTURE_3D         ? "3d"
+                                                 : "2d";
 }
 
 static const char *layout_name(ibl_layout layout)
@@ -97,7 +124,8 @@ static void print_json(const char *path, const ibl_texture *tex, const ibl_file_
     json_object_set_new(o, "kind", json_string(kind_name(tex)));
     json_object_set_new(o, "width", json_integer(tex->width));
     json_object_set_new(o, "height", json_integer(tex->height));
-    json_object_set_new(o, "depth", json_integer(tex->depth));
+    json_object_set_new(o, "depth", json_integer(tex->kind == IBL_TEXTURE_3D ? tex->depth : 1));
+    json_object_set_new(o, "layers", json_integer(s->layers));
     json_object_set_new(o, "levels", json_integer(tex->levels));
     json_object_set_new(o, "format", json_string(ibl_format_name(info->format)));
     json_object_set_new(o, "layout", json_string(layout_name(s->layout)));
@@ -108,6 +136,12 @@ static void print_json(const char *path, const ibl_texture *tex, const ibl_file_
     double luminance = 0.2126 * s->radiance[0] + 0.7152 * s->radiance[1] + 0.0722 * s->radiance[2];
     json_object_set_new(o, "mean_radiance", known ? numbers(s->radiance, 3) : json_null());
     json_object_set_new(o, "mean_luminance", known ? json_real(luminance) : json_null());
+    if (s->layers && s->layer_radiance) {
+        json_t *layers = json_array();
+        for (int i = 0; i < s->layers; i++)
+            json_array_append_new(layers, numbers(s->layer_radiance + 3 * i, 3));
+        json_object_set_new(o, "layer_mean_radiance", layers);
+    }
     json_object_set_new(o, "nan_texels", json_integer((json_int_t)info->pixels.nan_count));
     json_object_set_new(o, "inf_texels", json_integer((json_int_t)info->pixels.inf_count));
     json_object_set_new(o, "negative_texels", json_integer((json_int_t)info->pixels.negative_count));
@@ -128,7 +162,8 @@ static void print_text(const char *path, const ibl_texture *tex, const ibl_file_
     printf("container:       %s\n", ibl_file_type_name(info->type));
     printf("kind:            %s\n", kind_name(tex));
     if (tex->kind == IBL_TEXTURE_3D) printf("size:            %dx%dx%d\n", tex->width, tex->height, tex->depth);
-    else printf("size:            %dx%d%s\n", tex->width, tex->height, tex->kind == IBL_TEXTURE_CUBE ? " per face" : "");
+    else printf("size:            %dx%d%s\n", tex->width, tex->height, tex->kind == IBL_TEXTURE_2D ? "" : " per face");
+    if (s->layers) printf("layers:          %d cubes\n", s->layers);
     printf("layout:          %s\n", layout_name(s->layout));
     printf("pixel format:    %s\n", ibl_format_name(info->format));
     printf("mip levels:      %d\n", tex->levels);
@@ -137,8 +172,12 @@ static void print_text(const char *path, const ibl_texture *tex, const ibl_file_
     printf("mean (RGBA):     %.6g %.6g %.6g %.6g   (per texel)\n", s->mean[0], s->mean[1], s->mean[2], s->mean[3]);
     const double *r = s->radiance;
     if (isnan(r[0])) printf("mean radiance:   n/a (layout unknown; use --layout)\n");
-    else printf("mean radiance:   %.6g %.6g %.6g   (solid-angle weighted; luminance %.6g)\n", r[0],
-                r[1], r[2], 0.2126 * r[0] + 0.7152 * r[1] + 0.0722 * r[2]);
+    else printf("mean radiance:   %.6g %.6g %.6g   (solid-angle weighted; luminance %.6g)%s\n", r[0],
+                r[1], r[2], 0.2126 * r[0] + 0.7152 * r[1] + 0.0722 * r[2],
+                s->layers ? " (mean of the layers)" : "");
+    for (int i = 0; s->layer_radiance && i < s->layers; i++)
+        printf("  layer %-8d %.6g %.6g %.6g\n", i, s->layer_radiance[3 * i],
+               s->layer_radiance[3 * i + 1], s->layer_radiance[3 * i + 2]);
     printf("NaN texels:      %llu (read as 0)\n", (unsigned long long)info->pixels.nan_count);
     printf("infinite texels: %llu%s\n", (unsigned long long)info->pixels.inf_count,
            info->pixels.inf_count ? " (other commands refuse them without --clamp)" : "");
@@ -176,10 +215,11 @@ int cli_cmd_info(int argc, char **argv)
         ibl_context_destroy(ctx);
         return CLI_EXIT_BAD_INPUT;
     }
-    file_stats s;
+    file_stats s = {0};
     measure(ctx, &tex, layout, &s);
     if (json) print_json(path, &tex, &info, &s);
     else print_text(path, &tex, &info, &s);
+    free(s.layer_radiance);
     ibl_texture_free(ctx, &tex);
     ibl_context_destroy(ctx);
     return CLI_EXIT_OK;

@@ -58,16 +58,37 @@ void cli_warn_upsampling(const cli_common *c, const char *path, const cli_input_
 int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
                      cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out)
 {
-    ibl_read_desc rd = {.clamp_infinite = c->clamp};
     ibl_texture tex;
-    ibl_file_info info;
     memset(out, 0, sizeof *out);
-    ibl_status st = ibl_read_texture(ctx, path, &rd, &tex, &info);
+    int rc = cli_read_input_texture(ctx, c, path, &tex);
+    return rc == CLI_EXIT_OK ? cli_texture_to_cubemap(ctx, path, o, &tex, out, layout_out) : rc;
+}
+
+int cli_read_input_texture(ibl_context *ctx, const cli_common *c, const char *path, ibl_texture *tex)
+{
+    ibl_read_desc rd = {.clamp_infinite = c->clamp};
+    ibl_file_info info;
+    ibl_status st = ibl_read_texture(ctx, path, &rd, tex, &info);
     if (st != IBL_OK) {
         cli_error("%s", ibl_context_message(ctx));
         return cli_exit_code(st) == CLI_EXIT_USAGE ? CLI_EXIT_BAD_INPUT : cli_exit_code(st);
     }
     cli_report_pixels(c, path, &info.pixels);
+    return CLI_EXIT_OK;
+}
+
+int cli_texture_to_cubemap(ibl_context *ctx, const char *path, cli_input_options *o,
+                           ibl_texture *texture, ibl_cubemap *out, ibl_layout *layout_out)
+{
+    ibl_texture tex = *texture;
+    ibl_status st;
+    memset(out, 0, sizeof *out);
+    if (tex.kind == IBL_TEXTURE_CUBE_ARRAY) {
+        ibl_texture_free(ctx, &tex);
+        cli_error("%s: a cube-map array of %d layers is not one environment ('ibl convert' "
+                  "copies it to another container)", path, texture->depth);
+        return CLI_EXIT_BAD_INPUT;
+    }
     if (tex.kind == IBL_TEXTURE_CUBE) {
         ibl_cubemap view;
         ibl_cubemap_from_texture(&tex, &view);

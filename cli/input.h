@@ -29,6 +29,12 @@ int cli_input_option(cli_args *a, const char *arg, cli_input_options *o);
  * (0 on success). If layout_out is not NULL it receives the layout used. */
 int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
                      cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out);
+/* The two halves of cli_read_cubemap: the file as a texture (pixels reported), then the
+ * texture (freed here, whatever happens) as a cube of the options' size and orientation;
+ * each prints its error and returns an exit code. */
+int cli_read_input_texture(ibl_context *ctx, const cli_common *c, const char *path, ibl_texture *tex);
+int cli_texture_to_cubemap(ibl_context *ctx, const char *path, cli_input_options *o,
+                           ibl_texture *tex, ibl_cubemap *out, ibl_layout *layout_out);
 
 /* The built-in clear sky (desc may be NULL: the defaults) as a one-level cube of edge
  * o->size (0: 256), oriented by o. Prints the error and returns the exit code. */

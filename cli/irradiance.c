@@ -26,7 +26,9 @@ static const char usage[] =
     "  --scale S            over-pi (default) or full (E itself)\n"
     "  --bands N            sh: 1..5 (default 3)\n"
     "  --window W           sh: none (default), auto, or a Hanning width\n"
-    "  --format F           storage format (rgba16f, rgba32f, rg11b10f, rgb9e5, ...)\n"
+    "  --format F           storage format (rgba16f, rgba32f, rg11b10f, rgb9e5, bc6h, astc4x4,\n"
+    "                       rgbm, ...: see 'ibl convert --help')\n"
+    CLI_FORMAT_HELP
     "  --out-layout NAME    flat outputs: hcross (default), vcross, hstrip, vstrip, equirect\n"
     CLI_INPUT_HELP
     "  --target ENGINE      read the environment in the engine's cube frame (docs/ENGINES.md)\n"

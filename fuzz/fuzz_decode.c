@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "fuzz_common.h"
+#include "core/context_internal.h"
 #include "io/io_internal.h"
 
 __attribute__((unused)) static ibl_status ibl_decode_any(ibl_context *ctx, const uint8_t *bytes, size_t size,
@@ -20,6 +21,56 @@ __attribute__((unused)) static ibl_status ibl_decode_any(ibl_context *ctx, const
 {
     ibl_read_desc rd = {.clamp_infinite = 1};
     return ibl_decode_texture(ctx, bytes, size, name, &rd, out, info);
+}
+
+/* The block readers on their own (targets bc6h and astc). An input is a 2-byte header and
+ * whole 16-byte blocks: byte 0 bits 0..3 = width in blocks - 1, bit 4 = BC6H signed, bits
+ * 5..7 = ASTC footprint (4x4, 5x4, 5x5, 6x5, 6x6, 8x5, 8x6, 8x8); byte 1 bits 0..2 and 3..5 =
+ * texels cut from the last block column and row (a padded image). The block rows are as
+ * many as the blocks fill. fuzz/corpus-gen/blocks.c writes the starting corpora. */
+static ibl_status block_image(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                              int bw, int bh, ibl_texture *out)
+{
+    int columns = (bytes[0] & 15) + 1;
+    size_t blocks = (size - 2) / 16;
+    if (blocks < (size_t)columns || blocks > (1u << 16))
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: %zu blocks for rows of %d", name, blocks, columns);
+    int rows = (int)(blocks / (size_t)columns);
+    int cut_x = bytes[1] & 7, cut_y = (bytes[1] >> 3) & 7;
+    int width = columns * bw - (cut_x < bw ? cut_x : bw - 1), height = rows * bh - (cut_y < bh ? cut_y : bh - 1);
+    ibl_status st = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, width, height, 1, 1, out);
+    return st == IBL_OK ? IBL_OK : ibl__fail_named(ctx, st, name);
+}
+
+__attribute__((unused)) static ibl_status fuzz_bc6h_blocks(ibl_context *ctx, const uint8_t *bytes, size_t size,
+                                                           const char *name, ibl_texture *out, ibl_file_info *info)
+{
+    (void)info;
+    if (size < 2 + 16) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: shorter than one block", name);
+    ibl_status st = block_image(ctx, bytes, size, name, 4, 4, out);
+    if (st == IBL_OK) st = ibl_bc6h_decode(ctx, (bytes[0] >> 4) & 1, bytes + 2, out->width, out->height, out->data);
+    if (st != IBL_OK && out->data) {
+        ibl_texture_free(ctx, out);
+        return ibl__fail_named(ctx, st, name);
+    }
+    return st;
+}
+
+__attribute__((unused)) static ibl_status fuzz_astc_blocks(ibl_context *ctx, const uint8_t *bytes, size_t size,
+                                                           const char *name, ibl_texture *out, ibl_file_info *info)
+{
+    static const uint8_t footprints[8][2] = {{4, 4}, {5, 4}, {5, 5}, {6, 5}, {6, 6}, {8, 5}, {8, 6}, {8, 8}};
+    (void)info;
+    if (size < 2 + 16) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: shorter than one block", name);
+    const uint8_t *fp = footprints[bytes[0] >> 5];
+    ibl_status st = block_image(ctx, bytes, size, name, fp[0], fp[1], out);
+    ibl_astc_desc d = {fp[0], fp[1], IBL_QUALITY_DEFAULT};
+    if (st == IBL_OK) st = ibl_astc_decode(ctx, &d, bytes + 2, out->width, out->height, out->data);
+    if (st != IBL_OK && out->data) {
+        ibl_texture_free(ctx, out);
+        return ibl__fail_named(ctx, st, name);
+    }
+    return st;
 }
 
 typedef struct decoded {

@@ -969,6 +969,90 @@ static void cli_formats(void **state)
     assert_ptr_equal(strchr(out, '\n'), out + strlen(out) - 1);
 }
 
+/* ibl bake with the storage options: the same chain in BC6H at each quality is the float
+ * bake's chain put through the encoder at that quality (bit for bit), Zstandard on the KTX2
+ * files only, ASTC and RGBM bakes without DDS, the manifest's "storage", refusals. */
+static void cli_bake_formats(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(0);
+    const char *out, *exr = test_data("forest_128x64.exr");
+    const char *common = "bake -q --size 16 --irradiance-size 4 --lut-size 8 --preview-width 0";
+    assert_int_equal(test_run_cli(&out, "%s '%s' -o '%s' --format rgba32f", common, exr, test_path("bf")), 0);
+    ibl_texture ref;
+    char path[1200];
+    snprintf(path, sizeof path, "%s/specular.ktx2", test_path("bf"));
+    assert_int_equal(ibl_read_texture(ctx, path, NULL, &ref, NULL), IBL_OK);
+    static const char *const qualities[] = {"fast", "thorough"};
+    for (int q = 0; q < 2; q++) {
+        const char *dir = test_path(q ? "bt" : "bq");
+        assert_int_equal(test_run_cli(&out, "%s '%s' -o '%s' --format bc6h --quality %s --zstd 5", common,
+                                      exr, dir, qualities[q]), 0);
+        ibl_texture got, want;
+        snprintf(path, sizeof path, "%s/specular.ktx2", dir);
+        assert_int_equal(ibl_read_texture(ctx, path, NULL, &got, NULL), IBL_OK);
+        FILE *f = fopen(path, "rb");
+        unsigned char head[48];
+        assert_non_null(f);
+        assert_int_equal(fread(head, 1, 48, f), 48);
+        fclose(f);
+        assert_int_equal(head[44], 2); /* supercompressionScheme: Zstandard */
+        ibl_write_desc wd = {.format = IBL_FORMAT_BC6H, .quality = q ? IBL_QUALITY_THOROUGH : IBL_QUALITY_FAST};
+        void *bytes;
+        size_t size;
+        assert_int_equal(ibl_encode_texture(ctx, IBL_FILE_KTX2, &ref, &wd, &bytes, &size), IBL_OK);
+        assert_int_equal(ibl_decode_texture(ctx, bytes, size, "want.ktx2", NULL, &want, NULL), IBL_OK);
+        assert_memory_equal(got.data, want.data,
+                            ibl_texture_floats(got.kind, got.width, got.height, 1, got.levels) * sizeof(float));
+        ibl_free(ctx, bytes);
+        ibl_texture_free(ctx, &got);
+        ibl_texture_free(ctx, &want);
+        /* the DDS has no supercompression but the same blocks */
+        snprintf(path, sizeof path, "%s/specular.dds", dir);
+        assert_true(test_file_exists(path));
+        assert_int_equal(test_run_cli(&out, "info '%s/specular.dds'", dir), 0);
+        assert_non_null(strstr(out, "bc6h"));
+    }
+    ibl_texture_free(ctx, &ref);
+    /* the manifest says how the cubes are stored */
+    snprintf(path, sizeof path, "%s/manifest.json", test_path("bt"));
+    FILE *mf = fopen(path, "rb");
+    char *manifest = calloc(1, 1 << 20);
+    assert_true(mf && manifest);
+    assert_true(fread(manifest, 1, (1 << 20) - 1, mf) > 0);
+    fclose(mf);
+    assert_non_null(strstr(manifest, "\"storage\": {\n    \"quality\": \"thorough\",\n    \"zstd_level\": 5"));
+    free(manifest);
+    /* KTX2-only formats: no DDS */
+    assert_int_equal(test_run_cli(&out, "%s '%s' -o '%s' --format astc4x4 --quality fast", common, exr,
+                                  test_path("ba")), 0);
+    snprintf(path, sizeof path, "%s/specular.dds", test_path("ba"));
+    assert_false(test_file_exists(path));
+    assert_int_equal(test_run_cli(&out, "%s '%s' -o '%s' --format rgbm --rgbm-range 16", common, exr,
+                                  test_path("bm")), 0);
+    assert_int_equal(test_run_cli(&out, "info '%s/specular.ktx2'", test_path("bm")), 0);
+    assert_non_null(strstr(out, "ibl.rgbm_range = 16"));
+    /* refused before any work, nothing written: exit 2 */
+    assert_int_equal(test_run_cli(&out, "%s '%s' -o '%s' --format rgbm --quality fast", common, exr, test_path("bx")), 2);
+    assert_non_null(strstr(out, "--quality applies to the block formats"));
+    assert_int_equal(test_run_cli(&out, "%s '%s' -o '%s' --format bc6h --rgbm-range 4", common, exr, test_path("bx")), 2);
+    assert_int_equal(test_run_cli(&out, "prefilter '%s' -o '%s' --quality thorough", exr, test_path("bx.ktx2")), 2);
+    assert_int_equal(test_run_cli(&out, "convert '%s' -o '%s' --format rgba16f --quality fast", exr,
+                                  test_path("bx.ktx2")), 2);
+    assert_false(test_file_exists(test_path("bx")));
+    assert_false(test_file_exists(test_path("bx.ktx2")));
+    /* the library checks the combination itself before baking */
+    ibl_cubemap env;
+    assert_int_equal(ibl_cubemap_alloc(ctx, 8, 1, &env), IBL_OK);
+    test_fill_cube(&env, 1, 1, 1);
+    ibl_bake_data b;
+    ibl_bake_desc d = {.format = IBL_FORMAT_RGBM}; /* containers 0: KTX2 and DDS */
+    assert_int_equal(ibl_bake_compute(ctx, &env, &d, &b), IBL_ERR_UNSUPPORTED);
+    assert_non_null(strstr(ibl_context_message(ctx), "rgbm cubes cannot be stored in DDS"));
+    ibl_cubemap_free(ctx, &env);
+    ibl_context_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -984,6 +1068,7 @@ int main(void)
         cmocka_unit_test(hdr8_round_trips),
         cmocka_unit_test(hdr8_containers),
         cmocka_unit_test(cli_formats),
+        cmocka_unit_test(cli_bake_formats),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

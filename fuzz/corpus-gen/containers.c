@@ -144,6 +144,14 @@ int main(int argc, char **argv)
         bad |= emit(ctx, argv[1], c, &t, IBL_FORMAT_RGBA16F, "meta_cube_rgba16f");
         ibl_texture_free(ctx, &t);
         bad |= emit_compressed(ctx, argv[1], c);
+        /* cube-map arrays (KTX2 layerCount, DDS arraySize): 2 cubes of 4 with 3 levels */
+        if (ibl_texture_alloc(ctx, IBL_TEXTURE_CUBE_ARRAY, 4, 4, 2, 3, &t) != IBL_OK) return 1;
+        fill(&t);
+        if (containers[c].type != IBL_FILE_KTX1) {
+            bad |= emit(ctx, argv[1], c, &t, IBL_FORMAT_RGBA16F, "cube_array_rgba16f");
+            bad |= emit(ctx, argv[1], c, &t, IBL_FORMAT_BC6H, "cube_array_bc6h");
+        }
+        ibl_texture_free(ctx, &t);
     }
     ibl_context_destroy(ctx);
     return bad;

@@ -70,6 +70,8 @@ typedef struct ibl_bake_desc {
                                    range (brdf.h; zero: 1..100000, any chain); the first and
                                    last rows are centred on the range's ends               */
     ibl_format format;          /* storage of the cube textures; 0: rgba16f                 */
+    ibl_quality quality;        /* BC6H / ASTC encoder effort (ibl/compress.h)              */
+    int zstd_level;             /* KTX2 files: Zstandard level 1..22; 0: none (DDS never)   */
     unsigned containers;        /* IBL_BAKE_KTX2 | IBL_BAKE_DDS; 0: both                    */
     ibl_dds_header dds_header;  /* the DDS files' header (io.h; 0: legacy where the format
                                    has a FourCC, else DX10)                                */
@@ -109,6 +111,8 @@ typedef struct ibl_bake_data {
     ibl_sh_window sh_window_requested;
     double sh_window_width;
     ibl_format format;
+    ibl_quality quality;
+    int zstd_level;
     unsigned containers;
     ibl_dds_header dds_header;
     char *source_name;   /* owned */

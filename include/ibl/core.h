@@ -161,6 +161,9 @@ const char *ibl_format_name(ibl_format format);
 /* Parses a name as above (case-insensitive; also "b10g11r11", "e5b9g9r9"); 0 if unknown
  * (*out untouched). */
 int ibl_format_from_name(const char *name, ibl_format *out);
+/* Non-zero for the block-compressed formats (BC6H, ASTC): the ones an encoder quality
+ * (ibl_write_desc.quality) applies to. */
+int ibl_format_is_block(ibl_format format);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Images: one 2D float RGBA picture (a reader's output, a layout's input).                 */
@@ -236,7 +239,8 @@ float *ibl_cubemap_face(const ibl_cubemap *cube, int level, int face);
 typedef enum ibl_texture_kind {
     IBL_TEXTURE_2D = 0,
     IBL_TEXTURE_3D,
-    IBL_TEXTURE_CUBE
+    IBL_TEXTURE_CUBE,
+    IBL_TEXTURE_CUBE_ARRAY /* depth cubes of one size (KTX2 layerCount, DDS arraySize) */
 } ibl_texture_kind;
 
 typedef struct ibl_key_value {
@@ -244,12 +248,14 @@ typedef struct ibl_key_value {
     char *value; /* NUL-terminated (KTX2 values are written with their NUL) */
 } ibl_key_value;
 
-/* Memory layout: for each level, for each face (1, or 6 for cubes), for each slice z
- * (depth >> level, at least 1), rows top first, RGBA float. Cubes have width == height and
- * are laid out exactly like ibl_cubemap. */
+/* Memory layout: for each level, for each face (1, 6 for cubes, 6 x layers for cube-map
+ * arrays: layer by layer, each +X -X +Y -Y +Z -Z, as a KTX2 level), for each slice z (depth >>
+ * level, at least 1, 3D only), rows top first, RGBA float. Cubes have width == height and are
+ * laid out exactly like ibl_cubemap; layer i of a cube-map array is a cube at
+ * ibl_texture_level(tex, level, 6 i). */
 typedef struct ibl_texture {
     ibl_texture_kind kind;
-    int width, height, depth; /* depth 1 unless 3D */
+    int width, height, depth; /* 3D: depth; cube-map array: the number of layers; else 1  */
     int levels;
     ibl_format format;        /* storage format read from / to write to a file */
     float *data;
@@ -263,8 +269,10 @@ size_t ibl_texture_floats(ibl_texture_kind kind, int width, int height, int dept
 ibl_status ibl_texture_alloc(ibl_context *ctx, ibl_texture_kind kind, int width, int height,
                              int depth, int levels, ibl_texture *out);
 void ibl_texture_free(ibl_context *ctx, ibl_texture *tex);
-/* Texels of one level/face (face 0 for non-cubes); the slices of a 3D level follow each other. */
+/* Texels of one level/face (face 0 for non-cubes; 6 layer + face for cube-map arrays); the
+ * slices of a 3D level follow each other. */
 float *ibl_texture_level(const ibl_texture *tex, int level, int face);
+/* Faces per level: 1, 6 (cube) or 6 x layers (cube-map array). */
 int ibl_texture_faces(const ibl_texture *tex);
 /* A non-owning texture view of a cubemap (no copy). */
 ibl_texture ibl_texture_from_cubemap(const ibl_cubemap *cube);

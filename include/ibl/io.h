@@ -167,9 +167,11 @@ float ibl_tonemap_apply(ibl_tonemap tonemap, float linear);
  * default of 8-bit previews. 0 for a black image. */
 float ibl_image_auto_exposure(const ibl_image *image);
 
-/* KTX2 cube-map arrays (layerCount N, faceCount 6; src/io/ktx2_array.c): count cubes of one
- * size and level count, layer i = layers[i]; metadata (may be NULL) goes into the file's
- * key/value data. Encodes into a new buffer (ibl_free). */
+/* KTX2 cube-map arrays (layerCount N, faceCount 6) from and to separate cubes
+ * (src/io/ktx2_array.c; ibl_read_texture / ibl_write_texture take them whole as
+ * IBL_TEXTURE_CUBE_ARRAY textures, in DDS too): count cubes of one size and level count,
+ * layer i = layers[i]; metadata (may be NULL) goes into the file's key/value data. Encodes
+ * into a new buffer (ibl_free). */
 ibl_status ibl_encode_cube_array(ibl_context *ctx, const ibl_cubemap *layers, int count,
                                  const ibl_key_value *metadata, int metadata_count,
                                  const ibl_write_desc *desc, void **bytes, size_t *size);

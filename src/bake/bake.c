@@ -208,6 +208,8 @@ static ibl_status record_parameters(ibl_context *ctx, const ibl_cubemap *env,
     b->sh_window_requested = d->sh_window;
     b->sh_window_width = d->sh_window_width;
     b->format = d->format;
+    b->quality = d->quality;
+    b->zstd_level = d->zstd_level;
     b->containers = d->containers;
     b->rgbm_range = d->rgbm_range > 0.0f ? d->rgbm_range : IBL_RGBM_DEFAULT_RANGE;
     b->dds_header = d->dds_header;
@@ -259,6 +261,17 @@ ibl_status ibl_bake_compute(ibl_context *ctx, const ibl_cubemap *env, const ibl_
         if (ibl_target_profile_of(d.target)->files & (IBL_TARGET_FILE_FILAMENT | IBL_TARGET_FILE_EQUIRECT_EXR))
             d.keep_environment = 1;
     }
+    /* the storage settings are checked before any work, not when the files are written */
+    if (!ibl_file_type_writes_format(IBL_FILE_KTX2, d.format) ||
+        ((d.containers & IBL_BAKE_DDS) && !ibl_file_type_writes_format(IBL_FILE_DDS, d.format)))
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "bake: %s cubes cannot be stored in %s (DDS "
+                         "holds neither ASTC nor the 8-bit encodings: bake KTX2 only)",
+                         ibl_format_name(d.format), (d.containers & IBL_BAKE_DDS) ? "DDS" : "KTX2");
+    if ((unsigned)d.quality > IBL_QUALITY_THOROUGH || d.zstd_level < 0 || d.zstd_level > 22 ||
+        !(d.rgbm_range >= 0.0f && d.rgbm_range <= 65504.0f))
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "bake: invalid storage settings (quality %d, zstd level %d, RGBM range %g)",
+                         (int)d.quality, d.zstd_level, (double)d.rgbm_range);
     double t0 = now_ms(), t = t0;
     ibl_status st = record_parameters(ctx, env, &d, out);
     if (st == IBL_OK) st = stage_specular(ctx, env, &d, out);

@@ -290,15 +290,20 @@ ibl_status ibl__bake_write_staged(ibl_context *ctx, const char *dir, const char 
     return st;
 }
 
-static ibl_status stage_texture(ibl_context *ctx, const char *dir, ibl__bake_file file,
-                                const ibl_texture *tex, ibl_format format, float rgbm_range,
+/* One texture file of the bake in format, with the bake's encoder quality and RGBM range, and
+ * its Zstandard level when the file is KTX2 (DDS has no supercompression). */
+static ibl_status stage_texture(ibl_context *ctx, const char *dir, const ibl_bake_data *b,
+                                ibl__bake_file file, const ibl_texture *tex, ibl_format format,
                                 ibl_dds_header header)
 {
     const char *name = ibl__bake_file_info_of(file)->name;
-    ibl_write_desc wd = {.format = format, .rgbm_range = rgbm_range, .dds_header = header};
+    ibl_file_type type = ibl_file_type_from_path(name);
+    ibl_write_desc wd = {.format = format, .quality = b->quality, .rgbm_range = b->rgbm_range,
+                         .zstd_level = type == IBL_FILE_KTX2 ? b->zstd_level : 0,
+                         .dds_header = header};
     void *bytes = NULL;
     size_t size = 0;
-    ibl_status st = ibl_encode_texture(ctx, ibl_file_type_from_path(name), tex, &wd, &bytes, &size);
+    ibl_status st = ibl_encode_texture(ctx, type, tex, &wd, &bytes, &size);
     if (st == IBL_OK) st = ibl__bake_write_staged(ctx, dir, name, bytes, size);
     else st = ibl__fail(ctx, st, "%s/%s: %s", dir, name, ibl_context_message(ctx));
     ibl_free(ctx, bytes);
@@ -314,19 +319,19 @@ static ibl_status stage_cube(ibl_context *ctx, const char *dir, const ibl_bake_d
                                                         "irradiance / pi (multiply by albedo)");
     for (int i = 0; i < 2 && st == IBL_OK; i++)
         if (ibl__bake_has_file(b, (ibl__bake_file)(ktx2 + i)))
-            st = stage_texture(ctx, dir, (ibl__bake_file)(ktx2 + i), &tex, b->format, b->rgbm_range,
+            st = stage_texture(ctx, dir, b, (ibl__bake_file)(ktx2 + i), &tex, b->format,
                                b->dds_header);
     ibl_texture_free(ctx, &tex); /* the metadata; the texels stay with the bake */
     return st;
 }
 
-static ibl_status stage_table(ibl_context *ctx, const char *dir, ibl__bake_file file,
+static ibl_status stage_table(ibl_context *ctx, const char *dir, const ibl_bake_data *b, ibl__bake_file file,
                               const ibl_image *image, ibl_format format, const char *description)
 {
     ibl_texture tex = {.kind = IBL_TEXTURE_2D, .width = image->width, .height = image->height,
                        .depth = 1, .levels = 1, .data = image->pixels};
     ibl_status st = ibl_texture_set_metadata(ctx, &tex, "ibl.brdf", description);
-    if (st == IBL_OK) st = stage_texture(ctx, dir, file, &tex, format, 0.0f, IBL_DDS_HEADER_AUTO);
+    if (st == IBL_OK) st = stage_texture(ctx, dir, b, file, &tex, format, IBL_DDS_HEADER_AUTO);
     ibl_texture_free(ctx, &tex);
     return st;
 }
@@ -342,9 +347,8 @@ static ibl_status stage_atlas(ibl_context *ctx, const char *dir, const ibl_bake_
     ibl_status st = ibl_atlas_layout_to_json(ctx, &b->atlas_layout, &table);
     if (st == IBL_OK) st = ibl_texture_set_metadata(ctx, &tex, "ibl.atlas", table);
     if (st == IBL_OK) st = ibl_specular_set_metadata(ctx, &b->specular_info, &tex);
-    if (st == IBL_OK)
-        st = stage_texture(ctx, dir, IBL__BAKE_ATLAS_KTX2, &tex, b->format, b->rgbm_range,
-                           IBL_DDS_HEADER_AUTO);
+    if (st == IBL_OK) st = stage_texture(ctx, dir, b, IBL__BAKE_ATLAS_KTX2, &tex, b->format,
+                                          IBL_DDS_HEADER_AUTO);
     ibl_texture_free(ctx, &tex);
     ibl_free(ctx, table);
     ibl_write_desc wd = {.format = IBL_FORMAT_RGBM, .rgbm_range = b->rgbm_range};
@@ -389,15 +393,15 @@ static ibl_status stage_all(ibl_context *ctx, const char *dir, const ibl_bake_da
         if (st == IBL_OK) st = stage_text(ctx, dir, IBL__BAKE_SH_JSON, text);
     }
     if (st == IBL_OK && b->splitsum.pixels)
-        st = stage_table(ctx, dir, IBL__BAKE_SPLITSUM, &b->splitsum, IBL_FORMAT_RG16F,
+        st = stage_table(ctx, dir, b, IBL__BAKE_SPLITSUM, &b->splitsum, IBL_FORMAT_RG16F,
                          "split-sum GGX, height-correlated Smith: R = A, G = B, specular = F0*A + "
                          "F90*B; x = n.v, y = roughness, row 0 = roughness 0");
     if (st == IBL_OK && b->brdf_extra.pixels)
-        st = stage_table(ctx, dir, IBL__BAKE_BRDF_EXTRA, &b->brdf_extra, IBL_FORMAT_RGBA16F,
+        st = stage_table(ctx, dir, b, IBL__BAKE_BRDF_EXTRA, &b->brdf_extra, IBL_FORMAT_RGBA16F,
                          "R = E (GGX directional albedo), G = E_avg, B = Charlie sheen albedo, "
                          "A = its average; x = n.v, y = roughness");
     if (st == IBL_OK && b->ambient_brdf.data)
-        st = stage_texture(ctx, dir, IBL__BAKE_AMBIENT_BRDF, &b->ambient_brdf, IBL_FORMAT_RG16F, 0.0f,
+        st = stage_texture(ctx, dir, b, IBL__BAKE_AMBIENT_BRDF, &b->ambient_brdf, IBL_FORMAT_RG16F,
                            IBL_DDS_HEADER_AUTO);
     if (st == IBL_OK && b->atlas.pixels) st = stage_atlas(ctx, dir, b);
     if (st == IBL_OK && b->preview.pixels) st = stage_preview(ctx, dir, b);

@@ -5,6 +5,7 @@
 #include "bake/bake_internal.h"
 #include "core/context_internal.h"
 #include "core/defaults.h"
+#include "io/container.h"
 #include "io/json.h"
 #include "shade/atlas_table.h"
 
@@ -214,6 +215,12 @@ ibl_status ibl_bake_manifest(ibl_context *ctx, const ibl_bake_data *b, char **js
     ibl__json_set(root, "timings_ms", timing_json(&b->timing_ms));
     ibl__json_set(root, "specular", specular_json(&b->specular_info, b->edge_fixup, b->format,
                                                   file_list(b, IBL__BAKE_SPECULAR_KTX2, 2)));
+    /* how the cube textures are stored beyond their format (read back into ibl_bake_data) */
+    json_t *storage = json_object();
+    if (ibl__format_is_block(b->format)) ibl__json_set(storage, "quality", ibl__json_string(ibl_quality_name(b->quality)));
+    ibl__json_set(storage, "zstd_level", ibl__json_number(b->zstd_level));
+    if (b->format == IBL_FORMAT_RGBM) ibl__json_set(storage, "rgbm_range", ibl__json_float(b->rgbm_range));
+    ibl__json_set(root, "storage", storage);
     if (b->irradiance.data) {
         json_t *irr = json_object();
         ibl__json_set(irr, "files", file_list(b, IBL__BAKE_IRRADIANCE_KTX2, 2));
@@ -509,6 +516,15 @@ static void read_source(ibl__json_reader *r, json_t *root, ibl_bake_data *b, con
         const char *units = ibl__json_opt_string(r, params, "parameters", "units", NULL);
         if (units && r->status == IBL_OK && !(b->units = ibl__strdup(r->ctx, units)))
             r->status = ibl__fail(r->ctx, IBL_ERR_OUT_OF_MEMORY, "%s: out of memory", r->name);
+    }
+    json_t *storage = json_object_get(root, "storage"); /* absent in older bakes */
+    if (storage) {
+        const char *q = ibl__json_opt_string(r, storage, "storage", "quality", "default");
+        if (r->status == IBL_OK && !ibl_quality_from_name(q, &b->quality))
+            ibl__json_fail(r, "storage", "quality", "unknown quality '%s'", q);
+        b->zstd_level = (int)ibl__json_opt_number(r, storage, "storage", "zstd_level", 0);
+        if (json_object_get(storage, "rgbm_range"))
+            b->rgbm_range = (float)ibl__json_opt_number(r, storage, "storage", "rgbm_range", 0);
     }
 }
 

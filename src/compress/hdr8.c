@@ -52,10 +52,13 @@ void ibl_rgbm_encode(const float rgb[3], float range, uint8_t out[4])
     out[3] = (uint8_t)a;
 }
 
+/* The decodes use the operations of shaders/ibl_hdr8.glsl in the same order (products and
+ * one division, each correctly rounded in C and GLSL), so a GPU decodes the same floats. */
 void ibl_rgbm_decode(const uint8_t in[4], float range, float rgb[3])
 {
     if (!(range > 0.0f)) range = IBL_RGBM_DEFAULT_RANGE;
-    float s = (float)in[3] / 255.0f * range / 255.0f;
+    const float inv_65025 = 1.0f / 65025.0f; /* 1 / 255^2 */
+    float s = (float)in[3] * (range * inv_65025);
     for (int i = 0; i < 3; i++) rgb[i] = (float)in[i] * s;
 }
 
@@ -72,8 +75,8 @@ void ibl_rgbd_encode(const float rgb[3], uint8_t out[4])
 
 void ibl_rgbd_decode(const uint8_t in[4], float rgb[3])
 {
-    float d = (float)(in[3] ? in[3] : 1) / 255.0f;
-    for (int i = 0; i < 3; i++) rgb[i] = (float)in[i] / 255.0f / d;
+    float a = (float)(in[3] ? in[3] : 1);
+    for (int i = 0; i < 3; i++) rgb[i] = (float)in[i] / a;
 }
 
 void ibl_rgbe_encode(const float rgb[3], uint8_t out[4])
@@ -102,6 +105,8 @@ void ibl_rgbe_decode(const uint8_t in[4], float rgb[3])
         rgb[0] = rgb[1] = rgb[2] = 0.0f;
         return;
     }
-    float s = ldexpf(1.0f, (int)in[3] - 136);
-    for (int i = 0; i < 3; i++) rgb[i] = ((float)in[i] + 0.5f) * s;
+    /* 2^(A8 - 136) as two exact halves, as the shaders must (2^-135 alone is a denormal) */
+    int e = (int)in[3] - 136, e_low = e >= 0 ? e / 2 : -((1 - e) / 2); /* floor(e / 2) */
+    float s_low = ldexpf(1.0f, e_low), s_high = ldexpf(1.0f, e - e_low);
+    for (int i = 0; i < 3; i++) rgb[i] = ((float)in[i] + 0.5f) * s_low * s_high;
 }

@@ -172,12 +172,12 @@ size_t ibl_texture_floats(ibl_texture_kind kind, int width, int height, int dept
 {
     if (width <= 0 || height <= 0 || depth <= 0 || levels <= 0 || levels > IBL_MAX_LEVELS)
         return 0;
-    if (kind == IBL_TEXTURE_CUBE && width != height) return 0;
-    if (kind != IBL_TEXTURE_3D && depth != 1) return 0;
+    if ((kind == IBL_TEXTURE_CUBE || kind == IBL_TEXTURE_CUBE_ARRAY) && width != height) return 0;
+    if (kind != IBL_TEXTURE_3D && kind != IBL_TEXTURE_CUBE_ARRAY && depth != 1) return 0;
     int max_dim = width > height ? width : height;
     if (kind == IBL_TEXTURE_3D && depth > max_dim) max_dim = depth;
     if (levels > ibl_full_mip_count(max_dim)) return 0;
-    size_t faces = kind == IBL_TEXTURE_CUBE ? 6 : 1;
+    size_t faces = kind == IBL_TEXTURE_CUBE ? 6 : kind == IBL_TEXTURE_CUBE_ARRAY ? 6 * (size_t)depth : 1;
     size_t total = 0;
     for (int l = 0; l < levels; l++) {
         size_t w = (size_t)ibl_level_size(width, l), h = (size_t)ibl_level_size(height, l);
@@ -233,7 +233,7 @@ void ibl_texture_free(ibl_context *ctx, ibl_texture *tex)
 
 int ibl_texture_faces(const ibl_texture *tex)
 {
-    return tex->kind == IBL_TEXTURE_CUBE ? 6 : 1;
+    return tex->kind == IBL_TEXTURE_CUBE ? 6 : tex->kind == IBL_TEXTURE_CUBE_ARRAY ? 6 * tex->depth : 1;
 }
 
 float *ibl_texture_level(const ibl_texture *tex, int level, int face)

@@ -48,7 +48,7 @@ ibl_status ibl__check_dimensions(ibl_context *ctx, const char *name, ibl_texture
                         "%s: texture size %llux%llux%llu exceeds the limit of %d texels per edge",
                         name, (unsigned long long)width, (unsigned long long)height,
                         (unsigned long long)depth, (int)IBL_MAX_DIMENSION);
-    if (kind == IBL_TEXTURE_CUBE && width != height)
+    if ((kind == IBL_TEXTURE_CUBE || kind == IBL_TEXTURE_CUBE_ARRAY) && width != height)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: cube map faces are %llux%llu, not square", name,
                         (unsigned long long)width, (unsigned long long)height);
     uint64_t max_dim = width > height ? width : height;
@@ -68,7 +68,8 @@ ibl_status ibl__check_texture(ibl_context *ctx, const ibl_texture *tex, const ch
 {
     if (!tex || !tex->data)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no texture data to write", name);
-    if (tex->kind != IBL_TEXTURE_2D && tex->kind != IBL_TEXTURE_3D && tex->kind != IBL_TEXTURE_CUBE)
+    if (tex->kind != IBL_TEXTURE_2D && tex->kind != IBL_TEXTURE_3D && tex->kind != IBL_TEXTURE_CUBE &&
+        tex->kind != IBL_TEXTURE_CUBE_ARRAY)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: unknown texture kind %d", name,
                         (int)tex->kind);
     if (tex->width <= 0 || tex->height <= 0 || tex->depth <= 0 || tex->levels <= 0 ||
@@ -320,6 +321,11 @@ int ibl__format_block(ibl_format format, int *block_width, int *block_height)
 int ibl__format_is_block(ibl_format format)
 {
     return ibl__format_block(format, NULL, NULL);
+}
+
+int ibl_format_is_block(ibl_format format)
+{
+    return ibl__format_is_block(format);
 }
 
 size_t ibl__format_unit_bytes(ibl_format format)

@@ -120,7 +120,13 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
         return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
                         "%s: %s has no legacy DDS FourCC (only rgba16f, rgba32f, rg16f and rg32f "
                         "do); it needs the DX10 header", name, ibl_format_name(fmt));
-    int legacy = header != IBL_DDS_HEADER_DX10 && dx->legacy_fourcc;
+    /* the legacy header has no array size: a cube-map array always takes the DX10 header */
+    int is_array = tex->kind == IBL_TEXTURE_CUBE_ARRAY;
+    if (header == IBL_DDS_HEADER_LEGACY && is_array)
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
+                        "%s: a cube-map array needs the DX10 header (the legacy one has no array size)",
+                        name);
+    int legacy = header != IBL_DDS_HEADER_DX10 && dx->legacy_fourcc && !is_array;
     size_t data_offset = legacy ? DATA_OFFSET_LEGACY : DATA_OFFSET_DX10;
     int faces = ibl_texture_faces(tex);
     int is3d = tex->kind == IBL_TEXTURE_3D, block = ibl__format_is_block(fmt);
@@ -139,7 +145,8 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
     if (is3d) flags |= DDSD_DEPTH;
     uint32_t caps = DDSCAPS_TEXTURE, caps2 = 0;
     if (tex->levels > 1) caps |= DDSCAPS_COMPLEX | DDSCAPS_MIPMAP;
-    if (tex->kind == IBL_TEXTURE_CUBE) {
+    int cube = tex->kind == IBL_TEXTURE_CUBE || tex->kind == IBL_TEXTURE_CUBE_ARRAY;
+    if (cube) {
         caps |= DDSCAPS_COMPLEX;
         caps2 |= DDSCAPS2_CUBEMAP | DDSCAPS2_CUBEMAP_ALLFACES;
     }
@@ -168,8 +175,11 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
         uint8_t *x = buf + 4 + HEADER_SIZE;
         ibl__wr32(x + 0, dx->dxgi);
         ibl__wr32(x + 4, is3d ? DIM_TEXTURE3D : DIM_TEXTURE2D);
-        ibl__wr32(x + 8, tex->kind == IBL_TEXTURE_CUBE ? MISC_TEXTURECUBE : 0);
-        ibl__wr32(x + 12, 1); /* arraySize: one texture (one cube for cube maps) */
+        ibl__wr32(x + 8, cube ? MISC_TEXTURECUBE : 0);
+        /* arraySize: one texture, one cube, or the cubes of a cube-map array (Microsoft's
+         * DDS_HEADER_DXT10: "For a 2D texture that is also a cube-map texture, this number
+         * represents the number of cubes") */
+        ibl__wr32(x + 12, tex->kind == IBL_TEXTURE_CUBE_ARRAY ? (uint32_t)tex->depth : 1);
         ibl__wr32(x + 16, ibl_format_channels(fmt) == 4 ? ALPHA_MODE_STRAIGHT : ALPHA_MODE_UNKNOWN);
     }
 
@@ -230,16 +240,19 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
                             "R32G32B32A32_FLOAT, 26 R11G11B10_FLOAT, 67 R9G9B9E5_SHAREDEXP, 34 "
                             "R16G16_FLOAT, 16 R32G32_FLOAT, 95 BC6H_UF16, 96 BC6H_SF16)",
                             name, dxgi);
-        if (array != 1)
-            return ibl__fail(ctx, array == 0 ? IBL_ERR_FORMAT : IBL_ERR_UNSUPPORTED,
-                            "%s: arraySize %u (only single textures are supported)", name, array);
+        if (array == 0) return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: arraySize 0", name);
+        if (array > 1 && !(dim == DIM_TEXTURE2D && (misc & MISC_TEXTURECUBE)))
+            return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
+                            "%s: arraySize %u (of arrays only cube-map arrays are supported)", name,
+                            array);
         if (dim == DIM_TEXTURE3D) {
             kind = IBL_TEXTURE_3D;
         } else if (dim == DIM_TEXTURE2D || dim == DIM_TEXTURE1D) {
             if (misc & MISC_TEXTURECUBE) {
                 if (dim != DIM_TEXTURE2D)
                     return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: a 1D texture flagged as a cube", name);
-                kind = IBL_TEXTURE_CUBE;
+                kind = array > 1 ? IBL_TEXTURE_CUBE_ARRAY : IBL_TEXTURE_CUBE;
+                depth = array; /* a cube-map array's "depth" is its layer count */
             }
             if (dim == DIM_TEXTURE1D && height > 1)
                 return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: a 1D texture with height %u", name,
@@ -266,13 +279,14 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     }
     if (kind == IBL_TEXTURE_3D && depth == 0)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: volume texture with depth 0", name);
-    if (kind != IBL_TEXTURE_3D) depth = 1;
+    if (kind != IBL_TEXTURE_3D && kind != IBL_TEXTURE_CUBE_ARRAY) depth = 1;
     uint64_t levels = mips ? mips : 1;
     ibl_status st = ibl__check_dimensions(ctx, name, kind, width, height, depth, levels);
     if (st != IBL_OK) return st;
     int w = (int)width, hh = (int)height, d = (int)depth;
-    int faces = kind == IBL_TEXTURE_CUBE ? 6 : 1;
-    uint64_t need = 0; /* at most 17 levels * 6 * 2^48 * 16: fits in 64 bits */
+    int faces = kind == IBL_TEXTURE_CUBE ? 6 : kind == IBL_TEXTURE_CUBE_ARRAY ? 6 * d : 1;
+    /* at most 17 levels * 6 * 2^48 * 16 (faces * 2^32 texels when 2^16 layers): fits in 64 bits */
+    uint64_t need = 0;
     for (int l = 0; l < (int)levels; l++)
         need += ibl__level_bytes(dx->format, kind, w, hh, d, l) * (uint64_t)faces;
     if (need > size - data_at)

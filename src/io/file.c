@@ -517,7 +517,9 @@ ibl_status ibl_read_image(ibl_context *ctx, const char *path, const ibl_read_des
     if (tex.kind != IBL_TEXTURE_2D) {
         ibl_texture_free(ctx, &tex);
         return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: holds a %s texture, not a flat image",
-                        path, tex.kind == IBL_TEXTURE_CUBE ? "cube" : "3D");
+                        path, tex.kind == IBL_TEXTURE_CUBE         ? "cube"
+                              : tex.kind == IBL_TEXTURE_CUBE_ARRAY ? "cube-map array"
+                                                                   : "3D");
     }
     if (tex.levels == 1 && tex.owns_data) {
         /* Level 0 is the whole block: hand it over without a copy. */

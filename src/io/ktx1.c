@@ -77,6 +77,9 @@ ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     *size = 0;
     ibl_status st = ibl__check_texture(ctx, tex, name);
     if (st != IBL_OK) return st;
+    if (tex->kind == IBL_TEXTURE_CUBE_ARRAY)
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
+                        "%s: KTX1 output does not store cube-map arrays (use .ktx2 or .dds)", name);
     ibl_format fmt = ibl__container_format(tex, desc);
     const gl_map *gl = map_format(fmt);
     if (!gl)

@@ -375,8 +375,9 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     ibl__wr32(buf + 20, (uint32_t)tex->width);
     ibl__wr32(buf + 24, (uint32_t)tex->height);
     ibl__wr32(buf + 28, tex->kind == IBL_TEXTURE_3D ? (uint32_t)tex->depth : 0);
-    ibl__wr32(buf + 32, 0); /* layerCount: not an array */
-    ibl__wr32(buf + 36, (uint32_t)faces);
+    int array = tex->kind == IBL_TEXTURE_CUBE_ARRAY;
+    ibl__wr32(buf + 32, array ? (uint32_t)tex->depth : 0); /* layerCount: 0 unless an array */
+    ibl__wr32(buf + 36, array ? 6u : (uint32_t)faces);
     ibl__wr32(buf + 40, (uint32_t)tex->levels);
     ibl__wr32(buf + 44, zstd ? SUPERCOMPRESSION_ZSTD : 0);
     ibl__wr32(buf + 48, (uint32_t)dfd_off);
@@ -488,7 +489,7 @@ static ibl_status orientation(ibl_context *ctx, const char *name, const ibl_text
     if (!ok)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: invalid KTXorientation \"%s\" for this texture",
                         name, o);
-    if (tex->kind == IBL_TEXTURE_CUBE && strcmp(o, "rd") != 0)
+    if ((tex->kind == IBL_TEXTURE_CUBE || tex->kind == IBL_TEXTURE_CUBE_ARRAY) && strcmp(o, "rd") != 0)
         return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: cube map orientation must be \"rd\", the file says \"%s\"", name, o);
     flips[0] = o[0] == 'l';
@@ -568,8 +569,9 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
         return ibl__fail(ctx, IBL_ERR_FORMAT,
                         "%s: supercompression global data present (none is defined for %s)", name,
                         scheme ? "Zstandard" : "uncompressed files");
-    if (layers != 0)
-        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: array textures (%u layers) are not supported",
+    if (layers != 0 && faces != 6)
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
+                        "%s: 2D array textures (%u layers) are not supported (cube-map arrays are)",
                         name, layers);
     if (faces != 1 && faces != 6)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: faceCount %u (must be 1 or 6)", name, faces);
@@ -579,7 +581,7 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
     if (faces == 6) {
         if (depth != 0)
             return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: a cube map with pixelDepth %u", name, depth);
-        kind = IBL_TEXTURE_CUBE;
+        kind = layers ? IBL_TEXTURE_CUBE_ARRAY : IBL_TEXTURE_CUBE;
     } else if (depth > 0) {
         if (one_d)
             return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: pixelDepth %u with pixelHeight 0", name,
@@ -587,10 +589,12 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
         kind = IBL_TEXTURE_3D;
     }
     uint64_t levels = level_count ? level_count : 1; /* 0: base level only */
+    /* a cube-map array's "depth" is its layer count (ibl_texture) */
+    uint64_t depth_or_layers = layers ? layers : depth ? depth : 1;
     ibl_status st = ibl__check_dimensions(ctx, name, kind, width, one_d ? 1 : height,
-                                          depth ? depth : 1, levels);
+                                          depth_or_layers, levels);
     if (st != IBL_OK) return st;
-    int w = (int)width, h = one_d ? 1 : (int)height, d = depth ? (int)depth : 1;
+    int w = (int)width, h = one_d ? 1 : (int)height, d = (int)depth_or_layers;
     if (size < HEADER_BYTES + LEVEL_ENTRY_BYTES * levels)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated level index", name);
 
@@ -613,8 +617,8 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
     for (uint64_t l = 0; l < levels; l++) {
         const uint8_t *e = bytes + HEADER_BYTES + LEVEL_ENTRY_BYTES * l;
         uint64_t off = ibl__rd64(e), len = ibl__rd64(e + 8), raw = ibl__rd64(e + 16);
-        /* at most 65536^3 texels * 6 faces * 16 bytes < 2^64 */
-        uint64_t expect = ibl__level_bytes(vk->format, kind, w, h, d, (int)l) * faces;
+        /* at most 65536^3 texels (a 3D level, or a face of 65536 layers) * 6 faces * 16 bytes < 2^64 */
+        uint64_t expect = ibl__level_bytes(vk->format, kind, w, h, d, (int)l) * faces * (layers ? layers : 1);
         if (raw != expect || (scheme == 0 && len != expect) || (scheme != 0 && len == 0))
             return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: level %llu holds %llu bytes (uncompressed %llu), its dimensions "

@@ -42,6 +42,7 @@
     X(Uniform1i, PFNGLUNIFORM1IPROC)                                                            \
     X(Uniform1f, PFNGLUNIFORM1FPROC)                                                            \
     X(Uniform2f, PFNGLUNIFORM2FPROC)                                                            \
+    X(Uniform2i, PFNGLUNIFORM2IPROC)                                                            \
     X(Uniform4fv, PFNGLUNIFORM4FVPROC)                                                          \
     X(GetUniformBlockIndex, PFNGLGETUNIFORMBLOCKINDEXPROC)                                      \
     X(UniformBlockBinding, PFNGLUNIFORMBLOCKBINDINGPROC)                                        \
@@ -60,6 +61,7 @@
     X(TexParameteri, PFNGLTEXPARAMETERIPROC)                                                    \
     X(TexImage2D, PFNGLTEXIMAGE2DPROC)                                                          \
     X(TexImage3D, PFNGLTEXIMAGE3DPROC)                                                          \
+    X(CompressedTexImage2D, PFNGLCOMPRESSEDTEXIMAGE2DPROC)                                      \
     X(BindImageTexture, PFNGLBINDIMAGETEXTUREPROC)                                              \
     X(GetTexImage, PFNGLGETTEXIMAGEPROC)                                                        \
     X(GenFramebuffers, PFNGLGENFRAMEBUFFERSPROC)                                                \
