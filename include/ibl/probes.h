@@ -317,7 +317,7 @@ typedef struct ibl_probe_render_desc {
 
 /* Renders the scene lit by a probe bake as a deferred renderer would: the camera's primary
  * ray through each pixel centre finds the visible surface (its glTF material becomes an
- * ibl_material_gltf; a diffuse-only material gets a negligible F0), the view depths feed
+ * ibl_material_gltf; a diffuse-only material keeps only the diffuse term), the view depths feed
  * ibl_cull_probes with the layers' influence volumes, and each point is shaded by
  * ibl_probes_shade with its tile's list (weights, parallax, alpha-aware priority blend, the
  * global probe last), plus the emission of front-facing emitters; a ray that leaves the scene

@@ -75,9 +75,8 @@ static void shade_row(void *arg, int y)
         }
         ibl_scene_surface sf;
         ibl_scene_surface_at(j->scene, &p->h, &sf);
-        ibl_material m = ibl_material_gltf(sf.base_color, sf.metallic, sf.roughness);
-        if (sf.diffuse_only) /* a Lambertian reflector: no specular lobe to speak of */
-            m.f0[0] = m.f0[1] = m.f0[2] = 1e-6f;
+        /* diffuse-only (validation scenes): Lambert of albedo base_color, whatever metallic says */
+        ibl_material m = ibl_material_gltf(sf.base_color, sf.diffuse_only ? 0.0f : sf.metallic, sf.roughness);
         ibl_surface s;
         memset(&s, 0, sizeof s);
         s.v = ibl__scale(p->dir, -1.0f);
@@ -91,7 +90,11 @@ static void shade_row(void *arg, int y)
         ibl_probes_shade(j->bake, j->global, j->locals, list, count, &j->desc->blend,
                          &j->desc->shade, &m, p->h.position, &s, &res, &info);
         int emits = emits_toward(j->scene, &p->h, p->dir);
-        for (int c = 0; c < 3; c++) o[c] = res.color[c] + (emits ? sf.emissive[c] : 0.0f);
+        for (int c = 0; c < 3; c++) {
+            /* a diffuse-only material (validation scenes) is Lambert alone: no specular lobe */
+            float reflected = sf.diffuse_only ? res.diffuse[c] * m.ao : res.color[c];
+            o[c] = reflected + (emits ? sf.emissive[c] : 0.0f);
+        }
         if (j->regions) j->regions[i] = info.heaviest >= 0 ? info.heaviest : IBL_REGION_GLOBAL;
     }
 }
