@@ -61,11 +61,12 @@ float ibl_local_probe_diffuse_alpha(ibl_local_probe r, vec3 n)
     return clamp(ibl_sh9_eval_irradiance(sh, IBL_SH_KIND_RADIANCE, n).r / IBL_PI, 0.0, 1.0);
 }
 
-/* A local probe as ibl.glsl's ibl_probe: the bake's level mapping and the global probe's
- * tables (both shared by every layer) with the record's radiance SH. */
-ibl_probe ibl_local_probe_view(ibl_probe global, ibl_local_probe r)
+/* A local probe as ibl.glsl's ibl_probe: `layers` is the block every layer shares (the
+ * bake's level mapping and the BRDF tables: ibl_shader_probe_fill of any probe
+ * ibl_probe_bake_locals returns), given the record's radiance SH here. */
+ibl_probe ibl_local_probe_view(ibl_probe layers, ibl_local_probe r)
 {
-    ibl_probe p = global;
+    ibl_probe p = layers;
     for (int k = 0; k < 9; k++) p.sh[k] = vec4(r.sh[k].rgb, 0.0);
     p.sh_kind = IBL_SH_KIND_RADIANCE;
     p.has_mirror = 0;
@@ -110,6 +111,10 @@ void ibl_probe_blend_add(inout ibl_probe_blend b, int k, float w, vec3 s, vec3 d
     b.rs = max(b.rs - cs * a_s, 0.0);
     b.rd = max(b.rd - cd * a_d, 0.0);
 }
+
+/* The layer with the largest specular share, or -1 when the global probe's share is larger
+ * (ibl_probe_blend_info.heaviest). */
+int ibl_probe_blend_heaviest(ibl_probe_blend b) { return b.rs > b.best ? -1 : b.heaviest; }
 
 /* Is anything left for the probes after? (the loop may stop when not) */
 bool ibl_probe_blend_open(ibl_probe_blend b) { return b.rs > 0.0 || b.rd > 0.0; }
@@ -178,11 +183,11 @@ ibl_shade_result ibl_local_shade_dir(ibl_probe p, samplerCubeArray chains, int l
  *   ibl_probe_blend b = ibl_probe_blend_begin();
  *   vec3 dir = ibl_shade_lookup_direction(desc, m, s);
  *   for (int i = 0; i < count && ibl_probe_blend_open(b); i++)
- *       ibl_probe_blend_layer(b, global, records[list[i]], list[i], chains, splitsum,
+ *       ibl_probe_blend_layer(b, layers, records[list[i]], list[i], chains, splitsum,
  *                             desc, m, p, s, dir, 0);
  *   ibl_shade_result g = ibl_shade_dir(global, ..., dir);
  *   ibl_shade_result r = ibl_probe_blend_end(b, g, m.ao);  */
-void ibl_probe_blend_layer(inout ibl_probe_blend b, ibl_probe global, ibl_local_probe rec, int k,
+void ibl_probe_blend_layer(inout ibl_probe_blend b, ibl_probe layers, ibl_local_probe rec, int k,
                            samplerCubeArray chains, sampler2D splitsum, ibl_shade_desc desc,
                            ibl_material m, vec3 p, ibl_surface s, vec3 dir, int flags)
 {
@@ -193,7 +198,7 @@ void ibl_probe_blend_layer(inout ibl_probe_blend b, ibl_probe global, ibl_local_
                  ? dir
                  : ibl_parallax_correct(ibl_local_probe_proxy(rec), rec.position_size.xyz, p, dir);
     float a_s;
-    ibl_shade_result r = ibl_local_shade_dir(ibl_local_probe_view(global, rec), chains, k, splitsum,
+    ibl_shade_result r = ibl_local_shade_dir(ibl_local_probe_view(layers, rec), chains, k, splitsum,
                                              desc, m, s, d, a_s);
     float a_d = ibl_local_probe_diffuse_alpha(rec, s.n);
     if ((flags & IBL_PROBE_NO_ALPHA) != 0) a_s = a_d = 1.0;
@@ -213,17 +218,17 @@ float ibl_attenuation_zone(float distance, float zone_start, float zone_end)
 /* Two layers blended by t the talk's way: outside the attenuation zone (t 0 or 1) one
  * radiance fetch; inside it two, and the diffuse from the two SH sets blended coefficient by
  * coefficient (one evaluation). Layers a and b of the array, their records ra and rb. */
-ibl_shade_result ibl_triace_blend(ibl_probe global, ibl_local_probe ra, int a, ibl_local_probe rb,
+ibl_shade_result ibl_triace_blend(ibl_probe layers, ibl_local_probe ra, int a, ibl_local_probe rb,
                                   int b, float t, samplerCubeArray chains, sampler2D splitsum,
                                   ibl_shade_desc desc, ibl_material m, ibl_surface s, vec3 dir)
 {
     ibl_local_probe first = t >= 1.0 ? rb : ra;
     for (int k = 0; k < 9; k++) first.sh[k].rgb = mix(ra.sh[k].rgb, rb.sh[k].rgb, clamp(t, 0.0, 1.0));
     float alpha;
-    ibl_shade_result r = ibl_local_shade_dir(ibl_local_probe_view(global, first), chains,
+    ibl_shade_result r = ibl_local_shade_dir(ibl_local_probe_view(layers, first), chains,
                                              t >= 1.0 ? b : a, splitsum, desc, m, s, dir, alpha);
     if (t > 0.0 && t < 1.0) { /* the second fetch, only in the zone */
-        ibl_shade_result r2 = ibl_local_shade_dir(ibl_local_probe_view(global, rb), chains, b,
+        ibl_shade_result r2 = ibl_local_shade_dir(ibl_local_probe_view(layers, rb), chains, b,
                                                   splitsum, desc, m, s, dir, alpha);
         r.specular = mix(r.specular, r2.specular, t);
     }
@@ -259,17 +264,17 @@ ibl_environment_slots ibl_environment_slots_update(ibl_environment_slots slots, 
 }
 
 /* The shading across the switch: the older set's result, the newer's, mixed by t. */
-ibl_shade_result ibl_environment_switch_shade(ibl_probe global, ibl_environment_slots slots,
+ibl_shade_result ibl_environment_switch_shade(ibl_probe layers, ibl_environment_slots slots,
                                               ibl_local_probe older, ibl_local_probe newer,
                                               float t, samplerCubeArray chains,
                                               sampler2D splitsum, ibl_shade_desc desc,
                                               ibl_material m, ibl_surface s, vec3 dir)
 {
     float alpha;
-    ibl_shade_result r = ibl_local_shade_dir(ibl_local_probe_view(global, older), chains,
+    ibl_shade_result r = ibl_local_shade_dir(ibl_local_probe_view(layers, older), chains,
                                              slots.older, splitsum, desc, m, s, dir, alpha);
     if (slots.newer != slots.older && t > 0.0) {
-        ibl_shade_result n = ibl_local_shade_dir(ibl_local_probe_view(global, newer), chains,
+        ibl_shade_result n = ibl_local_shade_dir(ibl_local_probe_view(layers, newer), chains,
                                                  slots.newer, splitsum, desc, m, s, dir, alpha);
         r.diffuse = mix(r.diffuse, n.diffuse, t);
         r.specular = mix(r.specular, n.specular, t);

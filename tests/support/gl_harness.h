@@ -42,6 +42,7 @@
     X(Uniform1i, PFNGLUNIFORM1IPROC)                                                            \
     X(Uniform1f, PFNGLUNIFORM1FPROC)                                                            \
     X(Uniform2f, PFNGLUNIFORM2FPROC)                                                            \
+    X(Uniform2i, PFNGLUNIFORM2IPROC)                                                            \
     X(Uniform4fv, PFNGLUNIFORM4FVPROC)                                                          \
     X(GetUniformBlockIndex, PFNGLGETUNIFORMBLOCKINDEXPROC)                                      \
     X(UniformBlockBinding, PFNGLUNIFORMBLOCKBINDINGPROC)                                        \
