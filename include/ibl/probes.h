@@ -153,6 +153,7 @@ typedef struct ibl_probe_bake_desc {
     ibl_format format;           /* storage of the local chains; 0: rgba16f                     */
     const ibl_bake_desc *global; /* the global probe's bake; NULL: the set's global preset and
                                     size, no preview                                           */
+    int lut_size;                /* with global NULL: the split-sum table's edge; 0: 128        */
 } ibl_probe_bake_desc;
 
 typedef struct ibl_probe_bake_report {
