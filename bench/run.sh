@@ -52,6 +52,10 @@ hyperfine -w 1 -r 3 -N "$BUILD/ibl prefilter -q $OUT/big.exr -o $OUT/p512.ktx2 -
 hyperfine -w 1 -r 3 -N "$BUILD/ibl capture -q examples/rooms/scene.gltf --probes examples/rooms/probes.json -o $OUT/caps --size 32 --samples 64"
 hyperfine -w 1 -r 3 -N "$BUILD/ibl bake -q --probes examples/rooms/probes.json --captures $OUT/caps -o $OUT/probe_bake"
 run "$B/bench_probes" 20
+# the same culling on the GPU (llvmpipe here; built with IBL_BUILD_GL), and the sample set's
+# capture + bake at 128 texels a face (docs/PERFORMANCE.md "Probe bake and tiled culling")
+if [ -x "$B/bench_probes_gpu" ]; then run "$B/bench_probes_gpu" 3; fi
+run "$B/bench_probe_bake" 16 2
 if [ "${BENCH_LARGE:-0}" = 1 ]; then
   sh bench/large.sh "$BUILD"
 fi

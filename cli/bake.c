@@ -229,6 +229,7 @@ int cli_cmd_bake(int argc, char **argv)
         if (o.desc.atlas) cli_usage_error(&a, "--out-layout atlas is for one environment, not --probes");
         if (o.desc.target) cli_usage_error(&a, "--target makes a single environment's bake, not a probe array's");
         o.probes.format = o.desc.format;
+        o.probes.lut_size = o.desc.lut_size;
         return cli_bake_probes(&a, &o.probes);
     }
     if (o.probes.captures || o.probes.scene || o.probes.shards || o.probes.merge)

@@ -60,6 +60,7 @@ int cli_bake_probes(cli_args *a, const cli_probe_bake_options *o)
         d.shards = o->shards;
         d.merge = o->merge;
         d.format = o->format;
+        d.lut_size = o->lut_size;
         st = ibl_probe_bake(ctx, &set, o->shards ? NULL : &env, &d, o->dir, &rep);
     }
     int rc = CLI_EXIT_OK;

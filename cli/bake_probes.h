@@ -7,6 +7,7 @@
 typedef struct cli_probe_bake_options {
     const char *dir, *probes, *captures, *scene;
     int shard, shards, merge;
+    int lut_size; /* --lut-size: the global probe's split-sum table */
     ibl_format format;
 } cli_probe_bake_options;
 
@@ -19,7 +20,8 @@ typedef struct cli_probe_bake_options {
     "  --captures DIR         what 'ibl capture' wrote for SET\n"                           \
     "  --scene SCENE          capture SET in SCENE (glTF) in this run instead\n"            \
     "  --shard I/N            only filter share I of N of the probes (parts in DIR)\n"      \
-    "  --merge                assemble DIR from the parts the shards wrote\n"
+    "  --merge                assemble DIR from the parts the shards wrote\n"            \
+    "  (--lut-size and --format apply: the global probe's table, the local chains' storage)\n"
 
 void cli_shard_value(cli_args *a, const char *arg, int *shard, int *shards);
 int cli_bake_probes(cli_args *a, const cli_probe_bake_options *o);

@@ -1,6 +1,7 @@
 /* ibl render: the preview of a probe on spheres or a mesh, its Monte Carlo reference, and
  * labelled side-by-side comparisons. A thin client of bake.h and render.h. */
 #include "input.h"
+#include "render_probes.h"
 
 #include "ibl/render.h"
 
@@ -11,6 +12,7 @@
 
 static const char usage[] =
     "usage: ibl render INPUT -o OUT [options]\n"
+    "       ibl render SCENE --probes DIR -o OUT [options]   (options: ibl render --probes DIR --help)\n"
     "\n"
     "Draws the environment and a grid of spheres (GGX roughness 0..1 for a metal and a\n"
     "dielectric row, and a row of Blinn-Phong shininess values) lit by the baked probe, with a\n"
@@ -509,6 +511,9 @@ static ibl_status load_skin(ibl_context *ctx, render_options *o, skin_data *sd)
 
 int cli_cmd_render(int argc, char **argv)
 {
+    for (int i = 0; i < argc; i++)
+        if (strcmp(argv[i], "--probes") == 0 || strncmp(argv[i], "--probes=", 9) == 0)
+            return cli_render_probes(argc, argv);
     cli_args a = {argc, argv, 0, "render", usage, {0}, {0}, 0};
     render_options o;
     memset(&o, 0, sizeof o);

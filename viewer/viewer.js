@@ -452,6 +452,13 @@
     const axis = (a) => a ? a.count : '?';
     if (b.splitsum) add('split-sum LUT', axis(b.splitsum.n_dot_v) + '\u00d7' + axis(b.splitsum.roughness));
     if (b.ambient_brdf) add('AmbientBRDF', axis(b.ambient_brdf.n_dot_v) + '\u00d7' + axis(b.ambient_brdf.shininess) + '\u00d7' + axis(b.ambient_brdf.f0));
+    // a probe bake (`ibl bake --probes`): the page shows its global probe; list the locals
+    const lp = m.probes;
+    if (lp && Array.isArray(lp.probes)) {
+      add('local probes', lp.count + ' \u00d7 ' + lp.size + '\u00b2 \u00d7 ' + lp.levels + ' levels, ' +
+          lp.format + ' (' + lp.array + '; not drawn here)');
+      for (const q of lp.probes) add('layer ' + q.layer, q.name);
+    }
     const t = m.timings_ms || {};
     if (t.total !== undefined)
       add('bake time', (t.total / 1000).toFixed(2) + ' s (specular ' + (t.specular / 1000).toFixed(2) + ' s)');

@@ -4,8 +4,10 @@
 Three rooms in a row along X (red, white, blue walls), 3 m high, joined by doors; the white
 room has a window to the sky in its south wall (+Z), where the default sun (azimuth 180:
 from +Z, 35 degrees up) shines in; the red and blue rooms have emissive ceiling lamps; a
-glossy pedestal, a mirror-like sphere and a gold sphere. A probe per room (far-plane capture:
-the doors and the window leave alpha 0) and one infinite probe over the whole house show what
+glossy pedestal, a mirror-like sphere and a gold sphere. Eight probes: one per room
+(far-plane capture: the doors and the window leave alpha 0), a small sphere probe over the
+pedestal and one by the gold sphere, one in each doorway (infinite, priority 1) and one
+infinite probe over the whole house (priority -1); with the set's default view they show what
 local probes are for: each room's reflections carry its own colours and light.
 
 Only the Python standard library: the glTF JSON, the binary buffer and the PNG are written by
@@ -31,6 +33,7 @@ ROOMS = [        # name, x0, x1, wall material, floor material
 ]
 Z0, Z1 = -2.0, 2.0
 WINDOW = (-0.8, 0.8, 1.0, 2.2)  # x0, x1, y0, y1 in the white room's +Z wall
+ROOM_MARGIN = 2 * GAP            # a room probe's influence past its walls: the wall's thickness
 
 MATERIALS = {
     # name: (base colour, metallic, roughness, emissive colour, emissive strength)
@@ -247,12 +250,37 @@ def write_gltf(meshes, out_dir):
 
 def write_probes(out_dir):
     probes = []
+    rooms = {}
     for name, x0, x1, _, _ in ROOMS:
         cx, hx = (x0 + x1) / 2, (x1 - x0) / 2
         room = {"shape": "box", "center": [cx, H / 2, 0.0], "half_extent": [hx, H / 2, (Z1 - Z0) / 2]}
-        influence = dict(room, blend=0.5)
+        rooms[name] = room
+        # the influence reaches ROOM_MARGIN past the walls with a blend margin as wide, so
+        # that the walls themselves get the full weight and the next room's walls none
+        influence = {"shape": "box", "center": room["center"], "blend": ROOM_MARGIN,
+                     "half_extent": [v + ROOM_MARGIN for v in room["half_extent"]]}
         probes.append({"name": name + "_room", "position": [cx, 1.5, 0.6], "influence": influence,
                        "proxy": room, "capture": "far-plane", "size": 64})
+    # small probes where one room probe's single point of view is poorest: over the glossy
+    # pedestal (sphere influence, sphere proxy) and beside the gold sphere (sphere influence,
+    # the room's box as proxy)
+    probes.append({"name": "red_pedestal", "position": [-4.0, 1.4, -0.7],
+                   "influence": {"shape": "sphere", "radius": 1.3, "blend": 0.5},
+                   "proxy": {"shape": "sphere", "radius": 1.6}, "capture": "far-plane", "size": 64})
+    probes.append({"name": "blue_gold", "position": [4.2, 1.4, -0.6],
+                   "influence": {"shape": "sphere", "radius": 1.3, "blend": 0.5},
+                   "proxy": rooms["blue"], "capture": "far-plane", "size": 64})
+    # the doorways: infinite captures that see both rooms, projected on the two rooms' box
+    for name, xc, pair in (("door_west", -2.0, ("red", "white")), ("door_east", 2.0, ("white", "blue"))):
+        a, b = rooms[pair[0]], rooms[pair[1]]
+        lo = a["center"][0] - a["half_extent"][0]
+        hi = b["center"][0] + b["half_extent"][0]
+        probes.append({"name": name, "position": [xc, 1.1, 0.0],
+                       "influence": {"shape": "box", "center": [xc, 1.2, 0.0], "half_extent": [0.7, 1.2, 0.9],
+                                     "blend": 0.4},
+                       "proxy": {"shape": "box", "center": [(lo + hi) / 2, H / 2, 0.0],
+                                 "half_extent": [(hi - lo) / 2, H / 2, (Z1 - Z0) / 2]},
+                       "priority": 1, "capture": "infinite", "size": 64})
     probes.append({"name": "house", "position": [0.0, 1.5, 0.6],
                    "influence": {"shape": "box", "center": [0.0, H / 2, 0.0], "half_extent": [6.5, 2.0, 2.5], "blend": 0.5},
                    "proxy": {"shape": "box", "center": [0.0, H / 2, 0.0], "half_extent": [6.0, H / 2, 2.0]},
@@ -260,6 +288,9 @@ def write_probes(out_dir):
     data = {"format": "ibl-probes", "version": 1,
             "global": {"environment": "sky", "sky": {"sun_elevation": 35, "sun_azimuth": 180},
                        "size": 128, "preset": "gltf"},
+            # the default camera of `ibl render scene.gltf --probes`: from the white room's
+            # south-east corner toward the west door, the mirror sphere and the red room
+            "view": {"position": [1.7, 1.7, 1.8], "target": [-2.6, 0.9, -0.7], "fov": 70},
             "probes": probes}
     with open(os.path.join(out_dir, "probes.json"), "w") as f:
         json.dump(data, f, indent=1)

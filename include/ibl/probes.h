@@ -51,11 +51,20 @@ typedef struct ibl_global_probe {
     char preset[IBL_PROBE_PRESET_MAX];
 } ibl_global_probe;
 
+/* A default view of the scene (the set's optional "view"): camera position, the point it
+ * looks at, vertical field of view. */
+typedef struct ibl_probe_view {
+    ibl_vec3 position, target;
+    float fov_y_degrees;
+} ibl_probe_view;
+
 typedef struct ibl_probe_set {
     ibl_global_probe global;
     ibl_local_probe *probes;
     int probe_count;
     char *path; /* the file it was read from (messages), or NULL */
+    int has_view;
+    ibl_probe_view view;
 } ibl_probe_set;
 
 /* Reads a probe-set file (docs/PROBES.md). Every error is one line naming the file and the
@@ -144,6 +153,7 @@ typedef struct ibl_probe_bake_desc {
     ibl_format format;           /* storage of the local chains; 0: rgba16f                     */
     const ibl_bake_desc *global; /* the global probe's bake; NULL: the set's global preset and
                                     size, no preview                                           */
+    int lut_size;                /* with global NULL: the split-sum table's edge; 0: 128        */
 } ibl_probe_bake_desc;
 
 typedef struct ibl_probe_bake_report {
@@ -287,11 +297,37 @@ typedef struct ibl_trace_desc {
     uint32_t seed;
 } ibl_trace_desc;
 
-/* Path-traces the camera's view (radiance, RGBA with A = 1; background: the environment) and,
- * if depth is not NULL, writes each pixel centre's view depth (0 on a miss). Deterministic for
- * any thread count. out: a new image of cam->width x cam->height. */
+/* Path-traces the camera's view: each pixel the mean of `samples` paths through jittered
+ * points of the pixel, with the capture's light transport (radiance, RGBA with A = 1; rays
+ * that leave the scene see the environment). Deterministic for any thread count. out: a new image of cam->width x cam->height. */
 ibl_status ibl_trace_view(ibl_context *ctx, const ibl_scene *scene, const ibl_cubemap *environment,
                           const ibl_camera *cam, const ibl_trace_desc *desc, ibl_image *out);
+
+/* ---- the scene lit by its probes (src/probes/probe_render.c; `ibl render SCENE --probes`) -- */
+
+enum {
+    IBL_REGION_GLOBAL = -1,     /* a surface lit by the global probe mostly (no local share)   */
+    IBL_REGION_BACKGROUND = -2  /* no surface: the ray left the scene                          */
+};
+
+typedef struct ibl_probe_render_desc {
+    ibl_probe_blend_desc blend; /* what to switch off (the comparisons of `ibl render`)        */
+    ibl_shade_desc shade;       /* the runtime shading; zero: defaults                          */
+    ibl_cull_desc cull;         /* the tiled culling; zero: 16x16 tiles, conservative           */
+} ibl_probe_render_desc;
+
+/* Renders the scene lit by a probe bake as a deferred renderer would: the camera's primary
+ * ray through each pixel centre finds the visible surface (its glTF material becomes an
+ * ibl_material_gltf; a diffuse-only material keeps only the diffuse term), the view depths feed
+ * ibl_cull_probes with the layers' influence volumes, and each point is shaded by
+ * ibl_probes_shade with its tile's list (weights, parallax, alpha-aware priority blend, the
+ * global probe last), plus the emission of front-facing emitters; a ray that leaves the scene
+ * shows the global probe's sharpest level. out: a new linear image. regions (optional, one
+ * int per pixel) receives the layer with the largest specular share (ibl_probe_blend_info's
+ * heaviest), IBL_REGION_GLOBAL or IBL_REGION_BACKGROUND. Bit-identical for any thread count. */
+ibl_status ibl_probe_render(ibl_context *ctx, const ibl_scene *scene,
+                            const ibl_probe_bake_data *bake, const ibl_camera *cam,
+                            const ibl_probe_render_desc *desc, ibl_image *out, int *regions);
 
 #ifdef __cplusplus
 }

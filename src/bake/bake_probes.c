@@ -511,6 +511,7 @@ static ibl_status global_desc(ibl_context *ctx, const ibl_probe_set *set, const 
     out->specular.size = set->global.size;
     out->preset = set->global.preset;
     out->preview_width = -1;
+    out->lut_size = d->lut_size;
     out->source.name = set->global.environment;
     out->source.sky = set->global.environment ? NULL : &set->global.sky;
     return IBL_OK;

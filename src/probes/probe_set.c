@@ -287,7 +287,26 @@ static void read_global(ibl__json_reader *r, json_t *obj, const char *dir, ibl_g
     get_preset(r, obj, "global", g->preset);
 }
 
-static const char *const root_keys[] = {"format", "version", "global", "probes", NULL};
+static const char *const root_keys[] = {"format", "version", "global", "probes", "view", NULL};
+static const char *const view_keys[] = {"position", "target", "fov", NULL};
+
+/* The scene's default camera for `ibl render SCENE --probes` (optional). */
+static void read_view(ibl__json_reader *r, json_t *root, ibl_probe_set *out)
+{
+    json_t *view = opt_object(r, root, "", "view");
+    if (!view || r->status != IBL_OK) return;
+    check_keys(r, view, "view", view_keys);
+    out->view.position = get_vec3(r, view, "view", "position", NULL);
+    out->view.target = get_vec3(r, view, "view", "target", NULL);
+    double fov = ibl__json_opt_number(r, view, "view", "fov", 60.0);
+    if (r->status == IBL_OK && !(fov > 0.0 && fov < 180.0))
+        ibl__json_fail(r, "view", "fov", "must be between 0 and 180 degrees");
+    ibl_vec3 d = ibl__sub(out->view.target, out->view.position);
+    if (r->status == IBL_OK && !(ibl__dot(d, d) > 0.0f))
+        ibl__json_fail(r, "view", "target", "must differ from the position");
+    out->view.fov_y_degrees = (float)fov;
+    out->has_view = r->status == IBL_OK;
+}
 
 static void read_root(ibl__json_reader *r, json_t *root, const char *dir, ibl_probe_set *out)
 {
@@ -305,6 +324,7 @@ static void read_root(ibl__json_reader *r, json_t *root, const char *dir, ibl_pr
     json_t *global = ibl__json_object(r, root, "", "global");
     if (r->status != IBL_OK) return;
     read_global(r, global, dir, &out->global);
+    read_view(r, root, out);
     json_t *probes = ibl__json_array(r, root, "", "probes");
     if (r->status != IBL_OK) return;
     size_t count = json_array_size(probes);

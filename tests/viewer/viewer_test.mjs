@@ -315,6 +315,27 @@ if (process.env.IBL_VIEWER_SCREENSHOTS) {
 }
 await p.close();
 
+// A probe bake (the sample scene's set with every cube edge cut to 8): the global probe is
+// drawn and the side panel lists the local probes in layer order.
+{
+  const rooms = path.join(path.dirname(new URL(import.meta.url).pathname), '..', '..', 'examples', 'rooms');
+  const set = path.join(work, 'probes.json'), pbake = path.join(work, 'probe-bake'), phtml = path.join(work, 'probes.html');
+  fs.writeFileSync(set, fs.readFileSync(path.join(rooms, 'probes.json'), 'utf8').replace(/"size": \d+/g, '"size": 8'));
+  execFileSync(ibl, ['capture', '-q', path.join(rooms, 'scene.gltf'), '--probes', set, '-o', path.join(work, 'caps'),
+                     '--samples', '1', '--bounces', '1']);
+  execFileSync(ibl, ['bake', '-q', '--probes', set, '--captures', path.join(work, 'caps'), '-o', pbake]);
+  const r = run(['view', '-q', pbake, '-o', phtml]);
+  check('ibl view takes a probe bake', r.status === 0 && fs.existsSync(phtml), r.stderr.trim());
+  const want = JSON.parse(fs.readFileSync(path.join(pbake, 'manifest.json'), 'utf8')).probes.probes;
+  const q = await open(phtml);
+  const got = await q.p.evaluate(() => ({ ready: iblViewer.ready, facts: document.getElementById('facts').textContent }));
+  check('its page draws the global probe and lists the local probes in layer order',
+        got.ready && q.errors.length === 0 && want.length === 8 &&
+        want.every((w, i) => got.facts.includes('layer ' + i + w.name)),
+        got.facts.slice(0, 200));
+  await q.p.close();
+}
+
 // A damaged texture: a message in the page, no drawing.
 const bad = await open(corrupted);
 const shown = await bad.p.evaluate(() => {
