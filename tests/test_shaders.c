@@ -17,14 +17,7 @@
 
 #include "shader_test.h"
 
-static char *read_shader(const char *name)
-{
-    char path[1024];
-    snprintf(path, sizeof path, "%s/%s", IBL_SHADER_SOURCE_DIR, name);
-    char *s = glh_read_text(path);
-    if (!s) print_error("cannot read %s\n", path);
-    return s;
-}
+static char *read_shader(const char *name) { return glh_read_shader(IBL_SHADER_SOURCE_DIR, name); }
 
 /* forest (128x64 equirect) on a 32 cube, baked as `ibl render` bakes (GGX chain to 4x4,
  * irradiance cube, SH, split-sum and AmbientBRDF tables, the environment as mirror). */
@@ -109,22 +102,8 @@ static void gl_context(void **state)
 static int validate(const char *args, const char *path, const char *head, const char *file,
                     const char *tail)
 {
-    FILE *o = fopen(path, "wb");
-    if (!o) return -1;
-    fprintf(o, "%s\n%s\n%s\n", head, file, tail);
-    fclose(o);
-    char cmd[2048];
-    snprintf(cmd, sizeof cmd, "'%s' %s '%s' > '%s.log' 2>&1", IBL_GLSLANG_VALIDATOR, args, path,
-             path);
-    int rc = system(cmd);
-    if (rc != 0) {
-        char log_path[1100];
-        snprintf(log_path, sizeof log_path, "%s.log", path);
-        char *log = glh_read_text(log_path);
-        print_error("glslangValidator %s %s failed:\n%s\n", args, path, log ? log : "");
-        free(log);
-    }
-    return rc;
+    const char *parts[] = {head, file, tail};
+    return glh_validate(IBL_GLSLANG_VALIDATOR, args, path, parts, 3);
 }
 
 /* A fragment shader that calls ibl_shade (so every function is reached from main). */

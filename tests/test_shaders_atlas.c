@@ -34,14 +34,7 @@ typedef struct atlas_fixture {
     char *glsl, *glsl_atlas, *hlsl, *hlsl_atlas;
 } atlas_fixture;
 
-static char *read_shader(const char *name)
-{
-    char path[1024];
-    snprintf(path, sizeof path, "%s/%s", IBL_SHADER_SOURCE_DIR, name);
-    char *s = glh_read_text(path);
-    if (!s) print_error("cannot read %s\n", path);
-    return s;
-}
+static char *read_shader(const char *name) { return glh_read_shader(IBL_SHADER_SOURCE_DIR, name); }
 
 /* The atlas as 8-bit RGBM bytes in an RGBA8 texture, and the floats the C decodes from them. */
 static int upload_rgbm(atlas_fixture *f)
@@ -170,22 +163,8 @@ static int setup(void **state)
 static int validate(const char *args, const char *name, const char *head, const char *a,
                     const char *b, const char *tail)
 {
-    const char *path = test_path(name);
-    FILE *o = fopen(path, "wb");
-    if (!o) return -1;
-    fprintf(o, "%s\n%s\n%s\n%s\n", head, a, b, tail);
-    fclose(o);
-    char cmd[2048];
-    snprintf(cmd, sizeof cmd, "'%s' %s '%s' > '%s.log' 2>&1", IBL_GLSLANG_VALIDATOR, args, path, path);
-    int rc = system(cmd);
-    if (rc != 0) {
-        char log_path[1100];
-        snprintf(log_path, sizeof log_path, "%s.log", path);
-        char *log = glh_read_text(log_path);
-        print_error("glslangValidator %s %s failed:\n%s\n", args, path, log ? log : "");
-        free(log);
-    }
-    return rc;
+    const char *parts[] = {head, a, b, tail};
+    return glh_validate(IBL_GLSLANG_VALIDATOR, args, test_path(name), parts, 4);
 }
 
 /* What an 8-slot ES device runs: no sampler3D, no specular cube; the atlas, the packed

@@ -24,14 +24,7 @@ typedef struct fixture {
     char *glsl, *hlsl;
 } fixture;
 
-static char *read_shader(const char *name)
-{
-    char path[1024];
-    snprintf(path, sizeof path, "%s/%s", IBL_SHADER_SOURCE_DIR, name);
-    char *s = glh_read_text(path);
-    if (!s) print_error("cannot read %s\n", path);
-    return s;
-}
+static char *read_shader(const char *name) { return glh_read_shader(IBL_SHADER_SOURCE_DIR, name); }
 
 static int teardown(void **state)
 {
@@ -216,23 +209,8 @@ static void decodes_match_formulas(void **state)
 static int validate(const char *args, const char *name, const char *head, const char *file,
                     const char *tail)
 {
-    const char *path = test_path(name);
-    FILE *o = fopen(path, "wb");
-    if (!o) return -1;
-    fprintf(o, "%s\n%s\n%s\n", head, file, tail);
-    fclose(o);
-    char cmd[2048];
-    snprintf(cmd, sizeof cmd, "'%s' %s '%s' > '%s.log' 2>&1", IBL_GLSLANG_VALIDATOR, args, path,
-             path);
-    int rc = system(cmd);
-    if (rc != 0) {
-        char log_path[1100];
-        snprintf(log_path, sizeof log_path, "%s.log", path);
-        char *log = glh_read_text(log_path);
-        print_error("glslangValidator %s %s failed:\n%s\n", args, path, log ? log : "");
-        free(log);
-    }
-    return rc;
+    const char *parts[] = {head, file, tail};
+    return glh_validate(IBL_GLSLANG_VALIDATOR, args, test_path(name), parts, 3);
 }
 
 static const char *const GLSL_FRAG =

@@ -21,14 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static char *read_shader(const char *name)
-{
-    char path[1024];
-    snprintf(path, sizeof path, "%s/%s", IBL_SHADER_SOURCE_DIR, name);
-    char *s = glh_read_text(path);
-    if (!s) print_error("cannot read %s\n", path);
-    return s;
-}
+static char *read_shader(const char *name) { return glh_read_shader(IBL_SHADER_SOURCE_DIR, name); }
 
 static float rnd(uint64_t *s)
 {
@@ -209,22 +202,7 @@ static int setup(void **state)
 
 static int validate(const char *args, const char *name, const char *text)
 {
-    const char *path = test_path(name);
-    FILE *o = fopen(path, "wb");
-    if (!o) return -1;
-    fputs(text, o);
-    fclose(o);
-    char cmd[2048];
-    snprintf(cmd, sizeof cmd, "'%s' %s '%s' > '%s.log' 2>&1", IBL_GLSLANG_VALIDATOR, args, path, path);
-    int rc = system(cmd);
-    if (rc != 0) {
-        char log_path[1100];
-        snprintf(log_path, sizeof log_path, "%s.log", path);
-        char *log = glh_read_text(log_path);
-        print_error("glslangValidator %s %s failed:\n%s\n", args, path, log ? log : "");
-        free(log);
-    }
-    return rc;
+    return glh_validate(IBL_GLSLANG_VALIDATOR, args, test_path(name), &text, 1);
 }
 
 /* A fragment shader that reaches every function of ibl_probes.glsl from main. */

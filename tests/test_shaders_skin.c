@@ -27,10 +27,7 @@ typedef struct fixture {
 
 static char *read_shaders(const char *a, const char *b)
 {
-    char pa[1024], pb[1024];
-    snprintf(pa, sizeof pa, "%s/%s", IBL_SHADER_SOURCE_DIR, a);
-    snprintf(pb, sizeof pb, "%s/%s", IBL_SHADER_SOURCE_DIR, b);
-    char *x = glh_read_text(pa), *y = glh_read_text(pb);
+    char *x = glh_read_shader(IBL_SHADER_SOURCE_DIR, a), *y = glh_read_shader(IBL_SHADER_SOURCE_DIR, b);
     char *s = x && y ? malloc(strlen(x) + strlen(y) + 2) : NULL;
     if (s) sprintf(s, "%s\n%s", x, y);
     free(x);
@@ -84,21 +81,7 @@ static int teardown(void **state)
 
 static int validate(const char *args, const char *path, const char *text)
 {
-    FILE *o = fopen(path, "wb");
-    if (!o) return -1;
-    fputs(text, o);
-    fclose(o);
-    char cmd[2048];
-    snprintf(cmd, sizeof cmd, "'%s' %s '%s' > '%s.log' 2>&1", IBL_GLSLANG_VALIDATOR, args, path, path);
-    int rc = system(cmd);
-    if (rc != 0) {
-        char log_path[1100];
-        snprintf(log_path, sizeof log_path, "%s.log", path);
-        char *log = glh_read_text(log_path);
-        print_error("glslangValidator %s %s failed:\n%s\n", args, path, log ? log : "");
-        free(log);
-    }
-    return rc;
+    return glh_validate(IBL_GLSLANG_VALIDATOR, args, path, &text, 1);
 }
 
 static const char *const glsl_main =

@@ -177,3 +177,32 @@ char *glh_read_text(const char *path)
     fclose(f);
     return buf;
 }
+
+char *glh_read_shader(const char *dir, const char *name)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    char *text = glh_read_text(path);
+    if (!text) fprintf(stderr, "cannot read %s\n", path);
+    return text;
+}
+
+int glh_validate(const char *validator, const char *args, const char *path,
+                 const char *const *parts, int count)
+{
+    FILE *o = fopen(path, "wb");
+    if (!o) return -1;
+    for (int i = 0; i < count; i++) fprintf(o, "%s\n", parts[i]);
+    if (fclose(o) != 0) return -1;
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "'%s' %s '%s' > '%s.log' 2>&1", validator, args, path, path);
+    int rc = system(cmd);
+    if (rc != 0) {
+        char log_path[1100];
+        snprintf(log_path, sizeof log_path, "%s.log", path);
+        char *log = glh_read_text(log_path);
+        fprintf(stderr, "glslangValidator %s %s failed:\n%s\n", args, path, log ? log : "");
+        free(log);
+    }
+    return rc;
+}

@@ -101,4 +101,13 @@ GLuint glh_program(const glh_context *c, char *log, size_t log_size, int stage_c
 /* Reads a whole text file into a new NUL-terminated buffer (free()); NULL on failure. */
 char *glh_read_text(const char *path);
 
+/* dir/name read whole (free()); NULL, with a line on stderr naming the file, on failure. */
+char *glh_read_shader(const char *dir, const char *name);
+
+/* Writes the count parts, each followed by a newline, to path and runs validator (the path of
+ * glslangValidator) with args on it; on failure prints the validator's log to stderr. Returns
+ * the command's status: 0 when the text is valid. */
+int glh_validate(const char *validator, const char *args, const char *path,
+                 const char *const *parts, int count);
+
 #endif
