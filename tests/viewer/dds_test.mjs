@@ -6,6 +6,7 @@
 import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
+import { makeChecker } from './common.mjs';
 
 const [ibl, work] = process.argv.slice(2);
 let DDSTools;
@@ -15,12 +16,7 @@ try {
   console.error('dds test: the npm package @babylonjs/core is missing (scripts/install-deps.sh runs npm ci in tests/viewer): ' + e.message);
   process.exit(1);
 }
-let passed = 0, failed = 0;
-function check(name, ok, detail) {
-  if (ok) passed++;
-  else failed++;
-  console.log((ok ? 'ok   ' : 'FAIL ') + name + (detail ? '  (' + detail + ')' : ''));
-}
+const { check, finish } = makeChecker();
 fs.rmSync(work, { recursive: true, force: true });
 fs.mkdirSync(work, { recursive: true });
 const run = (args) => execFileSync(ibl, args, { cwd: work, stdio: ['ignore', 'pipe', 'pipe'] });
@@ -93,5 +89,4 @@ for (const c of cases) {
         `FourCC ${fourcc}, cube ${info.isCube}, ${info.mipmapCount} levels, ${Object.keys(uploads).length} uploads, ` +
         `worst relative difference ${worst.toExponential(2)} (bound ${c.tol})`);
 }
-console.log(`${passed} passed, ${failed} failed`);
-process.exit(failed ? 1 : 0);
+finish();

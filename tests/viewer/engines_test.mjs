@@ -15,6 +15,7 @@ import http from 'node:http';
 import zlib from 'node:zlib';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { makeChecker } from './common.mjs';
 
 const [ibl, work, shots] = process.argv.slice(2);
 const here = path.dirname(fileURLToPath(import.meta.url));
@@ -22,12 +23,7 @@ const repo = path.resolve(here, '..', '..');
 const CHROMIUM = process.env.IBL_CHROMIUM || '/usr/bin/chromium';
 const { chromium } = await import('playwright-core');
 
-let passed = 0, failed = 0;
-function check(name, ok, detail) {
-  if (ok) passed++;
-  else failed++;
-  console.log((ok ? 'ok   ' : 'FAIL ') + name + (detail ? '  (' + detail + ')' : ''));
-}
+const { check, finish } = makeChecker();
 
 // ---- the axes environment: a Radiance .hdr (flat RGBE scanlines) in ibl's equirect layout
 // (centre column -Z, right quarter +X, top row +Y; docs/CONVENTIONS.md) ----
@@ -348,5 +344,4 @@ const BOUND = 2.0, BOUND_RGBD = 3.0;
 }
 await browser.close();
 server.close();
-console.log(`engines test: ${passed} passed, ${failed} failed in ${((Date.now() - t0) / 1000).toFixed(1)} s`);
-process.exit(failed ? 1 : 0);
+finish(`engines test (${((Date.now() - t0) / 1000).toFixed(1)} s)`);

@@ -16,8 +16,8 @@ import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import http from 'node:http';
 import path from 'node:path';
-import zlib from 'node:zlib';
 import { fileURLToPath } from 'node:url';
+import { makeChecker, readPng } from './common.mjs';
 
 const [ibl, work] = process.argv.slice(2);
 const here = path.dirname(fileURLToPath(import.meta.url));
@@ -35,12 +35,7 @@ if (!fs.existsSync(path.join(filamentDir, 'filament.wasm'))) {
   process.exit(1);
 }
 
-let passed = 0, failed = 0;
-function check(name, ok, detail) {
-  if (ok) passed++;
-  else failed++;
-  console.log((ok ? 'ok   ' : 'FAIL ') + name + (detail ? '  (' + detail + ')' : ''));
-}
+const { check, finish } = makeChecker();
 
 fs.rmSync(work, { recursive: true, force: true });
 fs.mkdirSync(work, { recursive: true });
@@ -193,30 +188,12 @@ await new Promise((r) => server.listen(0, '127.0.0.1', r));
 const url = `http://127.0.0.1:${server.address().port}/index.html`;
 
 // ---- PNG reading (chromium's screenshots: 8-bit RGB(A), not interlaced) ----------------------
-function readPng(buf) {
-  let pos = 8, width = 0, height = 0, type = 0;
-  const idat = [];
-  while (pos < buf.length) {
-    const len = buf.readUInt32BE(pos), kind = buf.toString('latin1', pos + 4, pos + 8);
-    const body = buf.subarray(pos + 8, pos + 8 + len);
-    if (kind === 'IHDR') { width = body.readUInt32BE(0); height = body.readUInt32BE(4); type = body[9]; }
-    else if (kind === 'IDAT') idat.push(body);
-    pos += 12 + len;
-  }
-  const bpp = { 2: 3, 6: 4 }[type], raw = zlib.inflateSync(Buffer.concat(idat));
-  const stride = width * bpp, out = new Float64Array(width * height * 3);
-  let prev = Buffer.alloc(stride);
-  for (let y = 0; y < height; y++) {
-    const f = raw[y * (stride + 1)], line = Buffer.from(raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1)));
-    for (let i = 0; i < stride; i++) {
-      const a = i >= bpp ? line[i - bpp] : 0, b = prev[i], c = i >= bpp ? prev[i - bpp] : 0;
-      const p = a + b - c, pa = Math.abs(p - a), pb = Math.abs(p - b), pc = Math.abs(p - c);
-      line[i] = (line[i] + [0, a, b, (a + b) >> 1, pa <= pb && pa <= pc ? a : pb <= pc ? b : c][f]) & 255;
-    }
-    for (let x = 0; x < width; x++) for (let k = 0; k < 3; k++) out[(y * width + x) * 3 + k] = line[x * bpp + k];
-    prev = line;
-  }
-  return { width, height, data: out };
+// The screenshot as RGB floats 0..255 (the measures below index three channels).
+function readRgb(buf) {
+  const img = readPng(buf), out = new Float64Array(img.width * img.height * 3);
+  for (let i = 0; i < img.width * img.height; i++)
+    for (let k = 0; k < 3; k++) out[i * 3 + k] = img.data[i * 4 + k];
+  return { width: img.width, height: img.height, data: out };
 }
 
 // ---- render both light sets --------------------------------------------------------------------
@@ -239,7 +216,7 @@ for (const name of ['target', 'reference']) {
         shown === true ? errors.join('; ') : shown);
   const png = await page.locator('#c').screenshot();
   fs.writeFileSync(path.join(work, name + '.png'), png);
-  shots[name] = readPng(png);
+  shots[name] = readRgb(png);
   await page.close();
 }
 await browser.close();
@@ -339,5 +316,4 @@ for (const name of ['target', 'reference']) {
         `dot ${dot.map((x) => x.toFixed(0)).join(' ')}, its mirror image ${mirrored.map((x) => x.toFixed(0)).join(' ')}`);
 }
 
-console.log(`${passed} passed, ${failed} failed`);
-process.exit(failed ? 1 : 0);
+finish();

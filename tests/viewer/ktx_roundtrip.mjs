@@ -8,18 +8,14 @@ import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { makeChecker } from './common.mjs';
 
 const [ibl, work] = process.argv.slice(2);
 const here = path.dirname(fileURLToPath(import.meta.url));
 const repo = path.resolve(here, '..', '..');
 const { read, write } = await import('ktx-parse');
 
-let passed = 0, failed = 0;
-function check(name, ok, detail) {
-  if (ok) passed++;
-  else failed++;
-  console.log((ok ? 'ok   ' : 'FAIL ') + name + (detail ? '  (' + detail + ')' : ''));
-}
+const { check, finish } = makeChecker();
 function run(args) {
   const r = spawnSync(ibl, [...args, '-q'], { encoding: 'utf8' });
   if (r.status !== 0) throw new Error(`ibl ${args.join(' ')}: ${r.stderr}`);
@@ -69,5 +65,4 @@ check('at least 20 KTX2 files were checked', files.length >= 20, `${files.length
   try { b = roundTrip(bad); } catch (e) { b = null; }
   check('control: a changed kvdByteLength is caught', b === null || firstDifference(bad, b) >= 0);
 }
-console.log(`ktx round trip: ${passed} passed, ${failed} failed`);
-process.exit(failed ? 1 : 0);
+finish('ktx round trip');
