@@ -91,6 +91,9 @@ typedef struct glh_context {
  * `why` and returns -1. */
 int glh_create(glh_context *out, char *why, size_t why_size);
 void glh_destroy(glh_context *c);
+/* glh_create for a test: on failure prints why on stderr (the reason names the Debian package
+ * to install: no silent skip) and returns non-zero. */
+int glh_create_for_test(glh_context *out);
 
 /* Compiles and links one program from shader stages (type, source) given as NULL-terminated
  * pairs: glh_program(c, log, n, GL_COMPUTE_SHADER, src, 0). Each source may be several
