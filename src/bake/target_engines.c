@@ -176,18 +176,43 @@ static const char unreal_readme[] =
     "--units nits and leave the Sky Light's intensity at 1. Unreal's frame is left-handed, +Z\n"
     "up; turn the picture with the Sky Light's Source Cubemap Angle.\n";
 
+/* Godot 3's settings and levels as measured by rendering this file in Godot 3.2.3
+ * (tests/godot/test_godot.c): the sky, the reflections and the diffuse light all come from the
+ * panorama; Background Energy scales all three and Ambient Light Energy the diffuse light. */
 static const char godot_readme[] =
     "Godot: an environment for Godot to filter (ibl bake --target godot)\n"
     "\n"
-    "Godot filters its radiance map itself from the sky: engine_environment.exr (equirect,\n"
-    "32-bit float RGB, %s).\n"
+    "Godot filters its radiance and irradiance maps itself from the sky: engine_environment.exr\n"
+    "(equirect, 32-bit float RGB, %s).\n"
     "\n"
-    "Import settings: Import As Texture2D, Compress Mode Lossless or VRAM Compressed (BC6H),\n"
-    "HDR as sRGB off, Mipmaps off. Then WorldEnvironment > Environment > Background Sky, Sky\n"
-    "> Sky Material a PanoramaSkyMaterial whose Panorama is the EXR; Radiance Size at least\n"
-    "256. Godot's frame is right-handed, +Y up like ibl's, but its panorama puts a picture's\n"
-    "centre on +Z (sky shader: u = atan(x, -z) / 2pi), so the environment was turned by 180\n"
-    "degrees about +Y first: a direction (x, y, z) of the input is (x, y, z) in Godot.\n";
+    "Godot 3 (rendered in Godot 3.2.3, GLES3): import the EXR as a Texture with Filter on,\n"
+    "Mipmaps off, HDR as sRGB off, Compress Mode Lossless; WorldEnvironment > Environment:\n"
+    "Background Mode Sky, Sky a new PanoramaSky whose Panorama is the EXR, Radiance Size 256\n"
+    "or more, Ambient Light Sky Contribution 1. Or at run time, without the import:\n"
+    "  var image = Image.new()\n"
+    "  image.load(ProjectSettings.globalize_path(\"res://engine_environment.exr\"))\n"
+    "  var panorama = ImageTexture.new()\n"
+    "  panorama.create_from_image(image, Texture.FLAG_FILTER)\n"
+    "  var sky = PanoramaSky.new()\n"
+    "  sky.radiance_size = Sky.RADIANCE_SIZE_256\n"
+    "  sky.panorama = panorama\n"
+    "  var environment = Environment.new()\n"
+    "  environment.background_mode = Environment.BG_SKY\n"
+    "  environment.background_sky = sky\n"
+    "  environment.ambient_light_sky_contribution = 1.0\n"
+    "  $WorldEnvironment.environment = environment\n"
+    "Godot 4: Background Mode Sky, Sky > Sky Material a PanoramaSkyMaterial whose Panorama is\n"
+    "the EXR.\n"
+    "\n"
+    "Levels: Godot 3 has no light units. A value V of the EXR reaches the tone mapper as\n"
+    "V x Background Energy (the sky and the reflections; Godot 4: Background Energy\n"
+    "Multiplier) and V x Background Energy x Ambient Light Energy (the diffuse light of a\n"
+    "white surface), then Tonemap Exposure multiplies it. Keep both energies at 1 to keep the\n"
+    "bake's levels, and set the exposure with Tonemap Exposure (or the camera's).\n"
+    "\n"
+    "Frame: Godot is right-handed, +Y up, -Z forward, like ibl, but its panorama puts a\n"
+    "picture's centre on +Z, so the environment was turned by 180 degrees about +Y first: a\n"
+    "direction (x, y, z) of the input is (x, y, z) in Godot.\n";
 
 int ibl__engine_readme(const ibl_bake_data *b, const char *units, char *text, size_t cap)
 {
