@@ -187,7 +187,8 @@ static void print_log_tail(const char *path)
  * with Godot's low-quality GGX (64 samples instead of 512; the mobile default): the high-quality
  * filter takes over a minute on llvmpipe. Views: axes (exposure 0.3), the furnace at energies
  * 1 and 1, and the furnace at background_energy 0.5 and ambient_energy 0.5. */
-static void run_godot(const char *project, const char *axes_exr, const char *furnace_exr)
+static void run_godot(const char *project, const char *axes_exr, const char *furnace_exr,
+                      const char *extra_views)
 {
     char path[600], text[4096];
     snprintf(path, sizeof path, "%s/project.godot", project);
@@ -198,8 +199,8 @@ static void run_godot(const char *project, const char *axes_exr, const char *fur
              "[axes]\npanorama=\"%s\"\noutput=\"%s/axes.png\"\nexposure=%.17g\n\n"
              "[furnace]\npanorama=\"%s\"\noutput=\"%s/furnace.png\"\n\n"
              "[furnace_half]\npanorama=\"%s\"\noutput=\"%s/furnace_half.png\"\n"
-             "background_energy=0.5\nambient_energy=0.5\n",
-             axes_exr, project, AXES_EXPOSURE, furnace_exr, project, furnace_exr, project);
+             "background_energy=0.5\nambient_energy=0.5\n\n%s",
+             axes_exr, project, AXES_EXPOSURE, furnace_exr, project, furnace_exr, project, extra_views);
     snprintf(path, sizeof path, "%s/views.cfg", project);
     write_text(path, text);
     char log[600], cmd[3000];
@@ -342,6 +343,17 @@ static void disc_mean(const ibl_image *shot, int sphere, double dx, double dy, d
     for (int k = 0; k < 3; k++) mean[k] /= n;
 }
 
+/* With a folder argument (`test_godot docs/images`), the pictures of docs/ENGINES.md go there too:
+ * the axes view and the grid lit by tests/data/forest.exr (baked at --working-size 256). */
+static const char *screenshot_dir;
+
+static void copy_file(const char *from, const char *to)
+{
+    char cmd[1400];
+    snprintf(cmd, sizeof cmd, "cp '%s' '%s'", from, to);
+    assert_int_equal(system(cmd), 0);
+}
+
 typedef struct godot_run {
     ibl_context *ctx;
     ibl_image axes, furnace, furnace_half;
@@ -372,8 +384,26 @@ static int setup(void **state)
     char cmd[700];
     snprintf(cmd, sizeof cmd, "mkdir -p '%s'", project);
     assert_int_equal(system(cmd), 0);
+    char extra[1400] = "";
+    if (screenshot_dir) {
+        if (test_run_cli(&out, "bake -q '%s' -o '%s' --target godot --size 64 --working-size 256 "
+                         "--lut-size 8 --irradiance-size 4 --preview-width 0", test_data("forest.exr"),
+                         test_path("forest_bake")) != 0) {
+            print_error("ibl bake failed: %s\n", out);
+            return -1;
+        }
+        snprintf(extra, sizeof extra, "[forest]\npanorama=\"%s\"\noutput=\"%s/forest.png\"\n",
+                 test_path("forest_bake/engine_environment.exr"), project);
+    }
     run_godot(project, test_path("axes_bake/engine_environment.exr"),
-              test_path("furnace_bake/engine_environment.exr"));
+              test_path("furnace_bake/engine_environment.exr"), extra);
+    if (screenshot_dir) {
+        char to[700];
+        snprintf(to, sizeof to, "%s/godot_axes.png", screenshot_dir);
+        copy_file(test_path("project/axes.png"), to);
+        snprintf(to, sizeof to, "%s/godot_forest.png", screenshot_dir);
+        copy_file(test_path("project/forest.png"), to);
+    }
     run->axes = read_codes(run->ctx, test_path("project/axes.png"));
     run->furnace = read_codes(run->ctx, test_path("project/furnace.png"));
     run->furnace_half = read_codes(run->ctx, test_path("project/furnace_half.png"));
@@ -490,8 +520,9 @@ static void furnace_level_in_godot(void **state)
     }
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    if (argc > 1) screenshot_dir = argv[1];
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(orientation_in_godot),
         cmocka_unit_test(furnace_level_in_godot),
