@@ -10,9 +10,11 @@
  *    degrees or mirrored must fail by far (the check can tell the frames apart).
  *  - Level: a constant environment E (a white furnace). Godot's linear tone mapper shows
  *    exposure x value, then the sRGB curve: the background and a mirror are
- *    E x background_energy, a white diffuse sphere E x background_energy x ambient_energy.
+ *    E x background_energy, a white diffuse sphere E x background_energy x ambient_energy (x
+ *    Godot's irradiance quadrature), rough white metals E x background_energy x Godot's
+ *    split-sum approximation.
  * Godot is required: when godot3 or xvfb-run is missing the test fails (scripts/install-deps.sh
- * installs both). */
+ * installs godot3, xvfb and xauth). `test_godot DIR` also writes docs/ENGINES.md's pictures. */
 #include "test_support.h"
 
 #include <math.h>
