@@ -122,6 +122,15 @@ const char *const *ibl_specular_preset_names(void);
 ibl_status ibl_specular_levels(ibl_context *ctx, const ibl_specular_desc *desc, int source_size,
                                ibl_specular_info *info);
 
+/* The face edge of the source cube the fast method works from for the chain desc describes
+ * (desc->size 0: source_size) from a source of edge source_size: the source's edge rounded up
+ * to a power of two, or, when that is larger, the smallest power of two that keeps the
+ * chain's narrowest filtered lobe as exact as the full source does (at least the chain's
+ * edge). ibl_specular_prefilter reduces a larger source to it by exact area means; a caller
+ * that makes the source cube (from a flat image, say) can make it at this edge directly. */
+ibl_status ibl_specular_source_size(ibl_context *ctx, const ibl_specular_desc *desc,
+                                    int source_size, int *edge);
+
 /* Prefilters src (level 0 is used) into a newly allocated cube (free with ibl_cubemap_free).
  * info may be NULL. */
 ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,

@@ -165,14 +165,25 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
     ibl_status st = ibl__specular_mapping(ctx, &desc, N, L, &info);
     if (st != IBL_OK) return st;
 
-    /* the working source: level 0 of src, resampled to a power of two if needed (the fast
-     * method's quadtree needs one; the reference uses the same cube so both see one source) */
+    /* the dynamic plan (the dynamic presets) wants a power-of-two chain no larger than the
+     * source; other sizes take the general code */
+    int pow2 = 1;
+    while (pow2 < src->size) pow2 *= 2;
+    if (desc.dynamic && (desc.method == IBL_METHOD_REFERENCE || !is_pow2(N) || N > pow2)) desc.dynamic = 0;
+    int box_or_gauss = desc.filter == IBL_FILTER_BOX || desc.filter == IBL_FILTER_GAUSS;
+    int fast_plan = desc.method != IBL_METHOD_REFERENCE && !desc.dynamic && !box_or_gauss;
+    /* the working source: level 0 of src at a power of two (the fast method's quadtree needs
+     * one; the reference uses the same cube so both see one source). The fast plan's is the
+     * edge the chain needs (ibl_specular_source_size): a larger source is reduced to it by
+     * exact area means, so the plan, whose memory and time grow with its source's texels,
+     * is built at that edge and not at the source's. */
+    int edge = pow2;
+    if (fast_plan) st = ibl_specular_source_size(ctx, &desc, src->size, &edge);
+    if (st != IBL_OK) return st;
     ibl_cubemap work = {0};
     const ibl_cubemap *s = src;
-    if (!is_pow2(src->size)) {
-        int p = 1;
-        while (p < src->size) p *= 2;
-        st = ibl_cubemap_alloc(ctx, p, 1, &work);
+    if (edge != src->size) {
+        st = ibl_cubemap_alloc(ctx, edge, 1, &work);
         if (st != IBL_OK) return st;
         st = ibl_cubemap_resample(ctx, src, &work);
         if (st != IBL_OK) goto done;
@@ -186,9 +197,6 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
     st = ibl_cubemap_alloc(ctx, N, L, out);
     if (st != IBL_OK) goto done;
 
-    /* the dynamic plan (the dynamic presets) wants a power-of-two chain no larger than the
-     * source; other sizes take the general code */
-    if (desc.dynamic && (desc.method == IBL_METHOD_REFERENCE || !is_pow2(N) || N > s->size)) desc.dynamic = 0;
     if ((desc.filter == IBL_FILTER_BOX || desc.filter == IBL_FILTER_GAUSS) && !desc.dynamic) {
         float kernel_exponents[IBL_MAX_LEVELS];
         for (int l = 0; l < L; l++) kernel_exponents[l] = ibl_specular_level_phong_exponent(&info, l);

@@ -79,6 +79,13 @@ static inline int is_power_of_two(int n) { return n > 0 && (n & (n - 1)) == 0; }
  * centre are 1.38 times wider, those at its corners 1.7 times narrower). */
 static inline double texel_angle(int n) { return 1.4472025 / n; }
 
+/* The widest texels the core of a lobe may be summed over (pieces.c: the coarsest pyramid level
+ * with texels at most this wide), acc being accuracy_scale. */
+static inline double core_source_width(const ibl__lobe *lobe, double acc)
+{
+    return lobe->half_angle / (CORE_TEXELS_PER_HALF_WIDTH / acc);
+}
+
 /* ---- the moment pyramid (geometry.c, pyramid.c) ---- */
 
 /* One level of the pyramid: the source (level 0) or a mip of it, as records in blocks. */

@@ -62,7 +62,9 @@ ibl_status ibl__fast_plan_bars(ibl_specular_plan *p, int level)
         precomputed_piece *c = pc->precomputed;
         if (!c || c->source_level == 0 || !(den > 0)) continue;
         correction_bounds(pc, den, c);
-        c->correction_capacity = CORRECTION_BLOCKS;
+        /* no more blocks than the level has: a capacity it cannot fill would only take memory */
+        size_t blocks = source_block_count(&p->pyramid[c->source_level]);
+        c->correction_capacity = blocks < CORRECTION_BLOCKS ? (int)blocks : CORRECTION_BLOCKS;
         p->correction_pool_blocks += (size_t)c->correction_capacity;
         c->correction_cones =
             ibl_alloc(p->ctx, cone_slots(c->correction_capacity) * CONE_FLOATS * sizeof(float));

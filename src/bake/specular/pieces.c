@@ -202,10 +202,9 @@ ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level)
     const ibl__lobe *lobe = &lv->lobe;
     int n = ibl_level_size(p->output_edge, level);
     double acc = accuracy_scale(p);
-    const double core_texels = CORE_TEXELS_PER_HALF_WIDTH / acc;
     const double cull = lobe->kind == IBL__LOBE_PHONG ? PHONG_CULL : 0.0;
 
-    int core_level = source_level_for(p, lobe->half_angle / core_texels);
+    int core_level = source_level_for(p, core_source_width(lobe, acc));
     double core_end = CORE_END_HALF_WIDTHS * lobe->half_angle;
     double min_core_end = CORE_END_MIN_TEXELS * texel_angle(p->pyramid[core_level].edge);
     if (core_end < min_core_end) core_end = min_core_end;

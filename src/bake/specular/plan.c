@@ -132,6 +132,53 @@ static ibl_status plan_fast(ibl_specular_plan *p)
     return st;
 }
 
+/* The source edge the chain needs (ibl_specular_source_size, include/ibl/specular.h). The
+ * finest pyramid level any piece reads is the core's of the narrowest filtered lobe: the
+ * coarsest level whose texels are at most core_source_width wide (pieces.c; rings read coarser
+ * levels, from twice the half width on). One level finer than that is kept, so the level the
+ * core reads is still built from 2x2 children with their luminance centroids (pyramid.c), as
+ * from the full source; and never less than the chain's own edge (a mirror level 0, the
+ * output's level 0 grid). Below this edge the plan would read the source itself where it now
+ * reads a mip, or split its texels (choose_subtexel_split). */
+static int needed_source_edge(const ibl_specular_desc *desc, const ibl_specular_info *info,
+                              int levels)
+{
+    double acc = desc->accuracy > 0 ? desc->accuracy / ACCURACY_DEFAULT : 1.0;
+    int edge = 1;
+    while (edge < desc->size) edge *= 2;
+    for (int l = 0; l < levels; l++) {
+        ibl__lobe lobe = ibl__lobe_for_level(info, l);
+        if (lobe.kind == IBL__LOBE_MIRROR) continue;
+        int core = MIN_SOURCE_EDGE;
+        while (core < 16384 && texel_angle(core) > core_source_width(&lobe, acc)) core *= 2;
+        if (2 * core > edge) edge = 2 * core;
+    }
+    return edge < 16384 ? edge : 16384;
+}
+
+ibl_status ibl_specular_source_size(ibl_context *ctx, const ibl_specular_desc *desc,
+                                    int source_size, int *out)
+{
+    if (!ctx || !desc || !out) return IBL_ERR_INVALID_ARGUMENT;
+    *out = 0;
+    ibl_specular_desc d = *desc;
+    d.size = d.size > 0 ? d.size : source_size;
+    if (d.size < 1 || d.size > 16384 || source_size < 1 || source_size > 16384)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: size %d from %d out of range",
+                         d.size, source_size);
+    int full = ibl_full_mip_count(d.size);
+    int levels = d.levels > 0 && d.levels < full ? d.levels : full;
+    ibl_specular_info info;
+    ibl_status st = ibl_specular_levels(ctx, &d, source_size, &info);
+    if (st != IBL_OK) return st;
+    if (info.levels < levels) levels = info.levels;
+    int pow2 = 1;
+    while (pow2 < source_size) pow2 *= 2;
+    int needed = needed_source_edge(&d, &info, levels);
+    *out = needed < pow2 ? needed : pow2;
+    return IBL_OK;
+}
+
 ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *desc,
                                     ibl_specular_plan **out)
 {
