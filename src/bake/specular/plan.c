@@ -135,11 +135,10 @@ static ibl_status plan_fast(ibl_specular_plan *p)
 /* The source edge the chain needs (ibl_specular_source_size, include/ibl/specular.h). The
  * finest pyramid level any piece reads is the core's of the narrowest filtered lobe: the
  * coarsest level whose texels are at most core_source_width wide (pieces.c; rings read coarser
- * levels, from twice the half width on). One level finer than that is kept, so the level the
- * core reads is still built from 2x2 children with their luminance centroids (pyramid.c), as
- * from the full source; and never less than the chain's own edge (a mirror level 0, the
- * output's level 0 grid). Below this edge the plan would read the source itself where it now
- * reads a mip, or split its texels (choose_subtexel_split). */
+ * levels, from twice the half width on). SOURCE_LEVELS_BELOW_CORE levels finer than that are
+ * kept (tuning.h: an area mean puts a texel's light at its centre, where the pyramid would have
+ * kept its luminance centroid), and never less than the chain's own edge (a mirror level 0).
+ * A source of at most this edge is used as it is. */
 static int needed_source_edge(const ibl_specular_desc *desc, const ibl_specular_info *info,
                               int levels)
 {
@@ -151,7 +150,7 @@ static int needed_source_edge(const ibl_specular_desc *desc, const ibl_specular_
         if (lobe.kind == IBL__LOBE_MIRROR) continue;
         int core = MIN_SOURCE_EDGE;
         while (core < 16384 && texel_angle(core) > core_source_width(&lobe, acc)) core *= 2;
-        if (2 * core > edge) edge = 2 * core;
+        if ((core << SOURCE_LEVELS_BELOW_CORE) > edge) edge = core << SOURCE_LEVELS_BELOW_CORE;
     }
     return edge < 16384 ? edge : 16384;
 }
