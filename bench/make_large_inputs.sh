@@ -4,8 +4,9 @@
 # For every cube edge E given (default 512 1024 2048: 2048x1024, 4096x2048 and 8192x4096, 23,
 # 90 and 346 MB; 4096 makes the 16384x8192 one, 1.3 GB, and needs 1.5 GiB more on the way) it
 # writes OUTDIR/city{4E}.exr, a 4E x 2E float RGB equirect (OpenEXR ZIP): city.exr resampled up
-# to an E cube, then unfolded. --format rgb32f: the resampled cube's alpha is 1 only to within float rounding, which would otherwise
-# make the writer keep a fourth channel that no real HDRI has. Existing files are kept.
+# to an E cube, then unfolded. --format rgb32f: the resampled cube's alpha is 1 only to within
+# float rounding, which would otherwise make the writer keep a fourth channel that no real HDRI
+# has. Existing files are kept.
 set -eu
 BUILD=${1:?usage: make_large_inputs.sh BUILD OUTDIR [EDGE...]}
 OUT=${2:?usage: make_large_inputs.sh BUILD OUTDIR [EDGE...]}
