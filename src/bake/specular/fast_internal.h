@@ -323,8 +323,9 @@ struct ibl_specular_plan {
     int face_axis[6][3];
     float face_sign[6][3];
     ibl__dynamic *dynamic; /* desc.dynamic: the precomputed operator instead of the pieces      */
-    /* level 0's geometric moments, once, face-local (GEOMETRY_FIELDS floats per texel of face
-     * 0): the other faces by the signed permutations. Level 0's records exist only when some
+    /* level 0's geometric moments, once, face-local (GEOMETRY_FIELDS floats per texel of one
+     * eighth of face 0, level0_face_moments): the rest of the face by its reflections, the
+     * other faces by the signed permutations. Level 0's records exist only when some
      * piece sums level 0 leaf by leaf (has_level0_records). */
     float *level0_geometry;
     int has_level0_records;
@@ -348,6 +349,33 @@ static inline int level_is_mirror(const ibl_specular_plan *p, int level)
 static inline double accuracy_scale(const ibl_specular_plan *p)
 {
     return p->desc.accuracy > 0 ? p->desc.accuracy / ACCURACY_DEFAULT : 1.0;
+}
+
+/* Texel (x, y) of level 0's face-local geometric moments, from the eighth of the face that is
+ * stored (a <= b < ceil(n / 2), row b from b (b + 1) / 2): the reflections s -> -s, t -> -t and
+ * the swap s <-> t act on the moments by sign flips and swaps, exactly in float, so this is
+ * the same as a whole face stored (geometry.c's unfold_eighth_task, which builds the doubles
+ * the same way) at an eighth of its memory. */
+static inline void level0_face_moments(const ibl_specular_plan *p, int x, int y,
+                                       float out[GEOMETRY_FIELDS])
+{
+    int n = p->pyramid[0].edge;
+    int fx = x > n - 1 - x, fy = y > n - 1 - y;
+    int a = fx ? n - 1 - x : x, b = fy ? n - 1 - y : y, swap = a > b;
+    if (swap) {
+        int t = a;
+        a = b, b = t;
+    }
+    const float *g = p->level0_geometry + ((size_t)b * (b + 1) / 2 + a) * GEOMETRY_FIELDS;
+    for (int k = 0; k < GEOMETRY_FIELDS; k++) out[k] = g[k];
+    float *m = out + FIELD_MEAN, *C = out + FIELD_COVARIANCE, t;
+    if (swap) { /* C: xx yy zz xy xz yz */
+        t = m[0], m[0] = m[1], m[1] = t;
+        t = C[0], C[0] = C[1], C[1] = t;
+        t = C[4], C[4] = C[5], C[5] = t;
+    }
+    if (fx) m[0] = -m[0], C[3] = -C[3], C[4] = -C[4];
+    if (fy) m[1] = -m[1], C[3] = -C[3], C[5] = -C[5];
 }
 
 /* Whether the output directions are the texel centres (no edge fixup bends them). */

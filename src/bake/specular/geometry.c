@@ -141,7 +141,8 @@ void ibl__fast_combine_moments(const texel_moments *const *parts, const double *
 void ibl__fast_level0_moments(const ibl_specular_plan *p, int f, int x, int y,
                               float out[GEOMETRY_FIELDS])
 {
-    const float *g = p->level0_geometry + ((size_t)y * p->pyramid[0].edge + x) * GEOMETRY_FIELDS;
+    float g[GEOMETRY_FIELDS];
+    level0_face_moments(p, x, y, g);
     double mean[3], covariance[6];
     for (int c = 0; c < 3; c++) mean[c] = g[FIELD_MEAN + c];
     for (int c = 0; c < 6; c++) covariance[c] = g[FIELD_COVARIANCE + c];
@@ -232,13 +233,14 @@ static void store_records_task(void *arg, int block_row)
         }
 }
 
-/* Row y of level 0's face-local moments, as floats (what records would hold). */
-static void store_level0_geometry_task(void *arg, int y)
+/* Row b of the stored eighth of level 0's face-local moments (a <= b), as floats (what
+ * records would hold; level0_face_moments reads them). */
+static void store_level0_geometry_task(void *arg, int b)
 {
     const moments_job *j = arg;
-    for (int x = 0; x < j->edge; x++) {
-        const texel_moments *g = &j->moments[(size_t)y * j->edge + x];
-        float *o = j->p->level0_geometry + ((size_t)y * j->edge + x) * GEOMETRY_FIELDS;
+    for (int a = 0; a <= b; a++) {
+        const texel_moments *g = &j->moments[(size_t)b * j->edge + a];
+        float *o = j->p->level0_geometry + ((size_t)b * (b + 1) / 2 + a) * GEOMETRY_FIELDS;
         for (int c = 0; c < 3; c++) o[FIELD_MEAN + c] = (float)g->mean[c];
         o[FIELD_SPREAD] = (float)g->spread;
         for (int c = 0; c < 6; c++) o[FIELD_COVARIANCE + c] = (float)g->covariance[c];
@@ -338,7 +340,8 @@ ibl_status ibl__fast_build_moments(ibl_specular_plan *p)
     int S = p->source_edge * p->subtexel_split, half = S > 1 ? S / 2 : 1;
     texel_moments *cur = ibl_alloc(ctx, (size_t)S * S * sizeof(texel_moments));
     texel_moments *next = ibl_alloc(ctx, (size_t)half * half * sizeof(texel_moments));
-    p->level0_geometry = ibl_alloc(ctx, (size_t)S * S * GEOMETRY_FIELDS * sizeof(float));
+    size_t eighth_rows = (size_t)(S + 1) / 2, eighth = eighth_rows * (eighth_rows + 1) / 2;
+    p->level0_geometry = ibl_alloc(ctx, eighth * GEOMETRY_FIELDS * sizeof(float));
     if (!cur || !next || !p->level0_geometry) {
         ibl_free(ctx, cur);
         ibl_free(ctx, next);
@@ -358,7 +361,7 @@ ibl_status ibl__fast_build_moments(ibl_specular_plan *p)
         }
         moments_job job = {p, s, cur, s->edge, NULL};
         if (l == 0) {
-            ibl_parallel_for(ctx, s->edge, store_level0_geometry_task, &job);
+            ibl_parallel_for(ctx, (s->edge + 1) / 2, store_level0_geometry_task, &job);
             continue;
         }
         ibl_parallel_for(ctx, s->blocks_y, store_records_task, &job);

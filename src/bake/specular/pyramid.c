@@ -53,11 +53,11 @@ static void level1_row_from_source(const pyramid_job *job, int f, int y)
     int M = s->edge, S = p->pyramid[0].edge;
     const float *face = ibl_cubemap_face(job->src, 0, f);
     for (int x = 0; x < M; x++) {
-        const float *g[4];
+        float g[4][GEOMETRY_FIELDS];
         double w[4], W = 0, m[3] = {0, 0, 0}, P[3] = {0, 0, 0};
         for (int k = 0; k < 4; k++) {
             int cx = 2 * x + (k & 1), cy = 2 * y + (k >> 1);
-            g[k] = p->level0_geometry + ((size_t)cy * S + cx) * GEOMETRY_FIELDS;
+            level0_face_moments(p, cx, cy, g[k]);
             const float *L = face + ((size_t)cy * S + cx) * 4;
             double om = g[k][FIELD_SOLID_ANGLE], pw[3] = {om * L[0], om * L[1], om * L[2]};
             for (int c = 0; c < 3; c++) P[c] += pw[c];
