@@ -314,6 +314,10 @@ struct ibl_specular_plan {
     int source_edge;       /* face edge of the cubes a run gets                                 */
     int subtexel_split;    /* level 0 of the pyramid splits each source texel k x k             */
     int pyramid_levels;    /* from source_edge subtexel_split texels down to 1                  */
+    /* the first coarse level with records: levels 1 .. first_stored - 1 are read by no piece
+     * and no mirror level, so they are skipped and level first_stored is summed straight from
+     * the source texels (pyramid.c); 1 when the source is split into sub-texels */
+    int first_stored;
     int output_edge, output_levels;
     source_level pyramid[IBL_MAX_LEVELS];
     level_plan levels[IBL_MAX_LEVELS];
@@ -407,6 +411,7 @@ void ibl__fast_combine_moments(const texel_moments *const *parts, const double *
                                int count, texel_moments *out);
 void ibl__fast_level0_moments(const ibl_specular_plan *p, int face, int x, int y,
                               float out[GEOMETRY_FIELDS]);
+void ibl__fast_pyramid_edges(ibl_specular_plan *p);
 ibl_status ibl__fast_build_moments(ibl_specular_plan *p);
 ibl_status ibl__fast_level0_records(ibl_specular_plan *p);
 

@@ -312,18 +312,25 @@ ibl_status ibl__fast_level0_records(ibl_specular_plan *p)
     return IBL_OK;
 }
 
-/* The records of the coarse levels (level 0's: ibl__fast_level0_records, when some piece
- * needs them). */
-static ibl_status allocate_pyramid(ibl_specular_plan *p)
+/* Every level's edge and record layout (the pieces are placed by the edges alone). */
+void ibl__fast_pyramid_edges(ibl_specular_plan *p)
 {
-    ibl_context *ctx = p->ctx;
     for (int l = 0; l < p->pyramid_levels; l++) {
         source_level *s = &p->pyramid[l];
         s->edge = (p->source_edge * p->subtexel_split) >> l;
         s->blocks_x = (s->edge + BLOCK_W - 1) / BLOCK_W;
         s->blocks_y = (s->edge + BLOCK_H - 1) / BLOCK_H;
         s->fields = l == 0 ? LEVEL0_FIELDS : COARSE_FIELDS;
-        if (l == 0) continue;
+    }
+}
+
+/* The records of the stored coarse levels (level 0's: ibl__fast_level0_records, when some piece
+ * needs them). */
+static ibl_status allocate_pyramid(ibl_specular_plan *p)
+{
+    ibl_context *ctx = p->ctx;
+    for (int l = p->first_stored; l < p->pyramid_levels; l++) {
+        source_level *s = &p->pyramid[l];
         s->records = allocate_records(ctx, s);
         s->cones = ibl_alloc(ctx, source_block_count(s) * CONE_FLOATS * sizeof(float));
         s->row_power = ibl_alloc(ctx, (size_t)6 * s->blocks_y * sizeof(double));
@@ -364,6 +371,7 @@ ibl_status ibl__fast_build_moments(ibl_specular_plan *p)
             ibl_parallel_for(ctx, (s->edge + 1) / 2, store_level0_geometry_task, &job);
             continue;
         }
+        if (l < p->first_stored) continue; /* combined through, not kept */
         ibl_parallel_for(ctx, s->blocks_y, store_records_task, &job);
         ibl_parallel_for(ctx, s->blocks_y, block_cones_task, &job);
     }

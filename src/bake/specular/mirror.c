@@ -5,8 +5,9 @@
  * level has no pieces, grids or weights.
  *
  * At the source's size the level is a copy. Smaller, at a power of two, it is the exact area
- * mean of the source texels it covers: the pyramid level of that size already holds each
- * texel's power and solid angle (pyramid.c). Any other size is sampled bilinearly here;
+ * mean of the source texels it covers: the pyramid level of that size holds each texel's power
+ * and solid angle (pyramid.c), or, when the plan does not keep that level (no piece reads it),
+ * the mean is summed here from the source texels and level 0's solid angles. Any other size is sampled bilinearly here;
  * ibl_specular_prefilter (specular.c) replaces a smaller one whose size does not divide the
  * source's by the exact area mean, which needs memory a plan's run does not allocate. */
 #include "bake/specular/fast_internal.h"
@@ -34,6 +35,24 @@ static void mirror_row_task(void *arg, int index)
         int l = 0;
         while ((p->pyramid[0].edge >> l) > n) l++;
         const source_level *s = &p->pyramid[l];
+        if (!s->records) { /* a level the plan does not keep: the same mean from the source */
+            int K = p->source_edge / n, S = p->source_edge;
+            const float *src = ibl_cubemap_face(job->src, 0, face);
+            for (int x = 0; x < n; x++) {
+                double P[3] = {0, 0, 0}, om = 0;
+                for (int cy = K * y; cy < K * (y + 1); cy++)
+                    for (int cx = K * x; cx < K * (x + 1); cx++) {
+                        float g[GEOMETRY_FIELDS];
+                        level0_face_moments(p, cx, cy, g);
+                        const float *L = src + ((size_t)cy * S + cx) * 4;
+                        for (int c = 0; c < 3; c++) P[c] += (double)g[FIELD_SOLID_ANGLE] * L[c];
+                        om += g[FIELD_SOLID_ANGLE];
+                    }
+                for (int c = 0; c < 3; c++) row[x * 4 + c] = (float)(P[c] / om);
+                row[x * 4 + 3] = 1.0f;
+            }
+            return;
+        }
         for (int x = 0; x < n; x++) {
             float om = s->records[record_index(s, face, x, y, FIELD_SOLID_ANGLE)];
             for (int c = 0; c < 3; c++)

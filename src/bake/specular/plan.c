@@ -109,18 +109,37 @@ static int needs_level0_records(const ibl_specular_plan *p)
     return 0;
 }
 
+/* The finest coarse level a piece reads; pyramid_levels if none (a mirror level smaller than
+ * the source takes its area means from a kept level or from the source, mirror.c). With
+ * sub-texels every level is kept (level 1 comes from level 0's records). */
+static int first_read_level(const ibl_specular_plan *p)
+{
+    if (p->subtexel_split > 1) return 1;
+    int first = p->pyramid_levels;
+    for (int l = 0; l < p->output_levels; l++) {
+        if (level_is_mirror(p, l)) continue;
+        for (int k = 0; k < p->levels[l].piece_count; k++) {
+            int s = p->levels[l].pieces[k].source_level;
+            if (s >= 1 && s < first) first = s;
+        }
+    }
+    return first;
+}
+
 /* Everything of the fast method's plan after the checks and the mapping. */
 static ibl_status plan_fast(ibl_specular_plan *p)
 {
     for (int l = 0; l < p->output_levels; l++) p->levels[l].lobe = ibl__lobe_for_level(&p->info, l);
     choose_subtexel_split(p);
     p->pyramid_levels = ibl_full_mip_count(p->source_edge * p->subtexel_split);
-    ibl_status st = ibl__fast_build_moments(p);
-    for (int l = 0; st == IBL_OK && l < p->output_levels; l++) {
-        if (level_is_mirror(p, l)) continue;
-        st = ibl__fast_plan_pieces(p, l);
-        if (st == IBL_OK) st = ibl__fast_precompute_level(p, l);
-    }
+    ibl__fast_pyramid_edges(p);
+    ibl_status st = IBL_OK;
+    for (int l = 0; st == IBL_OK && l < p->output_levels; l++)
+        if (!level_is_mirror(p, l)) st = ibl__fast_plan_pieces(p, l);
+    p->first_stored = first_read_level(p);
+    if (st == IBL_OK) st = ibl__fast_build_moments(p);
+    for (int l = 0; st == IBL_OK && l < p->output_levels; l++)
+        if (!level_is_mirror(p, l)) st = ibl__fast_precompute_level(p, l);
     if (st == IBL_OK) st = run_buffers(p);
     if (st == IBL_OK && needs_level0_records(p)) st = ibl__fast_level0_records(p);
     for (int l = 0; st == IBL_OK && l < p->output_levels; l++) {
@@ -234,7 +253,7 @@ static ibl_status run_dynamic(ibl_specular_plan *p, const ibl_cubemap *src, ibl_
 static void run_pyramid(ibl_specular_plan *p, const ibl_cubemap *src)
 {
     if (p->has_level0_records) ibl__fast_pyramid_level0(p, src);
-    for (int l = 1; l < p->pyramid_levels; l++) {
+    for (int l = p->first_stored; l < p->pyramid_levels; l++) {
         ibl__fast_pyramid_level(p, src, l);
         if (p->pyramid[l].bright_scale > 0) ibl__fast_select_bright(p, l);
         ibl__fast_uniform_level(p, l);

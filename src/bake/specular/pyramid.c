@@ -41,43 +41,52 @@ void ibl__fast_pyramid_level0(ibl_specular_plan *p, const ibl_cubemap *src)
     ibl_parallel_for(p->ctx, 6 * p->pyramid[0].blocks_y, level0_task, &job);
 }
 
-/* Row y of face f of level 1 straight from the source texels (no sub-texels, no level-0
- * records): the four children are uniform texels whose geometric moments are face 0's
- * face-local ones (level0_geometry, the same on every face), so they are combined in face-local
- * coordinates and the result is turned to face f's world coordinates once. */
-static void level1_row_from_source(const pyramid_job *job, int f, int y)
+/* A source texel's face-local moments (level0_face_moments), its power and its luminance weight. */
+static double source_child(const ibl_specular_plan *p, const float *face, int cx, int cy,
+                           float g[GEOMETRY_FIELDS], double power[3])
+{
+    level0_face_moments(p, cx, cy, g);
+    const float *L = face + ((size_t)cy * p->pyramid[0].edge + cx) * 4;
+    double om = g[FIELD_SOLID_ANGLE];
+    for (int c = 0; c < 3; c++) power[c] = om * L[c];
+    double lum = luminance(power[0], power[1], power[2]);
+    return lum > 0 ? lum : 0;
+}
+
+/* Row y of face f of the first stored level straight from the source texels (no sub-texels):
+ * its K x K children (K = 2^level, row by row) are uniform texels whose geometric moments are
+ * face 0's face-local ones (the same on every face), so they are combined in face-local
+ * coordinates, by the same parallel-axis rule as two levels at a time (the levels between are
+ * read by nothing and not kept), and the result is turned to face f's world coordinates once. */
+static void level_row_from_source(const pyramid_job *job, int f, int y)
 {
     static const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
     const ibl_specular_plan *p = job->p;
-    source_level *s = &job->p->pyramid[1];
-    int M = s->edge, S = p->pyramid[0].edge;
+    source_level *s = &job->p->pyramid[job->level];
+    int M = s->edge, K = 1 << job->level;
     const float *face = ibl_cubemap_face(job->src, 0, f);
     for (int x = 0; x < M; x++) {
-        float g[4][GEOMETRY_FIELDS];
-        double w[4], W = 0, m[3] = {0, 0, 0}, P[3] = {0, 0, 0};
-        for (int k = 0; k < 4; k++) {
-            int cx = 2 * x + (k & 1), cy = 2 * y + (k >> 1);
-            level0_face_moments(p, cx, cy, g[k]);
-            const float *L = face + ((size_t)cy * S + cx) * 4;
-            double om = g[k][FIELD_SOLID_ANGLE], pw[3] = {om * L[0], om * L[1], om * L[2]};
-            for (int c = 0; c < 3; c++) P[c] += pw[c];
-            double lum = luminance(pw[0], pw[1], pw[2]);
-            w[k] = lum > 0 ? lum : 0;
-            W += w[k];
-            for (int c = 0; c < 3; c++) m[c] += w[k] * g[k][FIELD_MEAN + c];
-        }
+        float g[GEOMETRY_FIELDS];
+        double W = 0, m[3] = {0, 0, 0}, P[3] = {0, 0, 0}, pw[3];
+        for (int cy = K * y; cy < K * (y + 1); cy++)
+            for (int cx = K * x; cx < K * (x + 1); cx++) {
+                double w = source_child(p, face, cx, cy, g, pw);
+                for (int c = 0; c < 3; c++) P[c] += pw[c];
+                W += w;
+                for (int c = 0; c < 3; c++) m[c] += w * g[FIELD_MEAN + c];
+            }
         float *o = s->records + record_index(s, f, x, y, 0);
         if (W > 0) {
             double C[6] = {0, 0, 0, 0, 0, 0}, e = 0;
             for (int c = 0; c < 3; c++) m[c] /= W;
-            for (int k = 0; k < 4; k++) {
-                const float *q = g[k];
-                double a = w[k] / W;
-                double d[3] = {q[FIELD_MEAN] - m[0], q[FIELD_MEAN + 1] - m[1], q[FIELD_MEAN + 2] - m[2]};
-                for (int c = 0; c < 6; c++)
-                    C[c] += a * (q[FIELD_COVARIANCE + c] + d[pair[c][0]] * d[pair[c][1]]);
-                e += a * (q[FIELD_SPREAD] + 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-            }
+            for (int cy = K * y; cy < K * (y + 1); cy++)
+                for (int cx = K * x; cx < K * (x + 1); cx++) {
+                    double a = source_child(p, face, cx, cy, g, pw) / W;
+                    double d[3] = {g[FIELD_MEAN] - m[0], g[FIELD_MEAN + 1] - m[1], g[FIELD_MEAN + 2] - m[2]};
+                    for (int c = 0; c < 6; c++)
+                        C[c] += a * (g[FIELD_COVARIANCE + c] + d[pair[c][0]] * d[pair[c][1]]);
+                    e += a * (g[FIELD_SPREAD] + 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+                }
             moments_to_world(p->face_axis[f], p->face_sign[f], m, e, C,
                              o + FIELD_LUM_MEAN * BLOCK_TEXELS, BLOCK_TEXELS);
         } else { /* no light: the geometric moments */
@@ -148,9 +157,10 @@ static void level_task(void *arg, int index)
     const pyramid_job *job = arg;
     source_level *s = &job->p->pyramid[job->level];
     int f = index / s->blocks_y, block_row = index % s->blocks_y;
-    int from_source = job->level == 1 && !job->p->has_level0_records;
+    /* the first stored level: from the source, unless it is level 1 over level 0's records */
+    int from_source = job->level == job->p->first_stored && (job->level > 1 || !job->p->has_level0_records);
     for (int y = block_row * BLOCK_H; y < (block_row + 1) * BLOCK_H && y < s->edge; y++) {
-        if (from_source) level1_row_from_source(job, f, y);
+        if (from_source) level_row_from_source(job, f, y);
         else level_row(job, f, y);
     }
     double power = 0;
