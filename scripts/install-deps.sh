@@ -25,7 +25,11 @@
 #              @babylonjs/core (the engines `ibl bake --target` is tested in, served
 #              locally); ktx-parse (the KTX2 round trip of every file ibl writes);
 #              filament (Filament's WebAssembly build, which `ibl bake --target filament`
-#              is rendered in; @babylonjs/core's DDSTools also reads ibl's DDS files)
+#              is rendered in; @babylonjs/core's DDSTools also reads ibl's DDS files);
+#              @babylonjs/loaders (Babylon's glTF loader and its EXT_lights_image_based,
+#              which loads `ibl bake --target gltf`)
+#              python3-openimageio (OpenImageIO's Python module: an independent reader of
+#              ibl's BC6H DDS files, tests/viewer/dds_oiio_test.py)
 #   godot:     godot3 (Godot 3.2.3: tests/godot renders `ibl bake --target godot` in it), xvfb
 #              and xauth (xvfb-run: the X server Godot needs, without a display)
 #   fuzzing:   clang libclang-rt-14-dev (libFuzzer, sanitizer runtimes), dpkg-dev (apt-get
@@ -40,7 +44,7 @@
 # components and keyring) in /etc/apt/sources.list.d/ibl-deb-src.sources. Nothing else is
 # ever downloaded: every byte comes through apt from the machine's configured Debian archive.
 set -eu
-PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libpng-dev libjpeg-dev libdeflate-dev libjansson-dev libassimp-dev libembree-dev libzstd-dev libastcenc-dev libcmocka-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools parallel chromium nodejs godot3 xvfb xauth"
+PACKAGES="cmake make gcc g++ pkg-config libopenexr-dev libpng-dev libjpeg-dev libdeflate-dev libjansson-dev libassimp-dev libembree-dev libzstd-dev libastcenc-dev libcmocka-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri glslang-tools parallel chromium nodejs python3-openimageio godot3 xvfb xauth"
 command -v npm >/dev/null 2>&1 || PACKAGES="$PACKAGES npm"
 # Source package:binary package whose installed version is fetched (headers and instrumented
 # libraries then match exactly). Built in this order by fuzz/build-deps.sh.
