@@ -48,7 +48,8 @@ static const ibl_target_profile profiles[IBL_TARGET_COUNT] = {
     /* Unity, Unreal and Godot filter their own probes from an equirect: the chain is ibl's
      * default for their level mappings; what they take is engine_environment.exr */
     /* the picture turned so that the engine's import shows the input's (x, y, z) at Unity's
-     * (x, y, -z) (the left-handed flip of z) and at Godot's (x, y, z) */
+     * (x, y, -z) (the left-handed flip of z), at Unreal's (-z, x, y) (ibl's front on Unreal's
+     * forward +X, +Z up; tests/test_engine_unreal.c) and at Godot's (x, y, z) */
     [IBL_TARGET_UNITY] = {
         .target = IBL_TARGET_UNITY, .name = "unity", .engine = "Unity (2022.3 documentation)",
         .orientation = {.yaw_degrees = 90.0f},
@@ -57,6 +58,7 @@ static const ibl_target_profile profiles[IBL_TARGET_COUNT] = {
         .sh_form = IBL_TARGET_SH_UNITY, .files = IBL_TARGET_FILE_README | IBL_TARGET_FILE_EQUIRECT_EXR},
     [IBL_TARGET_UNREAL] = {
         .target = IBL_TARGET_UNREAL, .name = "unreal", .engine = "Unreal Engine 5 (documentation)",
+        .orientation = {.yaw_degrees = -90.0f},
         .filter = IBL_FILTER_GGX, .mapping = IBL_MAPPING_UNREAL, .size = 256,
         .format = IBL_FORMAT_RGBA16F, .containers = IBL_BAKE_KTX2 | IBL_BAKE_DDS,
         .sh_form = IBL_TARGET_SH_RADIANCE, .files = IBL_TARGET_FILE_README | IBL_TARGET_FILE_EQUIRECT_EXR},

@@ -174,7 +174,9 @@ static const char unreal_readme[] =
     "Maximum Texture Size at least %d. Use it as a Sky Light with Source Type SLS Specified\n"
     "Cubemap (or the HDRI Backdrop actor). Units: with physical units (cd/m^2) bake with\n"
     "--units nits and leave the Sky Light's intensity at 1. Unreal's frame is left-handed, +Z\n"
-    "up; turn the picture with the Sky Light's Source Cubemap Angle.\n";
+    "up, and its long-lat import puts a picture's centre on -Y and its right quarter on +X, so\n"
+    "the environment was turned by -90 degrees about +Y first: a direction (x, y, z) of the\n"
+    "input shows at Unreal's (-z, x, y), the input's front (-Z) on Unreal's forward (+X).\n";
 
 /* Godot 3's settings and levels as measured by rendering this file in Godot 3.2.3
  * (tests/godot/test_godot.c): the sky, the reflections and the diffuse light all come from the
