@@ -81,7 +81,7 @@ static const char gltf_readme[] =
     "glTF 2.0: image-based light extensions (ibl bake --target gltf)\n"
     "\n"
     "engine_gltf.gltf declares EXT_lights_image_based: %d mips of the GGX chain (%d..%d texels,\n"
-    "roughness = mip / (mips - 1)) as RGBD PNG faces engine_gltf_MIP_FACE.png (faces +X -X +Y\n"
+    "%s) as RGBD PNG faces engine_gltf_MIP_FACE.png (faces +X -X +Y\n"
     "-Y +Z -Z), the irradiance SH (irradianceCoefficients) and specularImageSize. Merge its\n"
     "\"extensions\", \"images\" and \"extensionsUsed\" into your asset, and reference the light\n"
     "from a scene:\n"
@@ -89,6 +89,10 @@ static const char gltf_readme[] =
     "  \"scenes\": [{ \"nodes\": [...], \"extensions\": { \"EXT_lights_image_based\": { \"light\": 0 } } }]\n"
     "\n"
     "RGBD (Babylon.js's packing): rgb = pow(png.rgb, 2.2) / png.a.\n"
+    "Babylon.js's glTF loader reads mip l as GGX alpha = 2^(l / s) / size, s = (mips - 1) /\n"
+    "log2(size), not roughness = mip / (mips - 1): for Babylon bake with --mapping babylon\n"
+    "--babylon-lod-scale s (0.5 for 5 mips at 256), and clear the loaded light's gammaSpace\n"
+    "(scene.environmentTexture.gammaSpace = false; the loader leaves it true).\n"
     "engine_khr_lights_environment.gltf is the same light in the KHR_lights_environment draft's\n"
     "form (a KTX2 cube texture, specular.ktx2, and the SH), referenced as\n"
     "  \"scenes\": [{ \"extensions\": { \"KHR_lights_environment\": { \"environment\": 0 } } }]\n"
@@ -113,9 +117,18 @@ static char *readme_text(ibl_context *ctx, const ibl_bake_data *b)
         snprintf(text, 8192, babylon_readme, info->levels, first, last,
                  (double)info->babylon_lod_scale, info->size, (double)info->babylon_lod_scale);
         break;
-    case IBL_TARGET_GLTF:
-        snprintf(text, 8192, gltf_readme, info->levels, first, last);
+    case IBL_TARGET_GLTF: {
+        char mapping[96];
+        if (info->mapping == IBL_MAPPING_BABYLON)
+            snprintf(mapping, sizeof mapping, "alpha = 2^(mip / %g) / %d: Babylon's mapping",
+                     (double)info->babylon_lod_scale, first);
+        else if (info->mapping == IBL_MAPPING_LINEAR)
+            snprintf(mapping, sizeof mapping, "roughness = mip / (mips - 1)");
+        else
+            snprintf(mapping, sizeof mapping, "the %s mapping", ibl_specular_mapping_name(info->mapping));
+        snprintf(text, 8192, gltf_readme, info->levels, first, last, mapping);
         break;
+    }
     default:
         if (!ibl__engine_readme(b, b->units ? b->units : "the input's units", text, 8192))
             snprintf(text, 8192, "%s\n", ibl_target_name(b->target));
