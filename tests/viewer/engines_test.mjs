@@ -1,4 +1,4 @@
-// Browser tests of `ibl bake --target ENGINE` (run by tests/viewer/run_engines.sh through
+// Browser tests of `ibl bake --target ENGINE` (run by tests/viewer/run_node.sh through
 // CTest): headless Debian chromium (playwright-core, software WebGL2), three.js and
 // Babylon.js from tests/viewer/node_modules served by a local HTTP server (no network).
 // For each engine a sphere grid is rendered twice in the same page: lit by the engine's own
@@ -9,126 +9,25 @@
 // each axis that moves to the other side under a mirror): a wrong yaw or mirror moves whole
 // colours across the spheres and fails the bound by far.
 // Usage: node engines_test.mjs IBL WORKDIR [SCREENSHOT_DIR] (the PNGs of docs/ENGINES.md)
-import { execFile } from 'node:child_process';
 import fs from 'node:fs';
-import http from 'node:http';
-import zlib from 'node:zlib';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { makeChecker } from './common.mjs';
+import { writeAxesHdr, startServer, launchChromium, runIbl, compareRenders, writeStackedPng } from './render_common.mjs';
 
 const [ibl, work, shots] = process.argv.slice(2);
 const here = path.dirname(fileURLToPath(import.meta.url));
 const repo = path.resolve(here, '..', '..');
-const CHROMIUM = process.env.IBL_CHROMIUM || '/usr/bin/chromium';
-const { chromium } = await import('playwright-core');
 
 const { check, finish } = makeChecker();
 
-// ---- the axes environment: a Radiance .hdr (flat RGBE scanlines) in ibl's equirect layout
-// (centre column -Z, right quarter +X, top row +Y; docs/CONVENTIONS.md) ----
-function axesHdr(file, W = 256, H = 128) {
-  const axes = [ // direction, colour, the dot's offset (a turn about +Y, then up)
-    [[1, 0, 0], [3.0, 0.15, 0.1]], [[-1, 0, 0], [0.1, 0.9, 1.2]],
-    [[0, 1, 0], [0.2, 2.0, 0.2]], [[0, -1, 0], [0.6, 0.1, 0.9]],
-    [[0, 0, 1], [0.15, 0.3, 3.0]], [[0, 0, -1], [1.6, 1.4, 0.1]]];
-  const head = Buffer.from(`#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y ${H} +X ${W}\n`, 'latin1');
-  const body = Buffer.alloc(W * H * 4);
-  for (let y = 0; y < H; y++)
-    for (let x = 0; x < W; x++) {
-      const phi = 2 * Math.PI * ((x + 0.5) / W - 0.5), th = Math.PI * (y + 0.5) / H;
-      const d = [Math.sin(th) * Math.sin(phi), Math.cos(th), -Math.sin(th) * Math.cos(phi)];
-      let best = 0, bestDot = -2;
-      axes.forEach(([a], i) => { const t = a[0] * d[0] + a[1] * d[1] + a[2] * d[2]; if (t > bestDot) { bestDot = t; best = i; } });
-      let c = axes[best][1].map((v) => v * (0.35 + 0.65 * bestDot));
-      // a white dot 25 degrees to the right of +X, +Z and -Z seen from inside, 20 up: mirrored
-      // images put it on the left
-      const dots = [[-Math.PI / 2 + 0.44, 0.35], [Math.PI + 0.44, 0.35], [0.44, 0.35], [0.44 - Math.PI, 0.35]];
-      for (const [p0, e0] of dots) {
-        const dd = [Math.cos(e0) * -Math.sin(-p0), Math.sin(e0), -Math.cos(e0) * Math.cos(-p0)];
-        const t = dd[0] * d[0] + dd[1] * d[1] + dd[2] * d[2];
-        if (t > Math.cos(0.16)) c = [8, 8, 8];
-      }
-      const m = Math.max(...c);
-      const i = (y * W + x) * 4;
-      if (m < 1e-32) continue;
-      const e = Math.ceil(Math.log2(m) + 1e-9), f = 256 / 2 ** e;
-      for (let k = 0; k < 3; k++) body[i + k] = Math.min(255, Math.floor(c[k] * f));
-      body[i + 3] = e + 128;
-    }
-  fs.writeFileSync(file, Buffer.concat([head, body]));
-}
-
-// ---- a local server: /nm/ -> node_modules, /w/ -> the work folder, /page/NAME -> pages ----
 const pages = {};
-const types = { '.js': 'text/javascript', '.mjs': 'text/javascript', '.html': 'text/html' };
-let requests = 0;
-const server = http.createServer((req, res) => {
-  requests++;
-  const url = decodeURIComponent(req.url.split('?')[0]);
-  let file = null;
-  if (url.startsWith('/page/')) {
-    res.writeHead(200, { 'content-type': 'text/html' });
-    return res.end(pages[url.slice(6)] || '');
-  }
-  if (url.startsWith('/nm/')) file = path.join(here, 'node_modules', url.slice(4));
-  else if (url.startsWith('/w/')) file = path.join(work, url.slice(3));
-  if (!file || !fs.existsSync(file) || !fs.statSync(file).isFile()) {
-    res.writeHead(404);
-    return res.end();
-  }
-  res.writeHead(200, { 'content-type': types[path.extname(file)] || 'application/octet-stream' });
-  fs.createReadStream(file).pipe(res);
-});
-await new Promise((r) => server.listen(0, '127.0.0.1', r));
-const base = `http://127.0.0.1:${server.address().port}`;
 
 // the bakes run while the browser loads the engines (module loading is latency-bound)
 function bake(input, target, dir, extra = []) {
   const size = target === 'three' ? 256 : SIZE; // three's PMREMGenerator makes 256 at least
   const args = ['bake', input, '--target', target, '--size', String(size), ...extra, '-o', dir, '-q'];
-  return new Promise((resolve, reject) => execFile(ibl, args, (e, out, err) =>
-    e ? reject(new Error(`ibl ${args.join(' ')}: ${err}`)) : resolve()));
-}
-
-// ---- a PNG of renders stacked top to bottom (readPixels rows are bottom-up), for the docs ----
-function writeStack(file, w, h, images) {
-  const rows = [];
-  for (const img of images)
-    for (let y = h - 1; y >= 0; y--) {
-      const row = Buffer.alloc(1 + w * 3);
-      for (let x = 0; x < w; x++)
-        for (let k = 0; k < 3; k++) row[1 + x * 3 + k] = img[(y * w + x) * 4 + k];
-      rows.push(row);
-    }
-  const chunk = (type, data) => {
-    const len = Buffer.alloc(4), crc = Buffer.alloc(4), body = Buffer.concat([Buffer.from(type, 'latin1'), data]);
-    len.writeUInt32BE(data.length);
-    crc.writeUInt32BE(zlib.crc32(body) >>> 0);
-    return Buffer.concat([len, body, crc]);
-  };
-  const ihdr = Buffer.alloc(13);
-  ihdr.writeUInt32BE(w, 0);
-  ihdr.writeUInt32BE(h * images.length, 4);
-  ihdr[8] = 8;
-  ihdr[9] = 2;
-  fs.writeFileSync(file, Buffer.concat([Buffer.from([137, 80, 78, 71, 13, 10, 26, 10]), chunk('IHDR', ihdr),
-    chunk('IDAT', zlib.deflateSync(Buffer.concat(rows))), chunk('IEND', Buffer.alloc(0))]));
-}
-
-// ---- comparison: sphere pixels (alpha > 0 where the clear colour is transparent) ----
-function compare(a, b) {
-  let sum = 0, n = 0, worst = 0;
-  for (let i = 0; i < a.length; i += 4) {
-    if (a[i + 3] === 0 && b[i + 3] === 0) continue;
-    for (let k = 0; k < 3; k++) {
-      const d = Math.abs(a[i + k] - b[i + k]);
-      sum += d;
-      if (d > worst) worst = d;
-    }
-    n += 3;
-  }
-  return { mean: n ? sum / n : Infinity, worst, pixels: n / 3 };
+  return runIbl(ibl, args);
 }
 
 const W = 320, H = 128, SIZE = Number(process.env.IBL_ENGINES_SIZE || 128);
@@ -263,7 +162,7 @@ pages['babylon.html'] = babylonPage;
 const t0 = Date.now();
 fs.mkdirSync(work, { recursive: true });
 const axes = path.join(work, 'axes.hdr');
-axesHdr(axes);
+writeAxesHdr(axes);
 fs.copyFileSync(path.join(repo, 'tests/data/uffizi_latlong_256x128.hdr'), path.join(work, 'uffizi.hdr'));
 const inputs = [['uffizi', path.join(work, 'uffizi.hdr')], ['axes', axes]];
 const bakes = [];
@@ -274,18 +173,9 @@ for (const [name, file] of inputs)
 bakes.push(bake(axes, 'three', path.join(work, 'axes-three-turned'), ['--yaw', '0']));
 bakes.push(bake(axes, 'babylon', path.join(work, 'axes-babylon-turned'), ['--yaw', '90']));
 
-const browser = await chromium.launch({
-  executablePath: CHROMIUM,
-  args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-});
-async function open(page) {
-  const p = await browser.newPage();
-  const errors = [];
-  p.on('pageerror', (e) => errors.push(String(e)));
-  await p.goto(`${base}/page/${page}`);
-  await p.waitForFunction(() => window.ready === true, null, { timeout: 150000 });
-  return { p, errors };
-}
+const { server, base } = await startServer(here, work, pages);
+const { browser, open: openUrl } = await launchChromium();
+const open = (page) => openUrl(`${base}/page/${page}`);
 const opened = { three: open('three.html'), babylon: open('babylon.html') };
 await Promise.all(bakes);
 
@@ -301,43 +191,43 @@ await Promise.all(bakes);
 const BOUND = 2.0, BOUND_RGBD = 3.0;
 {
   const { p, errors } = await opened.three;
-  console.log('three page loaded after ' + ((Date.now() - t0) / 1000).toFixed(1) + ' s, ' + requests + ' requests');
+  console.log('three page loaded after ' + ((Date.now() - t0) / 1000).toFixed(1) + ' s');
   for (const [name] of inputs) {
     const r = await p.evaluate(([h, k, w]) => window.run(h, k, w), [`/w/${name === 'axes' ? 'axes.hdr' : 'uffizi.hdr'}`,
       `/w/${name}-three/specular.ktx2`, name === 'axes' ? '/w/axes-three-turned/specular.ktx2' : null]);
-    const c = compare(r.own, r.baked);
+    const c = compareRenders(r.own, r.baked, W);
     check(`three.js: ${name}: PMREM of the HDRI vs ibl bake --target three`, c.mean < BOUND && c.pixels > 5000,
       `mean ${c.mean.toFixed(3)}/255, worst ${c.worst}/255 over ${c.pixels} px`);
     if (r.turned) {
-      const t = compare(r.own, r.turned);
+      const t = compareRenders(r.own, r.turned, W);
       check('three.js: axes: the bake a quarter turn off fails the same bound', t.mean > 4 * BOUND,
         `mean ${t.mean.toFixed(3)}/255`);
     }
-    if (shots && name === 'uffizi') writeStack(path.join(shots, 'engines_three.png'), W, H, [r.own, r.baked]);
+    if (shots && name === 'uffizi') writeStackedPng(path.join(shots, 'engines_three.png'), W, H, [r.own, r.baked]);
   }
   check('three.js: no page errors', errors.length === 0, errors.join('; '));
   await p.close();
 }
 {
   const { p, errors } = await opened.babylon;
-  console.log('babylon page loaded after ' + ((Date.now() - t0) / 1000).toFixed(1) + ' s, ' + requests + ' requests');
+  console.log('babylon page loaded after ' + ((Date.now() - t0) / 1000).toFixed(1) + ' s');
   for (const [name] of inputs) {
     const r = await p.evaluate(([h, d, e, w]) => window.run(h, d, e, w), [`/w/${name === 'axes' ? 'axes.hdr' : 'uffizi.hdr'}`,
       `/w/${name}-babylon/specular.dds`, `/w/${name}-babylon/engine_babylon.env`,
       name === 'axes' ? '/w/axes-babylon-turned/specular.dds' : null]);
     console.log('babylon ms', r.ms.map((x) => x.toFixed(0)).join(' '));
-    const c = compare(r.own, r.dds);
+    const c = compareRenders(r.own, r.dds, W);
     check(`Babylon.js: ${name}: HDRCubeTexture prefiltered vs ibl bake --target babylon (DDS)`, c.mean < BOUND && c.pixels > 5000,
       `mean ${c.mean.toFixed(3)}/255, worst ${c.worst}/255 over ${c.pixels} px`);
-    const e = compare(r.own, r.env);
+    const e = compareRenders(r.own, r.env, W);
     check(`Babylon.js: ${name}: HDRCubeTexture prefiltered vs the bake's .env`, e.mean < BOUND_RGBD && e.pixels > 5000,
       `mean ${e.mean.toFixed(3)}/255, worst ${e.worst}/255 over ${e.pixels} px`);
     if (r.turned) {
-      const t = compare(r.own, r.turned);
+      const t = compareRenders(r.own, r.turned, W);
       check('Babylon.js: axes: the bake a quarter turn off fails the same bound', t.mean > 4 * BOUND,
         `mean ${t.mean.toFixed(3)}/255`);
     }
-    if (shots && name === 'uffizi') writeStack(path.join(shots, 'engines_babylon.png'), W, H, [r.own, r.dds, r.env]);
+    if (shots && name === 'uffizi') writeStackedPng(path.join(shots, 'engines_babylon.png'), W, H, [r.own, r.dds, r.env]);
   }
   check('Babylon.js: no page errors', errors.length === 0, errors.join('; '));
   await p.close();
