@@ -3,11 +3,13 @@
 // in headless Debian chromium. A glTF scene is made from the bake's engine_gltf.gltf (its
 // light, RGBD faces and irradiance coefficients as written) plus a grid of ten spheres with
 // glTF metallic-roughness materials; Babylon loads it, renders it, and renders the same loaded
-// spheres again with the light swapped for the DDS of `ibl bake --target babylon`, which
-// tests/viewer/engines_test.mjs checks against Babylon's own import of the HDRI. The two
-// renders must agree. Negative controls, each must fail the bound: the glTF with two cube
-// faces swapped, and with the irradiance coefficients in the unsigned basis (signs of the
-// Condon-Shortley phase dropped).
+// spheres again lit by a DDS of the same environment with the babylon row's chain (the form
+// tests/viewer/engines_test.mjs checks against Babylon's own import of the HDRI). The two
+// renders must agree when the glTF's chain is in the level mapping Babylon's loader assumes.
+// Negative controls, each must fail the bound: the glTF with two cube faces exchanged, and with
+// the irradiance coefficients in the unsigned basis (the Condon-Shortley signs dropped).
+// The last column has roughness 0.95: the loader's materials at roughness exactly 1 render
+// black in SwiftShader under any light, the DDS too.
 // Usage: node gltf_test.mjs IBL WORKDIR [SCREENSHOT_DIR]
 import fs from 'node:fs';
 import path from 'node:path';
