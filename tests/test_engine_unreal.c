@@ -1,4 +1,4 @@
-/* `ibl bake --target unreal`: the frame of engine_environment.exr through Unreal's own
+/* `ibl bake --target unreal`: the frame of engine_environment.exr (and its .hdr twin) through Unreal's own
  * long-lat import, worked out by hand (Unreal cannot run here).
  *
  * Unreal turns a 2:1 panorama into a TextureCube in its texture compressor
@@ -89,6 +89,43 @@ static double unreal_frame_error(ibl_context *ctx, const char *picture, const ch
     return worst;
 }
 
+/* engine_environment.hdr (the file Unreal's importer makes a TextureCube of) is the EXR's picture
+ * in Radiance RGBE: same size, every channel within RGBE's quantisation of it. RGBE keeps 8
+ * bits of mantissa under the pixel's largest channel m, so a channel is off by at most
+ * m / 256 (truncation) plus the float rounding of the decode: bound m / 200. */
+static void unreal_hdr_is_the_exr_in_rgbe(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    const char *picture = write_direction_picture(ctx);
+    const char *dir = test_path("unreal_hdr"), *out;
+    assert_int_equal(test_run_cli(&out, "bake -q '%s' -o '%s' --target unreal --size 32 %s", picture, dir, FAST), 0);
+    char path[600];
+    ibl_image exr, hdr;
+    snprintf(path, sizeof path, "%s/engine_environment.exr", dir);
+    assert_int_equal(ibl_read_image(ctx, path, NULL, &exr, NULL), IBL_OK);
+    snprintf(path, sizeof path, "%s/engine_environment.hdr", dir);
+    assert_int_equal(ibl_file_type_from_path(path), IBL_FILE_HDR);
+    assert_int_equal(ibl_read_image(ctx, path, NULL, &hdr, NULL), IBL_OK);
+    assert_int_equal(hdr.width, exr.width);
+    assert_int_equal(hdr.height, exr.height);
+    double worst = 0, sum = 0;
+    for (size_t i = 0; i < (size_t)exr.width * exr.height; i++) {
+        const float *e = exr.pixels + i * 4, *h = hdr.pixels + i * 4;
+        double m = fmax(e[0], fmax(e[1], e[2]));
+        for (int k = 0; k < 3; k++) {
+            worst = fmax(worst, fabs(h[k] - e[k]) / m);
+            sum += e[k];
+        }
+    }
+    printf("unreal .hdr against .exr: largest error %.5f of the pixel's largest channel\n", worst);
+    assert_true(sum > 0);
+    assert_true(worst <= 1.0 / 200);
+    ibl_image_free(ctx, &exr);
+    ibl_image_free(ctx, &hdr);
+    ibl_context_destroy(ctx);
+}
+
 /* Bound 0.05, as for Unity and Godot in test_engine_targets.c: the colour changes by at most 0.5
  * per radian, a pixel of the 128-wide EXR is 0.049 rad and the 32-texel working cube's texels
  * 0.05 rad, so nearest-pixel and resampling errors stay under 0.04; the row without its turn,
@@ -111,6 +148,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(unreal_import_shows_the_stated_frame),
+        cmocka_unit_test(unreal_hdr_is_the_exr_in_rgbe),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -63,9 +63,12 @@ enum {
                                                engine_filament_ibl.ktx (the chain, KTX1 with
                                                the "sh" key), engine_filament_skybox.ktx,
                                                engine_filament_irradiance.ktx and sh.txt     */
-    IBL_TARGET_FILE_EQUIRECT_EXR = 1u << 4  /* engine_environment.exr: the unfiltered
+    IBL_TARGET_FILE_EQUIRECT_EXR = 1u << 4, /* engine_environment.exr: the unfiltered
                                                environment as an equirect float EXR, for the
                                                engines that filter it themselves             */
+    IBL_TARGET_FILE_EQUIRECT_HDR = 1u << 5  /* engine_environment.hdr: the same picture as
+                                               Radiance RGBE, the form Unreal's importer turns
+                                               into a TextureCube by itself                  */
 };
 
 typedef struct ibl_target_profile {

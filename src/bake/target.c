@@ -61,7 +61,8 @@ static const ibl_target_profile profiles[IBL_TARGET_COUNT] = {
         .orientation = {.yaw_degrees = -90.0f},
         .filter = IBL_FILTER_GGX, .mapping = IBL_MAPPING_UNREAL, .size = 256,
         .format = IBL_FORMAT_RGBA16F, .containers = IBL_BAKE_KTX2 | IBL_BAKE_DDS,
-        .sh_form = IBL_TARGET_SH_RADIANCE, .files = IBL_TARGET_FILE_README | IBL_TARGET_FILE_EQUIRECT_EXR},
+        .sh_form = IBL_TARGET_SH_RADIANCE,
+        .files = IBL_TARGET_FILE_README | IBL_TARGET_FILE_EQUIRECT_EXR | IBL_TARGET_FILE_EQUIRECT_HDR},
     [IBL_TARGET_GODOT] = {
         .target = IBL_TARGET_GODOT, .name = "godot", .engine = "Godot 3.2.3 (rendered) and 4 (sky shader source)",
         .orientation = {.yaw_degrees = 180.0f},

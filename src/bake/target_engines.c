@@ -81,9 +81,10 @@ ibl_status ibl__stage_filament(ibl_context *ctx, const char *dir, const ibl_bake
     return st;
 }
 
-ibl_status ibl__stage_equirect_exr(ibl_context *ctx, const char *dir, const ibl_bake_data *b)
+ibl_status ibl__stage_equirect(ibl_context *ctx, const char *dir, const ibl_bake_data *b,
+                               ibl_file_type kind)
 {
-    static const char name[] = "engine_environment.exr";
+    const char *name = kind == IBL_FILE_HDR ? "engine_environment.hdr" : "engine_environment.exr";
     if (!b->environment.data)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s/%s: the bake kept no environment", dir, name);
     /* 4 pixels per cube texel around the horizon: the cube's detail, no more */
@@ -91,11 +92,12 @@ ibl_status ibl__stage_equirect_exr(ibl_context *ctx, const char *dir, const ibl_
     ibl_image image;
     ibl_status st = ibl_cubemap_to_image(ctx, &b->environment, &fd, &image);
     if (st != IBL_OK) return ibl__fail(ctx, st, "%s/%s: %s", dir, name, ibl_context_message(ctx));
-    /* 32-bit float: a sun in cd/m^2 is far past half's 65504 */
-    ibl_write_desc wd = {.format = IBL_FORMAT_RGB32F};
+    /* EXR in 32-bit float: a sun in cd/m^2 is far past half's 65504 (RGBE's shared exponent
+     * reaches 2^127 with an 8-bit mantissa) */
+    ibl_write_desc wd = {.format = kind == IBL_FILE_HDR ? IBL_FORMAT_DEFAULT : IBL_FORMAT_RGB32F};
     void *bytes = NULL;
     size_t size = 0;
-    st = ibl_encode_image(ctx, IBL_FILE_EXR, &image, &wd, &bytes, &size);
+    st = ibl_encode_image(ctx, kind, &image, &wd, &bytes, &size);
     if (st == IBL_OK) st = ibl__bake_write_staged(ctx, dir, name, bytes, size);
     else st = ibl__fail(ctx, st, "%s/%s: %s", dir, name, ibl_context_message(ctx));
     ibl_free(ctx, bytes);
@@ -167,10 +169,12 @@ static const char unreal_readme[] =
     "Unreal Engine: an environment for Unreal to filter (ibl bake --target unreal)\n"
     "\n"
     "Unreal builds its reflection captures and sky light from the unfiltered environment:\n"
-    "engine_environment.exr (equirect, 32-bit float RGB, %s).\n"
+    "engine_environment.hdr (equirect, Radiance RGBE, %s; engine_environment.exr is the same\n"
+    "picture in 32-bit float for tools that take EXR).\n"
     "\n"
-    "Import settings: drag the EXR into the Content Browser: it becomes a TextureCube\n"
-    "(long-lat source), Compression Settings HDR (RGBA16F) or HDRCompressed (BC6H), sRGB off,\n"
+    "Import settings: drag the .hdr into the Content Browser: Unreal makes a 2:1 Radiance file\n"
+    "a TextureCube (long-lat source) by itself; an EXR panorama comes in as a 2D texture.\n"
+    "Compression Settings HDR (RGBA16F) or HDRCompressed (BC6H), sRGB off,\n"
     "Maximum Texture Size at least %d. Use it as a Sky Light with Source Type SLS Specified\n"
     "Cubemap (or the HDRI Backdrop actor). Units: with physical units (cd/m^2) bake with\n"
     "--units nits and leave the Sky Light's intensity at 1. Unreal's frame is left-handed, +Z\n"

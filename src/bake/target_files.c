@@ -274,6 +274,9 @@ ibl_status ibl__bake_stage_target(ibl_context *ctx, const char *dir, const ibl_b
     if (st == IBL_OK && (p->files & IBL_TARGET_FILE_BABYLON_ENV)) st = stage_babylon_env(ctx, dir, b);
     if (st == IBL_OK && (p->files & IBL_TARGET_FILE_GLTF)) st = ibl__stage_gltf_lights(ctx, dir, b);
     if (st == IBL_OK && (p->files & IBL_TARGET_FILE_FILAMENT)) st = ibl__stage_filament(ctx, dir, b);
-    if (st == IBL_OK && (p->files & IBL_TARGET_FILE_EQUIRECT_EXR)) st = ibl__stage_equirect_exr(ctx, dir, b);
+    if (st == IBL_OK && (p->files & IBL_TARGET_FILE_EQUIRECT_EXR))
+        st = ibl__stage_equirect(ctx, dir, b, IBL_FILE_EXR);
+    if (st == IBL_OK && (p->files & IBL_TARGET_FILE_EQUIRECT_HDR))
+        st = ibl__stage_equirect(ctx, dir, b, IBL_FILE_HDR);
     return st;
 }

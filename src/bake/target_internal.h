@@ -24,10 +24,12 @@ ibl_status ibl__target_check(ibl_context *ctx, ibl_target target, const ibl_spec
 ibl_status ibl__stage_gltf_lights(ibl_context *ctx, const char *dir, const ibl_bake_data *bake);
 
 /* target_engines.c: Filament's deploy set (engine_filament_*.ktx, sh.txt) and the equirect
- * EXR of the engines that filter it themselves (engine_environment.exr), into the staging
- * folder; both need the bake's environment (kept for these targets). */
+ * picture of the engines that filter it themselves (engine_environment.exr, or .hdr when
+ * kind is IBL_FILE_HDR), into the staging folder; both need the bake's environment (kept for
+ * these targets). */
 ibl_status ibl__stage_filament(ibl_context *ctx, const char *dir, const ibl_bake_data *bake);
-ibl_status ibl__stage_equirect_exr(ibl_context *ctx, const char *dir, const ibl_bake_data *bake);
+ibl_status ibl__stage_equirect(ibl_context *ctx, const char *dir, const ibl_bake_data *bake,
+                               ibl_file_type kind);
 /* README.txt of the Filament, Unity, Unreal and Godot targets into text; units names the
  * bake's radiance units. Returns 0 for the other targets. */
 int ibl__engine_readme(const ibl_bake_data *bake, const char *units, char *text, size_t cap);
