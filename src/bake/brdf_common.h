@@ -22,11 +22,12 @@ typedef struct ibl__rule {
 /* Fills a rule of n points (1 <= n <= IBL__GL_MAX); nodes by Newton iteration, float64. */
 void ibl__gauss_legendre(int n, ibl__rule *rule);
 
-/* The rules one albedo integral uses, all derived from one "order" (points per smooth piece
- * in theta_h where only part of the phi circle is valid; the full-circle piece, which is
- * smoother, gets 2/3 of it, phi pieces half of it, whole circles 2/3 of it as midpoints). */
+/* The rules one albedo integral uses, all derived from one "order": order / 2 points on the
+ * theta_h pieces where the phi circle is cut (5/6 order at grazing n.v) and on the
+ * whole-circle piece, order / 3 per phi interval and order / 3 midpoints on a whole half
+ * circle. */
 typedef struct ibl__quadrature {
-    ibl__rule u_part, u_full, phi;
+    ibl__rule u_part, u_graze, u_full, phi;
     int circle;
 } ibl__quadrature;
 
