@@ -5,6 +5,23 @@
 #include <math.h>
 
 
+/* cos(phi) for phi in [0, pi] as sin(pi/2 - phi) by its Taylor series to t^17 (truncation
+ * below 5e-14): cheaper than libm's cos in the innermost loop, and the same on every
+ * platform, which keeps tables bit-identical across C libraries. */
+static inline double cos_0_pi(double phi)
+{
+    double t = 0.5 * IBL_PI - phi, t2 = t * t;
+    double q = -1.0 / 355687428096000.0;                /* -1/17! */
+    q = q * t2 + 1.0 / 1307674368000.0;                 /* 1/15!  */
+    q = q * t2 - 1.0 / 6227020800.0;                    /* -1/13! */
+    q = q * t2 + 1.0 / 39916800.0;                      /* 1/11!  */
+    q = q * t2 - 1.0 / 362880.0;                        /* -1/9!  */
+    q = q * t2 + 1.0 / 5040.0;                          /* 1/7!   */
+    q = q * t2 - 1.0 / 120.0;                           /* -1/5!  */
+    q = q * t2 + 1.0 / 6.0;                             /* 1/3!   */
+    return t - t * t2 * q;
+}
+
 void ibl__gauss_legendre(int n, ibl__rule *rule)
 {
     if (n < 1) n = 1;
@@ -46,6 +63,7 @@ void ibl__quadrature_init(ibl__quadrature *q, int order)
     ibl__gauss_legendre(order / 2, &q->u_full);
     ibl__gauss_legendre(order / 3, &q->phi);
     q->circle = order / 3;
+    for (int j = 0; j < q->circle; j++) q->circle_cos[j] = cos_0_pi((j + 0.5) * IBL_PI / q->circle);
 }
 
 /* The lobe's weight measure in theta_h through its CDF u (the textbook importance map):
@@ -140,23 +158,6 @@ typedef struct sink {
     const double *f0;
     int nf0;
 } sink;
-
-/* cos(phi) for phi in [0, pi] as sin(pi/2 - phi) by its Taylor series to t^17 (truncation
- * below 5e-14): cheaper than libm's cos in the innermost loop, and the same on every
- * platform, which keeps tables bit-identical across C libraries. */
-static inline double cos_0_pi(double phi)
-{
-    double t = 0.5 * IBL_PI - phi, t2 = t * t;
-    double q = -1.0 / 355687428096000.0;                /* -1/17! */
-    q = q * t2 + 1.0 / 1307674368000.0;                 /* 1/15!  */
-    q = q * t2 - 1.0 / 6227020800.0;                    /* -1/13! */
-    q = q * t2 + 1.0 / 39916800.0;                      /* 1/11!  */
-    q = q * t2 - 1.0 / 362880.0;                        /* -1/9!  */
-    q = q * t2 + 1.0 / 5040.0;                          /* 1/7!   */
-    q = q * t2 - 1.0 / 120.0;                           /* -1/5!  */
-    q = q * t2 + 1.0 / 6.0;                             /* 1/3!   */
-    return t - t * t2 * q;
-}
 
 enum { MAX_PHI = 2 * IBL__GL_MAX };
 
@@ -316,9 +317,12 @@ static void piece_node(const piece *pc, double x, double *u, double *omu, double
         *du = 3.0 * pc->u1 * x * x;
         return;
     case MAP_ZETA_SINH: {
+        /* sinh and cosh from one expm1 (w >= 0): sinh w = (e - 1/e) / 2 = m (1 + 1/e) / 2
+         * with m = e - 1 keeps full precision at small w. */
         double w = pc->wa + (pc->wb - pc->wa) * x;
-        z = pc->c * sinh(w);
-        dz = pc->c * cosh(w) * (pc->wb - pc->wa);
+        double m = expm1(w), inv_e = 1.0 / (1.0 + m);
+        z = pc->c * 0.5 * m * (1.0 + inv_e);
+        dz = pc->c * 0.5 * (1.0 + m + inv_e) * (pc->wb - pc->wa);
         break;
     }
     default:
@@ -335,6 +339,90 @@ static void piece_node(const piece *pc, double x, double *u, double *omu, double
  * at th1 ~ n.v / 2 and th2 ~ pi/2 - n.v / 2 sit n.v from their mirror images: it gets the
  * larger rule u_graze. */
 #define GRAZING_MU 0.25
+
+/* One theta_h node: its weight (per unit phi, both sides of the circle) and angles. */
+typedef struct theta_node {
+    double wu, c2, s2, ch, sh;
+} theta_node;
+
+/* The nodes of one piece, computed before any phi loop so that their independent chains of
+ * libm calls, divisions and square roots overlap in the processor. Returns the count. */
+static int theta_nodes(const ibl__lobe_params *p, const piece *pc, const ibl__rule *ru,
+                       int partial, double mass, theta_node *out)
+{
+    int n = 0;
+    for (int i = 0; i < ru->n; i++) {
+        double x = ru->x[i], wx = ru->w[i];
+        if (partial) {
+            wx *= 6.0 * x * (1.0 - x);
+            x = x * x * (3.0 - 2.0 * x);
+        }
+        double u, omu, du;
+        piece_node(pc, x, &u, &omu, &du);
+        if (!(du > 0)) continue;
+        theta_node *t = &out[n++];
+        lobe_angle(p, u, omu, &t->c2, &t->s2);
+        t->ch = sqrt(t->c2);
+        t->sh = sqrt(t->s2);
+        t->wu = du * wx * mass / IBL_PI; /* (1/2pi) * 2 sides of phi */
+    }
+    return n;
+}
+
+/* The phi nodes of one theta_h node: cos(phi) into cphi[], weights into wgt[]; 0 when no
+ * phi gives n.l > 0. */
+static int phi_nodes(const theta_node *t, double mu, double sv, int kink, double level,
+                     const ibl__quadrature *q, double *cphi, double *wgt)
+{
+    /* n.l = 2 (v.h) ch - mu > 0  <=>  cos phi > -cot(tv) cot(2 th) */
+    double num = -mu * (t->c2 - t->s2), den = sv * 2.0 * t->sh * t->ch;
+    double cmax = den > 0 ? num / den : (num > 0 ? 2.0 : -2.0);
+    if (cmax >= 1.0) return 0;
+    double phimax = cmax <= -1.0 ? IBL_PI : acos(cmax);
+    double cuts[3] = {0, phimax, phimax};
+    int ncut = 2, n = 0;
+    if (kink) {
+        /* n.l = c  <=>  v.h = (c + mu) / (2 ch)  <=>  cos phi = (c + mu - 2 mu ch^2) / (2 ch sv sh) */
+        double ceq = den > 0 ? (level + mu - 2.0 * mu * t->c2) / den : 2.0;
+        if (ceq < 1.0) {
+            double pe = ceq <= -1.0 ? IBL_PI : acos(ceq);
+            if (pe > 0 && pe < phimax) {
+                cuts[1] = pe;
+                ncut = 3;
+            }
+        }
+    }
+    if (ncut == 2 && phimax >= IBL_PI) {
+        /* The whole circle: the integrand is smooth, even and 2 pi periodic, where the
+         * midpoint rule converges geometrically (exact for cos(k phi), k < 2m). */
+        int m = q->circle;
+        double wc = t->wu * IBL_PI / m;
+        for (int j = 0; j < m; j++) {
+            cphi[n] = q->circle_cos[j];
+            wgt[n++] = wc;
+        }
+        return n;
+    }
+    const ibl__rule *rphi = &q->phi;
+    for (int c = 0; c + 1 < ncut; c++) {
+        double pa = cuts[c], dp = cuts[c + 1] - pa;
+        if (!(dp > 0)) continue;
+        /* Towards the n.l = 0 cut the GGX visibility has poles at n.l ~ +-i alpha (Charlie's
+         * at n.l ~ -mu): x (2 - x) grades the nodes towards phimax, which turns a pole at
+         * relative distance d from the end into one at ~sqrt(d). */
+        int graded = c + 2 == ncut && phimax < IBL_PI;
+        for (int j = 0; j < rphi->n; j++) {
+            double x = rphi->x[j], wx = rphi->w[j];
+            if (graded) {
+                wx *= 2.0 * (1.0 - x);
+                x *= 2.0 - x;
+            }
+            cphi[n] = cos_0_pi(pa + dp * x);
+            wgt[n++] = t->wu * dp * wx;
+        }
+    }
+    return n;
+}
 
 static void integrate(const ibl__lobe_params *p, double mu, const ibl__quadrature *q, sink *s)
 {
@@ -362,6 +450,7 @@ static void integrate(const ibl__lobe_params *p, double mu, const ibl__quadratur
     sort_small(th, nth);
     double mass = lobe_mass(p);
     double cphi[MAX_PHI], wgt[MAX_PHI], fc[MAX_PHI];
+    theta_node nodes[IBL__GL_MAX];
     for (int seg = 0; seg + 1 < nth; seg++) {
         if (th[seg] >= th2) break;
         if (!(th[seg + 1] > th[seg])) continue;
@@ -371,69 +460,12 @@ static void integrate(const ibl__lobe_params *p, double mu, const ibl__quadratur
          * t = x^2 (3 - 2x) makes them O(x^3) so Gauss-Legendre keeps converging fast. */
         int whole = th[seg + 1] <= th1 + 1e-15 &&
                     (!kink || th[seg + 1] <= kink_lo + 1e-15 || th[seg] >= kink_hi - 1e-15);
-        int partial = !whole;
-        const ibl__rule *ru = !partial ? &q->u_full : mu < GRAZING_MU ? &q->u_graze : &q->u_part;
-        const ibl__rule *rphi = &q->phi;
-        for (int i = 0; i < ru->n; i++) {
-            double x = ru->x[i], wx = ru->w[i];
-            if (partial) {
-                wx *= 6.0 * x * (1.0 - x);
-                x = x * x * (3.0 - 2.0 * x);
-            }
-            double u, omu, du, c2, s2;
-            piece_node(&pc, x, &u, &omu, &du);
-            if (!(du > 0)) continue;
-            lobe_angle(p, u, omu, &c2, &s2);
-            double ch = sqrt(c2), sh = sqrt(s2);
-            /* n.l = 2 (v.h) ch - mu > 0  <=>  cos phi > -cot(tv) cot(2 th) */
-            double num = -mu * (c2 - s2), den = sv * 2.0 * sh * ch;
-            double cmax = den > 0 ? num / den : (num > 0 ? 2.0 : -2.0);
-            if (cmax >= 1.0) continue;
-            double phimax = cmax <= -1.0 ? IBL_PI : acos(cmax);
-            double cuts[3] = {0, phimax, phimax};
-            int ncut = 2;
-            if (kink) {
-                /* n.l = c  <=>  v.h = (c + mu) / (2 ch)  <=>
-                 * cos phi = (c + mu - 2 mu ch^2) / (2 ch sv sh) */
-                double ceq = den > 0 ? (level + mu - 2.0 * mu * c2) / den : 2.0;
-                if (ceq < 1.0) {
-                    double pe = ceq <= -1.0 ? IBL_PI : acos(ceq);
-                    if (pe > 0 && pe < phimax) {
-                        cuts[1] = pe;
-                        ncut = 3;
-                    }
-                }
-            }
-            double wu = du * wx * mass / IBL_PI; /* (1/2pi) * 2 sides of phi */
-            int n = 0;
-            if (ncut == 2 && phimax >= IBL_PI) {
-                /* The whole circle: the integrand is smooth, even and 2 pi periodic, where
-                 * the midpoint rule converges geometrically (exact for cos(k phi), k < 2m). */
-                int m = q->circle;
-                for (int j = 0; j < m; j++) {
-                    cphi[n] = cos_0_pi((j + 0.5) * IBL_PI / m);
-                    wgt[n++] = wu * IBL_PI / m;
-                }
-                ncut = 0;
-            }
-            for (int c = 0; c + 1 < ncut; c++) {
-                double pa = cuts[c], dp = cuts[c + 1] - pa;
-                if (!(dp > 0)) continue;
-                /* Towards the n.l = 0 cut the GGX visibility has poles at n.l ~ +-i alpha
-                 * (Charlie's at n.l ~ -mu): x (2 - x) grades the nodes towards phimax,
-                 * which doubles their relative distance's exponent (d -> sqrt(d)). */
-                int graded = c + 2 == ncut && phimax < IBL_PI;
-                for (int j = 0; j < rphi->n; j++) {
-                    double t = rphi->x[j], wt = rphi->w[j];
-                    if (graded) {
-                        wt *= 2.0 * (1.0 - t);
-                        t *= 2.0 - t;
-                    }
-                    cphi[n] = cos_0_pi(pa + dp * t);
-                    wgt[n++] = wu * dp * wt;
-                }
-            }
-            evaluate(p, mu, sv, ch, sh, cphi, wgt, fc, n);
+        const ibl__rule *ru = whole ? &q->u_full : mu < GRAZING_MU ? &q->u_graze : &q->u_part;
+        int nn = theta_nodes(p, &pc, ru, !whole, mass, nodes);
+        for (int i = 0; i < nn; i++) {
+            int n = phi_nodes(&nodes[i], mu, sv, kink, level, q, cphi, wgt);
+            if (!n) continue;
+            evaluate(p, mu, sv, nodes[i].ch, nodes[i].sh, cphi, wgt, fc, n);
             if (!s->nf0) {
                 double a = 0, b = 0;
                 for (int j = 0; j < n; j++) {

@@ -29,6 +29,7 @@ void ibl__gauss_legendre(int n, ibl__rule *rule);
 typedef struct ibl__quadrature {
     ibl__rule u_part, u_graze, u_full, phi;
     int circle;
+    double circle_cos[IBL__GL_MAX]; /* cos of the circle's midpoints on [0, pi] */
 } ibl__quadrature;
 
 enum { IBL__DEFAULT_ORDER = 24 };
