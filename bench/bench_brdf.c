@@ -1,7 +1,7 @@
 /* BRDF table timings (medians) and the numbers quoted in docs/BRDF.md.
  *   bench_brdf [DATA_DIR] [--accuracy] [--study]
  * DATA_DIR is ignored (the tables need no input). --accuracy prints the quadrature error of
- * the default order (against order 72); --study the tri-Ace BRDF's directional-albedo study and
+ * the default order (against order 96); --study the tri-Ace BRDF's directional-albedo study and
  * the "Rd (1 - value)" shortcut error. */
 #include <math.h>
 #include <stdio.h>
@@ -142,7 +142,7 @@ static void study(void)
     }
 }
 
-/* Largest |order 24 - order 72| over every texel of 128x128 tables (and 128x128 AmbientBRDF
+/* Largest |order 24 - order 96| over every texel of 128x128 tables (and 128x128 AmbientBRDF
  * 2D tables over log 1..2000), i.e. the quadrature error of the defaults. */
 static double max_diff(const ibl_image *a, const ibl_image *b, int channels)
 {
@@ -168,13 +168,13 @@ static void accuracy(void)
         {"multiscatter (E, E_avg)", {.size = 128, .channels = {IBL_BRDF_ALBEDO, IBL_BRDF_ALBEDO_AVG}}},
         {"sheen (E, E_avg)", {.size = 128, .channels = {IBL_BRDF_SHEEN, IBL_BRDF_SHEEN_AVG}}},
     };
-    printf("\nquadrature error: max |order 24 - order 72| over every texel\n");
+    printf("\nquadrature error: max |order 24 - order 96| over every texel\n");
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         ibl_image lo, hi;
         ibl_brdf_lut_desc d = cases[c].d;
         d.order = 24;
         if (ibl_brdf_lut(ctx, &d, &lo) != IBL_OK) exit(1);
-        d.order = 72;
+        d.order = 96;
         if (ibl_brdf_lut(ctx, &d, &hi) != IBL_OK) exit(1);
         printf("  %-36s 128x128   %.2e\n", cases[c].label, max_diff(&lo, &hi, 2));
         ibl_image_free(ctx, &lo);
@@ -185,7 +185,7 @@ static void accuracy(void)
                                     .normalization = (ibl_blinn_normalization)n, .order = 24};
         ibl_image lo, hi;
         if (ibl_ambient_brdf_table(ctx, &ad, &lo) != IBL_OK) exit(1);
-        ad.order = 72;
+        ad.order = 96;
         if (ibl_ambient_brdf_table(ctx, &ad, &hi) != IBL_OK) exit(1);
         printf("  ambient-brdf (X, Y), %-15s 128x128   %.2e\n", n ? "exact norm" : "triace norm",
                max_diff(&lo, &hi, 2));
