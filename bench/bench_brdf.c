@@ -89,6 +89,38 @@ static void bench_ambient(int threads, int volume)
     ibl_context_destroy(ctx);
 }
 
+/* The tables `ibl bake` computes in its "brdf" stage (src/bake/bake.c stage_brdf): the
+ * 128x128 split-sum table, the 128x128 (E, E_avg, sheen, sheen_avg) table and the 32x32x16
+ * AmbientBRDF volume (here over the volume's default shininess range; the bake widens it by
+ * half a row at each end, which does not change the work). */
+static void bench_bake_stage(int threads)
+{
+    ibl_context_desc cd = {.threads = threads};
+    ibl_context *ctx;
+    if (ibl_context_create(&cd, &ctx) != IBL_OK) exit(1);
+    ibl_brdf_lut_desc split = {.size = 128};
+    ibl_brdf_lut_desc extra = {.size = 128,
+                               .channels = {IBL_BRDF_ALBEDO, IBL_BRDF_ALBEDO_AVG, IBL_BRDF_SHEEN,
+                                            IBL_BRDF_SHEEN_AVG}};
+    ibl_ambient_brdf_desc ad = {.size_shininess = 32};
+    double t[RUNS], c[RUNS];
+    for (int r = 0; r < RUNS; r++) {
+        ibl_image a, b;
+        ibl_texture v;
+        double t0 = now(), c0 = cpu_now();
+        if (ibl_brdf_lut(ctx, &split, &a) != IBL_OK || ibl_brdf_lut(ctx, &extra, &b) != IBL_OK ||
+            ibl_ambient_brdf_volume(ctx, &ad, &v) != IBL_OK)
+            exit(1);
+        t[r] = now() - t0;
+        c[r] = cpu_now() - c0;
+        ibl_image_free(ctx, &a);
+        ibl_image_free(ctx, &b);
+        ibl_texture_free(ctx, &v);
+    }
+    report("bake table stage (the three above)", threads, t, c);
+    ibl_context_destroy(ctx);
+}
+
 /* Directional albedo (F = 1) of the tri-Ace specular term under both normalisations, and
  * the diffuse shortcut error, on a few rows. */
 static void study(void)
@@ -213,6 +245,7 @@ int main(int argc, char **argv)
         bench_lut(t, "sheen 128x128 (E, E_avg)", sheen);
         bench_ambient(t, 1);
         bench_ambient(t, 0);
+        bench_bake_stage(t);
     }
     if (do_accuracy) accuracy();
     if (do_study) study();
