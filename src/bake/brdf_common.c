@@ -66,6 +66,19 @@ void ibl__quadrature_init(ibl__quadrature *q, int order)
     for (int j = 0; j < q->circle; j++) q->circle_cos[j] = cos_0_pi((j + 0.5) * IBL_PI / q->circle);
 }
 
+/* e = exp(l) and 1 - e (l <= 0) with one libm call, each to full relative precision: the
+ * smaller of the two is computed directly, the larger (>= 1/2) by subtraction. */
+static inline void complement_pair(double l, double *e, double *one_minus_e)
+{
+    if (l < -0.6931471805599453) {
+        *e = exp(l);
+        *one_minus_e = 1.0 - *e;
+    } else {
+        *one_minus_e = -expm1(l);
+        *e = 1.0 - *one_minus_e;
+    }
+}
+
 /* The lobe's weight measure in theta_h through its CDF u (the textbook importance map):
  * cos^2 and sin^2 of theta_h from u and 1 - u, each passed exactly so that both ends keep
  * their precision. */
@@ -89,8 +102,7 @@ static void lobe_angle(const ibl__lobe_params *p, double u, double omu, double *
             break;
         }
         double l = 2.0 / (2.0 + 1.0 / p->alpha) * log(u);
-        *s2 = exp(l);
-        *c2 = -expm1(l);
+        complement_pair(l, s2, c2);
         break;
     }
     default: {
@@ -101,8 +113,7 @@ static void lobe_angle(const ibl__lobe_params *p, double u, double omu, double *
             break;
         }
         double l = 2.0 * log(omu) / (p->shininess + 1.0);
-        *c2 = exp(l);
-        *s2 = -expm1(l);
+        complement_pair(l, c2, s2);
         break;
     }
     }
