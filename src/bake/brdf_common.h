@@ -2,9 +2,10 @@
  * tri-Ace AmbientBRDF). Every table is a directional albedo
  *     E(mu) = integral over the hemisphere of f(l, v) (n.l) dl,   n.v = mu,
  * computed in half-vector coordinates (theta_h, phi) with the lobe's exact importance map
- * u -> theta_h, Gauss-Legendre in u and in phi, and the integration domain cut exactly where
- * the integrand has kinks (n.l = 0, and n.l = n.v for tri-Ace's max(n.l, n.v)) so that each
- * piece is smooth and Gauss-Legendre converges fast. docs/BRDF.md has the derivation. */
+ * u -> theta_h, Gauss-Legendre in a per-lobe variable of u and in phi, and the integration
+ * domain cut exactly where the integrand has kinks (n.l = 0; n.l = n.v for tri-Ace's
+ * max(n.l, n.v); n.l = 0.5 for KHR_materials_sheen's Lambda) so that each piece is smooth
+ * and Gauss-Legendre converges fast. docs/BRDF.md has the derivation. */
 #ifndef IBL_BRDF_COMMON_H
 #define IBL_BRDF_COMMON_H
 
