@@ -37,7 +37,7 @@ static const char usage[] =
     "                           rgba16f, rgba32f; PNG: rgba16 (default); EXR: rgb32f (default),\n"
     "                           rgb16f, rgba16f, rgba32f\n"
     "  --symbol NAME            array name in a C header (default ibl_brdf_lut)\n"
-    "  --order N                quadrature points per piece (default 24; raise to check)\n"
+    "  --order N                quadrature size (default 24; raise to check)\n"
     "\n"
     "Flat images (.png .exr .hdr .pfm) of the 3D ambient-brdf volume stack the F0 slices\n"
     "top to bottom. See docs/BRDF.md for the maths and the shader code.\n";

@@ -16,8 +16,9 @@
  *    (Schlick is affine in F0: value = F0 * X + Y).
  *
  * Every value is a deterministic quadrature (Gauss-Legendre on the half-vector sphere with
- * the lobe's exact importance map, cut at the integrand's kinks), accurate to 1e-4 absolute
- * or better everywhere including grazing n.v; output is bit-identical at any thread count.
+ * the lobe's exact importance map, cut at the integrand's kinks), accurate to 2e-5 absolute
+ * or better everywhere including grazing n.v (measured in docs/BRDF.md); output is
+ * bit-identical at any thread count.
  *
  * Texel centres: texel (i, j) of an N-texel axis holds the value at (i + 0.5) / N, so a GPU's
  * bilinear lookup at the normalised coordinate is right. Rows are stored top first: row 0,
@@ -63,8 +64,9 @@ typedef struct ibl_brdf_lut_desc {
     ibl_brdf_visibility visibility;
     ibl_brdf_channel channels[4]; /* R, G, B, A sources up to the first NONE; all zero:
                                      {SCALE, BIAS}                                        */
-    int order;                    /* Gauss-Legendre points per smooth piece in theta_h
-                                     (phi uses order / 2); 0: 24. Raise to check convergence */
+    int order;                    /* quadrature size: order / 2 Gauss-Legendre points per
+                                     theta_h piece, order / 3 per phi interval (docs/BRDF.md);
+                                     0: 24. Raise to check convergence                    */
 } ibl_brdf_lut_desc;
 
 /* Number of channels the descriptor asks for (1..4). */

@@ -2,9 +2,10 @@
  * tri-Ace AmbientBRDF). Every table is a directional albedo
  *     E(mu) = integral over the hemisphere of f(l, v) (n.l) dl,   n.v = mu,
  * computed in half-vector coordinates (theta_h, phi) with the lobe's exact importance map
- * u -> theta_h, Gauss-Legendre in u and in phi, and the integration domain cut exactly where
- * the integrand has kinks (n.l = 0, and n.l = n.v for tri-Ace's max(n.l, n.v)) so that each
- * piece is smooth and Gauss-Legendre converges fast. docs/BRDF.md has the derivation. */
+ * u -> theta_h, Gauss-Legendre in a per-lobe variable of u and in phi, and the integration
+ * domain cut exactly where the integrand has kinks (n.l = 0; n.l = n.v for tri-Ace's
+ * max(n.l, n.v); n.l = 0.5 for KHR_materials_sheen's Lambda) so that each piece is smooth
+ * and Gauss-Legendre converges fast. docs/BRDF.md has the derivation. */
 #ifndef IBL_BRDF_COMMON_H
 #define IBL_BRDF_COMMON_H
 
@@ -22,12 +23,14 @@ typedef struct ibl__rule {
 /* Fills a rule of n points (1 <= n <= IBL__GL_MAX); nodes by Newton iteration, float64. */
 void ibl__gauss_legendre(int n, ibl__rule *rule);
 
-/* The rules one albedo integral uses, all derived from one "order" (points per smooth piece
- * in theta_h where only part of the phi circle is valid; the full-circle piece, which is
- * smoother, gets 2/3 of it, phi pieces half of it, whole circles 2/3 of it as midpoints). */
+/* The rules one albedo integral uses, all derived from one "order": order / 2 points on the
+ * theta_h pieces where the phi circle is cut (5/6 order at grazing n.v) and on the
+ * whole-circle piece, order / 3 per phi interval and order / 3 midpoints on a whole half
+ * circle. */
 typedef struct ibl__quadrature {
-    ibl__rule u_part, u_full, phi;
+    ibl__rule u_part, u_graze, u_full, phi;
     int circle;
+    double circle_cos[IBL__GL_MAX]; /* cos of the circle's midpoints on [0, pi] */
 } ibl__quadrature;
 
 enum { IBL__DEFAULT_ORDER = 24 };

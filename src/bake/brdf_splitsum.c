@@ -13,14 +13,17 @@
 enum { DEFAULT_SIZE = 128 };
 
 typedef struct rules {
-    ibl__quadrature q; /* the albedo integral                    */
-    ibl__rule mu;      /* the cosine-weighted average over n.v   */
+    ibl__quadrature q; /* the albedo integral                                     */
+    ibl__rule mu;      /* the cosine-weighted average over n.v (GGX)               */
+    ibl__rule mu_sheen; /* the same for the sheen albedos, steeper at grazing n.v */
 } rules;
 
 static void make_rules(int order, rules *r)
 {
     ibl__quadrature_init(&r->q, order);
+    if (order <= 0) order = IBL__DEFAULT_ORDER;
     ibl__gauss_legendre(r->q.u_part.n, &r->mu);
+    ibl__gauss_legendre(order, &r->mu_sheen);
 }
 
 static ibl__lobe_params ggx_params(double r, ibl_brdf_visibility vis)
@@ -72,20 +75,29 @@ static double sheen_rules(double nv, double r, const rules *R, int sheen)
 }
 
 /* E_avg = 2 integral_0^1 E(mu) mu dmu with mu = t^2 (4 integral E(t^2) t^3 dt), which
- * tames the mu log(mu) behaviour of E at grazing angles. */
+ * tames the mu log(mu) behaviour of E at grazing angles. The GGX albedo is smooth enough in t
+ * for order / 2 Gauss-Legendre points (1.2e-6 at the default); the Charlie albedo, steep at
+ * grazing n.v for small r, takes order points; the KHR sheen albedo has a kink at n.v = 0.5
+ * (its Lambda(n.v) is mirrored there), so its integral is split at t = sqrt(0.5). */
 static double average_rules(double r, int sheen, ibl_brdf_visibility vis, const rules *R)
 {
+    const ibl__rule *rule = sheen == 1 ? &R->mu_sheen : &R->mu;
+    double split = sqrt(0.5), ends[3] = {0, sheen == 2 ? split : 1, 1};
+    int pieces = sheen == 2 ? 2 : 1;
     double acc = 0;
-    for (int k = 0; k < R->mu.n; k++) {
-        double t = R->mu.x[k], mu = t * t, e;
-        if (sheen) {
-            e = sheen_rules(mu, r, R, sheen);
-        } else {
-            double a, b;
-            splitsum_rules(mu, r, vis, R, &a, &b);
-            e = a + b;
+    for (int piece = 0; piece < pieces; piece++) {
+        double t0 = ends[piece], dt = ends[piece + 1] - t0;
+        for (int k = 0; k < rule->n; k++) {
+            double t = t0 + dt * rule->x[k], mu = t * t, e;
+            if (sheen) {
+                e = sheen_rules(mu, r, R, sheen);
+            } else {
+                double a, b;
+                splitsum_rules(mu, r, vis, R, &a, &b);
+                e = a + b;
+            }
+            acc += dt * rule->w[k] * 4.0 * e * t * t * t;
         }
-        acc += R->mu.w[k] * 4.0 * e * t * t * t;
     }
     return acc;
 }
