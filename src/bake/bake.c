@@ -158,12 +158,18 @@ static ibl_status stage_brdf(ibl_context *ctx, const ibl_bake_desc *d, ibl_bake_
     ibl_status st = ibl_brdf_lut(ctx, &ld, &b->splitsum);
     if (st != IBL_OK) return st;
     b->splitsum_n_dot_v = b->splitsum_roughness = centred_axis(d->lut_size, 0.0, 1.0, 0);
-    ld.channels[0] = IBL_BRDF_ALBEDO;
+    /* the directional albedo E is A + B of the table just made (Karis 2013's split sum with
+     * F = 1): summed here rather than integrated a second time, a third of the stage's cost */
+    ld.channels[0] = IBL_BRDF_ZERO;
     ld.channels[1] = IBL_BRDF_ALBEDO_AVG;
     ld.channels[2] = IBL_BRDF_SHEEN;
     ld.channels[3] = IBL_BRDF_SHEEN_AVG;
     st = ibl_brdf_lut(ctx, &ld, &b->brdf_extra);
-    if (st != IBL_OK || d->ambient_brdf < 0) return st;
+    if (st != IBL_OK) return st;
+    size_t texels = (size_t)b->brdf_extra.width * b->brdf_extra.height;
+    for (size_t i = 0; i < texels; i++)
+        b->brdf_extra.pixels[i * 4] = b->splitsum.pixels[i * 4] + b->splitsum.pixels[i * 4 + 1];
+    if (d->ambient_brdf < 0) return st;
     ibl_ambient_brdf_desc ad = d->ambient;
     if (ad.size_shininess == 0) ad.size_shininess = IBL_DEFAULT_AMBIENT_ROWS;
     double lo, hi;
