@@ -33,6 +33,7 @@
 #include "core/numeric.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -47,7 +48,7 @@
 #define BRIGHT_PEAK_SHARE 0.1
 /* At most this many source pixels (the brightest first) and region texels: the cost is the
  * region's cells times the output texels in their reach. */
-#define MAX_SOURCE_PIXELS 4096
+#define MAX_SOURCE_PIXELS 2048
 #define MAX_REGION_TEXELS 2048
 /* The region around a source pixel: the conversion spreads a pixel over the support of its
  * linear interpolation (one row and one column each way: within 1.42 rows of its centre, a
@@ -74,7 +75,8 @@ typedef struct source_group {
     double radius;    /* largest angle of a cell from centre    */
     double energy[3]; /* sum of the cells' weights per channel  */
     double moment[3][3]; /* [channel][axis]: sum w (l - centre) */
-    size_t first, count;
+    double *cell;     /* 6 per cell: unit direction, weight (solid angle x radiance) RGB */
+    size_t count;
 } source_group;
 
 struct ibl_specular_sources {
@@ -83,6 +85,9 @@ struct ibl_specular_sources {
     int working_size;
     int groups;
     source_group *group;
+    /* the cells of the group being made (then copied to its own block: every block the
+     * sources keep while the chain is filtered stays small, so an allocator that keeps
+     * freed large blocks for reuse, as the CLI's, is not made to grow past them) */
     double *cell_dir; /* 3 per cell, unit            */
     double *cell_w;   /* 3 per cell: solid angle x radiance (negative for the working cube) */
     size_t cells, capacity;
@@ -113,7 +118,7 @@ static double lobe_normaliser(const ibl__lobe *lobe)
 static ibl_status add_cell(ibl_specular_sources *s, const double d[3], const double w[3])
 {
     if (s->cells == s->capacity) {
-        size_t cap = s->capacity ? 2 * s->capacity : 4096;
+        size_t cap = s->capacity ? 2 * s->capacity : 1024;
         double *dir = ibl_alloc(s->ctx, cap * 3 * sizeof(double));
         double *wt = dir ? ibl_alloc(s->ctx, cap * 3 * sizeof(double)) : NULL;
         if (!wt) {
@@ -199,27 +204,47 @@ static double image_mean_luminance(const ibl_image *im)
 }
 
 typedef struct candidate {
-    double power;
-    size_t pixel;
+    float power;
+    uint32_t pixel;
 } candidate;
+
+static int better(const candidate *a, const candidate *b)
+{
+    return a->power > b->power || (a->power == b->power && a->pixel < b->pixel);
+}
 
 static int by_power(const void *a, const void *b)
 {
-    const candidate *p = a, *q = b;
-    if (p->power != q->power) return p->power > q->power ? -1 : 1;
-    return p->pixel < q->pixel ? -1 : p->pixel > q->pixel;
+    return better(a, b) ? -1 : better(b, a) ? 1 : 0;
+}
+
+/* Keeps the MAX_SOURCE_PIXELS best candidates in a heap whose root is the worst of them. */
+static void heap_offer(candidate *h, int *n, candidate c)
+{
+    int i;
+    if (*n < MAX_SOURCE_PIXELS) {
+        for (i = (*n)++; i > 0 && better(&h[(i - 1) / 2], &c); i = (i - 1) / 2) h[i] = h[(i - 1) / 2];
+        h[i] = c;
+        return;
+    }
+    if (!better(&c, &h[0])) return;
+    for (i = 0;;) {
+        int k = 2 * i + 1;
+        if (k >= *n) break;
+        if (k + 1 < *n && better(&h[k], &h[k + 1])) k++;
+        if (!better(&c, &h[k])) break;
+        h[i] = h[k], i = k;
+    }
+    h[i] = c;
 }
 
 /* The source pixels, brightest first (at most MAX_SOURCE_PIXELS), away from the poles, where
  * the conversion integrates whole rows (its polar region: 3 texels or 4 rows). */
-static ibl_status find_sources(ibl_context *ctx, const ibl_image *im, int working_size, double bar,
-                               double margin, candidate **out, int *count)
+static void find_sources(const ibl_image *im, int working_size, double bar, double margin,
+                         candidate *c, int *count)
 {
-    int W = im->width, H = im->height;
+    int W = im->width, H = im->height, n = 0;
     double polar = fmax(atan(3.0 * 2.0 / working_size), 4.0 * IBL_PI / H) + margin;
-    size_t cap = 256, n = 0;
-    candidate *c = ibl_alloc(ctx, cap * sizeof *c);
-    if (!c) return ibl_context_status(ctx);
     for (int y = 1; y + 1 < H; y++) {
         double t0 = IBL_PI * y / H, t1 = IBL_PI * (y + 1) / H;
         if (t0 < polar || t1 > IBL_PI - polar) continue;
@@ -236,31 +261,33 @@ static ibl_status find_sources(ibl_context *ctx, const ibl_image *im, int workin
                     if (i || j) around += luminance(im->pixels + ((size_t)(y + j) * W + xx) * 4);
                 }
             double power = (lum - around / 8.0) * dw;
-            if (!(power >= bar)) continue;
-            if (n == cap) {
-                candidate *g = ibl_alloc(ctx, 2 * cap * sizeof *g);
-                if (!g) {
-                    ibl_free(ctx, c);
-                    return ibl_context_status(ctx);
-                }
-                memcpy(g, c, n * sizeof *c);
-                ibl_free(ctx, c);
-                c = g, cap *= 2;
-            }
-            c[n].power = power;
-            c[n++].pixel = (size_t)y * W + x;
+            if (power >= bar) heap_offer(c, &n, (candidate){(float)power, (uint32_t)((size_t)y * W + x)});
         }
     }
-    qsort(c, n, sizeof *c, by_power);
-    *out = c;
-    *count = n > MAX_SOURCE_PIXELS ? MAX_SOURCE_PIXELS : (int)n;
-    return IBL_OK;
+    qsort(c, (size_t)n, sizeof *c, by_power);
+    *count = n;
+}
+
+/* The set of region texels: open addressing over REGION_HASH slots (twice the most texels a
+ * region holds with one pixel's disc on top). */
+#define REGION_HASH 8192
+static int region_insert(uint32_t *table, uint32_t key)
+{
+    uint32_t i = (uint32_t)((key * 0x9E3779B97F4A7C15ull) >> 51) & (REGION_HASH - 1);
+    for (;; i = (i + 1) & (REGION_HASH - 1)) {
+        if (table[i] == key) return 0;
+        if (table[i] == UINT32_MAX) {
+            table[i] = key;
+            return 1;
+        }
+    }
 }
 
 /* Marks the texels within `margin` radians of each source pixel's centre (sampled on its
- * tangent plane at `step`), a pixel at a time, until MAX_REGION_TEXELS would be passed. */
+ * tangent plane at `step`), a pixel at a time, until MAX_REGION_TEXELS would be passed;
+ * region[] receives them (the last pixel's past the count returned are not part of it). */
 static int mark_region(const ibl_image *im, const frame *fr, int M, const candidate *c, int count,
-                       double margin, double step, unsigned char *mark, size_t *scratch)
+                       double margin, double step, uint32_t *table, uint32_t *region)
 {
     int W = im->width, H = im->height, marked = 0;
     int half = (int)ceil(margin / step);
@@ -281,18 +308,19 @@ static int mark_region(const ibl_image *im, const frame *fr, int M, const candid
                 if (j * j + k * k > half * half) continue;
                 double q[3];
                 for (int m = 0; m < 3; m++) q[m] = d[m] + step * (k * u[m] + j * v[m]);
-                size_t t = texel_index(M, q);
-                if (mark[t]) continue;
-                mark[t] = 1;
-                scratch[added++] = t;
+                uint32_t t = (uint32_t)texel_index(M, q);
+                if (region_insert(table, t)) region[marked + added++] = t;
             }
-        if (marked + added > MAX_REGION_TEXELS) {
-            for (int k = 0; k < added; k++) mark[scratch[k]] = 0; /* not this pixel, nor later ones */
-            break;
-        }
+        if (marked + added > MAX_REGION_TEXELS) break; /* not this pixel, nor later ones */
         marked += added;
     }
     return marked;
+}
+
+static int by_index(const void *a, const void *b)
+{
+    uint32_t p = *(const uint32_t *)a, q = *(const uint32_t *)b;
+    return p < q ? -1 : p > q;
 }
 
 /* The cells of one region texel: its own k x k (negative: the working cube's radiance), then
@@ -310,7 +338,8 @@ static ibl_status texel_cells(ibl_specular_sources *s, const ibl_image *im, cons
     kt = kt < MIN_CELLS ? MIN_CELLS : kt > MAX_CELLS ? MAX_CELLS : kt;
     kp = kp < MIN_CELLS ? MIN_CELLS : kp > MAX_CELLS ? MAX_CELLS : kp;
     double omega = ibl_cube_texel_solid_angle(M, tx, ty), wsum = 0;
-    size_t first = s->cells;
+    size_t first = 0;
+    s->cells = 0;
     for (int j = 0; j < kt; j++)
         for (int i = 0; i < kt; i++) {
             double q[3], w[3];
@@ -362,18 +391,18 @@ static ibl_status texel_cells(ibl_specular_sources *s, const ibl_image *im, cons
     return IBL_OK;
 }
 
-static void group_stats(const ibl_specular_sources *s, source_group *g)
+static void group_stats(source_group *g)
 {
     double c[3] = {0, 0, 0};
-    for (size_t n = g->first; n < g->first + g->count; n++)
-        for (int m = 0; m < 3; m++) c[m] += s->cell_dir[n * 3 + m];
+    for (size_t n = 0; n < g->count; n++)
+        for (int m = 0; m < 3; m++) c[m] += g->cell[n * 6 + m];
     double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
     for (int m = 0; m < 3; m++) g->centre[m] = c[m] / len;
     double min_cos = 1;
     memset(g->energy, 0, sizeof g->energy);
     memset(g->moment, 0, sizeof g->moment);
-    for (size_t n = g->first; n < g->first + g->count; n++) {
-        const double *d = s->cell_dir + n * 3, *w = s->cell_w + n * 3;
+    for (size_t n = 0; n < g->count; n++) {
+        const double *d = g->cell + n * 6, *w = d + 3;
         double x = d[0] * g->centre[0] + d[1] * g->centre[1] + d[2] * g->centre[2];
         if (x < min_cos) min_cos = x;
         for (int ch = 0; ch < 3; ch++) {
@@ -393,41 +422,53 @@ static ibl_status build(ibl_specular_sources *s, const ibl_image *image, const f
     if (!(mean_lum > 0) || !isfinite(mean_lum)) return IBL_OK;
     double step = fmin(IBL_PI / H, 2.0 / (3.0 * M)) / 2.0;
     double margin = MARGIN_PIXELS * IBL_PI / H + step;
-    candidate *c = NULL;
-    int count = 0;
-    ibl_status st = find_sources(ctx, image, M, BRIGHT_PEAK_SHARE * mean_lum * lobe_normaliser_min,
-                                 margin, &c, &count);
-    if (st != IBL_OK || count == 0) {
-        ibl_free(ctx, c);
-        return st;
-    }
-    int half = (int)ceil(margin / step);
-    size_t total = 6 * (size_t)M * M;
-    unsigned char *mark = ibl_alloc(ctx, total);
-    size_t *scratch = ibl_alloc(ctx, (size_t)(2 * half + 1) * (2 * half + 1) * sizeof(size_t));
-    if (!mark || !scratch) {
+    int half = (int)ceil(margin / step), count = 0;
+    /* one pixel's disc adds at most (2 half + 1)^2 texels past MAX_REGION_TEXELS */
+    size_t disc = (size_t)(2 * half + 1) * (2 * half + 1);
+    if (MAX_REGION_TEXELS + disc > REGION_HASH / 2) return IBL_OK; /* a step far below a texel */
+    candidate *c = ibl_alloc(ctx, MAX_SOURCE_PIXELS * sizeof *c);
+    uint32_t *table = ibl_alloc(ctx, REGION_HASH * sizeof(uint32_t));
+    uint32_t *region = ibl_alloc(ctx, (MAX_REGION_TEXELS + disc) * sizeof(uint32_t));
+    ibl_status st = IBL_OK;
+    if (!c || !table || !region) {
         st = ibl_context_status(ctx);
         goto done;
     }
-    memset(mark, 0, total);
-    int marked = mark_region(image, fr, M, c, count, margin, step, mark, scratch);
+    find_sources(image, M, BRIGHT_PEAK_SHARE * mean_lum * lobe_normaliser_min, margin, c, &count);
+    memset(table, 0xff, REGION_HASH * sizeof(uint32_t));
+    int marked = mark_region(image, fr, M, c, count, margin, step, table, region);
+    qsort(region, (size_t)marked, sizeof *region, by_index); /* groups in (face, y, x) order */
     s->group = ibl_alloc(ctx, (size_t)(marked ? marked : 1) * sizeof *s->group);
     if (!s->group) {
         st = ibl_context_status(ctx);
         goto done;
     }
-    for (size_t t = 0; t < total && st == IBL_OK; t++) {
-        if (!mark[t]) continue;
+    for (int i = 0; i < marked && st == IBL_OK; i++) {
+        size_t t = region[i];
         source_group *g = &s->group[s->groups];
-        g->first = s->cells;
         st = texel_cells(s, image, fr, working, (int)(t / ((size_t)M * M)), (int)(t % M),
                          (int)(t / M % M));
-        g->count = s->cells - g->first;
-        if (st == IBL_OK) group_stats(s, g), s->groups++;
+        if (st != IBL_OK) break;
+        g->count = s->cells;
+        g->cell = ibl_alloc(ctx, (g->count ? g->count : 1) * 6 * sizeof(double));
+        if (!g->cell) {
+            st = ibl_context_status(ctx);
+            break;
+        }
+        for (size_t n = 0; n < g->count; n++) {
+            memcpy(g->cell + n * 6, s->cell_dir + n * 3, 3 * sizeof(double));
+            memcpy(g->cell + n * 6 + 3, s->cell_w + n * 3, 3 * sizeof(double));
+        }
+        group_stats(g);
+        s->groups++;
     }
 done:
-    ibl_free(ctx, scratch);
-    ibl_free(ctx, mark);
+    ibl_free(ctx, s->cell_dir);
+    ibl_free(ctx, s->cell_w);
+    s->cell_dir = s->cell_w = NULL;
+    s->cells = s->capacity = 0;
+    ibl_free(ctx, region);
+    ibl_free(ctx, table);
     ibl_free(ctx, c);
     return st;
 }
@@ -435,6 +476,7 @@ done:
 void ibl_specular_sources_destroy(ibl_specular_sources *s)
 {
     if (!s) return;
+    for (int g = 0; g < s->groups; g++) ibl_free(s->ctx, s->group[g].cell);
     ibl_free(s->ctx, s->group);
     ibl_free(s->ctx, s->cell_dir);
     ibl_free(s->ctx, s->cell_w);
@@ -461,7 +503,8 @@ ibl_status ibl_specular_sources_create(ibl_context *ctx, const ibl_image *image,
                 desc->filter == IBL_FILTER_BLINN;
     ibl_status st = IBL_OK;
     if (layout == IBL_LAYOUT_EQUIRECT && lobes && desc->edge_fixup == IBL_EDGE_FIXUP_NONE &&
-        !desc->dynamic && image->width >= 8 && image->height >= 4) {
+        !desc->dynamic && image->width >= 8 && image->height >= 4 &&
+        (size_t)image->width * image->height <= UINT32_MAX) {
         st = ibl_specular_levels(ctx, desc, working->size, &s->info);
         double narrowest = 0;
         for (int l = 0; st == IBL_OK && l < s->info.levels; l++) {
@@ -544,8 +587,8 @@ static void apply_tile(void *arg, int index)
                 double xc = R[0] * gr->centre[0] + R[1] * gr->centre[1] + R[2] * gr->centre[2];
                 if (xc < cos_reach[i]) continue;
                 if (xc >= cos_near[i]) {
-                    for (size_t k = gr->first; k < gr->first + gr->count; k++) {
-                        const double *d = s->cell_dir + k * 3, *w = s->cell_w + k * 3;
+                    for (size_t k = 0; k < gr->count; k++) {
+                        const double *d = gr->cell + k * 6, *w = d + 3;
                         double f = ibl__lobe_f(&job->lobe, R[0] * d[0] + R[1] * d[1] + R[2] * d[2]);
                         for (int ch = 0; ch < 3; ch++) acc[ch] += f * w[ch];
                     }
@@ -568,8 +611,9 @@ static void apply_tile(void *arg, int index)
 
 ibl_status ibl_specular_sources_apply(const ibl_specular_sources *s, ibl_cubemap *chain)
 {
-    if (!s || !chain || !chain->data) return IBL_ERR_INVALID_ARGUMENT;
-    if (!s->groups) return IBL_OK;
+    if (!s || !s->groups) return IBL_OK; /* no sources: nothing to refine */
+    if (!chain || !chain->data)
+        return ibl__fail(s->ctx, IBL_ERR_INVALID_ARGUMENT, "specular sources: no chain");
     if (chain->size != s->info.size || chain->levels != s->info.levels)
         return ibl__fail(s->ctx, IBL_ERR_INVALID_ARGUMENT,
                          "specular sources: the chain is %d texels and %d levels, the sources were "
