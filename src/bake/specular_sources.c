@@ -11,9 +11,9 @@
  * plan; the input's own pixels cure it exactly, and only a few texels need them.
  *
  * So, for the levels whose lobe is narrower than NARROW_HALF_WIDTH_TEXELS working texels, a
- * region S of working texels is marked around the input's brightest pixels (those whose power
- * at such a lobe's peak is at least BRIGHT_PEAK_SHARE of the mean radiance), and every output
- * texel R within reach of S gets
+ * region S of working texels is marked around the input's brightest compact pixels (those whose
+ * power above their neighbours' adds at least BRIGHT_PEAK_SHARE of the mean radiance at such a
+ * lobe's peak), and every output texel R within reach of S gets
  *     delta(R) = [ int_S f(R.l) L_input(l) dl - sum_{t in S} L_t int_t f(R.l) dl ] / int f dl
  * the integral over S of the input taken as constant per pixel (what the exact integral over
  * the input is) minus the same region as the filter saw it. Both sides are sums over small
