@@ -3,7 +3,7 @@
  * end-to-end error of `ibl prefilter`, conversion included.
  *
  *   bench_input_accuracy INPUT.exr CHAIN.ktx2 [--samples N] [--bright N] [--threads N]
- *                        [--max-level L]
+ *                        [--max-level L] [--cube WORK.ktx2]
  *
  * INPUT is an equirect image (2:1); CHAIN is what `ibl prefilter INPUT -o CHAIN.ktx2
  * --format rgba32f` wrote (a GGX chain; its KTX2 metadata gives each level's roughness).
@@ -18,7 +18,10 @@
  * 8 x 8 sub-cells with their own centres and exact solid angles, so the lobe's core is
  * integrated to ~1e-4. Printed per level: the worst channel's relative RMS over the sampled
  * texels, sqrt(sum (chain - exact)^2 / sum exact^2), and the largest texel error relative to
- * max(exact, level mean), both for all samples and for the bright ones alone. */
+ * max(exact, level mean), both for all samples and for the bright ones alone. With --cube (the
+ * working cube the chain was filtered from, one level, rgba32f) the error over all samples is
+ * split in two: the library's reference integral over that cube against the exact one over the
+ * input (the conversion's share) and the chain against that cube integral (the filter's). */
 #include "ibl/ibl.h"
 
 #include <math.h>
@@ -103,12 +106,24 @@ typedef struct job {
     double alpha2;
     const double (*dirs)[3];
     double (*out)[3];
+    /* with --cube: the library's reference integral over the working cube at the same texels */
+    const ibl_specular_reference *cube_ref;
+    const ibl_specular_info *info;
+    int level;
+    double (*cube_out)[3];
 } job;
 
 static void exact_task(void *arg, int index)
 {
     const job *j = arg;
     exact_at(j->e, j->dirs[index], j->alpha2, j->out[index]);
+    if (j->cube_ref) {
+        const double *d = j->dirs[index];
+        double v[4];
+        ibl_specular_reference_eval(j->cube_ref, j->info, j->level,
+                                    (ibl_vec3){(float)d[0], (float)d[1], (float)d[2]}, v);
+        for (int k = 0; k < 3; k++) j->cube_out[index][k] = v[k];
+    }
 }
 
 /* the indices of the `count` largest values, largest first (insertion into a short list) */
@@ -127,9 +142,30 @@ static void brightest(const double *lum, size_t total, size_t count, size_t *out
     }
 }
 
-static int measure_level(ibl_context *ctx, const equirect *e, const ibl_cubemap *chain, int level,
-                         double roughness, int bright, int samples)
+/* Worst channel's relative RMS and largest relative error of got against want over the first
+ * `end` samples, relative to max(want, mean). */
+static void error_stats(const double (*got)[3], const double (*want)[3], int end, double mean,
+                        double *worst_rms, double *worst_max)
 {
+    *worst_rms = 0, *worst_max = 0;
+    for (int k = 0; k < 3; k++) {
+        double e2 = 0, r2 = 0;
+        for (int s = 0; s < end; s++) {
+            double err = fabs(got[s][k] - want[s][k]);
+            e2 += err * err, r2 += want[s][k] * want[s][k];
+            double rel = err / (want[s][k] > mean ? want[s][k] : mean);
+            if (rel > *worst_max) *worst_max = rel;
+        }
+        double rms = r2 > 0 ? sqrt(e2 / r2) : 0;
+        if (rms > *worst_rms) *worst_rms = rms;
+    }
+}
+
+static int measure_level(ibl_context *ctx, const equirect *e, const ibl_cubemap *chain, int level,
+                         const ibl_specular_info *info, const ibl_specular_reference *cube_ref,
+                         int bright, int samples)
+{
+    double roughness = info->roughness[level];
     int n = ibl_level_size(chain->size, level);
     size_t total = 6 * (size_t)n * n;
     double *lum = malloc(total * sizeof(double)), mean = 0;
@@ -149,50 +185,52 @@ static int measure_level(ibl_context *ctx, const equirect *e, const ibl_cubemap 
         idx[s] = (size_t)((state >> 33) % total);
     }
     double (*dirs)[3] = malloc((size_t)count * sizeof *dirs), (*ref)[3] = malloc((size_t)count * sizeof *ref);
+    double (*got)[3] = malloc((size_t)count * sizeof *got), (*cube)[3] = malloc((size_t)count * sizeof *cube);
     for (int s = 0; s < count; s++) {
         size_t t = idx[s];
         int f = (int)(t / ((size_t)n * n)), y = (int)(t / n % n), x = (int)(t % n);
         ibl_vec3 d = ibl_cube_texel_direction(f, n, x, y);
         double len = sqrt((double)d.x * d.x + (double)d.y * d.y + (double)d.z * d.z);
         dirs[s][0] = d.x / len, dirs[s][1] = d.y / len, dirs[s][2] = d.z / len;
+        for (int k = 0; k < 3; k++) got[s][k] = base[t * 4 + k];
     }
     double a = roughness * roughness;
-    job j = {e, a * a, (const double(*)[3])dirs, ref};
+    job j = {e, a * a, (const double(*)[3])dirs, ref, cube_ref, info, level, cube};
     ibl_parallel_for(ctx, count, exact_task, &j);
-    double worst_rms[2] = {0, 0}, worst_max[2] = {0, 0};
-    for (int set = 0; set < 2; set++) {
-        int end = set == 0 ? count : bright;
-        for (int k = 0; k < 3; k++) {
-            double e2 = 0, r2 = 0;
-            for (int s = 0; s < end; s++) {
-                double got = base[idx[s] * 4 + k], want = ref[s][k], err = fabs(got - want);
-                e2 += err * err, r2 += want * want;
-                double rel = err / (want > mean ? want : mean);
-                if (rel > worst_max[set]) worst_max[set] = rel;
-            }
-            double rms = r2 > 0 ? sqrt(e2 / r2) : 0;
-            if (rms > worst_rms[set]) worst_rms[set] = rms;
-        }
+    double rms[2], max[2];
+    for (int set = 0; set < 2; set++)
+        error_stats((const double(*)[3])got, (const double(*)[3])ref, set == 0 ? count : bright, mean,
+                    &rms[set], &max[set]);
+    printf("| %d | %d | %.3f | %.3f%% | %.2f%% | %.3f%% | %.2f%% |", chain->size, level, roughness,
+           100 * rms[0], 100 * max[0], 100 * rms[1], 100 * max[1]);
+    if (cube_ref) {
+        double conv_rms, conv_max, filt_rms, filt_max;
+        error_stats((const double(*)[3])cube, (const double(*)[3])ref, count, mean, &conv_rms, &conv_max);
+        error_stats((const double(*)[3])got, (const double(*)[3])cube, count, mean, &filt_rms, &filt_max);
+        printf(" %.3f%% / %.2f%% | %.3f%% / %.2f%% |", 100 * conv_rms, 100 * conv_max, 100 * filt_rms,
+               100 * filt_max);
     }
-    printf("| %d | %d | %.3f | %.3f%% | %.2f%% | %.3f%% | %.2f%% |\n", chain->size, level, roughness,
-           100 * worst_rms[0], 100 * worst_max[0], 100 * worst_rms[1], 100 * worst_max[1]);
+    printf("\n");
     fflush(stdout);
     free(lum);
     free(idx);
     free(dirs);
     free(ref);
+    free(got);
+    free(cube);
     return 0;
 }
 
 int main(int argc, char **argv)
 {
-    const char *in = NULL, *chain_path = NULL;
+    const char *in = NULL, *chain_path = NULL, *cube_path = NULL;
     int samples = 200, bright = 50, threads = 0, max_level = 1 << 20;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--samples") && i + 1 < argc) samples = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--bright") && i + 1 < argc) bright = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--max-level") && i + 1 < argc) max_level = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--cube") && i + 1 < argc) cube_path = argv[++i];
         else if (!in) in = argv[i];
         else chain_path = argv[i];
     }
@@ -241,12 +279,27 @@ int main(int argc, char **argv)
     }
     printf("%s against %s (%dx%d): %d brightest + %d sampled texels a level\n\n", chain_path, in, e.W, e.H,
            bright, samples);
-    printf("| size | level | roughness | RMS (all) | max (all) | RMS (bright) | max (bright) |\n");
-    printf("|---|---|---|---|---|---|---|\n");
+    /* --cube WORK.ktx2: the working cube the chain was filtered from (one level); the error
+     * is then split into the conversion's share (the reference integral over the cube against
+     * the exact one over the input) and the filter's (the chain against the cube's integral) */
+    ibl_texture cube_tex = {0};
+    ibl_cubemap cube;
+    ibl_specular_reference *cube_ref = NULL;
+    if (cube_path && (ibl_read_texture(ctx, cube_path, NULL, &cube_tex, NULL) != IBL_OK ||
+                      ibl_cubemap_from_texture(&cube_tex, &cube) != IBL_OK ||
+                      ibl_specular_reference_create(ctx, &cube, &cube_ref) != IBL_OK)) {
+        fprintf(stderr, "bench_input_accuracy: %s\n", ibl_context_message(ctx));
+        return 1;
+    }
+    printf("| size | level | roughness | RMS (all) | max (all) | RMS (bright) | max (bright) |%s\n",
+           cube_ref ? " conversion RMS / max | filter RMS / max |" : "");
+    printf("|---|---|---|---|---|---|---|%s\n", cube_ref ? "---|---|" : "");
     for (int l = 0; l < chain.levels && l <= max_level; l++) {
         if (!(info.roughness[l] > 0)) continue;
-        measure_level(ctx, &e, &chain, l, info.roughness[l], bright, samples);
+        measure_level(ctx, &e, &chain, l, &info, cube_ref, bright, samples);
     }
+    if (cube_ref) ibl_specular_reference_destroy(cube_ref);
+    if (cube_path) ibl_texture_free(ctx, &cube_tex);
     free(e.cos_theta);
     free(e.sin_theta);
     free(e.sin_phi);

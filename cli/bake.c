@@ -165,8 +165,10 @@ static int read_input(ibl_context *ctx, const cli_args *a, bake_options *o, ibl_
         o->desc.source.name = a->positional[0];
         o->desc.source.orientation = o->input.orientation;
         ibl_layout layout = IBL_LAYOUT_AUTO;
+        o->input.chain = &o->desc.specular;
         int rc = cli_read_cubemap(ctx, &a->common, a->positional[0], &o->input, env, &layout);
         o->desc.source.layout = layout;
+        o->desc.specular_sources = o->input.sources;
         return rc;
     }
     memset(sky, 0, sizeof *sky);
@@ -255,6 +257,7 @@ int cli_cmd_bake(int argc, char **argv)
         else cli_report_failure(ctx, o.dir, st), rc = cli_exit_code(st);
         if (st == IBL_OK) ibl_bake_free(ctx, &bake);
     }
+    ibl_specular_sources_destroy(o.input.sources);
     ibl_cubemap_free(ctx, &env);
     ibl_context_destroy(ctx);
     return rc;

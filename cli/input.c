@@ -138,6 +138,10 @@ int cli_texture_to_cubemap(ibl_context *ctx, const char *path, cli_input_options
         return CLI_EXIT_BAD_INPUT;
     }
     st = ibl_image_to_cubemap(ctx, &image, &d, out);
+    if (st == IBL_OK && o->chain) {
+        st = ibl_specular_sources_create(ctx, &image, &d, out, o->chain, &o->sources);
+        if (st != IBL_OK) ibl_cubemap_free(ctx, out);
+    }
     ibl_texture_free(ctx, &tex);
     if (st != IBL_OK) {
         cli_error("%s: %s", path, ibl_context_message(ctx));

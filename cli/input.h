@@ -10,6 +10,11 @@ typedef struct cli_input_options {
     int size;                    /* the cube's edge (0: the input's)  */
     int detail;                  /* set by cli_read_cubemap: the face edge the input's
                                     pixels carry (an equirect W wide: W/4 at the horizon) */
+    /* Set chain (the resolved desc of the chain the cube is read for) and a flat input also
+     * gives its sources (ibl_specular_sources_create, made while the image is still in
+     * memory): the caller applies them to the chain and destroys them. */
+    const ibl_specular_desc *chain;
+    ibl_specular_sources *sources;
 } cli_input_options;
 
 /* The one table of options that say how an environment is read; every command that reads one

@@ -217,6 +217,7 @@ int cli_cmd_prefilter(int argc, char **argv)
     ibl_context *ctx = cli_context(&a.common);
     double t0 = cli_seconds();
     ibl_cubemap cube = {0}, chain = {0};
+    io.chain = &d;
     int rc = cli_read_cubemap(ctx, &a.common, in, &io, &cube, NULL);
     if (rc != CLI_EXIT_OK) {
         ibl_context_destroy(ctx);
@@ -226,6 +227,8 @@ int cli_cmd_prefilter(int argc, char **argv)
     double t_read = cli_seconds();
     ibl_specular_info info;
     ibl_status st = ibl_specular_prefilter(ctx, &cube, &d, &chain, &info);
+    if (st == IBL_OK) st = ibl_specular_sources_apply(io.sources, &chain);
+    ibl_specular_sources_destroy(io.sources);
     double t_filter = cli_seconds();
     ibl_cubemap_free(ctx, &cube);
     if (st == IBL_OK) cli_warn_upsampling(&a.common, in, &io, info.size);

@@ -91,6 +91,9 @@ typedef struct ibl_bake_desc {
     ibl_target target;          /* the engine the bake is for (target.h): adds README.txt and
                                    the engine's files and records it; the chain, format and
                                    containers are the caller's (ibl_bake_desc_for_target)  */
+    const ibl_specular_sources *specular_sources; /* optional: the sources of the flat image
+                                   env was converted from (ibl_specular_sources_create with
+                                   `specular` above), applied to the chain (specular.h) */
 } ibl_bake_desc;
 
 /* A desc with a target row's chain, pixel format, containers, target and (in source) its

@@ -35,6 +35,7 @@
 #include "core.h"
 #include "cubemap.h"
 #include "edge_fixup.h"
+#include "layout.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -136,6 +137,40 @@ ibl_status ibl_specular_source_size(ibl_context *ctx, const ibl_specular_desc *d
 ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
                                   const ibl_specular_desc *desc, ibl_cubemap *out,
                                   ibl_specular_info *info);
+
+/* ---- accuracy against a flat input (docs/SPECULAR.md "Accuracy against the input") ----
+ *
+ * The prefilter reads a cube; an image in another layout is converted first to a working cube
+ * whose texels are area means of the image. Where a level's lobe is only a few working texels
+ * wide (half width under 8), a sun a few pixels across is then misplaced inside its texels by
+ * up to a texel. The sources of an image fix that: made from the image and the working cube
+ * before the prefilter, they hold the image's own pixels (split into small cells with exact
+ * solid angles) and the working texels around its brightest pixels, and applied to the chain
+ * after it they replace, at every output texel of those narrow levels within reach, the
+ * region's integral as the working cube gave it by the integral over the image's pixels.
+ * Equirect images only (other layouts, box and Gaussian chains, edge fixups and the dynamic
+ * path: no sources, apply does nothing); sources near the poles are left out (the conversion
+ * integrates whole rows there). The image may be freed after create. */
+typedef struct ibl_specular_sources ibl_specular_sources;
+/* conversion: the desc the working cube was made with (layout, orientation; NULL: detected,
+ * none); desc: the chain that will be filtered from working. */
+ibl_status ibl_specular_sources_create(ibl_context *ctx, const ibl_image *image,
+                                       const ibl_to_cube_desc *conversion,
+                                       const ibl_cubemap *working, const ibl_specular_desc *desc,
+                                       ibl_specular_sources **out);
+/* Refines the chain ibl_specular_prefilter made from the working cube with the same desc. */
+ibl_status ibl_specular_sources_apply(const ibl_specular_sources *sources, ibl_cubemap *chain);
+/* Working texels whose light is replaced by the image's (0: apply does nothing). */
+int ibl_specular_sources_count(const ibl_specular_sources *sources);
+void ibl_specular_sources_destroy(ibl_specular_sources *sources);
+
+/* A chain straight from an image in any layout: ibl_image_to_cubemap (conversion; NULL: the
+ * layout detected, the image's own size), the sources, ibl_specular_prefilter, apply. What
+ * `ibl prefilter` and `ibl bake` do with a flat input. */
+ibl_status ibl_specular_prefilter_image(ibl_context *ctx, const ibl_image *image,
+                                        const ibl_to_cube_desc *conversion,
+                                        const ibl_specular_desc *desc, ibl_cubemap *out,
+                                        ibl_specular_info *info);
 
 /* The reference integral (double, every source texel, exact solid angles) for single
  * directions: the yardstick the benchmarks and tests compare the fast method against. */

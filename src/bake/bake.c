@@ -101,6 +101,7 @@ static ibl_status stage_specular(ibl_context *ctx, const ibl_cubemap *env, const
                                  ibl_bake_data *b)
 {
     ibl_status st = ibl_specular_prefilter(ctx, env, &d->specular, &b->specular, &b->specular_info);
+    if (st == IBL_OK && d->specular_sources) st = ibl_specular_sources_apply(d->specular_sources, &b->specular);
     if (st == IBL_OK && d->atlas) st = ibl_atlas_pack(ctx, &b->specular, NULL, &b->atlas, &b->atlas_layout);
     return st;
 }

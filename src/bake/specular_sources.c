@@ -1,0 +1,664 @@
+/* A chain's narrow levels refined against the flat input image itself, next to its compact
+ * bright sources (docs/SPECULAR.md "Accuracy against the input").
+ *
+ * The prefilter reads a working cube: every texel is the area mean of its footprint of the
+ * input, and the filter treats it as uniform over the texel. Where a lobe is only a few
+ * working texels wide, a sun a few input pixels across is then first-order misplaced (its
+ * light is spread over the texel instead of sitting where its pixels are; the conversion's
+ * linear reconstruction spreads it one more pixel): on city.exr, level 1 of the 256 chain is
+ * 1.36% RMS off the exact integral over the input, while the filter's own share is ~0.1%. A
+ * finer working cube cures it only slowly (the reconstruction stays) and costs the whole
+ * plan; the input's own pixels cure it exactly, and only a few texels need them.
+ *
+ * So, for the levels whose lobe is narrower than NARROW_HALF_WIDTH_TEXELS working texels, a
+ * region S of working texels is marked around the input's brightest compact pixels (those whose
+ * power above their neighbours' adds at least BRIGHT_PEAK_SHARE of the mean radiance at such a
+ * lobe's peak), and every output texel R within reach of S gets
+ *     delta(R) = [ int_S f(R.l) L_input(l) dl - sum_{t in S} L_t int_t f(R.l) dl ] / int f dl
+ * the integral over S of the input taken as constant per pixel (what the exact integral over
+ * the input is) minus the same region as the filter saw it. Both sides are sums over small
+ * cells: the input's pixels split k x k with their exact solid angles (2 pi / W)(cos theta0 -
+ * cos theta1) / k, each kept where its centre falls in a texel of S; the texels of S split
+ * k x k with weights dA / |d|^3 scaled to the texel's exact solid angle (Driscoll 2012). Both
+ * sides hold the same region's energy, so far from S the difference fades (a group's cells
+ * are summed one by one within NEAR_HALF_WIDTHS of the lobe's half width, as a monopole and
+ * a dipole, f and f' at the group's centre, out to REACH_HALF_WIDTHS, not at all beyond).
+ * The normaliser int f dl is the lobe's closed form over the sphere (GGX: Walter et al. 2007's
+ * D with v = n, as in the fast method; Phong: 2 pi / (n + 1)).
+ *
+ * Every output texel is summed alone, in a fixed order of groups and cells, so the result
+ * does not depend on the thread count. */
+#include "specular_internal.h"
+#include "core/context_internal.h"
+#include "core/numeric.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A level is refined when its lobe's half width is under this many mean working texels: at
+ * 9.1 (level 1 of the 1024 chain from a 4096x2048 input) the conversion's share was already
+ * 0.27% RMS, at 5.6 (512) 0.57%, at 3.5 (256) 1.36% (docs/SPECULAR.md). */
+#define NARROW_HALF_WIDTH_TEXELS 8.0
+/* An input pixel is a source when its power in excess of its eight neighbours' mean (what a
+ * texel can misplace to first order: a uniform patch is not misplaced) times the narrowest
+ * refined lobe's peak over that lobe's normaliser, i.e. what the pixel alone adds to the level
+ * where the lobe is centred on it, is at least the mean radiance; the brightest first, at most
+ * MAX_SOURCE_PIXELS, until the region holds MAX_REGION_TEXELS. Measured on the six test HDRIs
+ * at 256 (level 1 against the exact integral over the input, docs/SPECULAR.md): this setting
+ * gave forest 0.20% RMS, studio 0.29%, interior 0.53%, night 0.09% (without the sources
+ * 1.05%, 0.44%, 1.47%, 2.33%) for 11-15 ms of CPU; 0.1 of the mean with 2048 texels gave
+ * 0.12%, 0.35%, 0.54%, 0.02% for 30-125 ms, and 0.1 with 512 texels left studio at 0.56% (the
+ * region's edge then cuts through its bright panels). */
+#define BRIGHT_PEAK_SHARE 1.0
+#define MAX_SOURCE_PIXELS 2048
+#define MAX_REGION_TEXELS 256
+/* The region around a source pixel: the conversion spreads a pixel over the support of its
+ * linear interpolation (one row and one column each way: within 1.42 rows of its centre, a
+ * column being no wider than a row), and every texel that meets that disc holds some of its
+ * light; S takes every texel that meets a disc of 1.5 rows (and one sampling step), so both
+ * sides of delta hold all of it. */
+#define MARGIN_PIXELS 1.5
+/* Cells: at least 4 x 4 a pixel or texel, and at most a quarter of the other grid's spacing
+ * (a boundary of the other grid then cuts a cell at most at quarter steps). */
+#define MIN_CELLS 4
+#define MAX_CELLS 32
+/* A group's cells are summed one by one where the output direction is within 2 half widths of
+ * the group's cone, as a monopole and a dipole out to 16 (measured on city.exr, level 1 of the
+ * 256 chain, against 4 and 32: within 0.11% of every texel; a reach of 8 half widths left a
+ * 0.97% step where the correction ends, 4 a 3.2% step; a near field of 1 half width 0.028%
+ * RMS against 0.022%). */
+#define NEAR_HALF_WIDTHS 2.0
+#define REACH_HALF_WIDTHS 16.0
+/* Output texels are culled against the groups eight by eight. */
+#define TILE 8
+
+typedef struct source_group {
+    double centre[3]; /* unit mean direction of its cells       */
+    double radius;    /* largest angle of a cell from centre    */
+    double energy[3]; /* sum of the cells' weights per channel  */
+    double moment[3][3]; /* [channel][axis]: sum w (l - centre) */
+    double *cell;     /* 6 per cell: unit direction, weight (solid angle x radiance) RGB */
+    size_t count;
+} source_group;
+
+struct ibl_specular_sources {
+    ibl_context *ctx;
+    ibl_specular_info info;
+    int working_size;
+    int groups;
+    source_group *group;
+    /* the cells of the group being made (then copied to its own block: every block the
+     * sources keep while the chain is filtered stays small, so an allocator that keeps
+     * freed large blocks for reuse, as the CLI's, is not made to grow past them) */
+    double *cell_dir; /* 3 per cell, unit            */
+    double *cell_w;   /* 3 per cell: solid angle x radiance (negative for the working cube) */
+    size_t cells, capacity;
+};
+
+static double texel_angle(int size)
+{
+    return sqrt(4.0 * IBL_PI / 6.0) / size;
+}
+
+/* The levels that are refined: a lobe (not a mirror) narrower than the bar. */
+static int level_refined(const ibl_specular_info *info, int working_size, int level, ibl__lobe *lobe)
+{
+    *lobe = ibl__lobe_for_level(info, level);
+    return lobe->kind != IBL__LOBE_MIRROR &&
+           lobe->half_angle < NARROW_HALF_WIDTH_TEXELS * texel_angle(working_size);
+}
+
+/* int f dl over the sphere. GGX: f = x a4 / t^2, t = 1 + (1 + x) k; with t as the variable,
+ * int_0^1 f dx = a4 / k^2 [ln t + (1 + k) / t] from t0 = 1 + k to t1 = alpha^2. */
+static double lobe_normaliser(const ibl__lobe *lobe)
+{
+    if (lobe->kind == IBL__LOBE_PHONG) return IBL_TWO_PI / (lobe->n + 1.0);
+    double k = lobe->k, t0 = 1.0 + k, t1 = 1.0 + 2.0 * k;
+    return IBL_TWO_PI * lobe->a4 / (k * k) * (log(t1 / t0) + (1.0 + k) * (1.0 / t1 - 1.0 / t0));
+}
+
+static ibl_status add_cell(ibl_specular_sources *s, const double d[3], const double w[3])
+{
+    if (s->cells == s->capacity) {
+        size_t cap = s->capacity ? 2 * s->capacity : 1024;
+        double *dir = ibl_alloc(s->ctx, cap * 3 * sizeof(double));
+        double *wt = dir ? ibl_alloc(s->ctx, cap * 3 * sizeof(double)) : NULL;
+        if (!wt) {
+            ibl_free(s->ctx, dir);
+            return ibl_context_status(s->ctx);
+        }
+        if (s->cells) {
+            memcpy(dir, s->cell_dir, s->cells * 3 * sizeof(double));
+            memcpy(wt, s->cell_w, s->cells * 3 * sizeof(double));
+        }
+        ibl_free(s->ctx, s->cell_dir);
+        ibl_free(s->ctx, s->cell_w);
+        s->cell_dir = dir, s->cell_w = wt, s->capacity = cap;
+    }
+    memcpy(s->cell_dir + s->cells * 3, d, 3 * sizeof(double));
+    memcpy(s->cell_w + s->cells * 3, w, 3 * sizeof(double));
+    s->cells++;
+    return IBL_OK;
+}
+
+/* The picture's frame in the world's (ibl_orientation_apply on the axes: exact for quarter
+ * turns, mirror and z-up; yaw in float, as the conversion applies it). */
+typedef struct frame {
+    double m[3][3]; /* world = m picture, column j the image of axis j */
+} frame;
+
+static void frame_make(const ibl_orientation *o, frame *fr)
+{
+    static const ibl_vec3 axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int j = 0; j < 3; j++) {
+        ibl_vec3 w = ibl_orientation_apply(o, axes[j]);
+        fr->m[0][j] = w.x, fr->m[1][j] = w.y, fr->m[2][j] = w.z;
+    }
+}
+
+/* World direction of picture angles (theta from +Y, phi; docs/CONVENTIONS.md: the centre
+ * column looks toward -Z, the right quarter toward +X). */
+static void picture_direction(const frame *fr, double theta, double phi, double out[3])
+{
+    double st = sin(theta), p[3] = {st * sin(phi), cos(theta), -st * cos(phi)};
+    for (int i = 0; i < 3; i++) out[i] = fr->m[i][0] * p[0] + fr->m[i][1] * p[1] + fr->m[i][2] * p[2];
+}
+
+/* Picture angles of a world direction (the inverse: m is orthogonal). */
+static void picture_angles(const frame *fr, const double d[3], double *theta, double *phi)
+{
+    double p[3];
+    for (int j = 0; j < 3; j++) p[j] = fr->m[0][j] * d[0] + fr->m[1][j] * d[1] + fr->m[2][j] * d[2];
+    double len = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    double y = p[1] / len;
+    *theta = acos(y < -1 ? -1 : y > 1 ? 1 : y);
+    *phi = atan2(p[0], -p[2]);
+}
+
+static size_t texel_index(int size, const double d[3])
+{
+    double s, t;
+    int f = ibl_cube_face_st_d(d, &s, &t);
+    int x = (int)(s * size), y = (int)(t * size);
+    x = x < 0 ? 0 : x >= size ? size - 1 : x;
+    y = y < 0 ? 0 : y >= size ? size - 1 : y;
+    return ((size_t)f * size + y) * size + x;
+}
+
+static double luminance(const float *p)
+{
+    return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+}
+
+/* The solid-angle-weighted mean luminance of the image (rows weighted by their exact solid
+ * angles; the working cube's would cost a texel solid angle each). */
+static double image_mean_luminance(const ibl_image *im)
+{
+    int W = im->width, H = im->height;
+    double sum = 0;
+    for (int y = 0; y < H; y++) {
+        double row = 0;
+        const float *p = im->pixels + (size_t)y * W * 4;
+        for (int x = 0; x < W; x++) row += luminance(p + (size_t)x * 4);
+        sum += row * (IBL_TWO_PI / W) * (cos(IBL_PI * y / H) - cos(IBL_PI * (y + 1) / H));
+    }
+    return sum / (4.0 * IBL_PI);
+}
+
+typedef struct candidate {
+    float power;
+    uint32_t pixel;
+} candidate;
+
+static int better(const candidate *a, const candidate *b)
+{
+    return a->power > b->power || (a->power == b->power && a->pixel < b->pixel);
+}
+
+static int by_power(const void *a, const void *b)
+{
+    return better(a, b) ? -1 : better(b, a) ? 1 : 0;
+}
+
+/* Keeps the MAX_SOURCE_PIXELS best candidates in a heap whose root is the worst of them. */
+static void heap_offer(candidate *h, int *n, candidate c)
+{
+    int i;
+    if (*n < MAX_SOURCE_PIXELS) {
+        for (i = (*n)++; i > 0 && better(&h[(i - 1) / 2], &c); i = (i - 1) / 2) h[i] = h[(i - 1) / 2];
+        h[i] = c;
+        return;
+    }
+    if (!better(&c, &h[0])) return;
+    for (i = 0;;) {
+        int k = 2 * i + 1;
+        if (k >= *n) break;
+        if (k + 1 < *n && better(&h[k], &h[k + 1])) k++;
+        if (!better(&c, &h[k])) break;
+        h[i] = h[k], i = k;
+    }
+    h[i] = c;
+}
+
+/* The source pixels, brightest first (at most MAX_SOURCE_PIXELS), away from the poles, where
+ * the conversion integrates whole rows (its polar region: 3 texels or 4 rows). */
+static void find_sources(const ibl_image *im, int working_size, double bar, double margin,
+                         candidate *c, int *count)
+{
+    int W = im->width, H = im->height, n = 0;
+    double polar = fmax(atan(3.0 * 2.0 / working_size), 4.0 * IBL_PI / H) + margin;
+    for (int y = 1; y + 1 < H; y++) {
+        double t0 = IBL_PI * y / H, t1 = IBL_PI * (y + 1) / H;
+        if (t0 < polar || t1 > IBL_PI - polar) continue;
+        double dw = IBL_TWO_PI / W * (cos(t0) - cos(t1));
+        const float *row = im->pixels + (size_t)y * W * 4;
+        for (int x = 0; x < W; x++) {
+            double lum = luminance(row + (size_t)x * 4);
+            if (!(lum * dw >= bar) || !isfinite(lum)) continue;
+            /* only its excess over its eight neighbours' mean is misplaced to first order */
+            double around = 0;
+            for (int j = -1; j <= 1; j++)
+                for (int i = -1; i <= 1; i++) {
+                    int xx = x + i < 0 ? x + i + W : x + i >= W ? x + i - W : x + i;
+                    if (i || j) around += luminance(im->pixels + ((size_t)(y + j) * W + xx) * 4);
+                }
+            double power = (lum - around / 8.0) * dw;
+            if (power >= bar) heap_offer(c, &n, (candidate){(float)power, (uint32_t)((size_t)y * W + x)});
+        }
+    }
+    qsort(c, (size_t)n, sizeof *c, by_power);
+    *count = n;
+}
+
+/* The set of region texels: open addressing over REGION_HASH slots (twice the most texels a
+ * region holds with one pixel's disc on top). */
+#define REGION_HASH 8192
+static int region_insert(uint32_t *table, uint32_t key)
+{
+    uint32_t i = (uint32_t)((key * 0x9E3779B97F4A7C15ull) >> 51) & (REGION_HASH - 1);
+    for (;; i = (i + 1) & (REGION_HASH - 1)) {
+        if (table[i] == key) return 0;
+        if (table[i] == UINT32_MAX) {
+            table[i] = key;
+            return 1;
+        }
+    }
+}
+
+/* Marks the texels within `margin` radians of each source pixel's centre (sampled on its
+ * tangent plane at `step`), a pixel at a time, until MAX_REGION_TEXELS would be passed;
+ * region[] receives them (the last pixel's past the count returned are not part of it). */
+static int mark_region(const ibl_image *im, const frame *fr, int M, const candidate *c, int count,
+                       double margin, double step, uint32_t *table, uint32_t *region)
+{
+    int W = im->width, H = im->height, marked = 0;
+    int half = (int)ceil(margin / step);
+    for (int i = 0; i < count; i++) {
+        int px = (int)(c[i].pixel % W), py = (int)(c[i].pixel / W), added = 0;
+        double d[3], u[3], v[3];
+        picture_direction(fr, IBL_PI * (py + 0.5) / H, IBL_TWO_PI * ((px + 0.5) / W - 0.5), d);
+        /* a tangent basis: u orthogonal to d and to its smallest axis, v = d x u */
+        int a = fabs(d[0]) < fabs(d[1]) ? (fabs(d[0]) < fabs(d[2]) ? 0 : 2) : (fabs(d[1]) < fabs(d[2]) ? 1 : 2);
+        double e[3] = {0, 0, 0};
+        e[a] = 1;
+        u[0] = d[1] * e[2] - d[2] * e[1], u[1] = d[2] * e[0] - d[0] * e[2], u[2] = d[0] * e[1] - d[1] * e[0];
+        double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        for (int k = 0; k < 3; k++) u[k] /= ul;
+        v[0] = d[1] * u[2] - d[2] * u[1], v[1] = d[2] * u[0] - d[0] * u[2], v[2] = d[0] * u[1] - d[1] * u[0];
+        for (int j = -half; j <= half; j++)
+            for (int k = -half; k <= half; k++) {
+                if (j * j + k * k > half * half) continue;
+                double q[3];
+                for (int m = 0; m < 3; m++) q[m] = d[m] + step * (k * u[m] + j * v[m]);
+                uint32_t t = (uint32_t)texel_index(M, q);
+                if (region_insert(table, t)) region[marked + added++] = t;
+            }
+        if (marked + added > MAX_REGION_TEXELS) break; /* not this pixel, nor later ones */
+        marked += added;
+    }
+    return marked;
+}
+
+static int by_index(const void *a, const void *b)
+{
+    uint32_t p = *(const uint32_t *)a, q = *(const uint32_t *)b;
+    return p < q ? -1 : p > q;
+}
+
+/* The cells of one region texel: its own k x k (negative: the working cube's radiance), then
+ * those of the input pixels around it whose centres fall in it. */
+static ibl_status texel_cells(ibl_specular_sources *s, const ibl_image *im, const frame *fr,
+                              const ibl_cubemap *working, int face, int tx, int ty)
+{
+    int M = working->size, W = im->width, H = im->height;
+    size_t self = ((size_t)face * M + ty) * M + tx;
+    const float *L = ibl_cubemap_face(working, 0, face) + ((size_t)ty * M + tx) * 4;
+    double pixel = IBL_PI / H, c[3];
+    ibl_cube_direction_d(face, (tx + 0.5) / M, (ty + 0.5) / M, c);
+    double c2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2], texel = 2.0 / M / c2;
+    int kt = (int)ceil(4.0 * texel / pixel), kp = (int)ceil(4.0 * pixel / texel);
+    kt = kt < MIN_CELLS ? MIN_CELLS : kt > MAX_CELLS ? MAX_CELLS : kt;
+    kp = kp < MIN_CELLS ? MIN_CELLS : kp > MAX_CELLS ? MAX_CELLS : kp;
+    double omega = ibl_cube_texel_solid_angle(M, tx, ty), wsum = 0;
+    size_t first = 0;
+    s->cells = 0;
+    for (int j = 0; j < kt; j++)
+        for (int i = 0; i < kt; i++) {
+            double q[3], w[3];
+            ibl_cube_direction_d(face, (tx + (i + 0.5) / kt) / M, (ty + (j + 0.5) / kt) / M, q);
+            double l2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2], l = sqrt(l2), a = 1.0 / (l2 * l);
+            for (int m = 0; m < 3; m++) q[m] /= l, w[m] = -a * L[m];
+            wsum += a;
+            ibl_status st = add_cell(s, q, w);
+            if (st != IBL_OK) return st;
+        }
+    for (size_t n = first; n < s->cells; n++)
+        for (int m = 0; m < 3; m++) s->cell_w[n * 3 + m] *= omega / wsum;
+    /* the pixels the texel can touch: the picture-angle box of its corners, edge midpoints
+     * and centre, one pixel wider (a texel edge bulges in theta between its corners) */
+    double tmin = 1e9, tmax = -1e9, pc, tc, pmin = 1e9, pmax = -1e9;
+    picture_angles(fr, c, &tc, &pc);
+    for (int j = 0; j <= 2; j++)
+        for (int i = 0; i <= 2; i++) {
+            double q[3], t, p;
+            ibl_cube_direction_d(face, (tx + 0.5 * i) / M, (ty + 0.5 * j) / M, q);
+            picture_angles(fr, q, &t, &p);
+            p -= pc;
+            p = p > IBL_PI ? p - IBL_TWO_PI : p < -IBL_PI ? p + IBL_TWO_PI : p;
+            tmin = fmin(tmin, t), tmax = fmax(tmax, t), pmin = fmin(pmin, p), pmax = fmax(pmax, p);
+        }
+    int y0 = (int)floor(tmin / pixel) - 1, y1 = (int)floor(tmax / pixel) + 1;
+    double col = IBL_TWO_PI / W, base = pc + IBL_PI; /* phi + pi = column units x col */
+    int x0 = (int)floor((base + pmin) / col) - 1, x1 = (int)floor((base + pmax) / col) + 1;
+    y0 = y0 < 0 ? 0 : y0, y1 = y1 >= H ? H - 1 : y1;
+    for (int y = y0; y <= y1; y++) {
+        double t0 = pixel * y, t1 = pixel * (y + 1);
+        for (int xx = x0; xx <= x1; xx++) {
+            int x = ((xx % W) + W) % W;
+            const float *p = im->pixels + ((size_t)y * W + x) * 4;
+            if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) continue;
+            for (int j = 0; j < kp; j++) {
+                double a0 = t0 + (t1 - t0) * j / kp, a1 = t0 + (t1 - t0) * (j + 1) / kp;
+                double dw = IBL_TWO_PI / W / kp * (cos(a0) - cos(a1)), am = 0.5 * (a0 + a1);
+                for (int i = 0; i < kp; i++) {
+                    double q[3], w[3] = {dw * p[0], dw * p[1], dw * p[2]};
+                    picture_direction(fr, am, IBL_TWO_PI * ((xx + (i + 0.5) / kp) / W - 0.5), q);
+                    if (texel_index(M, q) != self) continue;
+                    ibl_status st = add_cell(s, q, w);
+                    if (st != IBL_OK) return st;
+                }
+            }
+        }
+    }
+    return IBL_OK;
+}
+
+static void group_stats(source_group *g)
+{
+    double c[3] = {0, 0, 0};
+    for (size_t n = 0; n < g->count; n++)
+        for (int m = 0; m < 3; m++) c[m] += g->cell[n * 6 + m];
+    double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    for (int m = 0; m < 3; m++) g->centre[m] = c[m] / len;
+    double min_cos = 1;
+    memset(g->energy, 0, sizeof g->energy);
+    memset(g->moment, 0, sizeof g->moment);
+    for (size_t n = 0; n < g->count; n++) {
+        const double *d = g->cell + n * 6, *w = d + 3;
+        double x = d[0] * g->centre[0] + d[1] * g->centre[1] + d[2] * g->centre[2];
+        if (x < min_cos) min_cos = x;
+        for (int ch = 0; ch < 3; ch++) {
+            g->energy[ch] += w[ch];
+            for (int m = 0; m < 3; m++) g->moment[ch][m] += w[ch] * (d[m] - g->centre[m]);
+        }
+    }
+    g->radius = acos(min_cos > 1 ? 1 : min_cos) + 1e-9;
+}
+
+static ibl_status build(ibl_specular_sources *s, const ibl_image *image, const frame *fr,
+                        const ibl_cubemap *working, double lobe_normaliser_min)
+{
+    ibl_context *ctx = s->ctx;
+    int M = working->size, H = image->height;
+    double mean_lum = image_mean_luminance(image);
+    if (!(mean_lum > 0) || !isfinite(mean_lum)) return IBL_OK;
+    double step = fmin(IBL_PI / H, 2.0 / (3.0 * M)) / 2.0;
+    double margin = MARGIN_PIXELS * IBL_PI / H + step;
+    int half = (int)ceil(margin / step), count = 0;
+    /* one pixel's disc adds at most (2 half + 1)^2 texels past MAX_REGION_TEXELS */
+    size_t disc = (size_t)(2 * half + 1) * (2 * half + 1);
+    if (MAX_REGION_TEXELS + disc > REGION_HASH / 2) return IBL_OK; /* a step far below a texel */
+    candidate *c = ibl_alloc(ctx, MAX_SOURCE_PIXELS * sizeof *c);
+    uint32_t *table = ibl_alloc(ctx, REGION_HASH * sizeof(uint32_t));
+    uint32_t *region = ibl_alloc(ctx, (MAX_REGION_TEXELS + disc) * sizeof(uint32_t));
+    ibl_status st = IBL_OK;
+    if (!c || !table || !region) {
+        st = ibl_context_status(ctx);
+        goto done;
+    }
+    find_sources(image, M, BRIGHT_PEAK_SHARE * mean_lum * lobe_normaliser_min, margin, c, &count);
+    memset(table, 0xff, REGION_HASH * sizeof(uint32_t));
+    int marked = mark_region(image, fr, M, c, count, margin, step, table, region);
+    qsort(region, (size_t)marked, sizeof *region, by_index); /* groups in (face, y, x) order */
+    s->group = ibl_alloc(ctx, (size_t)(marked ? marked : 1) * sizeof *s->group);
+    if (!s->group) {
+        st = ibl_context_status(ctx);
+        goto done;
+    }
+    for (int i = 0; i < marked && st == IBL_OK; i++) {
+        size_t t = region[i];
+        source_group *g = &s->group[s->groups];
+        st = texel_cells(s, image, fr, working, (int)(t / ((size_t)M * M)), (int)(t % M),
+                         (int)(t / M % M));
+        if (st != IBL_OK) break;
+        g->count = s->cells;
+        g->cell = ibl_alloc(ctx, (g->count ? g->count : 1) * 6 * sizeof(double));
+        if (!g->cell) {
+            st = ibl_context_status(ctx);
+            break;
+        }
+        for (size_t n = 0; n < g->count; n++) {
+            memcpy(g->cell + n * 6, s->cell_dir + n * 3, 3 * sizeof(double));
+            memcpy(g->cell + n * 6 + 3, s->cell_w + n * 3, 3 * sizeof(double));
+        }
+        group_stats(g);
+        s->groups++;
+    }
+done:
+    ibl_free(ctx, s->cell_dir);
+    ibl_free(ctx, s->cell_w);
+    s->cell_dir = s->cell_w = NULL;
+    s->cells = s->capacity = 0;
+    ibl_free(ctx, region);
+    ibl_free(ctx, table);
+    ibl_free(ctx, c);
+    return st;
+}
+
+void ibl_specular_sources_destroy(ibl_specular_sources *s)
+{
+    if (!s) return;
+    for (int g = 0; g < s->groups; g++) ibl_free(s->ctx, s->group[g].cell);
+    ibl_free(s->ctx, s->group);
+    ibl_free(s->ctx, s->cell_dir);
+    ibl_free(s->ctx, s->cell_w);
+    ibl_free(s->ctx, s);
+}
+
+ibl_status ibl_specular_sources_create(ibl_context *ctx, const ibl_image *image,
+                                       const ibl_to_cube_desc *conversion,
+                                       const ibl_cubemap *working, const ibl_specular_desc *desc,
+                                       ibl_specular_sources **out)
+{
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "specular sources: no output");
+    *out = NULL;
+    if (!image || !image->pixels || !working || !working->data || !desc)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "specular sources: missing image, cube or desc");
+    ibl_specular_sources *s = ibl_alloc(ctx, sizeof *s);
+    if (!s) return ibl_context_status(ctx);
+    memset(s, 0, sizeof *s);
+    s->ctx = ctx;
+    s->working_size = working->size;
+    ibl_layout layout = conversion && conversion->layout ? conversion->layout
+                                                         : ibl_layout_detect(image->width, image->height);
+    int lobes = desc->filter == IBL_FILTER_GGX || desc->filter == IBL_FILTER_PHONG ||
+                desc->filter == IBL_FILTER_BLINN;
+    ibl_status st = IBL_OK;
+    if (layout == IBL_LAYOUT_EQUIRECT && lobes && desc->edge_fixup == IBL_EDGE_FIXUP_NONE &&
+        !desc->dynamic && image->width >= 8 && image->height >= 4 &&
+        (size_t)image->width * image->height <= UINT32_MAX) {
+        st = ibl_specular_levels(ctx, desc, working->size, &s->info);
+        double narrowest = 0;
+        for (int l = 0; st == IBL_OK && l < s->info.levels; l++) {
+            ibl__lobe lobe;
+            if (!level_refined(&s->info, working->size, l, &lobe)) continue;
+            double n = lobe_normaliser(&lobe);
+            if (narrowest == 0 || n < narrowest) narrowest = n;
+        }
+        if (st == IBL_OK && narrowest > 0) {
+            frame fr;
+            ibl_orientation o = {0};
+            if (conversion) o = conversion->orientation;
+            frame_make(&o, &fr);
+            st = build(s, image, &fr, working, narrowest);
+        }
+    }
+    if (st != IBL_OK) {
+        ibl_specular_sources_destroy(s);
+        return st;
+    }
+    *out = s;
+    return IBL_OK;
+}
+
+int ibl_specular_sources_count(const ibl_specular_sources *s)
+{
+    return s ? s->groups : 0;
+}
+
+typedef struct apply_job {
+    const ibl_specular_sources *s;
+    ibl__lobe lobe;
+    double inv_norm, near, reach;
+    ibl_cubemap *chain;
+    int level, n, tiles; /* tiles per face edge */
+} apply_job;
+
+static double angle_between(const double a[3], const double b[3])
+{
+    double x = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    return acos(x > 1 ? 1 : x < -1 ? -1 : x);
+}
+
+static void apply_tile(void *arg, int index)
+{
+    const apply_job *job = arg;
+    const ibl_specular_sources *s = job->s;
+    int n = job->n, T = job->tiles, face = index / (T * T), tx = index % T, ty = index / T % T;
+    int x0 = tx * TILE, y0 = ty * TILE, x1 = x0 + TILE < n ? x0 + TILE : n, y1 = y0 + TILE < n ? y0 + TILE : n;
+    /* the tile's cone: its centre direction and the farthest corner */
+    double c[3], q[3], radius = 0;
+    ibl_cube_direction_d(face, 0.5 * (x0 + x1) / n, 0.5 * (y0 + y1) / n, c);
+    double cl = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    for (int m = 0; m < 3; m++) c[m] /= cl;
+    for (int k = 0; k < 4; k++) {
+        ibl_cube_direction_d(face, (double)(k & 1 ? x1 : x0) / n, (double)(k & 2 ? y1 : y0) / n, q);
+        double ql = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+        for (int m = 0; m < 3; m++) q[m] /= ql;
+        radius = fmax(radius, angle_between(c, q));
+    }
+    /* the groups in reach of the tile, with the cosines of their near and far bounds */
+    int list[MAX_REGION_TEXELS], count = 0;
+    double cos_near[MAX_REGION_TEXELS], cos_reach[MAX_REGION_TEXELS];
+    for (int g = 0; g < s->groups; g++) {
+        const source_group *gr = &s->group[g];
+        if (angle_between(c, gr->centre) - gr->radius - radius > job->reach) continue;
+        cos_near[count] = cos(fmin(gr->radius + job->near, IBL_PI));
+        cos_reach[count] = cos(fmin(gr->radius + job->reach, IBL_PI));
+        list[count++] = g;
+    }
+    if (!count) return;
+    for (int y = y0; y < y1; y++)
+        for (int x = x0; x < x1; x++) {
+            double R[3], acc[3] = {0, 0, 0};
+            ibl_cube_direction_d(face, (x + 0.5) / n, (y + 0.5) / n, R);
+            double rl = sqrt(R[0] * R[0] + R[1] * R[1] + R[2] * R[2]);
+            for (int m = 0; m < 3; m++) R[m] /= rl;
+            for (int i = 0; i < count; i++) {
+                const source_group *gr = &s->group[list[i]];
+                double xc = R[0] * gr->centre[0] + R[1] * gr->centre[1] + R[2] * gr->centre[2];
+                if (xc < cos_reach[i]) continue;
+                if (xc >= cos_near[i]) {
+                    for (size_t k = 0; k < gr->count; k++) {
+                        const double *d = gr->cell + k * 6, *w = d + 3;
+                        double f = ibl__lobe_f(&job->lobe, R[0] * d[0] + R[1] * d[1] + R[2] * d[2]);
+                        for (int ch = 0; ch < 3; ch++) acc[ch] += f * w[ch];
+                    }
+                    continue;
+                }
+                /* f(R.l) ~ f(x) + f'(x) R.(l - centre), x = R.centre */
+                double f[3];
+                ibl__lobe_f012(&job->lobe, xc, f);
+                for (int ch = 0; ch < 3; ch++)
+                    acc[ch] += f[0] * gr->energy[ch] +
+                               f[1] * (R[0] * gr->moment[ch][0] + R[1] * gr->moment[ch][1] + R[2] * gr->moment[ch][2]);
+            }
+            float *p = ibl_cubemap_face(job->chain, job->level, face) + ((size_t)y * n + x) * 4;
+            for (int ch = 0; ch < 3; ch++) {
+                float v = p[ch] + (float)(acc[ch] * job->inv_norm);
+                p[ch] = v > 0.0f ? v : 0.0f;
+            }
+        }
+}
+
+ibl_status ibl_specular_sources_apply(const ibl_specular_sources *s, ibl_cubemap *chain)
+{
+    if (!s || !s->groups) return IBL_OK; /* no sources: nothing to refine */
+    if (!chain || !chain->data)
+        return ibl__fail(s->ctx, IBL_ERR_INVALID_ARGUMENT, "specular sources: no chain");
+    if (chain->size != s->info.size || chain->levels != s->info.levels)
+        return ibl__fail(s->ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "specular sources: the chain is %d texels and %d levels, the sources were "
+                         "made for %d and %d", chain->size, chain->levels, s->info.size, s->info.levels);
+    for (int l = 0; l < chain->levels; l++) {
+        apply_job job;
+        memset(&job, 0, sizeof job);
+        if (!level_refined(&s->info, s->working_size, l, &job.lobe)) continue;
+        job.s = s;
+        job.inv_norm = 1.0 / lobe_normaliser(&job.lobe);
+        job.near = NEAR_HALF_WIDTHS * job.lobe.half_angle;
+        job.reach = REACH_HALF_WIDTHS * job.lobe.half_angle;
+        job.chain = chain;
+        job.level = l;
+        job.n = ibl_level_size(chain->size, l);
+        job.tiles = (job.n + TILE - 1) / TILE;
+        ibl_parallel_for(s->ctx, 6 * job.tiles * job.tiles, apply_tile, &job);
+    }
+    return IBL_OK;
+}
+
+ibl_status ibl_specular_prefilter_image(ibl_context *ctx, const ibl_image *image,
+                                        const ibl_to_cube_desc *conversion,
+                                        const ibl_specular_desc *desc, ibl_cubemap *out,
+                                        ibl_specular_info *info)
+{
+    ibl_specular_desc zero = {0};
+    ibl_cubemap working;
+    memset(&working, 0, sizeof working);
+    if (out) memset(out, 0, sizeof *out);
+    if (!desc) desc = &zero;
+    ibl_to_cube_desc cd = {0};
+    if (conversion) cd = *conversion;
+    ibl_status st = ibl_image_to_cubemap(ctx, image, &cd, &working);
+    if (st != IBL_OK) return st;
+    ibl_specular_sources *sources = NULL;
+    st = ibl_specular_sources_create(ctx, image, &cd, &working, desc, &sources);
+    if (st == IBL_OK) st = ibl_specular_prefilter(ctx, &working, desc, out, info);
+    if (st == IBL_OK) st = ibl_specular_sources_apply(sources, out);
+    ibl_specular_sources_destroy(sources);
+    ibl_cubemap_free(ctx, &working);
+    if (st != IBL_OK && out) ibl_cubemap_free(ctx, out);
+    return st;
+}
