@@ -4,8 +4,11 @@
  * built-in pool's, a host's parallel-for running bands and whole decodes on threads of its
  * own), their memory is counted in the budget, a budget too small
  * for one is refused with the budget's message, and the sanitizer build's leak check sees
- * them all freed by ibl_context_destroy. */
+ * them all freed by ibl_context_destroy. Also: ASTC HDR and BC6H decode to half floats
+ * exactly (what `ibl view` relies on). */
 #include "test_support.h"
+
+#include "core/pixel_format.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -196,6 +199,39 @@ static void budget_counts_decoders(void **state)
     free(out);
 }
 
+/* Every decoded value is a half float: ASTC HDR and BC6H decode to 16-bit floats (Khronos
+ * Data Format Specification 1.3, "ASTC Compressed Texture Image Formats", HDR endpoint
+ * decoding and "BC6H"), which the library returns as floats. `ibl view` embeds a compressed
+ * bake's decoded chain as half floats (cli/viewer_html.c) and docs/VIEWER.md says that this
+ * is lossless, i.e. what a GPU sampling the blocks would read: checked here bit for bit. */
+static int all_halves(const float *v, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        float back = ibl_half_to_float(ibl_float_to_half(v[i]));
+        if (memcmp(&back, &v[i], sizeof back) != 0) return 0;
+    }
+    return 1;
+}
+
+static void decoded_values_are_halves(void **state)
+{
+    case_data *c = *state;
+    for (int f = 0; f < 8; f++)
+        if (!all_halves(c->fresh[f], (size_t)TEXELS * 4))
+            fail_msg("ASTC %dx%d decodes to a value that is not a half float", footprints[f][0], footprints[f][1]);
+    float *img = test_image(), *back = malloc((size_t)TEXELS * 16);
+    uint8_t *blocks = malloc(ibl_bc6h_bytes(W, H));
+    ibl_bc6h_desc d = {0, IBL_QUALITY_FAST};
+    assert_int_equal(ibl_bc6h_encode(NULL, &d, img, W, H, blocks), IBL_OK);
+    assert_int_equal(ibl_bc6h_decode(NULL, 0, blocks, W, H, back), IBL_OK);
+    assert_true(all_halves(back, (size_t)TEXELS * 4));
+    /* the check can fail: the image itself holds values that are not halves */
+    assert_false(all_halves(img, (size_t)TEXELS * 4));
+    free(blocks);
+    free(back);
+    free(img);
+}
+
 static int setup(void **state)
 {
     *state = make_cases();
@@ -214,6 +250,7 @@ int main(void)
         cmocka_unit_test(reuse_matches_fresh),
         cmocka_unit_test(shared_by_threads),
         cmocka_unit_test(budget_counts_decoders),
+        cmocka_unit_test(decoded_values_are_halves),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
