@@ -115,7 +115,10 @@ static void decoder_give_back(ibl_context *ctx, astc_decoders *cache, int f, ibl
 {
     if (cache) {
         pthread_mutex_lock(&cache->lock);
-        if (cache->idle_count[f] < IDLE_DECODERS) cache->idle[f][cache->idle_count[f]++] = decoder, decoder = NULL;
+        if (cache->idle_count[f] < IDLE_DECODERS) {
+            cache->idle[f][cache->idle_count[f]++] = decoder;
+            decoder = NULL;
+        }
         pthread_mutex_unlock(&cache->lock);
     }
     if (decoder) {
