@@ -93,6 +93,9 @@ size_t ibl_astc_bytes(int block_width, int block_height, int width, int height);
  * context on the context's parallel-for (output identical at any thread count). */
 ibl_status ibl_astc_encode(ibl_context *ctx, const ibl_astc_desc *desc, const float *rgba,
                            int width, int height, void *blocks);
+/* Decodes the same way, band by band. The context keeps astcenc's decoders from one call to
+ * the next (building one costs 4-14 ms): at most one per footprint and band decoded at once,
+ * about 10 MiB each counted in the memory budget, freed by ibl_context_destroy. */
 ibl_status ibl_astc_decode(ibl_context *ctx, const ibl_astc_desc *desc, const void *blocks,
                            int width, int height, float *rgba);
 

@@ -45,6 +45,9 @@ struct ibl_context {
     atomic_flag message_lock; /* a failure on a worker thread may race one on another */
     ibl_status last_status;
     char message[MESSAGE_BYTES];
+    /* state kept across calls (ibl__context_cache), published by compare-and-swap */
+    void *_Atomic caches[IBL__CACHE_SLOTS];
+    ibl__cache_free_fn cache_free[IBL__CACHE_SLOTS]; /* written by the thread that published */
 };
 
 const char *ibl_status_name(ibl_status status)
@@ -335,6 +338,7 @@ ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out)
     atomic_init(&ctx->live_bytes, 0);
     atomic_init(&ctx->peak_bytes, 0);
     atomic_flag_clear(&ctx->message_lock);
+    for (int i = 0; i < IBL__CACHE_SLOTS; i++) atomic_init(&ctx->caches[i], NULL);
     ctx->thread_count = 1;
     ctx->cpu_features = d.kernels == IBL_KERNELS_PORTABLE ? 0u : ibl__cpu_detect();
     if (!d.parallel_for) {
@@ -361,8 +365,30 @@ void ibl_context_destroy(ibl_context *ctx)
 {
     if (!ctx) return;
     pool_destroy(ctx->pool);
+    for (int i = 0; i < IBL__CACHE_SLOTS; i++) {
+        void *cache = atomic_load(&ctx->caches[i]);
+        if (cache) ctx->cache_free[i](ctx, cache);
+    }
     ibl_allocator a = ctx->desc.allocator;
     a.free(ctx, a.user);
+}
+
+void *ibl__context_cache(ibl_context *ctx, ibl__cache_slot slot, ibl__cache_create_fn create,
+                         ibl__cache_free_fn free_fn)
+{
+    if (!ctx) return NULL;
+    void *cache = atomic_load(&ctx->caches[slot]);
+    if (cache) return cache;
+    void *made = create(ctx);
+    if (!made) return NULL;
+    void *expected = NULL;
+    if (atomic_compare_exchange_strong(&ctx->caches[slot], &expected, made)) {
+        /* only ibl_context_destroy reads it, after every call on the context has returned */
+        ctx->cache_free[slot] = free_fn;
+        return made;
+    }
+    free_fn(ctx, made); /* another thread published first: use its object */
+    return expected;
 }
 
 unsigned ibl__cpu_features(const ibl_context *ctx)

@@ -26,4 +26,19 @@ ibl_status ibl__budget_reserve(ibl_context *ctx, uint64_t bytes);
 void ibl__budget_release(ibl_context *ctx, uint64_t bytes);
 ibl_status ibl__budget_check(ibl_context *ctx, uint64_t bytes);
 
+/* State a module keeps in the context from one call to the next, because building it costs
+ * more than the work of a typical call (astcenc's decoder tables: 4-14 ms each). One slot per
+ * kind of state; the module creates its object on first use and the context frees it when
+ * destroyed. */
+typedef enum ibl__cache_slot { IBL__CACHE_ASTC_DECODERS, IBL__CACHE_SLOTS } ibl__cache_slot;
+typedef void *(*ibl__cache_create_fn)(ibl_context *ctx);
+typedef void (*ibl__cache_free_fn)(ibl_context *ctx, void *cache);
+/* The slot's object, made by create(ctx) if there is none yet. Any thread may ask: when two
+ * race to create it, one object is kept and the other given to free_fn. NULL when create
+ * returned NULL (its failure recorded in the context) or when ctx is NULL (no context, no
+ * cache: the caller does without). free_fn(ctx, object) runs in ibl_context_destroy, after
+ * the thread pool has stopped and while the context's allocator and budget still work. */
+void *ibl__context_cache(ibl_context *ctx, ibl__cache_slot slot, ibl__cache_create_fn create,
+                         ibl__cache_free_fn free_fn);
+
 #endif
