@@ -9,13 +9,26 @@
  * library's seamless bilinear sampler reads them) and each output row reads two grid rows.
  * Otherwise (edge fixups bend the directions) the grid is sampled by direction with
  * ibl_cubemap_sample_bilinear. Interpolating the numerator and the normaliser alike keeps a
- * constant environment constant. */
+ * constant environment constant.
+ *
+ * A Phong core's grids (sum_grid.lagrange, always centred and dividing the level's edge) are read
+ * by 6-point Lagrange interpolation per axis (the quintic through the 6 x 6 grid points around
+ * the texel; its error on a smooth function goes as the spacing to the sixth power, where
+ * bilinear's goes as its square), from a three-texel border resampled at the border points' own
+ * directions (lagrange_border_task), the corner squares included. Its weights add up to 1, so a
+ * constant environment stays constant too. */
 #include "bake/specular/fast_internal.h"
 
+#include <limits.h>
 #include <math.h>
+#include <string.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+
+/* A lagrange grid is read over TAPS x TAPS points, from TAP_OFFSET before the point under the
+ * texel (grid_border: TAPS / 2 texels of border). */
+enum { TAPS = 6, TAP_OFFSET = TAPS / 2 - 1 };
 
 typedef struct border_job {
     const ibl_specular_plan *p;
@@ -27,17 +40,19 @@ static void border_task(void *arg, int f)
 {
     const border_job *j = arg;
     sum_grid *gr = j->grid;
-    int n = gr->edge, m = n + 2;
+    int n = gr->edge, B = grid_border(gr), m = n + 2 * B;
     float *out = gr->bordered + (size_t)f * m * m * 4;
-    for (int Y = -1; Y <= n; Y++)
-        for (int X = -1; X <= n; X++) {
-            float *o = out + ((size_t)(Y + 1) * m + X + 1) * 4;
+    for (int Y = -B; Y < n + B; Y++)
+        for (int X = -B; X < n + B; X++) {
+            float *o = out + ((size_t)(Y + B) * m + X + B) * 4;
             int ox = X < 0 || X >= n, oy = Y < 0 || Y >= n;
-            if (ox && oy) { /* a cube corner: the mean of the three texels around it */
+            if (ox && oy) {
+                /* a cube corner: the mean of the three texels around it (a bilinear read takes
+                 * the cell next to the corner; a lagrange grid's corner square is resampled) */
                 int cx = X < 0 ? 0 : n - 1, cy = Y < 0 ? 0 : n - 1;
                 int32_t t[3] = {ibl__fast_unfolded_texel(j->p, n, f, cx, cy),
-                                ibl__fast_unfolded_texel(j->p, n, f, X, cy),
-                                ibl__fast_unfolded_texel(j->p, n, f, cx, Y)};
+                                ibl__fast_unfolded_texel(j->p, n, f, X < 0 ? -1 : n, cy),
+                                ibl__fast_unfolded_texel(j->p, n, f, cx, Y < 0 ? -1 : n)};
                 for (int c = 0; c < 4; c++) {
                     float v = 0;
                     for (int k = 0; k < 3; k++) v += gr->sums[(size_t)t[k] * 4 + c] * (1.0f / 3.0f);
@@ -50,6 +65,60 @@ static void border_task(void *arg, int f)
         }
 }
 
+/* The interpolation weights of the TAPS points at -TAPS/2 + 1 .. TAPS/2 for a position t in
+ * [0, 1) after point 0: Lagrange's polynomial through them. */
+static void lagrange_weights(float t, float w[TAPS])
+{
+    for (int k = 0; k < TAPS; k++) {
+        float wk = 1.0f;
+        for (int j = 0; j < TAPS; j++)
+            if (j != k) wk *= (t - (float)(j - TAP_OFFSET)) / (float)(k - j);
+        w[k] = wk;
+    }
+}
+
+/* A lagrange grid's border, resampled: the unfolded neighbour texels of border_task lie where the
+ * neighbour's grid has them, not where this face's grid continued across the edge would (the
+ * face plane extended; laterally half a texel off at depth 1 near the corners, 1.5 at depth 2),
+ * and the interpolation reads its taps as evenly spaced (read as they lie, they gave 0.5-1%
+ * errors along the face edges of the 256 chain's level 0). So each border point takes the value
+ * at its own direction -- this face's grid continued on its plane -- read from the face that
+ * direction falls on by the same interpolation over that face's bordered copy (the point lies
+ * within three texels of that face's edge, the border's own displacement entering only through
+ * the outer taps). The corner squares, where no face's grid continues, get values the same way.
+ * Reads the first copy, writes the second. */
+static void lagrange_border_task(void *arg, int f)
+{
+    const border_job *j = arg;
+    sum_grid *gr = j->grid;
+    int n = gr->edge, B = grid_border(gr), m = n + 2 * B;
+    const float *in = gr->bordered;
+    float *out = gr->bordered + (size_t)6 * m * m * 4 + (size_t)f * m * m * 4;
+    memcpy(out, in + (size_t)f * m * m * 4, (size_t)m * m * 4 * sizeof(float));
+    for (int Y = -B; Y < n + B; Y++)
+        for (int X = -B; X < n + B; X++) {
+            if (X >= 0 && X < n && Y >= 0 && Y < n) continue;
+            double d[3], s, t;
+            ibl_cube_direction_d(f, (X + 0.5) / n, (Y + 0.5) / n, d);
+            int g = ibl_cube_face_st_d(d, &s, &t);
+            float gx = (float)(s * n - 0.5), gy = (float)(t * n - 0.5);
+            int ix = (int)floorf(gx), iy = (int)floorf(gy);
+            ix = ix < -1 ? -1 : ix > n - 1 ? n - 1 : ix;
+            iy = iy < -1 ? -1 : iy > n - 1 ? n - 1 : iy;
+            float wx[TAPS], wy[TAPS], v[4] = {0, 0, 0, 0};
+            lagrange_weights(gx - ix, wx);
+            lagrange_weights(gy - iy, wy);
+            const float *origin = in + ((size_t)g * m * m + (size_t)B * m + B) * 4;
+            for (int r = 0; r < TAPS; r++)
+                for (int q = 0; q < TAPS; q++) {
+                    const float *a = origin + ((ptrdiff_t)(iy - TAP_OFFSET + r) * m + ix - TAP_OFFSET + q) * 4;
+                    for (int c = 0; c < 4; c++) v[c] += wy[r] * wx[q] * a[c];
+                }
+            float *o = out + ((size_t)(Y + B) * m + X + B) * 4;
+            for (int c = 0; c < 4; c++) o[c] = v[c];
+        }
+}
+
 typedef struct combine_job {
     const ibl_specular_plan *p;
     ibl_cubemap *dst;
@@ -57,12 +126,24 @@ typedef struct combine_job {
 } combine_job;
 
 /* How an output row reads the level's grids: the one at the output texels, the coarse grids
- * read by rows of their bordered copies, and those sampled by direction. */
+ * read by rows of their bordered copies (two rows bilinearly, TAPS for lagrange grids), and those
+ * sampled by direction. */
+/* A level has at most two lagrange grids (a Phong core's and its corrections', pieces.c); the
+ * column weights of a lagrange grid are tabulated for up to 64 output texels a grid texel. */
+enum { LAGRANGE_GRIDS = 2, LAGRANGE_PHASES = 64 };
+
 typedef struct row_sources {
     const sum_grid *at_output;
     const float *rows[MAX_PIECES][2]; /* the two bordered rows under the output row        */
     float fy[MAX_PIECES], scale[MAX_PIECES];
-    int sampled[MAX_PIECES], row_count, sampled_count;
+    /* lagrange grids: the TAPS rows, their weights, and the column weights of each phase x % r
+     * of the output column over the grid's (r = n / edge; computed per texel above
+     * LAGRANGE_PHASES) */
+    const float *lagrange_rows[LAGRANGE_GRIDS][TAPS];
+    float lagrange_wy[LAGRANGE_GRIDS][TAPS], lagrange_scale[LAGRANGE_GRIDS];
+    float lagrange_wx[LAGRANGE_GRIDS][LAGRANGE_PHASES][TAPS];
+    int lagrange_ratio[LAGRANGE_GRIDS];
+    int sampled[MAX_PIECES], row_count, lagrange_count, sampled_count;
 } row_sources;
 
 static void row_sources_of(const ibl_specular_plan *p, const level_plan *lv, int n, int face,
@@ -70,25 +151,88 @@ static void row_sources_of(const ibl_specular_plan *p, const level_plan *lv, int
 {
     int centred = centred_directions(p);
     rs->at_output = NULL;
-    rs->row_count = rs->sampled_count = 0;
+    rs->row_count = rs->lagrange_count = rs->sampled_count = 0;
     for (int g = 0; g < lv->grid_count; g++) {
         const sum_grid *gr = &lv->grids[g];
         int gn = gr->edge;
         if (gr->at_output) {
             rs->at_output = gr;
         } else if (centred && n % gn == 0) {
-            /* the texel centre's bilinear footprint on the bordered grid (it never leaves it:
-             * gx is in [-1/2, gn - 1/2]) */
+            /* the texel centre's footprint on the bordered grid (it never leaves it: gx is in
+             * [-1/2, gn - 1/2], and the border is three deep for the lagrange reads) */
+            int B = grid_border(gr), m = gn + 2 * B;
+            const float *copy = gr->bordered + (gr->lagrange ? (size_t)6 * m * m * 4 : 0);
+            const float *face_origin = copy + ((size_t)face * m * m + (size_t)B * m + B) * 4;
             float gy = (y + 0.5f) * gn / n - 0.5f;
-            int iy = (int)floorf(gy), k = rs->row_count++;
-            rs->rows[k][0] = gr->bordered + (((size_t)face * (gn + 2) + iy + 1) * (gn + 2) + 1) * 4;
-            rs->rows[k][1] = rs->rows[k][0] + (size_t)(gn + 2) * 4;
-            rs->fy[k] = gy - iy;
-            rs->scale[k] = (float)gn / n;
+            int iy = (int)floorf(gy);
+            if (gr->lagrange && rs->lagrange_count < LAGRANGE_GRIDS) {
+                int k = rs->lagrange_count++;
+                for (int r = 0; r < TAPS; r++)
+                    rs->lagrange_rows[k][r] = face_origin + (ptrdiff_t)(iy - TAP_OFFSET + r) * m * 4;
+                lagrange_weights(gy - iy, rs->lagrange_wy[k]);
+                rs->lagrange_scale[k] = (float)gn / n;
+                rs->lagrange_ratio[k] = n / gn;
+                for (int x = 0; x < n / gn && x < LAGRANGE_PHASES; x++) {
+                    float gx = (x + 0.5f) * rs->lagrange_scale[k] - 0.5f;
+                    lagrange_weights(gx - floorf(gx), rs->lagrange_wx[k][x]);
+                }
+            } else {
+                int k = rs->row_count++;
+                rs->rows[k][0] = face_origin + (ptrdiff_t)iy * m * 4;
+                rs->rows[k][1] = rs->rows[k][0] + (size_t)m * 4;
+                rs->fy[k] = gy - iy;
+                rs->scale[k] = (float)gn / n;
+            }
         } else {
             rs->sampled[rs->sampled_count++] = g;
         }
     }
+}
+
+/* The grid columns under an output row, interpolated along y: a window of TAPS columns that
+ * slides with x (the output's texels are at least twice as many as the grid's, so each column
+ * is interpolated once per row, and a texel costs TAPS taps along x, not TAPS^2). */
+typedef struct lagrange_window {
+    int first;             /* grid column of column[0] (INT_MIN: empty)                        */
+    float column[TAPS][4];
+} lagrange_window;
+
+/* Grid column c of Lagrange grid k interpolated along y at the row, into out. */
+static void lagrange_column(const row_sources *rs, int k, int c, float out[4])
+{
+#if defined(__SSE2__)
+    __m128 acc = _mm_setzero_ps();
+    for (int r = 0; r < TAPS; r++)
+        acc = _mm_add_ps(acc, _mm_mul_ps(_mm_set1_ps(rs->lagrange_wy[k][r]),
+                                         _mm_loadu_ps(rs->lagrange_rows[k][r] + (ptrdiff_t)c * 4)));
+    _mm_storeu_ps(out, acc);
+#else
+    for (int q = 0; q < 4; q++) out[q] = 0.0f;
+    for (int r = 0; r < TAPS; r++)
+        for (int q = 0; q < 4; q++)
+            out[q] += rs->lagrange_wy[k][r] * rs->lagrange_rows[k][r][(ptrdiff_t)c * 4 + q];
+#endif
+}
+
+/* Adds Lagrange grid k of the row at output column x to v: TAPS x TAPS points, the y pass from
+ * the window (x rises along a row, so the window only moves forward). */
+static void add_lagrange(const row_sources *rs, int k, int x, lagrange_window *w, float v[4])
+{
+    float gx = (x + 0.5f) * rs->lagrange_scale[k] - 0.5f;
+    int ix = (int)floorf(gx), first = ix - TAP_OFFSET;
+    if (w->first != first) {
+        int keep = w->first != INT_MIN && first > w->first && first - w->first < TAPS
+                       ? TAPS - (first - w->first) : 0;
+        if (keep) memmove(w->column[0], w->column[TAPS - keep], (size_t)keep * 4 * sizeof(float));
+        for (int q = keep; q < TAPS; q++) lagrange_column(rs, k, first + q, w->column[q]);
+        w->first = first;
+    }
+    float computed[TAPS];
+    const float *wx = computed;
+    if (rs->lagrange_ratio[k] <= LAGRANGE_PHASES) wx = rs->lagrange_wx[k][x % rs->lagrange_ratio[k]];
+    else lagrange_weights(gx - ix, computed);
+    for (int q = 0; q < TAPS; q++)
+        for (int c = 0; c < 4; c++) v[c] += wx[q] * w->column[q][c];
 }
 
 /* Row `index` (face n + y) of the output level. */
@@ -101,6 +245,8 @@ static void combine_task(void *arg, int index)
     float *row = ibl_cubemap_face(job->dst, job->level, face) + (size_t)y * n * 4;
     row_sources rs;
     row_sources_of(p, lv, n, face, y, &rs);
+    lagrange_window windows[LAGRANGE_GRIDS];
+    for (int k = 0; k < LAGRANGE_GRIDS; k++) windows[k].first = INT_MIN;
     for (int x = 0; x < n; x++) {
         float v[4] = {0, 0, 0, 0};
         if (rs.at_output) {
@@ -132,6 +278,7 @@ static void combine_task(void *arg, int index)
             }
         }
 #endif
+        for (int k = 0; k < rs.lagrange_count; k++) add_lagrange(&rs, k, x, &windows[k], v);
         if (rs.sampled_count) {
             double d[3];
             ibl__output_direction(&p->desc, &lv->lobe, face, n, x, y, d);
@@ -161,6 +308,7 @@ void ibl__fast_combine(ibl_specular_plan *p, ibl_cubemap *dst, int level)
         if (!lv->grids[g].bordered) continue;
         border_job bj = {p, &lv->grids[g]};
         ibl_parallel_for(p->ctx, 6, border_task, &bj);
+        if (lv->grids[g].lagrange) ibl_parallel_for(p->ctx, 6, lagrange_border_task, &bj);
     }
     combine_job job = {p, dst, level};
     ibl_parallel_for(p->ctx, 6 * ibl_level_size(p->output_edge, level), combine_task, &job);

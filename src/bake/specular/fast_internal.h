@@ -185,12 +185,17 @@ typedef struct lobe_piece {
  * where edge fixups may bend the directions) or a coarser cube grid, interpolated. */
 typedef struct sum_grid {
     int edge, at_output;
+    int lagrange;          /* read by 6-point Lagrange interpolation (a Phong core), not bilinear */
     int tiles;             /* TILE_EDGE tiles per face edge                                    */
     float *sums;           /* 6 edge^2 x 4: sum g P (rgb), sum g Omega (the normaliser)         */
-    float *bordered;       /* coarse grids: 6 (edge + 2)^2 x 4, the sums with a one-texel
-                            * border across the face edges (corner: the mean of its three
-                            * texels), as the seamless bilinear sampler reads them            */
+    float *bordered;       /* coarse grids: 6 (edge + 2 border)^2 x 4, the sums with a border
+                            * (grid_border) across the face edges (corner: the mean of its
+                            * three texels), as the seamless bilinear sampler reads them      */
 } sum_grid;
+
+/* Texels of a coarse grid's border: the 6-point reads of a Lagrange grid take three beyond a
+ * face edge (combine.c), bilinear ones one. */
+static inline int grid_border(const sum_grid *g) { return g->lagrange ? 3 : 1; }
 
 typedef struct level_plan {
     ibl__lobe lobe;

@@ -109,14 +109,18 @@ static int source_level_for(const ibl_specular_plan *p, double width)
     return best;
 }
 
-/* The level's grid of `edge` points a face edge (at_output: the output texels), added if new. */
-static int grid_index(level_plan *lv, int edge, int at_output)
+/* The level's grid of `edge` points a face edge (at_output: the output texels; lagrange: read by
+ * 6-point Lagrange interpolation, combine.c), added if new. */
+static int grid_index(level_plan *lv, int edge, int at_output, int lagrange)
 {
     for (int g = 0; g < lv->grid_count; g++)
-        if (lv->grids[g].edge == edge && lv->grids[g].at_output == at_output) return g;
+        if (lv->grids[g].edge == edge && lv->grids[g].at_output == at_output &&
+            lv->grids[g].lagrange == lagrange)
+            return g;
     sum_grid *g = &lv->grids[lv->grid_count];
     g->edge = edge;
     g->at_output = at_output;
+    g->lagrange = lagrange;
     g->tiles = (edge + TILE_EDGE - 1) / TILE_EDGE;
     return lv->grid_count++;
 }
@@ -140,39 +144,54 @@ static void place_ring(const ibl_specular_plan *p, level_plan *lv, int output_ed
     while (texel_angle(edge) > (bright_apart ? spacing_bright_apart : spacing) * b) edge *= 2;
     if (edge < MIN_GRID_EDGE) edge = MIN_GRID_EDGE;
     if (edge >= output_edge) {
-        pc->grid = grid_index(lv, output_edge, 1);
+        pc->grid = grid_index(lv, output_edge, 1, 0);
         return;
     }
-    pc->grid = grid_index(lv, edge, 0);
+    pc->grid = grid_index(lv, edge, 0, 0);
     pc->bright_apart = bright_apart;
     int bright_edge = MIN_GRID_EDGE;
     while (bright_edge < output_edge && texel_angle(bright_edge) > BRIGHT_GRID_SPACING * acc * b)
         bright_edge *= 2;
-    pc->bright_grid = bright_edge >= output_edge ? grid_index(lv, output_edge, 1)
-                                                 : grid_index(lv, bright_edge, 0);
+    pc->bright_grid = bright_edge >= output_edge ? grid_index(lv, output_edge, 1, 0)
+                                                 : grid_index(lv, bright_edge, 0, 0);
 }
 
 /* Where the core is summed: on the output texels, or, when they are finer than the lobe needs,
  * on a cube grid spaced by the lobe's half width, interpolated (the core of a wide lobe, whose
  * result varies on the scale of its half width, not of the output's texels). The centroid
  * corrections of its weights go to a coarser grid still when one is fine enough for them
- * (gathering.c, difference form). */
+ * (gathering.c, difference form).
+ *
+ * A Phong lobe that is nil long before the horizon is smooth on the scale of its half width
+ * with every derivative (cos^n is close to a Gaussian): its grids are read by 6-point Lagrange
+ * interpolation (combine.c), which lets the core's grid be four times as coarse as the bilinear
+ * rule (tuning.h), its centroid corrections summed on the same grid. Such grids must divide the
+ * output's edge (combine.c reads them row by row) and have at least MIN_LAGRANGE_GRID_EDGE
+ * points a face edge. A lobe that reaches the horizon has a kink there and keeps the bilinear
+ * rules. */
 static void place_core(const ibl_specular_plan *p, level_plan *lv, int output_edge, double acc,
                        lobe_piece *pc)
 {
-    double half = lv->lobe.half_angle;
+    const ibl__lobe *lobe = &lv->lobe;
+    double half = lobe->half_angle;
+    int smooth = lobe->kind == IBL__LOBE_PHONG && lobe->horizon < PHONG_CULL;
     int core_edge = MIN_GRID_EDGE, correction_edge = MIN_GRID_EDGE;
-    while (texel_angle(core_edge) > CORE_GRID_SPACING * acc * half) core_edge *= 2;
+    while (texel_angle(core_edge) > (smooth ? CORE_GRID_SPACING_LAGRANGE : CORE_GRID_SPACING) * acc * half)
+        core_edge *= 2;
     while (texel_angle(correction_edge) > CORRECTION_GRID_SPACING * acc * half) correction_edge *= 2;
     if (!centred_directions(p)) {
-        pc->grid = grid_index(lv, output_edge, 1);
+        pc->grid = grid_index(lv, output_edge, 1, 0);
         return;
     }
+    if (smooth && core_edge < MIN_LAGRANGE_GRID_EDGE) core_edge = MIN_LAGRANGE_GRID_EDGE;
+    if (smooth && (core_edge >= output_edge || output_edge % core_edge != 0)) core_edge = output_edge;
     int at_output = core_edge >= output_edge, edge = at_output ? output_edge : core_edge;
-    pc->grid = grid_index(lv, edge, at_output);
+    pc->grid = grid_index(lv, edge, at_output, smooth && !at_output);
+    /* a smooth core on the output texels is where its Lagrange grid would not divide them or
+     * would not be coarser: its corrections keep the bilinear rule */
     if (correction_edge < edge) {
         pc->has_correction_grid = 1;
-        pc->correction_grid = grid_index(lv, correction_edge, 0);
+        pc->correction_grid = grid_index(lv, correction_edge, 0, 0);
     }
 }
 
@@ -187,8 +206,9 @@ static ibl_status allocate_grids(ibl_specular_plan *p, level_plan *lv)
         gr->sums = ibl_alloc(p->ctx, (size_t)6 * gr->edge * gr->edge * 4 * sizeof(float));
         if (!gr->sums) return ibl_context_status(p->ctx);
         if (!gr->at_output) {
-            gr->bordered = ibl_alloc(p->ctx, (size_t)6 * (gr->edge + 2) * (gr->edge + 2) * 4 *
-                                                 sizeof(float));
+            /* a Lagrange grid keeps two copies: the border unfolded, then resampled (combine.c) */
+            size_t m = (size_t)gr->edge + 2 * grid_border(gr), copies = gr->lagrange ? 2 : 1;
+            gr->bordered = ibl_alloc(p->ctx, copies * 6 * m * m * 4 * sizeof(float));
             if (!gr->bordered) return ibl_context_status(p->ctx);
         }
     }
@@ -212,6 +232,13 @@ ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level)
     double U = 1.0 - cos(core_end < IBL_PI ? core_end : IBL_PI);
     lv->grid_count = 0;
     lv->piece_count = 0;
+    /* A Phong lobe ends where it falls below `cull` of its peak, u = 1 - cull^(1/n): cos^n dies
+     * like exp(-n theta^2 / 2), so the partition's 4x steps in u would carry a piece far past
+     * it (the ring after a core of exponent 62.5 reached 1.27 radians, the lobe being under
+     * 1e-9 from 0.77 on: summed by leaves instead of precomputed weights). The piece that
+     * reaches that end is the last one, without an outer step: the pieces still add up to the
+     * lobe exactly, up to the cull. */
+    const double u_cull = cull > 0 ? 1.0 - pow(cull, 1.0 / lobe->n) : 2.0;
     double previous_U = 0.0, inner[MAX_PIECES]; /* each piece's inner step scale (0: none) */
     for (int j = 0; j < MAX_PIECES; j++) {
         lobe_piece *pc = &lv->pieces[lv->piece_count];
@@ -221,6 +248,7 @@ ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level)
         pc->u_lo = previous_U;
         pc->u_hi = last ? 2.0 : 4.0 * outer_U;
         if (pc->u_hi > 2.0) pc->u_hi = 2.0;
+        if (pc->u_hi > u_cull) pc->u_hi = u_cull, last = 1;
         pc->angle_in = acos(1.0 - pc->u_lo);
         pc->angle_out = acos(1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0));
         /* a Phong tail far below the peak is dropped (its weight is below `cull`) */
