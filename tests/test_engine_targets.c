@@ -358,15 +358,42 @@ static void exr_at(const ibl_image *img, double u, double v, double c[3])
     for (int k = 0; k < 3; k++) c[k] = img->pixels[((size_t)y * img->width + x) * 4 + k];
 }
 
+/* Unreal's frame, worked out by hand (Unreal cannot run here).
+ * * long-lat import, worked out by hand (Unreal cannot run here).
+ *
+ * Unreal turns a 2:1 panorama into a TextureCube in its texture compressor
+ * (TextureCompressorModule, GenerateBaseCubeMipFromLongitudeLatitude2D in Epic's API
+ * reference). Each texel of the cube, at the Direct3D cube direction c of its face and
+ * position, is filled from the panorama through the swizzle (c.x, c.z, c.y) ("the Unreal way,
+ * z and y flipped") and the lookup u = (1 + atan2(q.x, -q.z) / pi) / 2, v = acos(q.y) / pi of
+ * the usual latitude-longitude map (v = 0 at the top row). Unreal samples the cube with the
+ * world direction w itself (its reflection shaders' GetCubemapVector is the Direct3D face
+ * convention), so in Unreal's world (left-handed, +X forward, +Y right, +Z up) a panorama pixel
+ * shows at
+ *     u = 1/2 + atan2(w.x, -w.y) / 2pi,  v = acos(w.z) / pi:
+ * the picture's centre on -Y, its right quarter on +X, its top on +Z.
+ * ibl's panorama puts its centre on -Z, its right quarter on +X and its top on +Y
+ * (docs/CONVENTIONS.md), so without a turn ibl's (x, y, z) would show at Unreal's (x, z, y):
+ * ibl's front (-Z) on Unreal's left. The unreal row turns the environment by -90 degrees about
+ * +Y first, so that a direction (x, y, z) of the input shows at Unreal's (-z, x, y): ibl's
+ * front on Unreal's forward (+X), its right (+X) on Unreal's right (+Y), up on up, the
+ * right- to left-handed change of the Unity row with Unreal's axis names. */
+
+enum { ENGINE_UNITY, ENGINE_GODOT, ENGINE_UNREAL, ENGINE_COUNT };
+static const char *const engine_names[ENGINE_COUNT] = {"unity", "godot", "unreal"};
+
 /* The largest channel error, over a few directions, between what the engine shows and the
- * picture (see equirect_in_engine_frames). engine 0: Unity, 1: Godot. */
+ * picture (see equirect_in_engine_frames). */
 static double engine_frame_error(ibl_context *ctx, const char *file, int engine, const char *extra)
 {
     static const double samples[][3] = {{0.8, 0.3, -0.5}, {-0.6, -0.2, 0.7}, {0.1, 0.5, 0.85},
-                                        {-0.9, 0.1, -0.4}, {0.5, -0.7, 0.5}, {-0.3, 0.2, -0.93}};
-    const char *dir = test_path(engine ? "godot_dirs" : "unity_dirs"), *out;
+                                        {-0.9, 0.1, -0.4}, {0.5, -0.7, 0.5}, {-0.3, 0.2, -0.93},
+                                        {0.0, 0.0, -1.0}, {1.0, 0.0, 0.0}};
+    char name[32];
+    snprintf(name, sizeof name, "%s_dirs", engine_names[engine]);
+    const char *dir = test_path(name), *out;
     assert_int_equal(test_run_cli(&out, "bake -q '%s' -o '%s' --target %s %s --size 32 %s", file, dir,
-                                  engine ? "godot" : "unity", extra, FAST), 0);
+                                  engine_names[engine], extra, FAST), 0);
     char path[600];
     snprintf(path, sizeof path, "%s/engine_environment.exr", dir);
     ibl_image img;
@@ -377,7 +404,11 @@ static double engine_frame_error(ibl_context *ctx, const char *file, int engine,
         double l = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         for (int k = 0; k < 3; k++) d[k] /= l;
         double u, v;
-        if (!engine) { /* Unity: w = (x, y, -z); u = 0.5 - atan2(w.z, w.x) / 2pi, v from the top */
+        if (engine == ENGINE_UNREAL) { /* Unreal: w = (-z, x, y), u = 1/2 + atan2(w.x, -w.y) / 2pi */
+            double w[3] = {-d[2], d[0], d[1]};
+            u = 0.5 + atan2(w[0], -w[1]) / (2 * PI);
+            v = acos(w[2]) / PI;
+        } else if (engine == ENGINE_UNITY) { /* Unity: w = (x, y, -z); u = 0.5 - atan2(w.z, w.x) / 2pi, v from the top */
             double w[3] = {d[0], d[1], -d[2]};
             u = 0.5 - atan2(w[2], w[0]) / (2 * PI);
             v = acos(w[1]) / PI;
@@ -420,11 +451,52 @@ static void equirect_in_engine_frames(void **state)
     const char *file = test_path("directions.exr");
     assert_int_equal(ibl_write_image(ctx, file, &pic, NULL), IBL_OK);
     ibl_image_free(ctx, &pic);
-    for (int engine = 0; engine < 2; engine++) {
-        assert_true(engine_frame_error(ctx, file, engine, "") <= 0.05);
+    for (int engine = 0; engine < ENGINE_COUNT; engine++) {
+        double err = engine_frame_error(ctx, file, engine, "");
+        printf("%s row: largest channel error %.4f\n", engine_names[engine], err);
+        assert_true(err <= 0.05);
         /* control: without the row's turn the same check fails by far */
         assert_true(engine_frame_error(ctx, file, engine, "--yaw 0") > 0.3);
     }
+    /* and Unreal turned the other way */
+    assert_true(engine_frame_error(ctx, file, ENGINE_UNREAL, "--yaw 90") > 0.3);
+    ibl_context_destroy(ctx);
+}
+
+/* engine_environment.hdr (the file Unreal's importer makes a TextureCube of) is the EXR's picture
+ * in Radiance RGBE: same size, every channel within RGBE's quantisation of it. RGBE keeps 8
+ * bits of mantissa under the pixel's largest channel m, so a channel is off by at most
+ * m / 256 (truncation) plus the float rounding of the decode: bound m / 200. */
+static void unreal_hdr_is_the_exr_in_rgbe(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    const char *picture = test_path("directions.exr"); /* written by equirect_in_engine_frames */
+    const char *dir = test_path("unreal_hdr"), *out;
+    assert_int_equal(test_run_cli(&out, "bake -q '%s' -o '%s' --target unreal --size 32 %s", picture, dir, FAST), 0);
+    char path[600];
+    ibl_image exr, hdr;
+    snprintf(path, sizeof path, "%s/engine_environment.exr", dir);
+    assert_int_equal(ibl_read_image(ctx, path, NULL, &exr, NULL), IBL_OK);
+    snprintf(path, sizeof path, "%s/engine_environment.hdr", dir);
+    assert_int_equal(ibl_file_type_from_path(path), IBL_FILE_HDR);
+    assert_int_equal(ibl_read_image(ctx, path, NULL, &hdr, NULL), IBL_OK);
+    assert_int_equal(hdr.width, exr.width);
+    assert_int_equal(hdr.height, exr.height);
+    double worst = 0, sum = 0;
+    for (size_t i = 0; i < (size_t)exr.width * exr.height; i++) {
+        const float *e = exr.pixels + i * 4, *h = hdr.pixels + i * 4;
+        double m = fmax(e[0], fmax(e[1], e[2]));
+        for (int k = 0; k < 3; k++) {
+            worst = fmax(worst, fabs(h[k] - e[k]) / m);
+            sum += e[k];
+        }
+    }
+    printf("unreal .hdr against .exr: largest error %.5f of the pixel's largest channel\n", worst);
+    assert_true(sum > 0);
+    assert_true(worst <= 1.0 / 200);
+    ibl_image_free(ctx, &exr);
+    ibl_image_free(ctx, &hdr);
     ibl_context_destroy(ctx);
 }
 
@@ -436,6 +508,7 @@ int main(void)
         cmocka_unit_test(units_scale_exactly),
         cmocka_unit_test(cli_threads_and_upsampling),
         cmocka_unit_test(equirect_in_engine_frames),
+        cmocka_unit_test(unreal_hdr_is_the_exr_in_rgbe),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -49,7 +49,7 @@ static const ibl_target_profile profiles[IBL_TARGET_COUNT] = {
      * default for their level mappings; what they take is engine_environment.exr */
     /* the picture turned so that the engine's import shows the input's (x, y, z) at Unity's
      * (x, y, -z) (the left-handed flip of z), at Unreal's (-z, x, y) (ibl's front on Unreal's
-     * forward +X, +Z up; tests/test_engine_unreal.c) and at Godot's (x, y, z) */
+     * forward +X, +Z up; tests/test_engine_targets.c) and at Godot's (x, y, z) */
     [IBL_TARGET_UNITY] = {
         .target = IBL_TARGET_UNITY, .name = "unity", .engine = "Unity (2022.3 documentation)",
         .orientation = {.yaw_degrees = 90.0f},
