@@ -17,6 +17,18 @@ export function makeChecker() {
   return tally;
 }
 
+// The system chromium (Debian's, never a download) and playwright-core's driver for it; a missing
+// npm package ends the test with one line naming what installs it.
+export const CHROMIUM = process.env.IBL_CHROMIUM || '/usr/bin/chromium';
+export async function importChromium(label) {
+  try {
+    return (await import('playwright-core')).chromium;
+  } catch (e) {
+    console.error(label + ': the npm package playwright-core is missing (scripts/install-deps.sh runs npm ci in tests/viewer)');
+    process.exit(1);
+  }
+}
+
 // ---- a small PNG reader (8-bit grey/RGB/RGBA, not interlaced): ibl's and chromium's PNGs ----
 export function readPng(buf) {
   let pos = 8, width = 0, height = 0, type = 0;

@@ -19,17 +19,10 @@ import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { pathToFileURL } from 'node:url';
-import { makeChecker } from './common.mjs';
+import { makeChecker, CHROMIUM, importChromium } from './common.mjs';
 
 const [ibl, work] = process.argv.slice(2);
-const CHROMIUM = process.env.IBL_CHROMIUM || '/usr/bin/chromium';
-let chromium;
-try {
-  ({ chromium } = await import('playwright-core'));
-} catch (e) {
-  console.error('compressed viewer test: the npm package playwright-core is missing (scripts/install-deps.sh runs npm ci in tests/viewer)');
-  process.exit(1);
-}
+const chromium = await importChromium('compressed viewer test');
 const { check, finish } = makeChecker();
 const here = path.dirname(new URL(import.meta.url).pathname);
 const forest = path.join(here, '..', 'data', 'forest_128x64.exr');

@@ -17,19 +17,12 @@ import fs from 'node:fs';
 import http from 'node:http';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { makeChecker, readPng } from './common.mjs';
+import { makeChecker, readPng, CHROMIUM, importChromium } from './common.mjs';
 
 const [ibl, work] = process.argv.slice(2);
 const here = path.dirname(fileURLToPath(import.meta.url));
-const CHROMIUM = process.env.IBL_CHROMIUM || '/usr/bin/chromium';
 const filamentDir = path.join(here, 'node_modules', 'filament');
-let chromium;
-try {
-  ({ chromium } = await import('playwright-core'));
-} catch (e) {
-  console.error('filament test: the npm package playwright-core is missing (scripts/install-deps.sh runs npm ci in tests/viewer)');
-  process.exit(1);
-}
+const chromium = await importChromium('filament test');
 if (!fs.existsSync(path.join(filamentDir, 'filament.wasm'))) {
   console.error('filament test: the npm package filament is missing (scripts/install-deps.sh runs npm ci in tests/viewer)');
   process.exit(1);

@@ -6,17 +6,10 @@ import { execFileSync, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { pathToFileURL } from 'node:url';
-import { makeChecker, readPng } from './common.mjs';
+import { makeChecker, readPng, CHROMIUM, importChromium } from './common.mjs';
 
 const [ibl, work] = process.argv.slice(2);
-const CHROMIUM = process.env.IBL_CHROMIUM || '/usr/bin/chromium';
-let chromium;
-try {
-  ({ chromium } = await import('playwright-core'));
-} catch (e) {
-  console.error('viewer test: the npm package playwright-core is missing (scripts/install-deps.sh runs npm ci in tests/viewer)');
-  process.exit(1);
-}
+const chromium = await importChromium('viewer test');
 
 const { check, finish } = makeChecker();
 
