@@ -36,7 +36,7 @@ static void pixel_direction(double theta, double phi, double d[3])
     d[2] = -sin(theta) * cos(phi);
 }
 
-static void make_image(ibl_image *im)
+static void make_sky(ibl_image *im)
 {
     im->width = W, im->height = H;
     im->pixels = malloc((size_t)W * H * 4 * sizeof(float));
@@ -47,12 +47,20 @@ static void make_image(ibl_image *im)
             double sky = 0.4 + 0.6 * fmax(cos(theta), 0.0) + 0.1 * sin(3 * phi);
             p[0] = (float)(0.8 * sky), p[1] = (float)(0.9 * sky), p[2] = (float)(1.2 * sky), p[3] = 1;
         }
+}
+
+static void set_pixel(ibl_image *im, int x, int y, double value)
+{
+    float *p = im->pixels + ((size_t)y * W + x) * 4;
+    p[0] = (float)value, p[1] = (float)(0.95 * value), p[2] = (float)(0.85 * value);
+}
+
+static void make_image(ibl_image *im)
+{
+    make_sky(im);
     /* the sun: five pixels of unequal brightness, 40 degrees above the horizon */
     static const int sun[5][3] = {{301, 50, 5000}, {302, 50, 3000}, {301, 51, 2500}, {302, 51, 800}, {300, 50, 400}};
-    for (int i = 0; i < 5; i++) {
-        float *p = im->pixels + ((size_t)sun[i][1] * W + sun[i][0]) * 4;
-        p[0] = (float)sun[i][2], p[1] = (float)(0.95 * sun[i][2]), p[2] = (float)(0.85 * sun[i][2]);
-    }
+    for (int i = 0; i < 5; i++) set_pixel(im, sun[i][0], sun[i][1], sun[i][2]);
 }
 
 /* sin and cos of the pixel centres' angles: rows' theta, columns' phi */
@@ -205,6 +213,38 @@ static void chain_matches_input(void **state)
     free(im.pixels);
 }
 
+/* Eight one-pixel suns on row 39 (theta 27.8 degrees, on the +Y face where its face-plane
+ * radius is 0.53), every 8 columns: where the texels' spacing changes by enough that a quarter
+ * of it is a different fraction of a pixel (k = ceil(4 pixel / texel) goes from 4 to 5 at a
+ * radius of 0.52), so some of these pixels are cut by two texels that would split them
+ * differently. Each pixel must be split the same way for every texel that cuts it: split per
+ * texel, part of a sun was counted twice or not at all, and level 1 was 1.9% RMS and 4.5% max
+ * off the exact integral (measured); with the pixel's own split, 0.06% RMS and 0.19% max. */
+static void suns_cut_by_texels(void **state)
+{
+    (void)state;
+    ibl_image im;
+    make_sky(&im);
+    for (int i = 0; i < 8; i++) set_pixel(&im, 300 + 8 * i, 39, 5000);
+    ibl_context *ctx = context(2);
+    ibl_to_cube_desc conv = {.layout = IBL_LAYOUT_EQUIRECT, .size = SIZE};
+    ibl_specular_desc desc = {.size = SIZE};
+    ibl_cubemap chain;
+    ibl_specular_info info;
+    assert_int_equal(ibl_specular_prefilter_image(ctx, &im, &conv, &desc, &chain, &info), IBL_OK);
+    double rms, max;
+    centre_tables();
+    level_error(&im, &chain, 1, info.roughness[1], 0, &rms, &max);
+    print_message("level 1, eight suns on row 39: %.3f%% RMS, %.2f%% max\n", 100 * rms, 100 * max);
+    /* the same bars as above (0.5% RMS, the issue's; 2% max), eight times the measured RMS,
+     * a quarter of the error with a sun's light lost or doubled in part */
+    assert_true(rms < 0.005);
+    assert_true(max < 0.02);
+    ibl_cubemap_free(ctx, &chain);
+    ibl_context_destroy(ctx);
+    free(im.pixels);
+}
+
 /* Inputs the sources do not apply to give an empty set, and apply then leaves the chain as
  * it is: another layout, a box chain, a chain whose narrowest lobe is wide. */
 static void no_sources_where_not_needed(void **state)
@@ -237,6 +277,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(chain_matches_input),
+        cmocka_unit_test(suns_cut_by_texels),
         cmocka_unit_test(no_sources_where_not_needed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
