@@ -49,9 +49,9 @@
  * where the lobe is centred on it, is at least the mean radiance; the brightest first, at most
  * MAX_SOURCE_PIXELS, until the region holds MAX_REGION_TEXELS. Measured on the six test HDRIs
  * at 256 (level 1 against the exact integral over the input, docs/SPECULAR.md): this setting
- * gave forest 0.20% RMS, studio 0.29%, interior 0.53%, night 0.09% (without the sources
+ * gives forest 0.09% RMS, studio 0.29%, interior 0.03%, night 0.09% (without the sources
  * 1.05%, 0.44%, 1.47%, 2.33%) for 11-15 ms of CPU; 0.1 of the mean with 2048 texels gave
- * 0.12%, 0.35%, 0.54%, 0.02% for 30-125 ms, and 0.1 with 512 texels left studio at 0.56% (the
+ * 0.02%, 0.34%, 0.03%, 0.02% for 30-125 ms, and 0.1 with 512 texels left studio at 0.56% (the
  * region's edge then cuts through its bright panels). */
 #define BRIGHT_PEAK_SHARE 1.0
 #define MAX_SOURCE_PIXELS 2048
@@ -333,9 +333,9 @@ static int by_index(const void *a, const void *b)
  * spacing at unit direction d is 2 / M times the square of d's largest coordinate). It depends
  * on the pixel alone, so that the texels cutting a pixel keep disjoint cells that add up to
  * the whole pixel. Chosen per texel, a pixel cut by texels on either side of a change of k
- * (4 to 5 where the face-plane radius passes 0.52 for a 512x256 image on 128 texels) lost or
- * doubled part of its light: 5% of interior.exr's brightest pixel, which left level 1 of its
- * 256 chain 0.5-1.2% low around that lamp (tests/test_specular_input.c keeps the case). */
+ * (4 to 5 where the face-plane radius passes 0.52 for a 512x256 image on 128 texels) would lose
+ * or double part of its light: 5% of interior.exr's brightest pixel, level 1 of its 256 chain
+ * then 0.5-1.2% low around that lamp (tests/test_specular_input.c keeps the case). */
 static int pixel_cells(const frame *fr, int M, int W, int H, int x, int y)
 {
     double d[3];
