@@ -21,10 +21,10 @@
  * cos theta1) / k, each kept where its centre falls in a texel of S, k the pixel's own (not
  * the texel's: a pixel two texels cut must be split the same way for both, or part of it is
  * counted twice or not at all); the texels of S split k x k with weights dA / |d|^3 scaled to
- * the texel's exact solid angle (Driscoll 2012). Both
- * sides hold the same region's energy, so far from S the difference fades (a group's cells
- * are summed one by one within NEAR_HALF_WIDTHS of the lobe's half width, as a monopole and
- * a dipole, f and f' at the group's centre, out to REACH_HALF_WIDTHS, not at all beyond).
+ * the texel's exact solid angle (Driscoll 2012). Both sides hold the same region's energy, so
+ * far from S the difference fades (a group's cells are summed one by one within
+ * NEAR_HALF_WIDTHS of the lobe's half width, as a monopole and a dipole, f and f' at the
+ * group's centre, out to REACH_HALF_WIDTHS, not at all beyond).
  * The normaliser int f dl is the lobe's closed form over the sphere (GGX: Walter et al. 2007's
  * D with v = n, as in the fast method; Phong: 2 pi / (n + 1)).
  *
