@@ -24,6 +24,7 @@ typedef struct lobe_vectors {
     __m256 out_scale, out_offset, out_slope, in_scale, in_offset, in_slope;
     __m256 n, nn1, xmin;          /* Phong: n, n (n - 1), smallest x divided by */
     __m256 n1, three, amin, tiny; /* Phong's mean over the spread at the horizon */
+    __m256 u_start, u_end; /* the inner step's start, the outer's end: g = g'' = 0 outside */
     int has_in, has_out;
 } lobe_vectors;
 
@@ -45,6 +46,10 @@ IBL_TARGET_AVX2 static void lobe_setup(const lobe_piece *pc, lobe_vectors *k)
     k->amin = _mm256_set1_ps(1e-6f), k->tiny = _mm256_set1_ps(1e-30f);
     k->has_in = pc->inner.scale != 0.0f;
     k->has_out = pc->outer.scale != 0.0f;
+    /* s = u scale - offset reaches 1 (psi_out = 0, clamped) at u = (1 + offset) / scale */
+    k->u_end = _mm256_set1_ps(k->has_out ? (1.0f + pc->outer.offset) / pc->outer.scale : 4.0f);
+    /* ... and psi_in = 1 = psi_out (p0 = p1 = p2 = 0) while s_in = u scale - offset <= 0 */
+    k->u_start = _mm256_set1_ps(k->has_in ? pc->inner.offset / pc->inner.scale : -1.0f);
 }
 
 /* ln x for x in (0, 1]: x = m 2^e with m in [sqrt(1/2), sqrt(2)), ln m = 2 atanh(r),
@@ -215,7 +220,11 @@ IBL_TARGET_AVX2 static void sum_leaves(const leaf_batch *batch, const float R[3]
             q = _mm256_fmadd_ps(q3, _mm256_loadu_ps(c + 3 * B), q);
             q = _mm256_fmadd_ps(q4, _mm256_loadu_ps(c + 4 * B), q);
             q = _mm256_fmadd_ps(q5, _mm256_loadu_ps(c + 5 * B), q);
-            __m256 v = vector_leaf(&k, ggx, u, q);
+            /* eight texels past the outer step or inside the inner one (blocks of scattered
+             * gathered texels, whose cones are wide, often are) add exactly zero */
+            __m256 live = _mm256_and_ps(_mm256_cmp_ps(u, k.u_end, _CMP_LT_OQ),
+                                        _mm256_cmp_ps(u, k.u_start, _CMP_GT_OQ));
+            __m256 v = _mm256_movemask_ps(live) ? vector_leaf(&k, ggx, u, q) : k.zero;
             w = pass ? _mm256_sub_ps(w, v) : v;
         }
         if (batch->mode == LEAF_NORMALISER) {
