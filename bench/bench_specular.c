@@ -5,7 +5,10 @@
  *
  *   bench_specular [--sizes 128,256] [--samples 2000] [--filters ggx,phong,blinn]
  *                  [--threads N] [--accuracy A] [--levels L] [--dynamic]
- *                  [--ref-cache DIR] FILE.exr ...
+ *                  [--table V,V,...] [--ref-cache DIR] FILE.exr ...
+ *
+ * --table gives the Phong-family chains a mapping table (e.g. cmft's exponents 2049 ... 3);
+ * their cached references are then keyed by the table too.
  *
  * --ref-cache keeps the reference values of the sampled texels in DIR (one file per file,
  * size, filter, level), so that re-measuring a changed fast method costs seconds.
@@ -51,14 +54,14 @@ static void ref_task(void *arg, int index)
 }
 
 static void reference_samples(ibl_context *ctx, const char *cache_dir, const char *base, int size,
-                              ibl_specular_filter filter, int src_size, int level,
+                              const char *filter, int src_size, int level,
                               const ibl_specular_reference *ref, const ibl_specular_info *info,
                               int n, const size_t *idx, size_t count, double *out)
 {
     char path[1024] = "";
     if (cache_dir) {
         snprintf(path, sizeof path, "%s/%s_%d_%s_src%d_l%d_n%zu.ref", cache_dir, base, size,
-                 ibl_specular_filter_name(filter), src_size, level, count);
+                 filter, src_size, level, count);
         FILE *fp = fopen(path, "rb");
         if (fp) {
             size_t got = fread(out, 4 * sizeof(double), count, fp);
@@ -123,6 +126,9 @@ static void dynamic_bench(void)
 typedef struct bench_options {
     int sizes[8], nsizes, samples, threads, dynamic, max_levels;
     float accuracy;
+    float table[32];       /* --table: the Phong-family chains' mapping table */
+    int table_count;
+    unsigned table_key;    /* FNV-1a of the table's text, for the cache's file names */
     ibl_specular_filter filters[3];
     int nfilters;
     const char *files[64], *cache_dir;
@@ -148,6 +154,12 @@ static void parse_options(int argc, char **argv, bench_options *o)
             o->max_levels = atoi(argv[++i]);
         } else if (strcmp(argv[i], "--ref-cache") == 0 && i + 1 < argc) {
             o->cache_dir = argv[++i];
+        } else if (strcmp(argv[i], "--table") == 0 && i + 1 < argc) {
+            o->table_key = 2166136261u;
+            for (const char *c = argv[i + 1]; *c; c++) o->table_key = (o->table_key ^ (unsigned char)*c) * 16777619u;
+            o->table_count = 0;
+            for (char *p = strtok(argv[++i], ","); p && o->table_count < 32; p = strtok(NULL, ","))
+                o->table[o->table_count++] = (float)atof(p);
         } else if (strcmp(argv[i], "--dynamic") == 0) {
             o->dynamic = 1;
         } else if (strcmp(argv[i], "--filters") == 0 && i + 1 < argc) {
@@ -211,6 +223,13 @@ int main(int argc, char **argv)
                 d.filter = filters[k];
                 d.size = sizes[si];
                 d.accuracy = accuracy;
+                char filter_key[64];
+                snprintf(filter_key, sizeof filter_key, "%s", ibl_specular_filter_name(filters[k]));
+                if (o.table_count && filters[k] != IBL_FILTER_GGX) {
+                    d.mapping = IBL_MAPPING_TABLE, d.table = o.table, d.table_count = o.table_count;
+                    snprintf(filter_key, sizeof filter_key, "%s-table%08x",
+                             ibl_specular_filter_name(filters[k]), o.table_key);
+                }
                 ibl_cubemap out;
                 ibl_specular_info info;
                 double t0 = now();
@@ -251,7 +270,7 @@ int main(int argc, char **argv)
                             idxs[s] = (size_t)((state >> 33) % total);
                         }
                     }
-                    reference_samples(ctx, cache_dir, base, sizes[si], filters[k], cube.size, l,
+                    reference_samples(ctx, cache_dir, base, sizes[si], filter_key, cube.size, l,
                                       ref, &info, n, idxs, count, refs);
                     for (size_t s = 0; s < count; s++) {
                         size_t idx = idxs[s];

@@ -60,14 +60,17 @@
  * spacing squared, so 0.08 keeps it near 0.1%. */
 #define CORE_GRID_SPACING 0.08
 /* A Phong core nil before the horizon is read by 6-point Lagrange interpolation per axis
- * (combine.c) from a grid spaced at most 0.31 of its half width: cos^n is close to a Gaussian of
- * sigma = 0.85 half widths, and a Gaussian sampled 0.5 sigma apart (0.31 half widths where the
- * grid is widest, a face centre: 1.38 times the mean) is interpolated within 9e-4 of its peak
- * per axis, where bilinear at 0.08 half widths left 2e-3 and Catmull-Rom at 0.31, 4e-3 (which
- * cost up to 0.25% RMS on level 0 of the 256 chain: city 0.04% -> 0.19%, interior 0.37% ->
- * 0.62%). The 256 chain's level 0 (exponent 1000) is summed on 128 points a face edge instead
- * of 256. */
-#define CORE_GRID_SPACING_LAGRANGE 0.31
+ * (combine.c) from a grid spaced at most 0.45 of its half width: cos^n is close to a Gaussian of
+ * sigma = 0.85 half widths, and a Gaussian sampled 0.73 sigma apart (0.45 half widths where the
+ * grid is widest, a face centre: 1.38 times the mean) is interpolated within 6.5e-3 of its peak
+ * per axis (9e-4 at 0.31 half widths; bilinear at 0.08 left 2e-3, Catmull-Rom at 0.31 4e-3, which
+ * cost up to 0.25% RMS on level 0 of the 256 chain). The 256 chain's level 0 (exponent 1000) is
+ * summed on 128 points a face edge instead of 256, and so, since 0.45 rather than 0.31, is cmft's
+ * exponent 2049 at 256 (4.6 output texels a half width: 0.435 half widths; its core's weights
+ * over the source texels were 2.4x GGX's whole chain). Measured on the six test HDRIs at 256
+ * (docs/SPECULAR.md "Accuracy"): that level went from 0.28% to 0.39% RMS at worst (interior)
+ * and from 3.0% to 3.7% max (night); the other chains' grids are the same at 0.31 and 0.45. */
+#define CORE_GRID_SPACING_LAGRANGE 0.45
 /* Lagrange grids have at least 32 points a face edge: on 16 the face's own curvature (texels
  * 1.38 times the mean at its centre, 0.6 at its corners) cost phong level 3 of the 256 chain
  * (exponent 15.6) 0.2% RMS and up to 2.8% max. */
