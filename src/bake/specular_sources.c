@@ -75,6 +75,9 @@
 #define REACH_HALF_WIDTHS 16.0
 /* Output texels are culled against the groups eight by eight. */
 #define TILE 8
+/* A Phong near field is summed NEAR_LANES cells at a time (independent lanes the compiler
+ * vectorizes). */
+#define NEAR_LANES 8
 
 typedef struct source_group {
     double centre[3]; /* unit mean direction of its cells       */
@@ -83,6 +86,10 @@ typedef struct source_group {
     double moment[3][3]; /* [channel][axis]: sum w (l - centre) */
     double *cell;     /* 6 per cell: unit direction, weight (solid angle x radiance) RGB */
     size_t count;
+    /* the cells again as six float planes of `padded` (a multiple of NEAR_LANES, the rest zero):
+     * the offset d - centre (x, y, z) and the weight (r, g, b), for the Phong near field */
+    float *lanes;
+    size_t padded;
 } source_group;
 
 struct ibl_specular_sources {
@@ -482,6 +489,17 @@ static ibl_status build(ibl_specular_sources *s, const ibl_image *image, const f
             memcpy(g->cell + n * 6 + 3, s->cell_w + n * 3, 3 * sizeof(double));
         }
         group_stats(g);
+        g->padded = (g->count + NEAR_LANES - 1) / NEAR_LANES * NEAR_LANES;
+        g->lanes = ibl_calloc(ctx, (g->padded ? g->padded : 1) * 6, sizeof(float));
+        if (!g->lanes) {
+            st = ibl_context_status(ctx);
+            break;
+        }
+        for (size_t n = 0; n < g->count; n++)
+            for (int m = 0; m < 3; m++) {
+                g->lanes[m * g->padded + n] = (float)(g->cell[n * 6 + m] - g->centre[m]);
+                g->lanes[(3 + m) * g->padded + n] = (float)g->cell[n * 6 + 3 + m];
+            }
         s->groups++;
     }
 done:
@@ -498,7 +516,10 @@ done:
 void ibl_specular_sources_destroy(ibl_specular_sources *s)
 {
     if (!s) return;
-    for (int g = 0; g < s->groups; g++) ibl_free(s->ctx, s->group[g].cell);
+    for (int g = 0; g < s->groups; g++) {
+        ibl_free(s->ctx, s->group[g].cell);
+        ibl_free(s->ctx, s->group[g].lanes);
+    }
     ibl_free(s->ctx, s->group);
     ibl_free(s->ctx, s->cell_dir);
     ibl_free(s->ctx, s->cell_w);
@@ -570,24 +591,43 @@ static double angle_between(const double a[3], const double b[3])
     return acos(x > 1 ? 1 : x < -1 ? -1 : x);
 }
 
-/* The Phong lobe x^n at x from its value f0 at x0, for the cells of a group next to its centre
- * (apply_tile's near field, where a narrow lobe spent nearly all its time in pow()):
- * x^n = x0^n exp(n ln(1 + e)), e = (x - x0) / x0, with ln(1 + e) to its e^3 term and exp to
- * its t^11 term (Estrin's scheme: a short dependency chain). Where |e| <= 1e-3 and |n e| <= 1
- * (a near field's cells: e is at most the near radius times the group's, ~3e-4 at exponent
- * 2049 on a 256 cube) the truncations are below 3e-9 relative and smooth in x, so they cancel
- * between the input's and the working cube's cells as the values do. Elsewhere, and for GGX (a
- * rational function), the lobe itself. */
-static double lobe_near(const ibl__lobe *lobe, double x0, double inv_x0, double f0, double x)
+/* A group's near field under a Phong lobe, sum_k w_k (x_k / x0)^n with x_k = R.d_k and x0 = R.c
+ * (the caller multiplies by x0^n): (x_k / x0)^n = exp(n ln(1 + e)), e = R.(d_k - c) / x0, with
+ * ln(1 + e) to its e^3 term and exp to its t^10 term (Estrin's scheme), in float over lanes of
+ * cells the compiler vectorizes (a narrow lobe spent nearly all of its refinement in pow()
+ * here). The offsets d_k - c keep e's relative precision in float; where every |e| <= 1e-3 and
+ * |n e| <= 1 (a near field's cells: e is at most the near radius times the group's, ~3e-4 at
+ * exponent 2049 on a 256 cube) the truncations are below 3e-8 relative. 0 when a cell is out
+ * of that range: the caller sums the cells one by one. */
+static int phong_near(const source_group *g, const double R[3], double x0, double n, double out[3])
 {
-    if (lobe->kind != IBL__LOBE_PHONG) return ibl__lobe_f(lobe, x);
-    double e = (x - x0) * inv_x0, t = lobe->n * (e * (1.0 + e * (-0.5 + e * (1.0 / 3.0))));
-    if (!(fabs(e) <= 1e-3 && fabs(t) <= 1.0)) return ibl__lobe_f(lobe, x);
-    double t2 = t * t, t4 = t2 * t2, t8 = t4 * t4;
-    double p01 = 1.0 + t, p23 = 0.5 + t * (1.0 / 6.0), p45 = 1.0 / 24.0 + t * (1.0 / 120.0);
-    double p67 = 1.0 / 720.0 + t * (1.0 / 5040.0), p89 = 1.0 / 40320.0 + t * (1.0 / 362880.0);
-    double p1011 = 1.0 / 3628800.0 + t * (1.0 / 39916800.0);
-    return f0 * ((p01 + t2 * p23) + t4 * (p45 + t2 * p67) + t8 * (p89 + t2 * p1011));
+    const size_t P = g->padded;
+    const float *ox = g->lanes, *oy = ox + P, *oz = oy + P, *wr = oz + P, *wg = wr + P, *wb = wg + P;
+    const float r0 = (float)R[0], r1 = (float)R[1], r2 = (float)R[2], inv = (float)(1.0 / x0);
+    const float nf = (float)n;
+    float ar[NEAR_LANES] = {0}, ag[NEAR_LANES] = {0}, ab[NEAR_LANES] = {0};
+    float worst_e[NEAR_LANES] = {0}, worst_t[NEAR_LANES] = {0};
+    for (size_t k = 0; k < P; k += NEAR_LANES)
+        for (int l = 0; l < NEAR_LANES; l++) {
+            size_t i = k + (size_t)l;
+            float e = (r0 * ox[i] + r1 * oy[i] + r2 * oz[i]) * inv;
+            float t = nf * (e * (1.0f + e * (-0.5f + e * (1.0f / 3.0f))));
+            float ae = e < 0 ? -e : e, at = t < 0 ? -t : t;
+            worst_e[l] = ae > worst_e[l] ? ae : worst_e[l];
+            worst_t[l] = at > worst_t[l] ? at : worst_t[l];
+            float t2 = t * t, t4 = t2 * t2, t8 = t4 * t4;
+            float p01 = 1.0f + t, p23 = 0.5f + t * (1.0f / 6.0f);
+            float p45 = 1.0f / 24.0f + t * (1.0f / 120.0f), p67 = 1.0f / 720.0f + t * (1.0f / 5040.0f);
+            float p89 = 1.0f / 40320.0f + t * (1.0f / 362880.0f), p10 = 1.0f / 3628800.0f;
+            float ex = (p01 + t2 * p23) + t4 * (p45 + t2 * p67) + t8 * (p89 + t2 * p10);
+            ar[l] += ex * wr[i], ag[l] += ex * wg[i], ab[l] += ex * wb[i];
+        }
+    out[0] = out[1] = out[2] = 0.0;
+    for (int l = 0; l < NEAR_LANES; l++) {
+        if (!(worst_e[l] <= 1e-3f && worst_t[l] <= 1.0f)) return 0;
+        out[0] += ar[l], out[1] += ag[l], out[2] += ab[l];
+    }
+    return 1;
 }
 
 static void apply_tile(void *arg, int index)
@@ -629,11 +669,16 @@ static void apply_tile(void *arg, int index)
                 double xc = R[0] * gr->centre[0] + R[1] * gr->centre[1] + R[2] * gr->centre[2];
                 if (xc < cos_reach[i]) continue;
                 if (xc >= cos_near[i]) {
-                    double fc = ibl__lobe_f(&job->lobe, xc), inv_xc = 1.0 / xc;
+                    double near[3];
+                    if (job->lobe.kind == IBL__LOBE_PHONG && xc > 0 &&
+                        phong_near(gr, R, xc, job->lobe.n, near)) {
+                        double fc = ibl__lobe_f(&job->lobe, xc);
+                        for (int ch = 0; ch < 3; ch++) acc[ch] += fc * near[ch];
+                        continue;
+                    }
                     for (size_t k = 0; k < gr->count; k++) {
                         const double *d = gr->cell + k * 6, *w = d + 3;
-                        double f = lobe_near(&job->lobe, xc, inv_xc, fc,
-                                             R[0] * d[0] + R[1] * d[1] + R[2] * d[2]);
+                        double f = ibl__lobe_f(&job->lobe, R[0] * d[0] + R[1] * d[1] + R[2] * d[2]);
                         for (int ch = 0; ch < 3; ch++) acc[ch] += f * w[ch];
                     }
                     continue;
