@@ -220,6 +220,63 @@ static void sum_piece(const ibl_specular_plan *p, int mode, int g, const sum_gri
     }
 }
 
+/* The texels gathered for piece pc on grid g, as sum_piece reads them (its bright texels
+ * first), or 0 blocks when it has none there. */
+static int gathered_for(const ibl_specular_plan *p, int mode, int g, const lobe_piece *pc,
+                        const float **cones, int *capacity)
+{
+    const source_level *s = &p->pyramid[pc->source_level];
+    const precomputed_piece *c = pc->precomputed;
+    int bright = pc->bright_apart && g == pc->bright_grid && mode != LEAF_NORMALISER &&
+                 s->bright_block_count > 0;
+    int corrections = c && g == (c->correction_difference ? pc->correction_grid : pc->grid) &&
+                      mode != LEAF_NORMALISER && c->correction_block_count > 0;
+    if (!bright && !corrections) return 0;
+    *cones = bright ? s->bright_cones : c->correction_cones;
+    *capacity = bright ? s->bright_capacity : c->correction_capacity;
+    return bright ? s->bright_block_count : c->correction_block_count;
+}
+
+/* Whether tile (tx, ty) of face `face` of grid g (centred directions) can have anything to sum:
+ * a piece summed by leaves on the grid, or a group of blocks gathered for a piece on it within
+ * the piece's reach. The tile's cone here is its centre and the angle to its farthest corner
+ * point (over a convex region of the face plane the angle from a direction is largest at a
+ * vertex), so a tile it rules out sums nothing: its sums are zero. Most tiles of a grid that
+ * only gathers (a ring's bright texels at the output texels, corrections) are such. */
+static int tile_has_work(const ibl_specular_plan *p, const level_plan *lv, int mode, int g,
+                         const sum_grid *gr, int face, int tx, int ty)
+{
+    for (int k = 0; k < lv->piece_count; k++)
+        if (lv->pieces[k].grid == g && !lv->pieces[k].precomputed) return 1;
+    int n = gr->edge, x0 = tx * TILE_EDGE, y0 = ty * TILE_EDGE;
+    int x1 = (x0 + TILE_EDGE < n ? x0 + TILE_EDGE : n) - 1, y1 = (y0 + TILE_EDGE < n ? y0 + TILE_EDGE : n) - 1;
+    double axis[3], radius = 0;
+    ibl_cube_direction_d(face, 0.5 * (x0 + x1 + 1) / n, 0.5 * (y0 + y1 + 1) / n, axis);
+    ibl__normalize_d(axis);
+    for (int corner = 0; corner < 4; corner++) {
+        double d[3];
+        ibl_cube_direction_d(face, ((corner & 1 ? x1 : x0) + 0.5) / n, ((corner & 2 ? y1 : y0) + 0.5) / n, d);
+        ibl__normalize_d(d);
+        double a = acos(ibl__clampd(ibl__dot_d(axis, d), -1, 1));
+        if (a > radius) radius = a;
+    }
+    radius += 1e-6;
+    for (int k = 0; k < lv->piece_count; k++) {
+        const lobe_piece *pc = &lv->pieces[k];
+        const float *cones;
+        int capacity, blocks = gathered_for(p, mode, g, pc, &cones, &capacity);
+        if (!blocks) continue;
+        double T = pc->angle_out + radius, hole = pc->angle_in - radius;
+        reach_test reach = {axis, T, cos(T), sin(T), hole, cos(hole), sin(hole), pc->angle_out,
+                            pc->angle_in, cos(pc->angle_out), sin(pc->angle_out), cos(pc->angle_in),
+                            sin(pc->angle_in)};
+        const float *groups = cones + (size_t)capacity * CONE_FLOATS;
+        for (int group = 0; group * SUPER_CONE_BLOCKS < blocks; group++)
+            if (!cone_misses(&reach, groups + (size_t)group * CONE_FLOATS)) return 1;
+    }
+    return 0;
+}
+
 /* One tile of one grid of a level: tasks run over the grids in order, then faces, then tiles
  * (the normalisers: face 0 only, and one eighth of it where the grid is symmetric). */
 static void tile_task(void *arg, int index)
@@ -240,6 +297,15 @@ static void tile_task(void *arg, int index)
         /* one eighth of the face: the tiles covering x <= y < ceil(n / 2) */
         int half = ((n + 1) / 2 + TILE_EDGE - 1) / TILE_EDGE;
         if (tx >= half || ty >= half || tx > ty) return;
+    }
+    if (grid_symmetric(p, gr) && !tile_has_work(p, lv, job->mode, g, gr, face, tx, ty)) {
+        for (int y = ty * TILE_EDGE; y < (ty + 1) * TILE_EDGE && y < n; y++)
+            for (int x = tx * TILE_EDGE; x < (tx + 1) * TILE_EDGE && x < n; x++) {
+                float *o = gr->sums + (((size_t)face * n + y) * n + x) * 4;
+                if (job->mode == LEAF_NORMALISER) o[3] = 0.0f;
+                else o[0] = o[1] = o[2] = 0.0f;
+            }
+        return;
     }
     tile_points tp;
     tile_points_of(p, lv, gr, face, tx, ty, &tp);
