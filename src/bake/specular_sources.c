@@ -583,6 +583,10 @@ typedef struct apply_job {
     double inv_norm, near, reach;
     ibl_cubemap *chain;
     int level, n, tiles; /* tiles per face edge */
+    /* per group, once per level: the cosines of its near and far bounds, and the cosine and
+     * sine of its reach (radius + reach) for the tiles' test */
+    double cos_near[MAX_REGION_TEXELS], cos_reach[MAX_REGION_TEXELS];
+    double reach_angle[MAX_REGION_TEXELS], cos_tile[MAX_REGION_TEXELS], sin_tile[MAX_REGION_TEXELS];
 } apply_job;
 
 static double angle_between(const double a[3], const double b[3])
@@ -647,14 +651,21 @@ static void apply_tile(void *arg, int index)
         for (int m = 0; m < 3; m++) q[m] /= ql;
         radius = fmax(radius, angle_between(c, q));
     }
-    /* the groups in reach of the tile, with the cosines of their near and far bounds */
+    /* the groups in reach of the tile, with the cosines of their near and far bounds: a group
+     * is out of reach when the angle to it exceeds its reach angle plus the tile's radius, i.e.
+     * when c.centre < cos(reach angle + radius) (by the angle-sum rule, a little lower to stay
+     * conservative: the texels' own test below decides) */
     int list[MAX_REGION_TEXELS], count = 0;
     double cos_near[MAX_REGION_TEXELS], cos_reach[MAX_REGION_TEXELS];
+    double cos_radius = cos(radius), sin_radius = sin(radius);
     for (int g = 0; g < s->groups; g++) {
         const source_group *gr = &s->group[g];
-        if (angle_between(c, gr->centre) - gr->radius - radius > job->reach) continue;
-        cos_near[count] = cos(fmin(gr->radius + job->near, IBL_PI));
-        cos_reach[count] = cos(fmin(gr->radius + job->reach, IBL_PI));
+        double xc = c[0] * gr->centre[0] + c[1] * gr->centre[1] + c[2] * gr->centre[2];
+        if (job->reach_angle[g] + radius < IBL_PI &&
+            xc < job->cos_tile[g] * cos_radius - job->sin_tile[g] * sin_radius - 1e-9)
+            continue;
+        cos_near[count] = job->cos_near[g];
+        cos_reach[count] = job->cos_reach[g];
         list[count++] = g;
     }
     if (!count) return;
@@ -718,6 +729,13 @@ ibl_status ibl_specular_sources_apply(const ibl_specular_sources *s, ibl_cubemap
         /* a Phong lobe is under 1e-12 of its peak beyond its cull angle (GGX's tail is not) */
         if (job.lobe.kind == IBL__LOBE_PHONG && job.lobe.cull_angle < job.reach)
             job.reach = job.lobe.cull_angle;
+        for (int g = 0; g < s->groups; g++) {
+            const source_group *gr = &s->group[g];
+            job.cos_near[g] = cos(fmin(gr->radius + job.near, IBL_PI));
+            job.cos_reach[g] = cos(fmin(gr->radius + job.reach, IBL_PI));
+            job.reach_angle[g] = gr->radius + job.reach;
+            job.cos_tile[g] = cos(job.reach_angle[g]), job.sin_tile[g] = sin(job.reach_angle[g]);
+        }
         job.chain = chain;
         job.level = l;
         job.n = ibl_level_size(chain->size, l);
