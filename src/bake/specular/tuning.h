@@ -66,8 +66,8 @@
  * per axis (9e-4 at 0.31 half widths; bilinear at 0.08 left 2e-3, Catmull-Rom at 0.31 4e-3, which
  * cost up to 0.25% RMS on level 0 of the 256 chain). The 256 chain's level 0 (exponent 1000) is
  * summed on 128 points a face edge instead of 256, and so, since 0.45 rather than 0.31, is cmft's
- * exponent 2049 at 256 (4.6 output texels a half width: 0.435 half widths; its core's weights
- * over the source texels were 2.4x GGX's whole chain). Measured on the six test HDRIs at 256
+ * exponent 2049 at 256 (4.6 output texels a half width: 0.435 half widths; with its core's
+ * weights at every output texel the chain cost 2.4x GGX's). Measured on the six test HDRIs at 256
  * (docs/SPECULAR.md "Accuracy"): that level went from 0.28% to 0.39% RMS at worst (interior)
  * and from 3.0% to 3.7% max (night); the other chains' grids are the same at 0.31 and 0.45. */
 #define CORE_GRID_SPACING_LAGRANGE 0.45
