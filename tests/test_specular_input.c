@@ -261,9 +261,10 @@ static void suns_cut_by_texels(void **state)
     free(im.pixels);
 }
 
-/* The same for a Phong chain whose two levels are both refined: exponents 2049 (cmft's first,
- * 2.3 working texels a half width) and 250 (6.6): the sources' Phong near field (summed in
- * float from the group's centre, specular_sources.c) and its reach (the lobe's 1e-12 cull). */
+/* chain_matches_input for a Phong chain whose two levels are both refined: exponents 2049
+ * (cmft's first, 2.3 working texels a half width) and 250 (6.6): the sources' Phong near field
+ * (summed in float from the group's centre, specular_sources.c) and its reach (the lobe's
+ * 1e-12 cull). */
 static void phong_chain_matches_input(void **state)
 {
     (void)state;
