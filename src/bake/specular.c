@@ -194,7 +194,10 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
         work.owns_data = 0;
         s = &work;
     }
-    st = ibl_cubemap_alloc(ctx, N, L, out);
+    /* a plan's chain is allocated after its pyramid: the pyramid's records are freed by
+     * then and the chain takes their memory */
+    int plan_path = !(box_or_gauss && !desc.dynamic) && desc.method != IBL_METHOD_REFERENCE;
+    if (!plan_path) st = ibl_cubemap_alloc(ctx, N, L, out);
     if (st != IBL_OK) goto done;
 
     if ((desc.filter == IBL_FILTER_BOX || desc.filter == IBL_FILTER_GAUSS) && !desc.dynamic) {
@@ -215,8 +218,10 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
     } else {
         ibl_specular_plan *plan = NULL;
         desc.source_size = s->size;
-        st = ibl_specular_plan_create(ctx, &desc, &plan);
-        if (st == IBL_OK) st = ibl_specular_plan_run(plan, s, out);
+        st = ibl__specular_plan_create(ctx, &desc, !desc.dynamic, &plan);
+        if (st == IBL_OK) st = ibl__specular_plan_run_pyramid(plan, s);
+        if (st == IBL_OK) st = ibl_cubemap_alloc(ctx, N, L, out);
+        if (st == IBL_OK) st = ibl__specular_plan_run_levels(plan, s, out);
         ibl_specular_plan_destroy(plan);
         /* a mirror level the plan could only point-sample (its size does not divide the
          * source's) is area-resampled here, as the reference does */

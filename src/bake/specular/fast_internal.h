@@ -95,6 +95,12 @@ typedef struct source_level {
     int fields;            /* floats per texel record: LEVEL0_FIELDS or COARSE_FIELDS          */
     float *records;        /* 6 blocks_y blocks_x blocks x fields x BLOCK_TEXELS               */
     float *cones;          /* per block: its bounding cone                                     */
+    /* coarse levels whose records only the run's pyramid reads (no leaf sum, no mirror level):
+     * their geometric fields kept once, face-local (GEOMETRY_FIELDS floats per texel of one
+     * face, row by row, as records would hold them before moments_to_world), and records
+     * allocated by the run (ibl__fast_run_records); NULL for levels whose records the plan
+     * keeps */
+    float *geometry;
     /* run, coarse levels: the luminance power of each task's block row (6 blocks_y), and their
      * sum in order (the bright and correction bars are relative to the mean radiance) */
     double *row_power, power;
@@ -139,6 +145,34 @@ static inline void moments_to_world(const int axis[3], const float sign[3], cons
         int i = pair[c][0], k = pair[c][1];
         out[(4 + c) * stride] = (float)(sign[i] * sign[k] * local[axis[i]][axis[k]]);
     }
+}
+
+/* A texel's face-local geometric fields g (floats, GEOMETRY_FIELDS) in world coordinates, as
+ * floats `stride` apart. */
+static inline void face_local_to_world(const int axis[3], const float sign[3], const float *g,
+                                       float *out, size_t stride)
+{
+    double mean[3] = {g[FIELD_MEAN], g[FIELD_MEAN + 1], g[FIELD_MEAN + 2]}, covariance[6];
+    for (int k = 0; k < 6; k++) covariance[k] = g[FIELD_COVARIANCE + k];
+    moments_to_world(axis, sign, mean, g[FIELD_SPREAD], covariance, out + FIELD_MEAN * stride,
+                     stride);
+    out[FIELD_SOLID_ANGLE * stride] = g[FIELD_SOLID_ANGLE];
+}
+
+/* The geometric fields (FIELD_MEAN .. FIELD_SOLID_ANGLE) of texel (x, y) of face f of level s:
+ * from its records, or from the face-local store through face f's signed permutation. Moving
+ * and negating floats is exact, so both give the same bits. */
+static inline void level_texel_geometry(const int axis[3], const float sign[3],
+                                        const source_level *s, int f, int x, int y,
+                                        float out[GEOMETRY_FIELDS])
+{
+    if (s->records) {
+        const float *r = s->records + record_index(s, f, x, y, 0);
+        for (int k = 0; k < GEOMETRY_FIELDS; k++) out[k] = r[k * BLOCK_TEXELS];
+        return;
+    }
+    face_local_to_world(axis, sign, s->geometry + ((size_t)y * s->edge + x) * GEOMETRY_FIELDS,
+                        out, 1);
 }
 
 /* The moments of a set of directions, in double (geometry.c). */
@@ -345,6 +379,11 @@ struct ibl_specular_plan {
      * part a run uses is touched) */
     float *correction_pool;
     size_t correction_pool_blocks;
+    /* a plan made for one run (ibl_specular_prefilter): the records that only the pyramid reads
+     * are freed as soon as the pyramid is done with them, and the precomputed pieces keep their
+     * rows and normalisers only, their weights recomputed just before their products and
+     * freed after them, so the run's largest buffers are never held at once */
+    int one_shot;
 };
 
 /* Roughness 0 (or no shininess): the level is the source itself (mirror.c), with no pieces,
@@ -419,6 +458,9 @@ void ibl__fast_level0_moments(const ibl_specular_plan *p, int face, int x, int y
 void ibl__fast_pyramid_edges(ibl_specular_plan *p);
 ibl_status ibl__fast_build_moments(ibl_specular_plan *p);
 ibl_status ibl__fast_level0_records(ibl_specular_plan *p);
+ibl_status ibl__fast_kept_records(ibl_specular_plan *p);
+ibl_status ibl__fast_run_records(ibl_specular_plan *p, int level);
+void ibl__fast_free_run_records(ibl_specular_plan *p, int level);
 
 /* ---- pyramid.c ---- */
 void ibl__fast_pyramid_level0(ibl_specular_plan *p, const ibl_cubemap *src);
@@ -437,6 +479,8 @@ void ibl__fast_leaf_sums(ibl_specular_plan *p, int level);
 ibl_status ibl__fast_precompute_level(ibl_specular_plan *p, int level);
 void ibl__fast_precomputed_normalisers(const precomputed_piece *c, float *sums);
 void ibl__fast_precomputed_destroy(ibl_context *ctx, precomputed_piece *c);
+void ibl__fast_precomputed_release(ibl_context *ctx, precomputed_piece *c);
+ibl_status ibl__fast_precomputed_refill(ibl_specular_plan *p, int level, int k);
 
 /* ---- products.c ---- */
 void ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src);

@@ -213,24 +213,35 @@ static void combine_task(void *arg, int y)
     }
 }
 
+/* Row y of a coarse level's face-local geometric fields, as floats (the same on every face up
+ * to the signed permutation, which level_texel_geometry applies). */
+static void store_geometry_task(void *arg, int y)
+{
+    const moments_job *j = arg;
+    for (int x = 0; x < j->edge; x++) {
+        const texel_moments *g = &j->moments[(size_t)y * j->edge + x];
+        float *o = j->level->geometry + ((size_t)y * j->edge + x) * GEOMETRY_FIELDS;
+        for (int c = 0; c < 3; c++) o[FIELD_MEAN + c] = (float)g->mean[c];
+        o[FIELD_SPREAD] = (float)g->spread;
+        for (int c = 0; c < 6; c++) o[FIELD_COVARIANCE + c] = (float)g->covariance[c];
+        o[FIELD_SOLID_ANGLE] = (float)g->solid_angle;
+    }
+}
+
 /* Records are stored in blocks of BLOCK_H rows: a task takes a whole block row, so that two
  * threads never write the same cache lines. This one writes the geometric fields of every
- * face. */
+ * face from the level's face-local floats (level_texel_geometry). */
 static void store_records_task(void *arg, int block_row)
 {
     const moments_job *j = arg;
     const ibl_specular_plan *p = j->p;
     source_level *s = j->level;
-    for (int y = block_row * BLOCK_H; y < (block_row + 1) * BLOCK_H && y < j->edge; y++)
-        for (int x = 0; x < j->edge; x++) {
-            const texel_moments *g = &j->moments[(size_t)y * j->edge + x];
-            for (int f = 0; f < 6; f++) {
-                float *r = s->records + record_index(s, f, x, y, 0);
-                moments_to_world(p->face_axis[f], p->face_sign[f], g->mean, g->spread,
-                                 g->covariance, r + FIELD_MEAN * BLOCK_TEXELS, BLOCK_TEXELS);
-                r[FIELD_SOLID_ANGLE * BLOCK_TEXELS] = (float)g->solid_angle;
-            }
-        }
+    for (int y = block_row * BLOCK_H; y < (block_row + 1) * BLOCK_H && y < s->edge; y++)
+        for (int f = 0; f < 6; f++)
+            for (int x = 0; x < s->edge; x++)
+                face_local_to_world(p->face_axis[f], p->face_sign[f],
+                                    s->geometry + ((size_t)y * s->edge + x) * GEOMETRY_FIELDS,
+                                    s->records + record_index(s, f, x, y, 0), BLOCK_TEXELS);
 }
 
 /* Row b of the stored eighth of level 0's face-local moments (a <= b), as floats (what
@@ -324,19 +335,79 @@ void ibl__fast_pyramid_edges(ibl_specular_plan *p)
     }
 }
 
-/* The records of the stored coarse levels (level 0's: ibl__fast_level0_records, when some piece
- * needs them). */
+/* The face-local geometry of the stored coarse levels (their records come later: those the
+ * plan keeps from ibl__fast_kept_records, the others from ibl__fast_run_records; level 0's from
+ * ibl__fast_level0_records, when some piece needs them). */
 static ibl_status allocate_pyramid(ibl_specular_plan *p)
 {
     ibl_context *ctx = p->ctx;
     for (int l = p->first_stored; l < p->pyramid_levels; l++) {
         source_level *s = &p->pyramid[l];
-        s->records = allocate_records(ctx, s);
-        s->cones = ibl_alloc(ctx, source_block_count(s) * CONE_FLOATS * sizeof(float));
+        s->geometry = ibl_alloc(ctx, (size_t)s->edge * s->edge * GEOMETRY_FIELDS * sizeof(float));
         s->row_power = ibl_alloc(ctx, (size_t)6 * s->blocks_y * sizeof(double));
-        if (!s->records || !s->cones || !s->row_power) return ibl_context_status(ctx);
+        if (!s->geometry || !s->row_power) return ibl_context_status(ctx);
     }
     return IBL_OK;
+}
+
+/* Whether a coarse level's records are read after the run's pyramid: by a piece summed leaf by
+ * leaf (its normalisers too, at plan time) or by a mirror level of its edge (mirror.c). */
+static int records_read_after_pyramid(const ibl_specular_plan *p, int level)
+{
+    for (int l = 0; l < p->output_levels; l++) {
+        if (level_is_mirror(p, l)) {
+            int n = ibl_level_size(p->output_edge, l);
+            if (n < p->source_edge && is_power_of_two(n) && (p->pyramid[0].edge >> level) == n)
+                return 1;
+            continue;
+        }
+        for (int k = 0; k < p->levels[l].piece_count; k++)
+            if (p->levels[l].pieces[k].source_level == level && !p->levels[l].pieces[k].precomputed)
+                return 1;
+    }
+    return 0;
+}
+
+/* The records (geometric fields) of a level from its face-local geometry. */
+static ibl_status materialise_records(ibl_specular_plan *p, int level)
+{
+    source_level *s = &p->pyramid[level];
+    s->records = allocate_records(p->ctx, s);
+    if (!s->records) return ibl_context_status(p->ctx);
+    moments_job job = {p, s, NULL, s->edge, NULL};
+    ibl_parallel_for(p->ctx, s->blocks_y, store_records_task, &job);
+    return IBL_OK;
+}
+
+ibl_status ibl__fast_kept_records(ibl_specular_plan *p)
+{
+    ibl_context *ctx = p->ctx;
+    for (int l = p->first_stored; l < p->pyramid_levels; l++) {
+        source_level *s = &p->pyramid[l];
+        if (!records_read_after_pyramid(p, l)) continue;
+        ibl_status st = materialise_records(p, l);
+        if (st != IBL_OK) return st;
+        s->cones = ibl_alloc(ctx, source_block_count(s) * CONE_FLOATS * sizeof(float));
+        if (!s->cones) return ibl_context_status(ctx);
+        moments_job job = {p, s, NULL, s->edge, NULL};
+        ibl_parallel_for(ctx, s->blocks_y, block_cones_task, &job);
+        ibl_free(ctx, s->geometry); /* the records hold it now */
+        s->geometry = NULL;
+    }
+    return IBL_OK;
+}
+
+ibl_status ibl__fast_run_records(ibl_specular_plan *p, int level)
+{
+    return p->pyramid[level].records ? IBL_OK : materialise_records(p, level);
+}
+
+void ibl__fast_free_run_records(ibl_specular_plan *p, int level)
+{
+    source_level *s = &p->pyramid[level];
+    if (!s->geometry) return; /* records the plan keeps */
+    ibl_free(p->ctx, s->records);
+    s->records = NULL;
 }
 
 ibl_status ibl__fast_build_moments(ibl_specular_plan *p)
@@ -372,8 +443,7 @@ ibl_status ibl__fast_build_moments(ibl_specular_plan *p)
             continue;
         }
         if (l < p->first_stored) continue; /* combined through, not kept */
-        ibl_parallel_for(ctx, s->blocks_y, store_records_task, &job);
-        ibl_parallel_for(ctx, s->blocks_y, block_cones_task, &job);
+        ibl_parallel_for(ctx, s->edge, store_geometry_task, &job);
     }
     ibl_free(ctx, cur);
     ibl_free(ctx, next);

@@ -32,6 +32,7 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
     for (int l = 0; l < IBL_MAX_LEVELS; l++) {
         source_level *s = &p->pyramid[l];
         ibl_free(ctx, s->records);
+        ibl_free(ctx, s->geometry);
         ibl_free(ctx, s->cones);
         ibl_free(ctx, s->row_power);
         ibl_free(ctx, s->uniform);
@@ -140,6 +141,7 @@ static ibl_status plan_fast(ibl_specular_plan *p)
     if (st == IBL_OK) st = ibl__fast_build_moments(p);
     for (int l = 0; st == IBL_OK && l < p->output_levels; l++)
         if (!level_is_mirror(p, l)) st = ibl__fast_precompute_level(p, l);
+    if (st == IBL_OK) st = ibl__fast_kept_records(p);
     if (st == IBL_OK) st = run_buffers(p);
     if (st == IBL_OK && needs_level0_records(p)) st = ibl__fast_level0_records(p);
     for (int l = 0; st == IBL_OK && l < p->output_levels; l++) {
@@ -200,6 +202,12 @@ ibl_status ibl_specular_source_size(ibl_context *ctx, const ibl_specular_desc *d
 ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *desc,
                                     ibl_specular_plan **out)
 {
+    return ibl__specular_plan_create(ctx, desc, 0, out);
+}
+
+ibl_status ibl__specular_plan_create(ibl_context *ctx, const ibl_specular_desc *desc,
+                                     int one_shot, ibl_specular_plan **out)
+{
     if (!ctx || !desc || !out) return IBL_ERR_INVALID_ARGUMENT;
     *out = NULL;
     if (desc->size < 1 || desc->size > 16384)
@@ -216,6 +224,7 @@ ibl_status ibl_specular_plan_create(ibl_context *ctx, const ibl_specular_desc *d
     ibl_specular_plan *p = ibl_calloc(ctx, 1, sizeof *p);
     if (!p) return ibl_context_status(ctx);
     p->ctx = ctx;
+    p->one_shot = one_shot;
     p->desc = *desc;
     p->source_edge = S;
     p->output_edge = desc->size;
@@ -247,53 +256,101 @@ static ibl_status run_dynamic(ibl_specular_plan *p, const ibl_cubemap *src, ibl_
     return st == IBL_OK ? ibl__progress(p->ctx, "prefilter", 1.0) : st;
 }
 
-/* The radiance pyramid and what is gathered from it: every level's bright texels, then the
- * centroid corrections of every precomputed piece over a coarse level, one after the other in
- * the correction pool. */
-static void run_pyramid(ibl_specular_plan *p, const ibl_cubemap *src)
+/* The precomputed pieces over pyramid level `level` gather their centroid corrections, one
+ * after the other in the correction pool (pool_used: its blocks taken so far). */
+static void gather_corrections(ibl_specular_plan *p, int level, size_t *pool_used)
 {
-    if (p->has_level0_records) ibl__fast_pyramid_level0(p, src);
-    for (int l = p->first_stored; l < p->pyramid_levels; l++) {
-        ibl__fast_pyramid_level(p, src, l);
-        if (p->pyramid[l].bright_scale > 0) ibl__fast_select_bright(p, l);
-        ibl__fast_uniform_level(p, l);
-    }
-    size_t pool_used = 0; /* blocks of the correction pool taken */
     for (int l = 0; l < p->output_levels; l++)
         for (int k = 0; k < p->levels[l].piece_count; k++) {
             precomputed_piece *c = p->levels[l].pieces[k].precomputed;
-            if (!c || c->correction_capacity == 0) continue;
-            c->correction_records = p->correction_pool + pool_used * COARSE_FIELDS * BLOCK_TEXELS;
+            if (!c || c->correction_capacity == 0 || c->source_level != level) continue;
+            c->correction_records = p->correction_pool + *pool_used * COARSE_FIELDS * BLOCK_TEXELS;
             ibl__fast_select_corrections(p, c);
-            pool_used += (size_t)c->correction_block_count;
+            *pool_used += (size_t)c->correction_block_count;
         }
+}
+
+/* The radiance pyramid and what is gathered from it: level by level, the records (those only
+ * the pyramid reads are made here), the bright texels, the uniform images and the centroid
+ * corrections of the precomputed pieces over it. A one-shot plan frees a level's records
+ * once the next level is made from them (ibl__fast_free_run_records: no-op for kept ones). */
+static ibl_status run_pyramid(ibl_specular_plan *p, const ibl_cubemap *src)
+{
+    if (p->has_level0_records) ibl__fast_pyramid_level0(p, src);
+    size_t pool_used = 0;
+    for (int l = p->first_stored; l < p->pyramid_levels; l++) {
+        ibl_status st = ibl__fast_run_records(p, l);
+        if (st != IBL_OK) return st;
+        ibl__fast_pyramid_level(p, src, l);
+        if (p->pyramid[l].bright_scale > 0) ibl__fast_select_bright(p, l);
+        ibl__fast_uniform_level(p, l);
+        gather_corrections(p, l, &pool_used);
+        if (p->one_shot && l > p->first_stored) ibl__fast_free_run_records(p, l - 1);
+    }
+    if (p->one_shot && p->pyramid_levels > p->first_stored)
+        ibl__fast_free_run_records(p, p->pyramid_levels - 1);
+    return IBL_OK;
+}
+
+static ibl_status check_run(const ibl_specular_plan *p, const ibl_cubemap *src,
+                            const ibl_cubemap *dst)
+{
+    if (!p || !src || !src->data || (dst && !dst->data)) return IBL_ERR_INVALID_ARGUMENT;
+    int out_edge = dst ? dst->size : p->output_edge, out_levels = dst ? dst->levels : p->output_levels;
+    if (src->size != p->source_edge || out_edge != p->output_edge || out_levels != p->output_levels)
+        return ibl__fail(p->ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "specular run: planned source %d -> %d x %d levels, got %d -> %d x %d",
+                         p->source_edge, p->output_edge, p->output_levels, src->size, out_edge,
+                         out_levels);
+    return IBL_OK;
+}
+
+/* A filtered level: leaf sums, products (a one-shot plan's weights made for them and freed
+ * after) and the combination of the grids. */
+static ibl_status run_filtered_level(ibl_specular_plan *p, const ibl_cubemap *src,
+                                     ibl_cubemap *dst, int l)
+{
+    level_plan *lv = &p->levels[l];
+    ibl__fast_leaf_sums(p, l);
+    for (int k = 0; k < lv->piece_count; k++) {
+        ibl_status st = ibl__fast_precomputed_refill(p, l, k);
+        if (st != IBL_OK) return st;
+    }
+    ibl__fast_products(p, l, src);
+    for (int k = 0; p->one_shot && k < lv->piece_count; k++)
+        if (lv->pieces[k].precomputed) ibl__fast_precomputed_release(p->ctx, lv->pieces[k].precomputed);
+    ibl__fast_combine(p, dst, l);
+    return IBL_OK;
+}
+
+ibl_status ibl__specular_plan_run_pyramid(ibl_specular_plan *p, const ibl_cubemap *src)
+{
+    ibl_status st = check_run(p, src, NULL);
+    if (st != IBL_OK || p->dynamic) return st;
+    return run_pyramid(p, src);
+}
+
+ibl_status ibl__specular_plan_run_levels(ibl_specular_plan *p, const ibl_cubemap *src,
+                                         ibl_cubemap *dst)
+{
+    ibl_status st = check_run(p, src, dst);
+    if (st != IBL_OK) return st;
+    if (p->dynamic) return run_dynamic(p, src, dst);
+    for (int l = 0; l < p->output_levels; l++) {
+        if (level_is_mirror(p, l)) ibl__fast_mirror_level(p, src, dst, l);
+        else st = run_filtered_level(p, src, dst, l);
+        if (st == IBL_OK) st = ibl_edge_fixup_apply(p->ctx, p->desc.edge_fixup, dst, l);
+        if (st == IBL_OK) st = ibl__progress(p->ctx, "prefilter", (l + 1.0) / p->output_levels);
+        if (st != IBL_OK) return st;
+    }
+    return IBL_OK;
 }
 
 ibl_status ibl_specular_plan_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cubemap *dst)
 {
     if (!p || !src || !dst || !src->data || !dst->data) return IBL_ERR_INVALID_ARGUMENT;
-    ibl_context *ctx = p->ctx;
-    if (src->size != p->source_edge || dst->size != p->output_edge || dst->levels != p->output_levels)
-        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
-                         "specular run: planned source %d -> %d x %d levels, got %d -> %d x %d",
-                         p->source_edge, p->output_edge, p->output_levels, src->size, dst->size,
-                         dst->levels);
-    if (p->dynamic) return run_dynamic(p, src, dst);
-    run_pyramid(p, src);
-    for (int l = 0; l < p->output_levels; l++) {
-        if (level_is_mirror(p, l)) {
-            ibl__fast_mirror_level(p, src, dst, l);
-        } else {
-            ibl__fast_leaf_sums(p, l);
-            ibl__fast_products(p, l, src);
-            ibl__fast_combine(p, dst, l);
-        }
-        ibl_status st = ibl_edge_fixup_apply(ctx, p->desc.edge_fixup, dst, l);
-        if (st != IBL_OK) return st;
-        st = ibl__progress(ctx, "prefilter", (l + 1.0) / p->output_levels);
-        if (st != IBL_OK) return st;
-    }
-    return IBL_OK;
+    ibl_status st = ibl__specular_plan_run_pyramid(p, src);
+    return st == IBL_OK ? ibl__specular_plan_run_levels(p, src, dst) : st;
 }
 
 void ibl__specular_plan_stats(const ibl_specular_plan *p, ibl__specular_stats *out)

@@ -206,8 +206,9 @@ static void geometry_task(void *arg, int row)
             ibl__fast_level0_moments(j->p, f, x, y, v);
             for (int k = 0; k < GEOMETRY_FIELDS; k++) geo[k * plane + i] = v[k];
         } else {
-            const float *rec = s->records + record_index(s, f, x, y, 0);
-            for (int k = 0; k < GEOMETRY_FIELDS; k++) geo[k * plane + i] = rec[k * BLOCK_TEXELS];
+            float v[GEOMETRY_FIELDS];
+            level_texel_geometry(j->p->face_axis[f], j->p->face_sign[f], s, f, x, y, v);
+            for (int k = 0; k < GEOMETRY_FIELDS; k++) geo[k * plane + i] = v[k];
         }
     }
 }
@@ -240,6 +241,35 @@ static precomputed_piece *precomputed_new(ibl_specular_plan *p, const lobe_piece
     return c;
 }
 
+/* The arrays a piece's weights take (the weights and their vectors' cells), freed between the
+ * plan and the products of a one-shot plan. */
+static ibl_status allocate_weights(ibl_context *ctx, precomputed_piece *c)
+{
+    size_t weights = c->first_weight[(size_t)c->base_edge * c->base_edge];
+    c->weights = ibl_alloc(ctx, (weights ? weights : 1) * sizeof(uint16_t));
+    c->vector_cells = ibl_alloc(ctx, (weights / 8 + 1) * 2 * sizeof(uint16_t));
+    return c->weights && c->vector_cells ? IBL_OK : ibl_context_status(ctx);
+}
+
+/* Each vector's first cell, from the rows. */
+static void vector_cells(precomputed_piece *c)
+{
+    size_t rows = c->first_row[(size_t)c->base_edge * c->base_edge];
+    for (size_t r = 0, v = 0; r < rows; r++) /* padded cells are below 3 S + 16 <= 49168 */
+        for (int i = 0; i < c->rows[3 * r + 2]; i += 8, v++) {
+            c->vector_cells[2 * v] = (uint16_t)(c->rows[3 * r + 1] + i + c->origin);
+            c->vector_cells[2 * v + 1] = (uint16_t)(c->rows[3 * r] + c->origin);
+        }
+}
+
+void ibl__fast_precomputed_release(ibl_context *ctx, precomputed_piece *c)
+{
+    ibl_free(ctx, c->weights);
+    ibl_free(ctx, c->vector_cells);
+    c->weights = NULL;
+    c->vector_cells = NULL;
+}
+
 /* Lays the rows found per base texel end to end, with their vectors' first cells; 0 when the
  * border was too narrow for some base or the weights would crowd the memory budget (sum by
  * leaves), -1 when memory ran out. */
@@ -261,17 +291,11 @@ static int pack_rows(ibl_context *ctx, precomputed_piece *c, const weights_job *
     uint64_t max = ibl_context_max_bytes(ctx), now = ibl_context_current_bytes(ctx);
     if (now >= max || bytes > PRECOMPUTED_BUDGET_SHARE * (double)(max - now)) return 0;
     c->rows = ibl_alloc(ctx, (rows ? rows : 1) * 3 * sizeof(int32_t));
-    c->weights = ibl_alloc(ctx, (weights ? weights : 1) * sizeof(uint16_t));
-    c->vector_cells = ibl_alloc(ctx, (weights / 8 + 1) * 2 * sizeof(uint16_t));
-    if (!c->rows || !c->weights || !c->vector_cells) return -1;
+    if (!c->rows || allocate_weights(ctx, c) != IBL_OK) return -1;
     for (size_t i = 0; i < bases; i++)
         memcpy(c->rows + 3 * (size_t)c->first_row[i], j->found_rows + i * stride,
                (size_t)j->found_count[i] * 3 * sizeof(int32_t));
-    for (size_t r = 0, v = 0; r < rows; r++) /* padded cells are below 3 S + 16 <= 49168 */
-        for (int i = 0; i < c->rows[3 * r + 2]; i += 8, v++) {
-            c->vector_cells[2 * v] = (uint16_t)(c->rows[3 * r + 1] + i + c->origin);
-            c->vector_cells[2 * v + 1] = (uint16_t)(c->rows[3 * r] + c->origin);
-        }
+    vector_cells(c);
     return 1;
 }
 
@@ -322,6 +346,9 @@ static ibl_status precompute_piece(ibl_specular_plan *p, int level, int k)
             for (int a = b + 1; a < c->base_edge; a++)
                 c->normaliser[b * c->base_edge + a] = c->normaliser[a * c->base_edge + b];
         pc->precomputed = c;
+        /* a one-shot plan keeps the rows and the normalisers; the weights come back for the
+         * products (ibl__fast_precomputed_refill) */
+        if (p->one_shot) ibl__fast_precomputed_release(ctx, c);
     }
     ibl_free(ctx, geometry);
     if (packed != 1) ibl__fast_precomputed_destroy(ctx, c);
@@ -335,4 +362,27 @@ ibl_status ibl__fast_precompute_level(ibl_specular_plan *p, int level)
         if (st != IBL_OK) return st;
     }
     return IBL_OK;
+}
+
+/* The weights of a one-shot plan's piece k of a level again, from its rows: the same geometry,
+ * rows and scale, so the same halves (and normalisers) as the plan found. */
+ibl_status ibl__fast_precomputed_refill(ibl_specular_plan *p, int level, int k)
+{
+    level_plan *lv = &p->levels[level];
+    lobe_piece *pc = &lv->pieces[k];
+    precomputed_piece *c = pc->precomputed;
+    if (!c || c->weights) return IBL_OK;
+    ibl_context *ctx = p->ctx;
+    size_t plane = (size_t)c->padded_edge * c->padded_edge, bases = (size_t)c->base_edge * c->base_edge;
+    double cos_end = 1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0) - 1e-6;
+    float *geometry = ibl_alloc(ctx, GEOMETRY_FIELDS * plane * sizeof(float));
+    ibl_status st = geometry ? allocate_weights(ctx, c) : ibl_context_status(ctx);
+    if (st == IBL_OK) {
+        weights_job job = {p, c, pc, &lv->lobe, geometry, NULL, NULL, 0.0, cos_end};
+        vector_cells(c);
+        ibl_parallel_for(ctx, c->padded_edge, geometry_task, &job);
+        ibl_parallel_for(ctx, (int)bases, weights_task, &job);
+    }
+    ibl_free(ctx, geometry);
+    return st;
 }
