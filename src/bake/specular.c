@@ -194,8 +194,8 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
         work.owns_data = 0;
         s = &work;
     }
-    /* a plan's chain is allocated after its pyramid: the pyramid's records are freed by
-     * then and the chain takes their memory */
+    /* a plan's chain is allocated once its grids are summed: the pyramid's records and the
+     * precomputed weights are freed by then and the chain takes their memory */
     int plan_path = !(box_or_gauss && !desc.dynamic) && desc.method != IBL_METHOD_REFERENCE;
     if (!plan_path) st = ibl_cubemap_alloc(ctx, N, L, out);
     if (st != IBL_OK) goto done;
@@ -219,9 +219,9 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
         ibl_specular_plan *plan = NULL;
         desc.source_size = s->size;
         st = ibl__specular_plan_create(ctx, &desc, !desc.dynamic, &plan);
-        if (st == IBL_OK) st = ibl__specular_plan_run_pyramid(plan, s);
+        if (st == IBL_OK) st = ibl__specular_plan_run_grids(plan, s);
         if (st == IBL_OK) st = ibl_cubemap_alloc(ctx, N, L, out);
-        if (st == IBL_OK) st = ibl__specular_plan_run_levels(plan, s, out);
+        if (st == IBL_OK) st = ibl__specular_plan_run_output(plan, s, out);
         ibl_specular_plan_destroy(plan);
         /* a mirror level the plan could only point-sample (its size does not divide the
          * source's) is area-resampled here, as the reference does */

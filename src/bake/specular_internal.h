@@ -84,11 +84,12 @@ void ibl__specular_plan_stats(const ibl_specular_plan *plan, ibl__specular_stats
 /* A plan for a single run (one_shot, ibl_specular_prefilter): it keeps less between its steps
  * and makes the rest when the run needs it, so that its largest buffers never coexist
  * (src/bake/specular/fast_internal.h, ibl_specular_plan.one_shot). Its run in two steps: the
- * pyramid (before the output chain exists), then the levels; ibl_specular_plan_run is both. */
+ * pyramid and every level's grids (no output needed yet), then the output levels from the
+ * grids; ibl_specular_plan_run is both. */
 ibl_status ibl__specular_plan_create(ibl_context *ctx, const ibl_specular_desc *desc,
                                      int one_shot, ibl_specular_plan **out);
-ibl_status ibl__specular_plan_run_pyramid(ibl_specular_plan *plan, const ibl_cubemap *src);
-ibl_status ibl__specular_plan_run_levels(ibl_specular_plan *plan, const ibl_cubemap *src,
+ibl_status ibl__specular_plan_run_grids(ibl_specular_plan *plan, const ibl_cubemap *src);
+ibl_status ibl__specular_plan_run_output(ibl_specular_plan *plan, const ibl_cubemap *src,
                                          ibl_cubemap *dst);
 
 /* The dynamic path (specular_dynamic/): every filter as a plan whose run allocates nothing

@@ -3,7 +3,10 @@
  *
  * A plan fixes everything that depends on the sizes and the lobes only: the geometry of the
  * moment pyramid, the pieces of every level and their grids, the precomputed weights and the
- * normalisers, and every buffer a run needs; a run allocates nothing. With desc.dynamic the plan
+ * normalisers, and the buffers a run needs, but for the records of the coarse levels only the
+ * run's pyramid reads (made by the first run, kept by a reusable plan; a one-shot plan, made by
+ * ibl_specular_prefilter, frees them as the pyramid goes and keeps its precomputed weights only
+ * while their products run: fast_internal.h, one_shot). With desc.dynamic the plan
  * is instead the per-frame plan of specular_dynamic/. The fast method itself is
  * described in fast_internal.h and docs/SPECULAR.md "The fast method".
  *
@@ -11,10 +14,13 @@
  *        per level: pieces and grids (pieces.c), precomputed weights (precomputed.c) ->
  *        run buffers -> level 0's records if a leaf sum reads them -> per level: normalisers
  *        (leaf_sums.c) and the bars of the gathered texels (gathering.c).
- * Run:   radiance pyramid (pyramid.c) with each level's bright texels (gathering.c) ->
- *        centroid corrections of every precomputed coarse piece (gathering.c) -> per level:
- *        the mirror (mirror.c), or leaf sums (leaf_sums.c), products (products.c) and the
- *        combination of the grids (combine.c) -> edge fixup. */
+ * Run:   radiance pyramid (pyramid.c), level by level with its bright texels and the
+ *        centroid corrections of the precomputed pieces over it (gathering.c) -> per filtered
+ *        level: leaf sums (leaf_sums.c) and products (products.c) into its grids -> per
+ *        level: the mirror (mirror.c) or the combination of the grids (combine.c), then the
+ *        edge fixup. The grids are all filled before the output is written, so that a
+ *        one-shot run (ibl_specular_prefilter) can allocate the output after its largest
+ *        buffers are gone. */
 #include "bake/specular/fast_internal.h"
 #include "core/context_internal.h"
 #include "core/cpu.h"
@@ -305,10 +311,9 @@ static ibl_status check_run(const ibl_specular_plan *p, const ibl_cubemap *src,
     return IBL_OK;
 }
 
-/* A filtered level: leaf sums, products (a one-shot plan's weights made for them and freed
- * after) and the combination of the grids. */
-static ibl_status run_filtered_level(ibl_specular_plan *p, const ibl_cubemap *src,
-                                     ibl_cubemap *dst, int l)
+/* A filtered level's grids: leaf sums, then products (a one-shot plan's weights made for them
+ * and freed after). */
+static ibl_status level_sums(ibl_specular_plan *p, const ibl_cubemap *src, int l)
 {
     level_plan *lv = &p->levels[l];
     ibl__fast_leaf_sums(p, l);
@@ -319,38 +324,41 @@ static ibl_status run_filtered_level(ibl_specular_plan *p, const ibl_cubemap *sr
     ibl__fast_products(p, l, src);
     for (int k = 0; p->one_shot && k < lv->piece_count; k++)
         if (lv->pieces[k].precomputed) ibl__fast_precomputed_release(p->ctx, lv->pieces[k].precomputed);
-    ibl__fast_combine(p, dst, l);
     return IBL_OK;
 }
 
-ibl_status ibl__specular_plan_run_pyramid(ibl_specular_plan *p, const ibl_cubemap *src)
+ibl_status ibl__specular_plan_run_grids(ibl_specular_plan *p, const ibl_cubemap *src)
 {
     ibl_status st = check_run(p, src, NULL);
     if (st != IBL_OK || p->dynamic) return st;
-    return run_pyramid(p, src);
+    st = run_pyramid(p, src);
+    /* every level's grids before any output: they need no output memory */
+    for (int l = 0; st == IBL_OK && l < p->output_levels; l++) {
+        if (!level_is_mirror(p, l)) st = level_sums(p, src, l);
+        if (st == IBL_OK) st = ibl__progress(p->ctx, "prefilter", (l + 1.0) / p->output_levels);
+    }
+    return st;
 }
 
-ibl_status ibl__specular_plan_run_levels(ibl_specular_plan *p, const ibl_cubemap *src,
+ibl_status ibl__specular_plan_run_output(ibl_specular_plan *p, const ibl_cubemap *src,
                                          ibl_cubemap *dst)
 {
     ibl_status st = check_run(p, src, dst);
     if (st != IBL_OK) return st;
     if (p->dynamic) return run_dynamic(p, src, dst);
-    for (int l = 0; l < p->output_levels; l++) {
+    for (int l = 0; st == IBL_OK && l < p->output_levels; l++) {
         if (level_is_mirror(p, l)) ibl__fast_mirror_level(p, src, dst, l);
-        else st = run_filtered_level(p, src, dst, l);
-        if (st == IBL_OK) st = ibl_edge_fixup_apply(p->ctx, p->desc.edge_fixup, dst, l);
-        if (st == IBL_OK) st = ibl__progress(p->ctx, "prefilter", (l + 1.0) / p->output_levels);
-        if (st != IBL_OK) return st;
+        else ibl__fast_combine(p, dst, l);
+        st = ibl_edge_fixup_apply(p->ctx, p->desc.edge_fixup, dst, l);
     }
-    return IBL_OK;
+    return st;
 }
 
 ibl_status ibl_specular_plan_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cubemap *dst)
 {
     if (!p || !src || !dst || !src->data || !dst->data) return IBL_ERR_INVALID_ARGUMENT;
-    ibl_status st = ibl__specular_plan_run_pyramid(p, src);
-    return st == IBL_OK ? ibl__specular_plan_run_levels(p, src, dst) : st;
+    ibl_status st = ibl__specular_plan_run_grids(p, src);
+    return st == IBL_OK ? ibl__specular_plan_run_output(p, src, dst) : st;
 }
 
 void ibl__specular_plan_stats(const ibl_specular_plan *p, ibl__specular_stats *out)
