@@ -36,6 +36,11 @@ typedef struct weights_job {
     int *found_count;       /* base_edge^2: rows found (-1: the border is too narrow)      */
     double cos_reach;       /* the window's reach (sizing)                                */
     double cos_end;         /* a cell counts when R.m >= cos_end: u < the piece's end     */
+    /* weights_task: base `index + first_base` writes its weights at weights + its first
+     * weight - weight_origin (the whole array, or a batch's scratch) */
+    uint16_t *weights;
+    size_t weight_origin;
+    int first_base;
 } weights_job;
 
 void ibl__fast_precomputed_destroy(ibl_context *ctx, precomputed_piece *c)
@@ -150,6 +155,7 @@ static void weights_task(void *arg, int index)
 {
     weights_job *j = arg;
     precomputed_piece *c = j->c;
+    index += j->first_base;
     int a = index % c->base_edge, b = index / c->base_edge;
     if (a > b) return; /* (b, a)'s, transposed */
     double Rd[3];
@@ -160,7 +166,7 @@ static void weights_task(void *arg, int index)
     j->p->kernels->base_weights(j->piece, R, RR, j->geometry, (size_t)c->padded_edge * c->padded_edge,
                                 c->padded_edge, c->origin, c->rows + 3 * (size_t)c->first_row[index],
                                 (int)(c->first_row[index + 1] - c->first_row[index]), 1.0f / c->weight_scale,
-                                c->weights + c->first_weight[index], lanes);
+                                j->weights + (c->first_weight[index] - j->weight_origin), lanes);
     double den = 0;
     for (int l = 0; l < 8; l++) den += lanes[l];
     c->normaliser[index] = den * c->weight_scale;
@@ -291,12 +297,37 @@ static int pack_rows(ibl_context *ctx, precomputed_piece *c, const weights_job *
     uint64_t max = ibl_context_max_bytes(ctx), now = ibl_context_current_bytes(ctx);
     if (now >= max || bytes > PRECOMPUTED_BUDGET_SHARE * (double)(max - now)) return 0;
     c->rows = ibl_alloc(ctx, (rows ? rows : 1) * 3 * sizeof(int32_t));
-    if (!c->rows || allocate_weights(ctx, c) != IBL_OK) return -1;
+    /* a one-shot plan finds the normalisers batch by batch (one_shot_normalisers) */
+    if (!c->rows || (!j->p->one_shot && allocate_weights(ctx, c) != IBL_OK)) return -1;
     for (size_t i = 0; i < bases; i++)
         memcpy(c->rows + 3 * (size_t)c->first_row[i], j->found_rows + i * stride,
                (size_t)j->found_count[i] * 3 * sizeof(int32_t));
-    vector_cells(c);
+    if (c->weights) vector_cells(c);
     return 1;
+}
+
+/* A one-shot plan's normalisers without keeping the weights: the bases in batches of about
+ * ONE_SHOT_WEIGHT_BATCHES-th of the weights, each batch's weights in one scratch array (the
+ * same halves, summed the same way, as weights_task stores). */
+enum { ONE_SHOT_WEIGHT_BATCHES = 16 };
+static ibl_status one_shot_normalisers(ibl_context *ctx, weights_job *job)
+{
+    const precomputed_piece *c = job->c;
+    size_t bases = (size_t)c->base_edge * c->base_edge, total = c->first_weight[bases];
+    size_t cap = total / ONE_SHOT_WEIGHT_BATCHES + 1;
+    for (size_t i = 0; i < bases; i++)
+        if (c->first_weight[i + 1] - c->first_weight[i] > cap) cap = c->first_weight[i + 1] - c->first_weight[i];
+    job->weights = ibl_alloc(ctx, cap * sizeof(uint16_t));
+    if (!job->weights) return ibl_context_status(ctx);
+    for (size_t first = 0, end; first < bases; first = end) {
+        for (end = first + 1; end < bases && c->first_weight[end + 1] - c->first_weight[first] <= cap;) end++;
+        job->first_base = (int)first;
+        job->weight_origin = c->first_weight[first];
+        ibl_parallel_for(ctx, (int)(end - first), weights_task, job);
+    }
+    ibl_free(ctx, job->weights);
+    job->weights = NULL, job->first_base = 0, job->weight_origin = 0;
+    return IBL_OK;
 }
 
 /* Sets up piece k of a level as precomputed weights when it can be (a symmetric grid, level 0
@@ -325,7 +356,8 @@ static ibl_status precompute_piece(ibl_specular_plan *p, int level, int k)
     float *geometry = ibl_alloc(ctx, GEOMETRY_FIELDS * plane * sizeof(float));
     int32_t *found_rows = ibl_alloc(ctx, bases * (2 * W + 1) * 3 * sizeof(int32_t));
     int *found_count = ibl_alloc(ctx, bases * sizeof(int));
-    weights_job job = {p, c, pc, &lv->lobe, geometry, found_rows, found_count, cos(reach), cos_end};
+    weights_job job = {p, c, pc, &lv->lobe, geometry, found_rows, found_count, cos(reach), cos_end,
+                       NULL, 0, 0};
     int packed = -1;
     if (geometry && found_rows && found_count) {
         ibl_parallel_for(ctx, c->padded_edge, cell_texel_task, &job);
@@ -340,15 +372,16 @@ static ibl_status precompute_piece(ibl_specular_plan *p, int level, int k)
         c->weight_scale = (float)(WEIGHT_BOUND_FACTOR * ibl__fast_piece_peak(pc) *
                                   ibl_cube_texel_solid_angle(S, S / 2, S / 2));
         if (!(c->weight_scale > 0)) c->weight_scale = 1.0f;
-        ibl_parallel_for(ctx, (int)bases, weights_task, &job);
+        /* a one-shot plan keeps the rows and the normalisers only: its weights are made again
+         * for the products (ibl__fast_precomputed_refill) */
+        job.weights = c->weights;
+        if (c->weights) ibl_parallel_for(ctx, (int)bases, weights_task, &job);
+        else if (one_shot_normalisers(ctx, &job) != IBL_OK) packed = -1;
         /* the normalisers of the bases below the diagonal: their mirrors' (the same weights) */
         for (int b = 0; b < c->base_edge; b++)
             for (int a = b + 1; a < c->base_edge; a++)
                 c->normaliser[b * c->base_edge + a] = c->normaliser[a * c->base_edge + b];
-        pc->precomputed = c;
-        /* a one-shot plan keeps the rows and the normalisers; the weights come back for the
-         * products (ibl__fast_precomputed_refill) */
-        if (p->one_shot) ibl__fast_precomputed_release(ctx, c);
+        if (packed == 1) pc->precomputed = c;
     }
     ibl_free(ctx, geometry);
     if (packed != 1) ibl__fast_precomputed_destroy(ctx, c);
@@ -378,7 +411,7 @@ ibl_status ibl__fast_precomputed_refill(ibl_specular_plan *p, int level, int k)
     float *geometry = ibl_alloc(ctx, GEOMETRY_FIELDS * plane * sizeof(float));
     ibl_status st = geometry ? allocate_weights(ctx, c) : ibl_context_status(ctx);
     if (st == IBL_OK) {
-        weights_job job = {p, c, pc, &lv->lobe, geometry, NULL, NULL, 0.0, cos_end};
+        weights_job job = {p, c, pc, &lv->lobe, geometry, NULL, NULL, 0.0, cos_end, c->weights, 0, 0};
         vector_cells(c);
         ibl_parallel_for(ctx, c->padded_edge, geometry_task, &job);
         ibl_parallel_for(ctx, (int)bases, weights_task, &job);
