@@ -92,7 +92,11 @@ static inline double core_source_width(const ibl__lobe *lobe, double acc)
 typedef struct source_level {
     int edge;              /* texels per face edge                                            */
     int blocks_x, blocks_y; /* blocks per face row and column                                 */
-    int fields;            /* floats per texel record: LEVEL0_FIELDS or COARSE_FIELDS          */
+    int fields;            /* floats per texel record: LEVEL0_FIELDS or COARSE_FIELDS, less
+                            * first_field                                                    */
+    /* the first field the records hold: 0, or GEOMETRY_FIELDS for a level whose geometric
+     * fields are in `geometry` only (levels only the run's pyramid reads) */
+    int first_field;
     float *records;        /* 6 blocks_y blocks_x blocks x fields x BLOCK_TEXELS               */
     float *cones;          /* per block: its bounding cone                                     */
     /* coarse levels whose records only the run's pyramid reads (no leaf sum, no mirror level):
@@ -120,11 +124,27 @@ static inline size_t source_block_count(const source_level *s)
     return (size_t)6 * s->blocks_y * s->blocks_x;
 }
 
-/* Where field `field` of texel (x, y) of face `face` is in s->records. */
+/* Where field `field` (at least s->first_field) of lane t of block b is in s->records. */
+static inline size_t field_index(const source_level *s, size_t b, int field, int t)
+{
+    return (b * s->fields + (size_t)(field - s->first_field)) * BLOCK_TEXELS + (size_t)t;
+}
+
+/* Where field `field` (at least s->first_field) of texel (x, y) of face `face` is in
+ * s->records. */
 static inline size_t record_index(const source_level *s, int face, int x, int y, int field)
 {
     size_t b = ((size_t)face * s->blocks_y + y / BLOCK_H) * s->blocks_x + x / BLOCK_W;
-    return (b * s->fields + field) * BLOCK_TEXELS + (y % BLOCK_H) * BLOCK_W + x % BLOCK_W;
+    return field_index(s, b, field, (y % BLOCK_H) * BLOCK_W + x % BLOCK_W);
+}
+
+/* The face and texel of lane t of block b. */
+static inline void block_texel(const source_level *s, size_t b, int t, int *face, int *x, int *y)
+{
+    size_t per_face = (size_t)s->blocks_y * s->blocks_x, r = b % per_face;
+    *face = (int)(b / per_face);
+    *x = (int)(r % s->blocks_x) * BLOCK_W + t % BLOCK_W;
+    *y = (int)(r / s->blocks_x) * BLOCK_H + t / BLOCK_W;
 }
 
 /* Writes moments given in a face's local (s, t, axis) coordinates in world coordinates, through
@@ -166,7 +186,7 @@ static inline void level_texel_geometry(const int axis[3], const float sign[3],
                                         const source_level *s, int f, int x, int y,
                                         float out[GEOMETRY_FIELDS])
 {
-    if (s->records) {
+    if (s->records && s->first_field == 0) {
         const float *r = s->records + record_index(s, f, x, y, 0);
         for (int k = 0; k < GEOMETRY_FIELDS; k++) out[k] = r[k * BLOCK_TEXELS];
         return;

@@ -197,19 +197,23 @@ static void super_cones(const float *cones, int count, float *supers)
 /* Gathers the `count` texels of `keys` in key order, eight to a block of records with their
  * power from field power_field, then their cones (one per block, then one per
  * SUPER_CONE_BLOCKS blocks after `capacity` cones); the number of blocks. */
-static int gather_texels(const source_level *s, uint64_t *keys, int count, int power_field,
-                         float *records, float *cones, int capacity)
+static int gather_texels(const ibl_specular_plan *p, const source_level *s, uint64_t *keys,
+                         int count, int power_field, float *records, float *cones, int capacity)
 {
     const int B = BLOCK_TEXELS;
     qsort(keys, (size_t)count, sizeof *keys, key_order);
     for (int k = 0; k < count; k++) {
         size_t b;
-        int t;
+        int t, f, x, y;
+        float g[GEOMETRY_FIELDS];
         texel_of_key(s, keys[k], &b, &t);
-        const float *rec = s->records + b * s->fields * B;
+        block_texel(s, b, t, &f, &x, &y);
+        level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, g);
         float *dst = records + (size_t)(k / B) * COARSE_FIELDS * B + k % B;
-        for (int field = 0; field < COARSE_FIELDS; field++) dst[field * B] = rec[field * B + t];
-        for (int c = 0; c < 3; c++) dst[(FIELD_POWER + c) * B] = rec[(power_field + c) * B + t];
+        for (int field = 0; field < GEOMETRY_FIELDS; field++) dst[field * B] = g[field];
+        for (int field = GEOMETRY_FIELDS; field < COARSE_FIELDS; field++)
+            dst[field * B] = s->records[field_index(s, b, field, t)];
+        for (int c = 0; c < 3; c++) dst[(FIELD_POWER + c) * B] = s->records[field_index(s, b, power_field + c, t)];
     }
     for (int i = count; i < (count + B - 1) / B * B; i++) { /* the rest of the last block: nothing */
         float *dst = records + (size_t)(i / B) * COARSE_FIELDS * B + i % B;
@@ -233,7 +237,7 @@ void ibl__fast_select_bright(ibl_specular_plan *p, int level)
     for (;;) { /* raise the bar until the brightest fit (a bounded direct sum) */
         int count = 0;
         for (size_t b = 0; b < blocks; b++) {
-            const float *P = s->records + (b * s->fields + FIELD_POWER) * B;
+            const float *P = s->records + field_index(s, b, FIELD_POWER, 0);
             for (int t = 0; t < B; t++) count += luminance(P[t], P[B + t], P[2 * B + t]) > bar;
         }
         if (count <= s->bright_capacity * B) break;
@@ -241,16 +245,15 @@ void ibl__fast_select_bright(ibl_specular_plan *p, int level)
     }
     int k = 0;
     for (size_t b = 0; b < blocks; b++) {
-        float *rec = s->records + b * s->fields * B;
+        float *P = s->records + field_index(s, b, FIELD_POWER, 0); /* fields from it */
         for (int t = 0; t < B; t++) {
-            const float *P = rec + FIELD_POWER * B;
             int is_bright = luminance(P[t], P[B + t], P[2 * B + t]) > bar;
             for (int c = 0; c < 3; c++)
-                rec[(FIELD_POWER_NOT_BRIGHT + c) * B + t] = is_bright ? 0.0f : P[c * B + t];
+                P[(FIELD_POWER_NOT_BRIGHT - FIELD_POWER + c) * B + t] = is_bright ? 0.0f : P[c * B + t];
             if (is_bright) s->bright_keys[k++] = texel_key(s, b, t);
         }
     }
-    s->bright_block_count = gather_texels(s, s->bright_keys, k, FIELD_POWER, s->bright_records,
+    s->bright_block_count = gather_texels(p, s, s->bright_keys, k, FIELD_POWER, s->bright_records,
                                           s->bright_cones, s->bright_capacity);
 }
 
@@ -272,22 +275,28 @@ static void bound_task(void *arg, int index)
     const float a1 = (float)c->bound_mean, a2 = (float)c->bound_spread, a3 = (float)c->bound_covariance;
     const float l0 = (float)LUMINANCE_R, l1 = (float)LUMINANCE_G, l2 = (float)LUMINANCE_B;
     for (size_t b = b0; b < b1 && b < blocks; b++) {
-        const float *rec = s->records + b * s->fields * B;
+        /* the luminance fields and the power from FIELD_LUM_MEAN on, the geometric ones apart
+         * (a level may keep them apart: level_texel_geometry) */
+        const float *lum = s->records + field_index(s, b, FIELD_LUM_MEAN, 0);
+        const float *pw = lum + (FIELD_POWER - FIELD_LUM_MEAN) * B;
         float *out = c->texel_bound + b * B;
         for (int t = 0; t < B; t++) {
-            float P = l0 * rec[FIELD_POWER * B + t] + l1 * rec[(FIELD_POWER + 1) * B + t] +
-                      l2 * rec[(FIELD_POWER + 2) * B + t];
+            int f, x, y;
+            float geo[GEOMETRY_FIELDS];
+            block_texel(s, b, t, &f, &x, &y);
+            level_texel_geometry(j->p->face_axis[f], j->p->face_sign[f], s, f, x, y, geo);
+            float P = l0 * pw[t] + l1 * pw[B + t] + l2 * pw[2 * B + t];
             float dm = 0, dc = 0;
             for (int k = 0; k < 3; k++) {
-                float d = rec[(FIELD_LUM_MEAN + k) * B + t] - rec[(FIELD_MEAN + k) * B + t];
+                float d = lum[k * B + t] - geo[FIELD_MEAN + k];
                 dm += d * d;
             }
             for (int k = 0; k < 6; k++) {
-                float d = fabsf(rec[(FIELD_LUM_COVARIANCE + k) * B + t] -
-                                rec[(FIELD_COVARIANCE + k) * B + t]);
+                float d = fabsf(lum[(FIELD_LUM_COVARIANCE - FIELD_LUM_MEAN + k) * B + t] -
+                                geo[FIELD_COVARIANCE + k]);
                 dc = d > dc ? d : dc;
             }
-            float de = fabsf(rec[FIELD_LUM_SPREAD * B + t] - rec[FIELD_SPREAD * B + t]);
+            float de = fabsf(lum[(FIELD_LUM_SPREAD - FIELD_LUM_MEAN) * B + t] - geo[FIELD_SPREAD]);
             out[t] = P > 0 ? P * (a1 * sqrtf(dm) + a2 * de + a3 * dc) : 0.0f;
         }
     }
@@ -297,23 +306,21 @@ static void bound_task(void *arg, int index)
  * power_field (FIELD_POWER, or FIELD_POWER_NOT_BRIGHT for a piece without bright texels):
  * summed as a leaf while the padded source leaves it out (products.c), it turns the texel's
  * uniform share into its moment leaf. */
-static int gather_corrections(precomputed_piece *c, const source_level *s, double threshold,
-                              int power_field)
+static int gather_corrections(const ibl_specular_plan *p, precomputed_piece *c,
+                              const source_level *s, double threshold, int power_field)
 {
     const int B = BLOCK_TEXELS;
     size_t blocks = source_block_count(s);
     int k = 0;
     for (size_t b = 0; b < blocks; b++) {
-        const float *rec = s->records + b * s->fields * B;
+        const float *P = s->records + field_index(s, b, power_field, 0);
         for (int t = 0; t < B; t++) {
             if (!(c->texel_bound[b * B + t] > threshold)) continue;
-            if (rec[power_field * B + t] == 0 && rec[(power_field + 1) * B + t] == 0 &&
-                rec[(power_field + 2) * B + t] == 0)
-                continue;
+            if (P[t] == 0 && P[B + t] == 0 && P[2 * B + t] == 0) continue;
             c->correction_keys[k++] = texel_key(s, b, t);
         }
     }
-    return gather_texels(s, c->correction_keys, k, power_field, c->correction_records,
+    return gather_texels(p, s, c->correction_keys, k, power_field, c->correction_records,
                          c->correction_cones, c->correction_capacity);
 }
 
@@ -335,5 +342,5 @@ void ibl__fast_select_corrections(ibl_specular_plan *p, precomputed_piece *c)
     }
     /* the padded source and the gathering compare the same floats */
     c->correction_threshold = (float)bar;
-    c->correction_block_count = gather_corrections(c, s, c->correction_threshold, power_field);
+    c->correction_block_count = gather_corrections(p, c, s, c->correction_threshold, power_field);
 }

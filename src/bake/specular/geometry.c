@@ -368,14 +368,15 @@ static int records_read_after_pyramid(const ibl_specular_plan *p, int level)
     return 0;
 }
 
-/* The records (geometric fields) of a level from its face-local geometry. */
+/* The records of a level, with their geometric fields from its face-local geometry unless
+ * the level keeps those apart (first_field). */
 static ibl_status materialise_records(ibl_specular_plan *p, int level)
 {
     source_level *s = &p->pyramid[level];
     s->records = allocate_records(p->ctx, s);
     if (!s->records) return ibl_context_status(p->ctx);
     moments_job job = {p, s, NULL, s->edge, NULL};
-    ibl_parallel_for(p->ctx, s->blocks_y, store_records_task, &job);
+    if (s->first_field == 0) ibl_parallel_for(p->ctx, s->blocks_y, store_records_task, &job);
     return IBL_OK;
 }
 
@@ -384,7 +385,12 @@ ibl_status ibl__fast_kept_records(ibl_specular_plan *p)
     ibl_context *ctx = p->ctx;
     for (int l = p->first_stored; l < p->pyramid_levels; l++) {
         source_level *s = &p->pyramid[l];
-        if (!records_read_after_pyramid(p, l)) continue;
+        if (!records_read_after_pyramid(p, l)) {
+            /* the pyramid reads the geometric fields from `geometry`: records without them */
+            s->first_field = GEOMETRY_FIELDS;
+            s->fields = COARSE_FIELDS - GEOMETRY_FIELDS;
+            continue;
+        }
         ibl_status st = materialise_records(p, l);
         if (st != IBL_OK) return st;
         s->cones = ibl_alloc(ctx, source_block_count(s) * CONE_FLOATS * sizeof(float));

@@ -212,7 +212,7 @@ static void sum_piece(const ibl_specular_plan *p, int mode, int g, const sum_gri
         source_level gathered = *s;
         gathered.records = bright ? s->bright_records : c->correction_records;
         gathered.cones = bright ? s->bright_cones : c->correction_cones;
-        gathered.fields = COARSE_FIELDS;
+        gathered.fields = COARSE_FIELDS, gathered.first_field = 0;
         batch.level = &gathered, batch.without_bright = 0;
         sum_gathered_blocks(p, &reach, &batch, list, tp,
                             bright ? s->bright_block_count : c->correction_block_count,

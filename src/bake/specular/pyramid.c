@@ -75,7 +75,7 @@ static void level_row_from_source(const pyramid_job *job, int f, int y)
                 W += w;
                 for (int c = 0; c < 3; c++) m[c] += w * g[FIELD_MEAN + c];
             }
-        float *o = s->records + record_index(s, f, x, y, 0);
+        float *o = s->records + record_index(s, f, x, y, FIELD_LUM_MEAN); /* fields from it */
         if (W > 0) {
             double C[6] = {0, 0, 0, 0, 0, 0}, e = 0;
             for (int c = 0; c < 3; c++) m[c] /= W;
@@ -87,13 +87,12 @@ static void level_row_from_source(const pyramid_job *job, int f, int y)
                         C[c] += a * (g[FIELD_COVARIANCE + c] + d[pair[c][0]] * d[pair[c][1]]);
                     e += a * (g[FIELD_SPREAD] + 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
                 }
-            moments_to_world(p->face_axis[f], p->face_sign[f], m, e, C,
-                             o + FIELD_LUM_MEAN * BLOCK_TEXELS, BLOCK_TEXELS);
+            moments_to_world(p->face_axis[f], p->face_sign[f], m, e, C, o, BLOCK_TEXELS);
         } else { /* no light: the geometric moments */
-            for (int k = 0; k < 10; k++)
-                o[(FIELD_LUM_MEAN + k) * BLOCK_TEXELS] = o[(FIELD_MEAN + k) * BLOCK_TEXELS];
+            level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, g);
+            for (int k = 0; k < 10; k++) o[k * BLOCK_TEXELS] = g[FIELD_MEAN + k];
         }
-        for (int c = 0; c < 3; c++) o[(FIELD_POWER + c) * BLOCK_TEXELS] = (float)P[c];
+        for (int c = 0; c < 3; c++) o[(FIELD_POWER - FIELD_LUM_MEAN + c) * BLOCK_TEXELS] = (float)P[c];
     }
 }
 
@@ -102,25 +101,27 @@ static void level_row_from_source(const pyramid_job *job, int f, int y)
 static void child_moments(const source_level *lo, int level, int f, int x, int y, texel_moments *g,
                           double power[3])
 {
-    const float *q = lo->records + record_index(lo, f, x, y, 0);
     const int B = BLOCK_TEXELS;
     if (level == 1) {
+        const float *q = lo->records + record_index(lo, f, x, y, 0);
         double om = q[FIELD_SOLID_ANGLE * B];
         for (int c = 0; c < 3; c++) power[c] = om * q[(FIELD_RADIANCE + c) * B];
         for (int c = 0; c < 3; c++) g->mean[c] = q[(FIELD_MEAN + c) * B];
         g->spread = q[FIELD_SPREAD * B];
         for (int c = 0; c < 6; c++) g->covariance[c] = q[(FIELD_COVARIANCE + c) * B];
-    } else {
-        for (int c = 0; c < 3; c++) power[c] = q[(FIELD_POWER + c) * B];
-        for (int c = 0; c < 3; c++) g->mean[c] = q[(FIELD_LUM_MEAN + c) * B];
-        g->spread = q[FIELD_LUM_SPREAD * B];
-        for (int c = 0; c < 6; c++) g->covariance[c] = q[(FIELD_LUM_COVARIANCE + c) * B];
+    } else { /* fields from FIELD_LUM_MEAN on (a level may keep its geometry apart) */
+        const float *q = lo->records + record_index(lo, f, x, y, FIELD_LUM_MEAN);
+        for (int c = 0; c < 3; c++) power[c] = q[(FIELD_POWER - FIELD_LUM_MEAN + c) * B];
+        for (int c = 0; c < 3; c++) g->mean[c] = q[c * B];
+        g->spread = q[(FIELD_LUM_SPREAD - FIELD_LUM_MEAN) * B];
+        for (int c = 0; c < 6; c++) g->covariance[c] = q[(FIELD_LUM_COVARIANCE - FIELD_LUM_MEAN + c) * B];
     }
 }
 
 /* Row y of face f of a coarse level from the records of the level below. */
 static void level_row(const pyramid_job *job, int f, int y)
 {
+    const ibl_specular_plan *p = job->p;
     const source_level *lo = &job->p->pyramid[job->level - 1];
     source_level *s = &job->p->pyramid[job->level];
     const int B = BLOCK_TEXELS;
@@ -136,18 +137,21 @@ static void level_row(const pyramid_job *job, int f, int y)
             for (int c = 0; c < 3; c++) P[c] += pw[c];
             pp[k] = &parts[k];
         }
-        float *o = s->records + record_index(s, f, x, y, 0);
+        float *o = s->records + record_index(s, f, x, y, FIELD_LUM_MEAN); /* fields from it */
         if (w[0] + w[1] + w[2] + w[3] > 0) {
             ibl__fast_combine_moments(pp, w, 4, &out);
         } else { /* no light: the geometric moments */
-            for (int c = 0; c < 3; c++) out.mean[c] = o[(FIELD_MEAN + c) * B];
-            out.spread = o[FIELD_SPREAD * B];
-            for (int c = 0; c < 6; c++) out.covariance[c] = o[(FIELD_COVARIANCE + c) * B];
+            float g[GEOMETRY_FIELDS];
+            level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, g);
+            for (int c = 0; c < 3; c++) out.mean[c] = g[FIELD_MEAN + c];
+            out.spread = g[FIELD_SPREAD];
+            for (int c = 0; c < 6; c++) out.covariance[c] = g[FIELD_COVARIANCE + c];
         }
-        for (int c = 0; c < 3; c++) o[(FIELD_LUM_MEAN + c) * B] = (float)out.mean[c];
-        o[FIELD_LUM_SPREAD * B] = (float)out.spread;
-        for (int c = 0; c < 6; c++) o[(FIELD_LUM_COVARIANCE + c) * B] = (float)out.covariance[c];
-        for (int c = 0; c < 3; c++) o[(FIELD_POWER + c) * B] = (float)P[c];
+        for (int c = 0; c < 3; c++) o[c * B] = (float)out.mean[c];
+        o[(FIELD_LUM_SPREAD - FIELD_LUM_MEAN) * B] = (float)out.spread;
+        for (int c = 0; c < 6; c++)
+            o[(FIELD_LUM_COVARIANCE - FIELD_LUM_MEAN + c) * B] = (float)out.covariance[c];
+        for (int c = 0; c < 3; c++) o[(FIELD_POWER - FIELD_LUM_MEAN + c) * B] = (float)P[c];
     }
 }
 
@@ -166,8 +170,7 @@ static void level_task(void *arg, int index)
     double power = 0;
     for (int bx = 0; bx < s->blocks_x; bx++) {
         const float *P = s->records +
-                         (((size_t)f * s->blocks_y + block_row) * s->blocks_x + bx) * s->fields * BLOCK_TEXELS +
-                         FIELD_POWER * BLOCK_TEXELS;
+                         field_index(s, ((size_t)f * s->blocks_y + block_row) * s->blocks_x + bx, FIELD_POWER, 0);
         for (int t = 0; t < BLOCK_TEXELS; t++)
             power += luminance(P[t], P[BLOCK_TEXELS + t], P[2 * BLOCK_TEXELS + t]);
     }
@@ -190,16 +193,18 @@ static void uniform_task(void *arg, int index)
     const source_level *s = &job->p->pyramid[job->level];
     int M = s->edge, f = index / M, y = index % M;
     for (int x = 0; x < M; x++) {
-        const float *rec = s->records + record_index(s, f, x, y, 0);
-        float om = rec[FIELD_SOLID_ANGLE * BLOCK_TEXELS], inv = om > 0 ? 1.0f / om : 0.0f;
+        const float *rec = s->records + record_index(s, f, x, y, FIELD_POWER); /* fields from it */
+        float om = s->first_field ? s->geometry[((size_t)y * M + x) * GEOMETRY_FIELDS + FIELD_SOLID_ANGLE]
+                                  : s->records[record_index(s, f, x, y, FIELD_SOLID_ANGLE)];
+        float inv = om > 0 ? 1.0f / om : 0.0f;
         size_t o = (((size_t)f * M + y) * M + x) * 4;
         if (s->uniform) {
-            for (int c = 0; c < 3; c++) s->uniform[o + c] = rec[(FIELD_POWER + c) * BLOCK_TEXELS] * inv;
+            for (int c = 0; c < 3; c++) s->uniform[o + c] = rec[c * BLOCK_TEXELS] * inv;
             s->uniform[o + 3] = 0.0f;
         }
         if (s->uniform_not_bright) {
             for (int c = 0; c < 3; c++)
-                s->uniform_not_bright[o + c] = rec[(FIELD_POWER_NOT_BRIGHT + c) * BLOCK_TEXELS] * inv;
+                s->uniform_not_bright[o + c] = rec[(FIELD_POWER_NOT_BRIGHT - FIELD_POWER + c) * BLOCK_TEXELS] * inv;
             s->uniform_not_bright[o + 3] = 0.0f;
         }
     }
