@@ -422,10 +422,12 @@ ibl_status ibl__fast_build_moments(ibl_specular_plan *p)
     ibl_status st = allocate_pyramid(p);
     if (st != IBL_OK) return st;
     int S = p->source_edge * p->subtexel_split, half = S > 1 ? S / 2 : 1;
-    texel_moments *cur = ibl_alloc(ctx, (size_t)S * S * sizeof(texel_moments));
-    texel_moments *next = ibl_alloc(ctx, (size_t)half * half * sizeof(texel_moments));
+    /* what the plan keeps before the scratch it frees, so that the scratch leaves one hole
+     * (an allocator that reuses freed blocks, as the CLI's, then fits larger buffers in it) */
     size_t eighth_rows = (size_t)(S + 1) / 2, eighth = eighth_rows * (eighth_rows + 1) / 2;
     p->level0_geometry = ibl_alloc(ctx, eighth * GEOMETRY_FIELDS * sizeof(float));
+    texel_moments *cur = ibl_alloc(ctx, (size_t)S * S * sizeof(texel_moments));
+    texel_moments *next = ibl_alloc(ctx, (size_t)half * half * sizeof(texel_moments));
     if (!cur || !next || !p->level0_geometry) {
         ibl_free(ctx, cur);
         ibl_free(ctx, next);

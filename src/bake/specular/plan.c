@@ -327,6 +327,49 @@ static ibl_status level_sums(ibl_specular_plan *p, const ibl_cubemap *src, int l
     return IBL_OK;
 }
 
+#define FREE_AND_CLEAR(ctx, ptr) (ibl_free((ctx), (ptr)), (ptr) = NULL)
+
+/* Whether a mirror level is made from the pyramid or level 0's geometry (mirror.c: a level
+ * smaller than the source) rather than copied or sampled from the source. */
+static int mirror_reads_pyramid(const ibl_specular_plan *p)
+{
+    for (int l = 0; l < p->output_levels; l++) {
+        int n = ibl_level_size(p->output_edge, l);
+        if (level_is_mirror(p, l) && n < p->source_edge && is_power_of_two(n)) return 1;
+    }
+    return 0;
+}
+
+/* Once a one-shot plan's grids are summed, the output levels need the grids only (combine.c),
+ * and mirror levels smaller than the source the pyramid (mirror.c): the rest of what the run
+ * used is freed, so that the output chain can take its memory (in one piece: even small
+ * blocks left between freed ones would split it). */
+static void release_after_grids(ibl_specular_plan *p)
+{
+    ibl_context *ctx = p->ctx;
+    int keep_pyramid = mirror_reads_pyramid(p);
+    FREE_AND_CLEAR(ctx, p->padded_source);
+    FREE_AND_CLEAR(ctx, p->correction_pool);
+    if (!keep_pyramid) FREE_AND_CLEAR(ctx, p->level0_geometry);
+    for (int l = 0; l < p->pyramid_levels; l++) {
+        source_level *s = &p->pyramid[l];
+        FREE_AND_CLEAR(ctx, s->uniform);
+        FREE_AND_CLEAR(ctx, s->uniform_not_bright);
+        FREE_AND_CLEAR(ctx, s->bright_records);
+        FREE_AND_CLEAR(ctx, s->bright_cones);
+        FREE_AND_CLEAR(ctx, s->bright_keys);
+        FREE_AND_CLEAR(ctx, s->geometry);
+        if (keep_pyramid) continue;
+        FREE_AND_CLEAR(ctx, s->records);
+        FREE_AND_CLEAR(ctx, s->cones);
+    }
+    for (int l = 0; l < p->output_levels; l++)
+        for (int k = 0; k < p->levels[l].piece_count; k++) {
+            ibl__fast_precomputed_destroy(ctx, p->levels[l].pieces[k].precomputed);
+            p->levels[l].pieces[k].precomputed = NULL;
+        }
+}
+
 ibl_status ibl__specular_plan_run_grids(ibl_specular_plan *p, const ibl_cubemap *src)
 {
     ibl_status st = check_run(p, src, NULL);
@@ -337,6 +380,7 @@ ibl_status ibl__specular_plan_run_grids(ibl_specular_plan *p, const ibl_cubemap 
         if (!level_is_mirror(p, l)) st = level_sums(p, src, l);
         if (st == IBL_OK) st = ibl__progress(p->ctx, "prefilter", (l + 1.0) / p->output_levels);
     }
+    if (st == IBL_OK && p->one_shot) release_after_grids(p);
     return st;
 }
 
