@@ -2,20 +2,23 @@
  * reusable plan, in less memory.
  *
  * A one-shot plan keeps the geometric fields of the coarse levels only the run's pyramid reads
- * apart (face-local, once for all six faces), frees those levels' records as the pyramid goes,
- * finds its precomputed normalisers without keeping the weights, makes the weights again just
- * before their products, and frees everything but the grids before the output is allocated. A
- * reusable plan (ibl_specular_plan_create) keeps its weights, and the records its first run
- * made for the next runs. Both must give the output bit for bit: compared here on chains that
- * use every mechanism the one-shot plan changes (precomputed pieces over the source and over
- * coarse levels with centroid corrections, bright texels gathered from coarse levels, leaf sums
- * over kept levels, sub-texels, Lagrange grids, a mirror level smaller than the source read from
- * the pyramid), and a reusable plan's second run (records kept from the first) against its
- * first. test_specular_bits pins the same outputs' hashes from before these mechanisms existed. */
+ * apart (face-local, once for all six faces), makes those levels' records during the run and
+ * frees them as the pyramid goes, finds its precomputed normalisers without keeping the
+ * weights, makes the weights again just before their products, and frees everything but the
+ * grids before the output is allocated. A reusable plan (ibl_specular_plan_create) keeps its
+ * weights and its records, and its runs allocate nothing. Both must give the output bit for
+ * bit: compared here on chains that use every mechanism the one-shot plan changes (precomputed
+ * pieces over the source and over coarse levels with centroid corrections, bright texels
+ * gathered from coarse levels, leaf sums over kept levels, sub-texels, Lagrange grids, a
+ * mirror level smaller than the source read from the pyramid), and a reusable plan's second
+ * run against its first (neither allocates). test_specular_bits pins the same outputs' hashes
+ * from before these mechanisms existed. */
 #include "test_support.h"
 #include "bake/specular_internal.h"
 
+#include <stdatomic.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 typedef struct chain_case {
@@ -60,10 +63,29 @@ static uint64_t chain_hash(const ibl_cubemap *out)
     return test_fnv1a(out->data, ibl_cubemap_floats(out->size, out->levels) * sizeof(float));
 }
 
+/* An allocator that counts its calls: a reusable plan's runs allocate nothing. */
+static void *count_alloc(size_t bytes, void *user)
+{
+    atomic_fetch_add((atomic_long *)user, 1);
+    return malloc(bytes);
+}
+
+static void count_free(void *ptr, void *user)
+{
+    (void)user;
+    free(ptr);
+}
+
 static void one_shot_matches_reusable_plan(void **state)
 {
     (void)state;
-    ibl_context *ctx = test_context(2);
+    atomic_long allocs;
+    atomic_init(&allocs, 0);
+    ibl_context_desc cd = {0};
+    cd.threads = 2;
+    cd.allocator = (ibl_allocator){count_alloc, count_free, &allocs};
+    ibl_context *ctx = NULL;
+    assert_int_equal(ibl_context_create(&cd, &ctx), IBL_OK);
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         const chain_case *c = &cases[i];
         ibl_specular_desc d = case_desc(c);
@@ -78,11 +100,13 @@ static void one_shot_matches_reusable_plan(void **state)
         if (st != IBL_OK) printf("  %s\n", ibl_context_message(ctx));
         assert_int_equal(st, IBL_OK);
         assert_int_equal(ibl_cubemap_alloc(ctx, c->size, once.levels, &reused), IBL_OK);
+        long before = atomic_load(&allocs);
         assert_int_equal(ibl_specular_plan_run(plan, &src, &reused), IBL_OK);
         uint64_t first = chain_hash(&reused);
         memset(reused.data, 0, ibl_cubemap_floats(c->size, reused.levels) * sizeof(float));
         assert_int_equal(ibl_specular_plan_run(plan, &src, &reused), IBL_OK);
         uint64_t second = chain_hash(&reused);
+        assert_int_equal(atomic_load(&allocs), before);
         ibl_specular_plan_destroy(plan);
 
         uint64_t one_shot = chain_hash(&once);

@@ -101,9 +101,8 @@ typedef struct source_level {
     float *cones;          /* per block: its bounding cone                                     */
     /* coarse levels whose records only the run's pyramid reads (no leaf sum, no mirror level):
      * their geometric fields kept once, face-local (GEOMETRY_FIELDS floats per texel of one
-     * face, row by row, as records would hold them before moments_to_world), and records
-     * allocated by the run (ibl__fast_run_records); NULL for levels whose records the plan
-     * keeps */
+     * face, row by row, as records would hold them before moments_to_world), the records
+     * holding the other fields only (first_field); NULL for levels whose records hold all */
     float *geometry;
     /* run, coarse levels: the luminance power of each task's block row (6 blocks_y), and their
      * sum in order (the bright and correction bars are relative to the mean radiance) */

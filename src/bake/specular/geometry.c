@@ -335,9 +335,10 @@ void ibl__fast_pyramid_edges(ibl_specular_plan *p)
     }
 }
 
-/* The face-local geometry of the stored coarse levels (their records come later: those the
- * plan keeps from ibl__fast_kept_records, the others from ibl__fast_run_records; level 0's from
- * ibl__fast_level0_records, when some piece needs them). */
+/* The face-local geometry of the stored coarse levels (their records come later, from
+ * ibl__fast_kept_records, or for a one-shot plan's levels only the pyramid reads from
+ * ibl__fast_run_records; level 0's from ibl__fast_level0_records, when some piece needs
+ * them). */
 static ibl_status allocate_pyramid(ibl_specular_plan *p)
 {
     ibl_context *ctx = p->ctx;
@@ -386,9 +387,13 @@ ibl_status ibl__fast_kept_records(ibl_specular_plan *p)
     for (int l = p->first_stored; l < p->pyramid_levels; l++) {
         source_level *s = &p->pyramid[l];
         if (!records_read_after_pyramid(p, l)) {
-            /* the pyramid reads the geometric fields from `geometry`: records without them */
+            /* the pyramid reads the geometric fields from `geometry`: records without them,
+             * made here for a reusable plan (a run allocates nothing), by the run for a
+             * one-shot one */
             s->first_field = GEOMETRY_FIELDS;
             s->fields = COARSE_FIELDS - GEOMETRY_FIELDS;
+            ibl_status st = p->one_shot ? IBL_OK : materialise_records(p, l);
+            if (st != IBL_OK) return st;
             continue;
         }
         ibl_status st = materialise_records(p, l);

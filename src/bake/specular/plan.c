@@ -3,10 +3,11 @@
  *
  * A plan fixes everything that depends on the sizes and the lobes only: the geometry of the
  * moment pyramid, the pieces of every level and their grids, the precomputed weights and the
- * normalisers, and the buffers a run needs, but for the records of the coarse levels only the
- * run's pyramid reads (made by the first run, kept by a reusable plan; a one-shot plan, made by
- * ibl_specular_prefilter, frees them as the pyramid goes and keeps its precomputed weights only
- * while their products run: fast_internal.h, one_shot). With desc.dynamic the plan
+ * normalisers, and every buffer a run needs; a run allocates nothing. A one-shot plan, made by
+ * ibl_specular_prefilter for its single run, instead makes the records of the coarse levels
+ * only the pyramid reads during the run and frees them as the pyramid goes, and keeps its
+ * precomputed weights only while their products run (fast_internal.h, one_shot). With
+ * desc.dynamic the plan
  * is instead the per-frame plan of specular_dynamic/. The fast method itself is
  * described in fast_internal.h and docs/SPECULAR.md "The fast method".
  *
