@@ -398,10 +398,11 @@ struct ibl_specular_plan {
      * part a run uses is touched) */
     float *correction_pool;
     size_t correction_pool_blocks;
-    /* a plan made for one run (ibl_specular_prefilter): the records that only the pyramid reads
-     * are freed as soon as the pyramid is done with them, and the precomputed pieces keep their
-     * rows and normalisers only, their weights recomputed just before their products and
-     * freed after them, so the run's largest buffers are never held at once */
+    /* a plan made for one run (ibl_specular_prefilter), whose largest buffers are never held
+     * at once: the records only the pyramid reads are made by the run and freed as soon as the
+     * pyramid is done with them; the precomputed pieces find their normalisers batch by batch
+     * and keep their rows only, their weights made again just before their products and freed
+     * after them; once the grids are summed, everything else is freed (plan.c) */
     int one_shot;
 };
 

@@ -402,7 +402,8 @@ ibl_status ibl__specular_plan_run_output(ibl_specular_plan *p, const ibl_cubemap
 ibl_status ibl_specular_plan_run(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cubemap *dst)
 {
     if (!p || !src || !dst || !src->data || !dst->data) return IBL_ERR_INVALID_ARGUMENT;
-    ibl_status st = ibl__specular_plan_run_grids(p, src);
+    ibl_status st = check_run(p, src, dst); /* before any work */
+    if (st == IBL_OK) st = ibl__specular_plan_run_grids(p, src);
     return st == IBL_OK ? ibl__specular_plan_run_output(p, src, dst) : st;
 }
 
