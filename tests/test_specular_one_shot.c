@@ -86,11 +86,12 @@ static void one_shot_matches_reusable_plan(void **state)
     cd.allocator = (ibl_allocator){count_alloc, count_free, &allocs};
     ibl_context *ctx = NULL;
     assert_int_equal(ibl_context_create(&cd, &ctx), IBL_OK);
+    ibl__specular_stats used = {0}; /* over the cases: what they exercised */
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         const chain_case *c = &cases[i];
         ibl_specular_desc d = case_desc(c);
         ibl_cubemap src, once = {0}, reused = {0};
-        read_source(ctx, c, &d, 512, &src);
+        read_source(ctx, c, &d, 256, &src);
         assert_int_equal(ibl_specular_prefilter(ctx, &src, &d, &once, NULL), IBL_OK);
 
         d.source_size = src.size;
@@ -107,6 +108,12 @@ static void one_shot_matches_reusable_plan(void **state)
         assert_int_equal(ibl_specular_plan_run(plan, &src, &reused), IBL_OK);
         uint64_t second = chain_hash(&reused);
         assert_int_equal(atomic_load(&allocs), before);
+        ibl__specular_stats stats;
+        ibl__specular_plan_stats(plan, &stats);
+        used.precomputed_coarse += stats.precomputed_coarse;
+        used.correction_blocks += stats.correction_blocks;
+        used.bright_blocks += stats.bright_blocks;
+        used.pieces += stats.pieces - stats.precomputed; /* summed by leaves */
         ibl_specular_plan_destroy(plan);
 
         uint64_t one_shot = chain_hash(&once);
@@ -120,6 +127,8 @@ static void one_shot_matches_reusable_plan(void **state)
         ibl_cubemap_free(ctx, &reused);
         ibl_cubemap_free(ctx, &src);
     }
+    assert_true(used.precomputed_coarse > 0 && used.correction_blocks > 0);
+    assert_true(used.bright_blocks > 0 && used.pieces > 0);
     ibl_context_destroy(ctx);
 }
 
