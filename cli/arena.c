@@ -21,6 +21,14 @@
  * cannot be reserved (strict overcommit) or is full, large blocks fall back to malloc too, as
  * they do in AddressSanitizer builds.
  *
+ * The allocator never writes into a block: what it knows of the arena's blocks (start, size,
+ * free or not) is kept beside them, in a list of small malloc'd records in address order, and
+ * a pointer is told to be the arena's by its address. So a fresh block's pages are first
+ * touched by whoever writes its data: the library's workers fill their own rows, and each
+ * faults (and the kernel zeroes) its own 2 MiB pages in parallel. A header at the block's
+ * start made the allocating thread fault the block's first huge page, serially and inside the
+ * mutex: 13% of the 256 GGX chain's samples on one thread.
+ *
  * Kept, but not without end: freed arena memory whose pages are still there is counted, and
  * beyond ARENA_KEEP bytes the largest such free blocks are given back to the kernel
  * (madvise MADV_DONTNEED: the address range stays reserved, its pages are dropped at once, so
@@ -28,30 +36,30 @@
  * commands ever free (the 512 GGX chain peaks at 193 MB), so their reuse is untouched; a 16k
  * input's 2 GiB image, freed once it is a cube, goes back.
  *
- * Every block has a header: its size and whether it is in the arena. Free arena blocks form a
- * list sorted by address, so that neighbours merge. One mutex: the library allocates from its
- * worker threads as well, but rarely (a few hundred calls per command). */
+ * One mutex: the library allocates from its worker threads as well, but rarely (a few hundred
+ * calls per command, a few dozen blocks alive at once, so the lists are searched in order). */
 
-enum { HEADER = 64 };
 #define ARENA_MIN ((size_t)64 << 10)
 #define ARENA_ALIGN ((size_t)2 << 20)
 #define ARENA_RESERVE ((size_t)64 << 30)
 #define ARENA_KEEP ((size_t)256 << 20)
 
-typedef struct block {
-    size_t size;     /* bytes, header included */
-    size_t arena;    /* 1: in the arena */
-    struct block *next; /* free list, by address */
+/* One block of the arena, in use or free. The blocks tile [base, top) in address order. */
+typedef struct span {
+    char *start;
+    size_t size;     /* bytes, a multiple of ARENA_MIN */
     size_t resident; /* free blocks: at most this many of its bytes still have pages */
-} block;
+    int used;
+    struct span *prev, *next;
+} span;
 
 static struct {
     pthread_mutex_t lock;
     int tried;
     char *base, *top, *end; /* reserved [base, end), handed out [base, top) */
-    block *free;
-    size_t kept; /* the sum of the free blocks' resident bytes */
-} arena = {PTHREAD_MUTEX_INITIALIZER, 0, NULL, NULL, NULL, NULL, 0};
+    span *first, *last;     /* every block of [base, top), by address */
+    size_t kept;            /* the sum of the free blocks' resident bytes */
+} arena = {PTHREAD_MUTEX_INITIALIZER, 0, NULL, NULL, NULL, NULL, NULL, 0};
 
 /* AddressSanitizer sees overruns of malloc'd blocks only: its builds keep every block there */
 #if defined(__SANITIZE_ADDRESS__)
@@ -68,8 +76,9 @@ static struct {
 static int arena_reserve(void)
 {
 #if ARENA_USABLE
-    size_t span = ARENA_RESERVE + ARENA_ALIGN;
-    char *map = mmap(NULL, span, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+    size_t span_bytes = ARENA_RESERVE + ARENA_ALIGN;
+    char *map = mmap(NULL, span_bytes, PROT_READ | PROT_WRITE,
+                     MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
     if (map == MAP_FAILED) return 0;
     arena.base = (char *)(((uintptr_t)map + ARENA_ALIGN - 1) & ~(uintptr_t)(ARENA_ALIGN - 1));
     arena.top = arena.base;
@@ -81,49 +90,74 @@ static int arena_reserve(void)
 #endif
 }
 
-/* a block of `size` bytes (header included, a multiple of ARENA_MIN) from the arena, or NULL */
-static block *arena_take(size_t size)
+static int in_arena(const void *p)
 {
-    block **best = NULL;
-    for (block **b = &arena.free; *b; b = &(*b)->next)
-        if ((*b)->size >= size && (!best || (*b)->size < (*best)->size)) best = b;
-    if (best) {
-        block *b = *best;
-        /* where in a block its resident pages are is not known: the part taken is assumed to
-         * hold as many of them as fit, the rest keeps what remains */
-        size_t taken = b->resident < size ? b->resident : size;
-        if (b->size - size >= ARENA_MIN) { /* the rest stays free, in place in the list */
-            block *rest = (block *)((char *)b + size);
-            rest->size = b->size - size;
-            rest->arena = 1;
-            rest->next = b->next;
-            rest->resident = b->resident - taken;
-            *best = rest;
-            b->size = size;
-        } else {
-            *best = b->next;
-            taken = b->resident;
-        }
-        arena.kept -= taken;
-        return b;
-    }
-    if ((size_t)(arena.end - arena.top) < size) return NULL;
-    block *b = (block *)arena.top;
-    arena.top += size;
-    b->size = size;
-    b->arena = 1;
-    return b;
+    return arena.base && (const char *)p >= arena.base && (const char *)p < arena.end;
 }
 
-/* Drops the pages of a free block, all but the one holding its header. */
-static void arena_release(block *b)
+/* Inserts s after `after` (NULL: at the front). */
+static void link_after(span *after, span *s)
 {
-    const uintptr_t page = 4096;
-    uintptr_t from = ((uintptr_t)b + HEADER + page - 1) & ~(page - 1);
-    uintptr_t to = ((uintptr_t)b + b->size) & ~(page - 1);
-    if (to > from && madvise((void *)from, to - from, MADV_DONTNEED) == 0) {
-        arena.kept -= b->resident;
-        b->resident = 0;
+    s->prev = after;
+    s->next = after ? after->next : arena.first;
+    if (s->next) s->next->prev = s;
+    else arena.last = s;
+    if (after) after->next = s;
+    else arena.first = s;
+}
+
+static void unlink_span(span *s)
+{
+    if (s->prev) s->prev->next = s->next;
+    else arena.first = s->next;
+    if (s->next) s->next->prev = s->prev;
+    else arena.last = s->prev;
+    free(s);
+}
+
+/* A block of `size` bytes (a multiple of ARENA_MIN) from the arena, or NULL. */
+static span *arena_take(size_t size)
+{
+    span *best = NULL;
+    for (span *s = arena.first; s; s = s->next)
+        if (!s->used && s->size >= size && (!best || s->size < best->size)) best = s;
+    if (best) {
+        /* where in a block its resident pages are is not known: the part taken is assumed to
+         * hold as many of them as fit, the rest keeps what remains */
+        size_t taken = best->resident < size ? best->resident : size;
+        span *rest = best->size - size >= ARENA_MIN ? malloc(sizeof *rest) : NULL;
+        if (rest) { /* the rest stays free, after it */
+            rest->start = best->start + size;
+            rest->size = best->size - size;
+            rest->resident = best->resident - taken;
+            rest->used = 0;
+            link_after(best, rest);
+            best->size = size;
+        } else {
+            taken = best->resident;
+        }
+        arena.kept -= taken;
+        best->used = 1;
+        return best;
+    }
+    if ((size_t)(arena.end - arena.top) < size) return NULL;
+    span *s = malloc(sizeof *s);
+    if (!s) return NULL;
+    s->start = arena.top;
+    s->size = size;
+    s->resident = 0;
+    s->used = 1;
+    link_after(arena.last, s);
+    arena.top += size;
+    return s;
+}
+
+/* Drops the pages of a free block (spans start and end on page boundaries). */
+static void arena_release(span *s)
+{
+    if (madvise(s->start, s->size, MADV_DONTNEED) == 0) {
+        arena.kept -= s->resident;
+        s->resident = 0;
     }
 }
 
@@ -131,9 +165,9 @@ static void arena_release(block *b)
 static void arena_trim(void)
 {
     while (arena.kept > ARENA_KEEP) {
-        block *most = NULL;
-        for (block *b = arena.free; b; b = b->next)
-            if (b->resident && (!most || b->resident > most->resident)) most = b;
+        span *most = NULL;
+        for (span *s = arena.first; s; s = s->next)
+            if (!s->used && s->resident && (!most || s->resident > most->resident)) most = s;
         if (!most) break;
         size_t before = arena.kept;
         arena_release(most);
@@ -141,26 +175,25 @@ static void arena_trim(void)
     }
 }
 
-static void arena_give(block *b)
+/* Frees the block starting at p (nothing when no block in use starts there). */
+static void arena_give(char *p)
 {
-    b->resident = b->size; /* it was in use: every page may have been touched */
-    arena.kept += b->size;
-    block **at = &arena.free;
-    while (*at && *at < b) at = &(*at)->next;
-    b->next = *at;
-    *at = b;
-    if (b->next && (char *)b + b->size == (char *)b->next) { /* merge with the next */
-        b->size += b->next->size;
-        b->resident += b->next->resident;
-        b->next = b->next->next;
+    span *s = arena.last; /* the latest blocks are the likeliest to go first */
+    while (s && s->start != p) s = s->prev;
+    if (!s || !s->used) return;
+    s->used = 0;
+    s->resident = s->size; /* it was in use: every page may have been touched */
+    arena.kept += s->size;
+    span *next = s->next, *prev = s->prev;
+    if (next && !next->used) { /* merge with the next */
+        s->size += next->size;
+        s->resident += next->resident;
+        unlink_span(next);
     }
-    if (at != &arena.free) { /* merge with the previous: its next field is `at` */
-        block *prev = (block *)((char *)at - offsetof(block, next));
-        if ((char *)prev + prev->size == (char *)b) {
-            prev->size += b->size;
-            prev->resident += b->resident;
-            prev->next = b->next;
-        }
+    if (prev && !prev->used) { /* merge into the previous */
+        prev->size += s->size;
+        prev->resident += s->resident;
+        unlink_span(s);
     }
     arena_trim();
 }
@@ -168,33 +201,28 @@ static void arena_give(block *b)
 void *cli_arena_alloc(size_t bytes, void *user)
 {
     (void)user;
-    if (bytes > SIZE_MAX - HEADER - ARENA_MIN) return NULL;
-    if (bytes + HEADER >= ARENA_MIN) {
-        size_t size = (bytes + HEADER + ARENA_MIN - 1) & ~(ARENA_MIN - 1);
+    if (bytes > SIZE_MAX - ARENA_MIN) return NULL;
+    if (bytes >= ARENA_MIN) {
+        size_t size = (bytes + ARENA_MIN - 1) & ~(ARENA_MIN - 1);
         pthread_mutex_lock(&arena.lock);
         if (!arena.tried) arena.tried = 1, arena_reserve();
-        block *b = arena.base ? arena_take(size) : NULL;
+        span *s = arena.base ? arena_take(size) : NULL;
+        char *start = s ? s->start : NULL;
         pthread_mutex_unlock(&arena.lock);
-        if (b) return (char *)b + HEADER;
+        if (start) return start;
     }
     void *p = NULL;
-    if (posix_memalign(&p, 64, bytes + HEADER) != 0) return NULL;
-    block *b = p;
-    b->size = bytes + HEADER;
-    b->arena = 0;
-    return (char *)p + HEADER;
+    if (posix_memalign(&p, 64, bytes ? bytes : 1) != 0) return NULL;
+    return p;
 }
 
 void cli_arena_free(void *ptr, void *user)
 {
     (void)user;
     if (!ptr) return;
-    block *b = (block *)((char *)ptr - HEADER);
-    if (!b->arena) {
-        free(b);
-        return;
-    }
     pthread_mutex_lock(&arena.lock);
-    arena_give(b);
+    int ours = in_arena(ptr);
+    if (ours) arena_give(ptr);
     pthread_mutex_unlock(&arena.lock);
+    if (!ours) free(ptr);
 }
