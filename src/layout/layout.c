@@ -271,6 +271,22 @@ static ibl_status finish_cube(ibl_context *ctx, ibl_cubemap *picture, const ibl_
     return st;
 }
 
+/* A one-level cube whose every texel the caller writes, left as the allocator gives it:
+ * ibl_cubemap_alloc's zeroing would touch every page on this thread, serially (on a fresh
+ * block: fault each one in and have the kernel clear it), before the workers write them all
+ * again in parallel. */
+static ibl_status cube_alloc_unzeroed(ibl_context *ctx, int size, ibl_cubemap *out)
+{
+    size_t n = ibl_cubemap_floats(size, 1);
+    if (n == 0)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "invalid cubemap size %d", size);
+    float *data = ibl_alloc(ctx, n * sizeof(float));
+    if (!data) return ibl_context_status(ctx);
+    ibl_cubemap_wrap(size, 1, data, out);
+    out->owns_data = 1;
+    return IBL_OK;
+}
+
 static ibl_status check_image(ibl_context *ctx, const char *what, const ibl_image *im)
 {
     if (!im || !im->pixels || im->width <= 0 || im->height <= 0)
@@ -319,7 +335,7 @@ ibl_status ibl_image_to_cubemap(ibl_context *ctx, const ibl_image *image,
 
     switch (layout) {
     case IBL_LAYOUT_EQUIRECT:
-        st = ibl_cubemap_alloc(ctx, size, 1, out);
+        st = cube_alloc_unzeroed(ctx, size, out);
         if (st != IBL_OK) return st;
         st = ibl__equirect_to_cube(ctx, image, &frame, d.samples_per_axis, out);
         break;
