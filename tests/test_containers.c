@@ -884,6 +884,64 @@ static void identical_at_any_thread_count(void **state)
     free(first_out.data);
 }
 
+/* The KTX2 writer encodes a whole chain in one parallel loop over fixed chunks of texels:
+ * every level and face must hold what the one-face encoders give it (ibl_pack_texels,
+ * ibl_rgbm_encode texel by texel), and the clamped count must be the texels with a stored
+ * channel past the format's largest value (|v| for the float formats, alpha included where
+ * stored; v of R, G, B for RGBM), counted here one by one, at 1, 2 and 8 threads. Exact: the same functions on the same floats. */
+static void chain_encoded_as_faces(void **state)
+{
+    (void)state;
+    static const ibl_format formats[3] = {IBL_FORMAT_RGBA16F, IBL_FORMAT_RG11B10F, IBL_FORMAT_RGBM};
+    static const int threads[3] = {1, 2, 8};
+    for (int fi = 0; fi < 3; fi++) {
+        ibl_format f = formats[fi];
+        float max = f == IBL_FORMAT_RGBM ? IBL_RGBM_DEFAULT_RANGE : ibl_format_max_value(f);
+        int channels = f == IBL_FORMAT_RGBM ? 3 : ibl_format_channels(f);
+        for (int ti = 0; ti < 3; ti++) {
+            ibl_context *ctx = test_context(threads[ti]);
+            ibl_texture t;
+            /* 8 levels: level 0 is 6 chunks of 16384 texels, the rest fit one chunk or less */
+            assert_int_equal(ibl_texture_alloc(ctx, IBL_TEXTURE_CUBE, 128, 128, 1, 8, &t), IBL_OK);
+            size_t n = ibl_texture_floats(t.kind, t.width, t.height, 1, t.levels), over = 0;
+            rng = 7;
+            for (size_t i = 0; i < n; i++) /* 1 in 64 values far above every format's range */
+                t.data[i] = (rnd() & 63) ? (float)(rnd() & 0xffff) / 4096.0f : 1.0e6f;
+            for (size_t i = 0; i < n / 4; i++) {
+                int o = 0;
+                for (int c = 0; c < channels; c++) o |= fabsf(t.data[i * 4 + (size_t)c]) > max;
+                over += (size_t)o;
+            }
+            ibl_write_report report = {0};
+            ibl_write_desc desc = {.format = f, .report = &report};
+            void *vb;
+            size_t size;
+            assert_int_equal(ibl__ktx2_encode(ctx, &t, &desc, "chain.ktx2", &vb, &size), IBL_OK);
+            assert_int_equal(report.clamped_texels, over);
+            const uint8_t *b = vb;
+            size_t unit = f == IBL_FORMAT_RGBM ? 4 : ibl_format_texel_bytes(f);
+            uint8_t *want = malloc(128 * 128 * 8);
+            assert_non_null(want);
+            for (int l = 0; l < t.levels; l++) {
+                size_t at = (size_t)rd64(b + 80 + 24 * (size_t)l), edge = (size_t)128 >> l;
+                for (int face = 0; face < 6; face++) {
+                    const float *src = ibl_texture_level(&t, l, face);
+                    if (f == IBL_FORMAT_RGBM)
+                        for (size_t i = 0; i < edge * edge; i++)
+                            ibl_rgbm_encode(src + 4 * i, IBL_RGBM_DEFAULT_RANGE, want + 4 * i);
+                    else
+                        ibl_pack_texels(f, src, edge * edge, want);
+                    assert_memory_equal(b + at + (size_t)face * edge * edge * unit, want, edge * edge * unit);
+                }
+            }
+            free(want);
+            ibl_free(ctx, vb);
+            ibl_texture_free(ctx, &t);
+            ibl_context_destroy(ctx);
+        }
+    }
+}
+
 /* Through the public API (io/file.c): write to a file, read it back; the reader applies the
  * pixel policy (NaN and negatives become 0 and are counted) and names the file. */
 static void public_api_files(void **state)
@@ -1022,6 +1080,7 @@ int main(void)
         cmocka_unit_test(malformed_inputs),
         cmocka_unit_test(encoder_refusals),
         cmocka_unit_test(identical_at_any_thread_count),
+        cmocka_unit_test(chain_encoded_as_faces),
         cmocka_unit_test(public_api_files),
         cmocka_unit_test(ktx_tool_validates),
         cmocka_unit_test(ktx_parse_cross_check),

@@ -435,6 +435,92 @@ size_t ibl__encode_level(ibl_context *ctx, ibl_format format, const ibl_write_de
     return ibl__pack(ctx, format, src, count, dst);
 }
 
+/* Every texel of every face and level in one parallel loop: a level's faces are contiguous in
+ * memory and in the file, so the texture is a few runs of texels (one a level), cut into
+ * LEVELS_CHUNK-texel chunks that never straddle two levels. One loop instead of one a face
+ * keeps both threads busy at 256 (a face of 65536 texels was a single chunk, encoded on one
+ * thread) and through the small levels. */
+enum { LEVELS_CHUNK = 1 << 14 };
+
+typedef struct levels_job {
+    ibl_format format;
+    float hdr8_range, hdr8_max; /* RGBM/RGBD/RGBE: the range encoded, the largest value kept */
+    const float *src[IBL_MAX_LEVELS];
+    uint8_t *dst[IBL_MAX_LEVELS];
+    size_t texels[IBL_MAX_LEVELS];
+    int first_chunk[IBL_MAX_LEVELS + 1];
+    size_t unit; /* bytes a texel */
+    atomic_size_t clamped; /* an integer sum: the same in any order */
+} levels_job;
+
+static void levels_chunk(void *arg, int index)
+{
+    levels_job *j = arg;
+    int l = 0;
+    while (index >= j->first_chunk[l + 1]) l++;
+    size_t first = (size_t)(index - j->first_chunk[l]) * LEVELS_CHUNK;
+    size_t n = j->texels[l] - first < LEVELS_CHUNK ? j->texels[l] - first : LEVELS_CHUNK;
+    const float *src = j->src[l] + first * 4;
+    uint8_t *dst = j->dst[l] + first * j->unit;
+    size_t clamped = 0;
+    if (j->hdr8_max > 0.0f) {
+        hdr8_job h = {j->format, j->hdr8_range, n, src, dst, NULL, NULL};
+        hdr8_chunk(&h, 0);
+        for (size_t i = 0; i < n; i++) {
+            int over = 0;
+            for (int c = 0; c < 3; c++) over |= src[i * 4 + (size_t)c] > j->hdr8_max;
+            clamped += (size_t)over;
+        }
+    } else {
+        clamped = ibl_pack_texels(j->format, src, n, dst);
+    }
+    if (clamped) atomic_fetch_add(&j->clamped, clamped);
+}
+
+/* Face by face (the block formats, whose encoders split their own work). */
+static size_t encode_levels_by_face(ibl_context *ctx, ibl_format format, const ibl_write_desc *desc,
+                                    const ibl_texture *tex, uint8_t *const dst[], ibl_status *status)
+{
+    size_t clamped = 0;
+    for (int l = 0; l < tex->levels && *status == IBL_OK; l++) {
+        uint64_t face_bytes = ibl__level_bytes(format, tex->kind, tex->width, tex->height,
+                                               tex->depth, l);
+        for (int f = 0; f < ibl_texture_faces(tex) && *status == IBL_OK; f++)
+            clamped += ibl__encode_level(ctx, format, desc, tex, l, f,
+                                         dst[l] + (size_t)face_bytes * (size_t)f, status);
+    }
+    return clamped;
+}
+
+size_t ibl__encode_levels(ibl_context *ctx, ibl_format format, const ibl_write_desc *desc,
+                          const ibl_texture *tex, uint8_t *const dst[], ibl_status *status)
+{
+    *status = IBL_OK;
+    if (ibl__format_is_block(format)) return encode_levels_by_face(ctx, format, desc, tex, dst, status);
+    levels_job j;
+    memset(&j, 0, sizeof j);
+    j.format = format;
+    j.unit = ibl__format_unit_bytes(format);
+    if (format == IBL_FORMAT_RGBM || format == IBL_FORMAT_RGBD || format == IBL_FORMAT_RGBE) {
+        j.hdr8_range = desc && desc->rgbm_range > 0.0f ? desc->rgbm_range : IBL_RGBM_DEFAULT_RANGE;
+        j.hdr8_max = format == IBL_FORMAT_RGBM ? j.hdr8_range : ibl_format_max_value(format);
+    }
+    size_t chunks = 0;
+    for (int l = 0; l < tex->levels; l++) {
+        j.src[l] = ibl_texture_level(tex, l, 0);
+        j.dst[l] = dst[l];
+        j.texels[l] = (size_t)ibl__level_texels(tex->kind, tex->width, tex->height, tex->depth, l) *
+                      (size_t)ibl_texture_faces(tex);
+        j.first_chunk[l] = (int)chunks;
+        chunks += (j.texels[l] + LEVELS_CHUNK - 1) / LEVELS_CHUNK;
+        /* past 2^45 texels (refused long before, by the memory limit) the count would not fit */
+        if (chunks > 0x7fffffff) return encode_levels_by_face(ctx, format, desc, tex, dst, status);
+    }
+    j.first_chunk[tex->levels] = (int)chunks;
+    ibl_parallel_for(ctx, (int)chunks, levels_chunk, &j);
+    return atomic_load(&j.clamped);
+}
+
 ibl_status ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_range,
                              const uint8_t *src, ibl_texture *tex, int level, int face)
 {

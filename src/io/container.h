@@ -92,6 +92,10 @@ uint64_t ibl__level_bytes(ibl_format format, ibl_texture_kind kind, int width, i
 size_t ibl__encode_level(ibl_context *ctx, ibl_format format, const ibl_write_desc *desc,
                          const ibl_texture *tex, int level, int face, uint8_t *dst,
                          ibl_status *status);
+/* ibl__encode_level for every face of every level; dst[l] receives level l's faces one after
+ * another. Texel formats run as one parallel loop over the whole texture. */
+size_t ibl__encode_levels(ibl_context *ctx, ibl_format format, const ibl_write_desc *desc,
+                          const ibl_texture *tex, uint8_t *const dst[], ibl_status *status);
 /* The reverse of ibl__encode_level; rgbm_range as written (0: the default). */
 ibl_status ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_range,
                              const uint8_t *src, ibl_texture *tex, int level, int face);

@@ -396,9 +396,12 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     if (kvd_len) memcpy(buf + kvd_off, kvd, kvd_len);
     ibl_free(ctx, kvd);
     /* A level's images are layer, face, slice, row: exactly our in-memory level block. */
-    for (int l = 0; l < tex->levels && st == IBL_OK; l++) {
-        if (zstd) memcpy(buf + level_off[l], ld.bytes[l], ld.len[l]);
-        else st = encode_faces(ctx, tex, fmt, desc, l, buf + level_off[l], &clamped);
+    if (zstd) {
+        for (int l = 0; l < tex->levels; l++) memcpy(buf + level_off[l], ld.bytes[l], ld.len[l]);
+    } else {
+        uint8_t *dst[IBL_MAX_LEVELS];
+        for (int l = 0; l < tex->levels; l++) dst[l] = buf + level_off[l];
+        clamped += ibl__encode_levels(ctx, fmt, desc, tex, dst, &st);
     }
     free_levels(ctx, &ld);
     if (st != IBL_OK) {
