@@ -38,6 +38,41 @@ int ibl_format_from_name(const char *name, ibl_format *out)
     return 0;
 }
 
+/* ---- zeroed pixel memory ---- */
+
+/* Large pixel blocks are zeroed in fixed 1 MiB chunks through ibl_parallel_for: zeroing a
+ * fresh block is mostly the kernel faulting its pages in and clearing them, and one thread
+ * doing it for a whole cube (the 512 chain: 33 MiB) is a serial stretch of every command.
+ * Below ZERO_PARALLEL_BYTES one memset is cheaper than waking the workers. (Never reached
+ * from inside a task: the library allocates its images outside its parallel loops.) */
+#define ZERO_CHUNK_BYTES ((size_t)1 << 20)
+#define ZERO_PARALLEL_BYTES ((size_t)4 << 20)
+
+typedef struct zero_job {
+    unsigned char *bytes;
+    size_t size;
+} zero_job;
+
+static void zero_chunk(void *arg, int index)
+{
+    const zero_job *j = arg;
+    size_t first = (size_t)index * ZERO_CHUNK_BYTES;
+    memset(j->bytes + first, 0, j->size - first < ZERO_CHUNK_BYTES ? j->size - first : ZERO_CHUNK_BYTES);
+}
+
+/* ibl_calloc(ctx, count, sizeof(float)), zeroed in parallel when large. */
+static float *zeroed_floats(ibl_context *ctx, size_t count)
+{
+    if (count > SIZE_MAX / sizeof(float) || count * sizeof(float) < ZERO_PARALLEL_BYTES)
+        return ibl_calloc(ctx, count, sizeof(float));
+    size_t size = count * sizeof(float);
+    float *p = ibl_alloc(ctx, size);
+    if (!p) return NULL;
+    zero_job j = {(unsigned char *)p, size};
+    ibl_parallel_for(ctx, (int)((size + ZERO_CHUNK_BYTES - 1) / ZERO_CHUNK_BYTES), zero_chunk, &j);
+    return p;
+}
+
 /* ---- images ---- */
 
 ibl_status ibl_image_alloc(ibl_context *ctx, int width, int height, ibl_image *out)
@@ -50,7 +85,7 @@ ibl_status ibl_image_alloc(ibl_context *ctx, int width, int height, ibl_image *o
     size_t texels = (size_t)width * (size_t)height;
     if (texels > SIZE_MAX / (4 * sizeof(float)))
         return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "image size %dx%d overflows", width, height);
-    out->pixels = ibl_calloc(ctx, texels * 4, sizeof(float));
+    out->pixels = zeroed_floats(ctx, texels * 4);
     if (!out->pixels) return ibl_context_status(ctx);
     out->width = width;
     out->height = height;
@@ -134,7 +169,7 @@ ibl_status ibl_cubemap_alloc(ibl_context *ctx, int size, int levels, ibl_cubemap
     if (n == 0)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "invalid cubemap size %d with %d levels",
                         size, levels);
-    float *data = ibl_calloc(ctx, n, sizeof(float));
+    float *data = zeroed_floats(ctx, n);
     if (!data) return ibl_context_status(ctx);
     out->size = size;
     out->levels = levels;
@@ -205,7 +240,7 @@ ibl_status ibl_texture_alloc(ibl_context *ctx, ibl_texture_kind kind, int width,
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
                         "invalid texture dimensions %dx%dx%d with %d levels", width, height,
                         depth, levels);
-    float *data = ibl_calloc(ctx, n, sizeof(float));
+    float *data = zeroed_floats(ctx, n);
     if (!data) return ibl_context_status(ctx);
     out->kind = kind;
     out->width = width;
