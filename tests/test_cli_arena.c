@@ -1,6 +1,6 @@
 /* The CLI's allocator (cli/arena.c): blocks are usable, aligned and disjoint; freed arena
- * blocks are reused best-fit, split and merged; freed memory beyond 256 MiB goes back to the
- * kernel; it is safe from several threads. */
+ * blocks are reused best-fit, split and merged; a fresh block is handed out untouched; freed
+ * memory beyond 256 MiB goes back to the kernel; it is safe from several threads. */
 #define _DEFAULT_SOURCE /* mincore */
 #include "test_support.h"
 
@@ -144,6 +144,26 @@ static void freed_memory_goes_back(void **state)
 #endif
 }
 
+/* The allocator keeps what it knows of a block beside it, never in it: a fresh block has no
+ * page in memory when it is handed out, so each page is first touched (faulted in, cleared
+ * by the kernel) by whichever thread writes its data, not by the allocating one. */
+static void fresh_blocks_are_untouched(void **state)
+{
+    (void)state;
+#if defined(__SANITIZE_ADDRESS__)
+    skip();
+#else
+    const size_t MB = (size_t)1 << 20, n = 24 * MB; /* larger than the 16 MiB freed before */
+    unsigned char *p = cli_arena_alloc(n, NULL);
+    assert_non_null(p);
+    assert_int_equal(resident_bytes(p, n), 0);
+    p[n / 2] = 1; /* one write faults in its own page (2 MiB at most), not the block's first */
+    assert_int_equal(resident_bytes(p, 4096), 0);
+    assert_true(resident_bytes(p, n) > 0 && resident_bytes(p, n) <= 2 * MB);
+    cli_arena_free(p, NULL);
+#endif
+}
+
 static void *churn(void *arg)
 {
     unsigned seed = (unsigned)(uintptr_t)arg;
@@ -180,6 +200,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(freed_blocks_are_reused), /* first: on a fresh arena, addresses are known */
+        cmocka_unit_test(fresh_blocks_are_untouched),
         cmocka_unit_test(blocks_are_disjoint),
         cmocka_unit_test(freed_memory_goes_back),
         cmocka_unit_test(threads_share_it),
