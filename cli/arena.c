@@ -27,7 +27,10 @@
  * touched by whoever writes its data: the library's workers fill their own rows, and each
  * faults (and the kernel zeroes) its own 2 MiB pages in parallel. A header at the block's
  * start made the allocating thread fault the block's first huge page, serially and inside the
- * mutex: 13% of the 256 GGX chain's samples on one thread.
+ * mutex (13% of the 256 GGX chain's samples, on a host slow to back fresh memory). The
+ * library's ibl_alloc still writes its own 64-byte header at the start of what it gets
+ * (src/core/context.c), so that one page is still faulted by the allocating thread, now
+ * outside this mutex.
  *
  * Kept, but not without end: freed arena memory whose pages are still there is counted, and
  * beyond ARENA_KEEP bytes the largest such free blocks are given back to the kernel
