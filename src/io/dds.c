@@ -137,8 +137,11 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
                  (uint64_t)faces;
     if (total > SIZE_MAX)
         return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
-    uint8_t *buf = ibl_calloc(ctx, (size_t)total, 1);
+    /* only the header is zeroed: the encoders write every byte of the levels (a calloc would
+     * also fault in and clear the whole buffer on this thread first) */
+    uint8_t *buf = ibl_alloc(ctx, (size_t)total);
     if (!buf) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
+    memset(buf, 0, data_offset);
 
     uint32_t flags = DDSD_CAPS | DDSD_HEIGHT | DDSD_WIDTH | DDSD_PIXELFORMAT |
                      (block ? DDSD_LINEARSIZE : DDSD_PITCH) | DDSD_MIPMAPCOUNT;
