@@ -252,7 +252,7 @@ static void suns_cut_by_texels(void **state)
     test_lobe lobe = {0, alpha * alpha, 0};
     level_error(&im, &chain, 1, &lobe, 0, &rms, &max);
     print_message("level 1, eight suns on row 39: %.3f%% RMS, %.2f%% max\n", 100 * rms, 100 * max);
-    /* the same bars as above (0.5% RMS, the issue's; 2% max), eight times the measured RMS,
+    /* the same bars as above (0.5% RMS, the accuracy bar against the input; 2% max), eight times the measured RMS,
      * a quarter of the error with a sun's light lost or doubled in part */
     assert_true(rms < 0.005);
     assert_true(max < 0.02);
