@@ -584,11 +584,48 @@ static void new_pixels_are_zero(void **state)
     }
 }
 
+typedef struct nested_job {
+    ibl_context *ctx;
+    int zeroed[4];
+} nested_job;
+
+/* Each task allocates a cube large enough to be zeroed by a parallel loop of its own. */
+static void nested_task(void *arg, int index)
+{
+    nested_job *j = arg;
+    ibl_cubemap cube;
+    if (ibl_cubemap_alloc(j->ctx, 300, 9, &cube) != IBL_OK) return;
+    j->zeroed[index] = all_zero(cube.data, ibl_cubemap_floats(300, 9));
+    ibl_cubemap_free(j->ctx, &cube);
+}
+
+/* A parallel loop started from inside a task of the context's pool (here: the parallel
+ * zeroing of a large cube allocated in a task) runs on that thread instead of waiting for a
+ * pool that is busy with the outer loop: this returns (it hung when the pool took the nested
+ * job), and every cube still comes zeroed, on 1, 2 and 8 threads. */
+static void parallel_loop_inside_a_task(void **state)
+{
+    (void)state;
+    static const int threads[3] = {1, 2, 8};
+    for (int t = 0; t < 3; t++) {
+        ibl_context_desc d = {0};
+        d.threads = threads[t];
+        d.allocator.alloc = dirty_alloc;
+        d.allocator.free = plain_free;
+        nested_job job = {0};
+        assert_int_equal(ibl_context_create(&d, &job.ctx), IBL_OK);
+        ibl_parallel_for(job.ctx, 4, nested_task, &job);
+        for (int i = 0; i < 4; i++) assert_int_equal(job.zeroed[i], 1);
+        ibl_context_destroy(job.ctx);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(budget_counts_the_total),
         cmocka_unit_test(new_pixels_are_zero),
+        cmocka_unit_test(parallel_loop_inside_a_task),
         cmocka_unit_test(budget_default),
         cmocka_unit_test(freed_through_another_context),
         cmocka_unit_test(budget_across_threads),

@@ -31,6 +31,7 @@ typedef struct thread_pool {
     atomic_int active_workers;
     atomic_uint generation;
     atomic_int quit;
+    atomic_flag running; /* set while a job is on the pool */
 } thread_pool;
 
 struct ibl_context {
@@ -288,6 +289,7 @@ static thread_pool *pool_create(int workers)
 {
     thread_pool *pool = calloc(1, sizeof *pool);
     if (!pool) return NULL;
+    atomic_flag_clear(&pool->running);
     pthread_mutex_init(&pool->lock, NULL);
     pthread_cond_init(&pool->wake, NULL);
     pthread_cond_init(&pool->done, NULL);
@@ -499,11 +501,15 @@ void ibl_parallel_for(ibl_context *ctx, int count, ibl_task_fn task, void *task_
         ctx->desc.parallel_for(ctx->desc.parallel_host, count, task, task_arg);
         return;
     }
-    if (!ctx || !ctx->pool || count == 1) {
+    /* A parallel loop started from inside one of the pool's tasks (a task that allocates a
+     * large image, which is zeroed in parallel) runs on the calling thread: the pool holds one
+     * job at a time. The chunks are the same, so the result is too. */
+    if (!ctx || !ctx->pool || count == 1 || atomic_flag_test_and_set(&ctx->pool->running)) {
         for (int i = 0; i < count; i++) task(task_arg, i);
         return;
     }
     pool_run(ctx->pool, count, task, task_arg);
+    atomic_flag_clear(&ctx->pool->running);
 }
 
 ibl_status ibl__progress(ibl_context *ctx, const char *stage, double fraction)
