@@ -543,6 +543,18 @@ static void plain_free(void *ptr, void *user)
     free(ptr);
 }
 
+/* A context on `threads` threads whose allocator hands out dirty blocks. */
+static ibl_context *dirty_context(int threads)
+{
+    ibl_context_desc d = {0};
+    d.threads = threads;
+    d.allocator.alloc = dirty_alloc;
+    d.allocator.free = plain_free;
+    ibl_context *ctx = NULL;
+    assert_int_equal(ibl_context_create(&d, &ctx), IBL_OK);
+    return ctx;
+}
+
 static int all_zero(const float *p, size_t n)
 {
     static const float zero[1024];
@@ -559,12 +571,7 @@ static void new_pixels_are_zero(void **state)
     (void)state;
     static const int threads[3] = {1, 2, 8};
     for (int t = 0; t < 3; t++) {
-        ibl_context_desc d = {0};
-        d.threads = threads[t];
-        d.allocator.alloc = dirty_alloc;
-        d.allocator.free = plain_free;
-        ibl_context *ctx = NULL;
-        assert_int_equal(ibl_context_create(&d, &ctx), IBL_OK);
+        ibl_context *ctx = dirty_context(threads[t]);
         ibl_cubemap cube;
         assert_int_equal(ibl_cubemap_alloc(ctx, 300, 9, &cube), IBL_OK); /* 11.5 MB */
         assert_true(all_zero(cube.data, ibl_cubemap_floats(300, 9)));
@@ -608,12 +615,7 @@ static void parallel_loop_inside_a_task(void **state)
     (void)state;
     static const int threads[3] = {1, 2, 8};
     for (int t = 0; t < 3; t++) {
-        ibl_context_desc d = {0};
-        d.threads = threads[t];
-        d.allocator.alloc = dirty_alloc;
-        d.allocator.free = plain_free;
-        nested_job job = {0};
-        assert_int_equal(ibl_context_create(&d, &job.ctx), IBL_OK);
+        nested_job job = {.ctx = dirty_context(threads[t])};
         ibl_parallel_for(job.ctx, 4, nested_task, &job);
         for (int i = 0; i < 4; i++) assert_int_equal(job.zeroed[i], 1);
         ibl_context_destroy(job.ctx);
