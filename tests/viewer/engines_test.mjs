@@ -13,7 +13,7 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { makeChecker } from './common.mjs';
-import { writeAxesHdr, startServer, launchChromium, runIbl, compareRenders, writeStackedPng } from './render_common.mjs';
+import { freshWorkWithEnvironments, startServer, launchChromium, runIbl, compareRenders, writeStackedPng } from './render_common.mjs';
 
 const [ibl, work, shots] = process.argv.slice(2);
 const here = path.dirname(fileURLToPath(import.meta.url));
@@ -160,11 +160,8 @@ pages['three.html'] = threePage;
 pages['babylon.html'] = babylonPage;
 
 const t0 = Date.now();
-fs.mkdirSync(work, { recursive: true });
-const axes = path.join(work, 'axes.hdr');
-writeAxesHdr(axes);
-fs.copyFileSync(path.join(repo, 'tests/data/uffizi_latlong_256x128.hdr'), path.join(work, 'uffizi.hdr'));
-const inputs = [['uffizi', path.join(work, 'uffizi.hdr')], ['axes', axes]];
+const { axes, uffizi } = freshWorkWithEnvironments(work, repo);
+const inputs = [['uffizi', uffizi], ['axes', axes]];
 const bakes = [];
 for (const [name, file] of inputs)
   for (const t of ['three', 'babylon']) bakes.push(bake(file, t, path.join(work, `${name}-${t}`)));

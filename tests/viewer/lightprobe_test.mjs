@@ -11,7 +11,7 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { makeChecker } from './common.mjs';
-import { writeAxesHdr, startServer, launchChromium, runIbl, compareRenders, writeStackedPng } from './render_common.mjs';
+import { freshWorkWithEnvironments, startServer, launchChromium, runIbl, compareRenders, writeStackedPng } from './render_common.mjs';
 
 const [ibl, work, shots] = process.argv.slice(2);
 const here = path.dirname(fileURLToPath(import.meta.url));
@@ -71,10 +71,7 @@ window.run = async (hdrUrl, shArrays) => {
 window.ready = true;
 </script>`;
 
-fs.rmSync(work, { recursive: true, force: true });
-fs.mkdirSync(work, { recursive: true });
-writeAxesHdr(path.join(work, 'axes.hdr'));
-fs.copyFileSync(path.join(repo, 'tests/data/uffizi_latlong_256x128.hdr'), path.join(work, 'uffizi.hdr'));
+freshWorkWithEnvironments(work, repo);
 const { server, base } = await startServer(here, work, { 'probe.html': page });
 const { browser, open } = await launchChromium();
 const opened = open(`${base}/page/probe.html`);

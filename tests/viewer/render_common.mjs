@@ -1,4 +1,4 @@
-// Shared by the browser render tests of the engine outputs (gltf_test.mjs, lightprobe_test.mjs):
+// Shared by the browser render tests of the engine outputs (engines_test.mjs, gltf_test.mjs, lightprobe_test.mjs):
 // the axes environment, a local HTTP server of node_modules and the work folder, headless
 // chromium, the comparison of two renders over the sphere pixels and a PNG of stacked renders.
 import { execFile } from 'node:child_process';
@@ -36,6 +36,18 @@ export function writeAxesHdr(file, W = 256, H = 128) {
       body[i + 3] = e + 128;
     }
   fs.writeFileSync(file, Buffer.concat([head, body]));
+}
+
+// A fresh work folder `work` holding the two test environments, axes.hdr (writeAxesHdr) and
+// uffizi.hdr (tests/data/uffizi_latlong_256x128.hdr of the repository at `repo`); returns
+// their paths.
+export function freshWorkWithEnvironments(work, repo) {
+  fs.rmSync(work, { recursive: true, force: true });
+  fs.mkdirSync(work, { recursive: true });
+  const axes = path.join(work, 'axes.hdr'), uffizi = path.join(work, 'uffizi.hdr');
+  writeAxesHdr(axes);
+  fs.copyFileSync(path.join(repo, 'tests/data/uffizi_latlong_256x128.hdr'), uffizi);
+  return { axes, uffizi };
 }
 
 // A server on 127.0.0.1: /nm/ -> tests/viewer/node_modules, /w/ -> the work folder,
