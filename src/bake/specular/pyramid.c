@@ -53,39 +53,60 @@ static double source_child(const ibl_specular_plan *p, const float *face, int cx
     return lum > 0 ? lum : 0;
 }
 
+/* Children a row of the first stored level keeps between its two passes (K <= 8): the second
+ * pass reads them back instead of unfolding their moments again; larger K recomputes them. */
+enum { CACHED_CHILDREN = 64 };
+
 /* Row y of face f of the first stored level straight from the source texels (no sub-texels):
  * its K x K children (K = 2^level, row by row) are uniform texels whose geometric moments are
  * face 0's face-local ones (the same on every face), so they are combined in face-local
  * coordinates, by the same parallel-axis rule as two levels at a time (the levels between are
- * read by nothing and not kept), and the result is turned to face f's world coordinates once. */
+ * read by nothing and not kept), and the result is turned to face f's world coordinates once.
+ * The second pass (the covariance about the centroid) sees the same children as the first,
+ * kept in a small cache where they fit: the same numbers, the unfolding done once. */
 static void level_row_from_source(const pyramid_job *job, int f, int y)
 {
     static const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
     const ibl_specular_plan *p = job->p;
     source_level *s = &job->p->pyramid[job->level];
-    int M = s->edge, K = 1 << job->level;
+    int M = s->edge, K = 1 << job->level, cached = K * K <= CACHED_CHILDREN;
     const float *face = ibl_cubemap_face(job->src, 0, f);
+    float cache_g[CACHED_CHILDREN][GEOMETRY_FIELDS];
+    double cache_w[CACHED_CHILDREN];
     for (int x = 0; x < M; x++) {
         float g[GEOMETRY_FIELDS];
         double W = 0, m[3] = {0, 0, 0}, P[3] = {0, 0, 0}, pw[3];
+        int child = 0;
         for (int cy = K * y; cy < K * (y + 1); cy++)
-            for (int cx = K * x; cx < K * (x + 1); cx++) {
+            for (int cx = K * x; cx < K * (x + 1); cx++, child++) {
                 double w = source_child(p, face, cx, cy, g, pw);
                 for (int c = 0; c < 3; c++) P[c] += pw[c];
                 W += w;
                 for (int c = 0; c < 3; c++) m[c] += w * g[FIELD_MEAN + c];
+                if (cached) {
+                    memcpy(cache_g[child], g, sizeof g);
+                    cache_w[child] = w;
+                }
             }
         float *o = s->records + record_index(s, f, x, y, FIELD_LUM_MEAN); /* fields from it */
         if (W > 0) {
             double C[6] = {0, 0, 0, 0, 0, 0}, e = 0;
             for (int c = 0; c < 3; c++) m[c] /= W;
+            child = 0;
             for (int cy = K * y; cy < K * (y + 1); cy++)
-                for (int cx = K * x; cx < K * (x + 1); cx++) {
-                    double a = source_child(p, face, cx, cy, g, pw) / W;
-                    double d[3] = {g[FIELD_MEAN] - m[0], g[FIELD_MEAN + 1] - m[1], g[FIELD_MEAN + 2] - m[2]};
+                for (int cx = K * x; cx < K * (x + 1); cx++, child++) {
+                    const float *gc = g;
+                    double a;
+                    if (cached) {
+                        gc = cache_g[child];
+                        a = cache_w[child] / W;
+                    } else {
+                        a = source_child(p, face, cx, cy, g, pw) / W;
+                    }
+                    double d[3] = {gc[FIELD_MEAN] - m[0], gc[FIELD_MEAN + 1] - m[1], gc[FIELD_MEAN + 2] - m[2]};
                     for (int c = 0; c < 6; c++)
-                        C[c] += a * (g[FIELD_COVARIANCE + c] + d[pair[c][0]] * d[pair[c][1]]);
-                    e += a * (g[FIELD_SPREAD] + 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+                        C[c] += a * (gc[FIELD_COVARIANCE + c] + d[pair[c][0]] * d[pair[c][1]]);
+                    e += a * (gc[FIELD_SPREAD] + 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
                 }
             moments_to_world(p->face_axis[f], p->face_sign[f], m, e, C, o, BLOCK_TEXELS);
         } else { /* no light: the geometric moments */
