@@ -41,11 +41,10 @@ void ibl__fast_pyramid_level0(ibl_specular_plan *p, const ibl_cubemap *src)
     ibl_parallel_for(p->ctx, 6 * p->pyramid[0].blocks_y, level0_task, &job);
 }
 
-/* A source texel's face-local moments (level0_face_moments), its power and its luminance weight. */
-static double source_child(const ibl_specular_plan *p, const float *face, int cx, int cy,
-                           float g[GEOMETRY_FIELDS], double power[3])
+/* A source texel's power and luminance weight, its face-local moments g given. */
+static double source_child_power(const ibl_specular_plan *p, const float *face, int cx, int cy,
+                                 const float g[GEOMETRY_FIELDS], double power[3])
 {
-    level0_face_moments(p, cx, cy, g);
     const float *L = face + ((size_t)cy * p->pyramid[0].edge + cx) * 4;
     double om = g[FIELD_SOLID_ANGLE];
     for (int c = 0; c < 3; c++) power[c] = om * L[c];
@@ -53,67 +52,83 @@ static double source_child(const ibl_specular_plan *p, const float *face, int cx
     return lum > 0 ? lum : 0;
 }
 
-/* Children a row of the first stored level keeps between its two passes (K <= 8): the second
- * pass reads them back instead of unfolding their moments again; larger K recomputes them. */
+/* Children whose face-local moments one texel of the first stored level keeps for its six faces
+ * and two passes (K <= 8); beyond that each child is unfolded where it is read. */
 enum { CACHED_CHILDREN = 64 };
 
-/* Row y of face f of the first stored level straight from the source texels (no sub-texels):
- * its K x K children (K = 2^level, row by row) are uniform texels whose geometric moments are
- * face 0's face-local ones (the same on every face), so they are combined in face-local
- * coordinates, by the same parallel-axis rule as two levels at a time (the levels between are
- * read by nothing and not kept), and the result is turned to face f's world coordinates once.
- * The second pass (the covariance about the centroid) sees the same children as the first,
- * kept in a small cache where they fit: the same numbers, the unfolding done once. */
-static void level_row_from_source(const pyramid_job *job, int f, int y)
+/* Texel (x, y) of face f of the first stored level from its K x K source children (row by
+ * row): their luminance-weighted moments by the parallel-axis rule, in face-local coordinates,
+ * turned to face f's world coordinates once. g holds the children's face-local moments (NULL:
+ * unfolded here). */
+static void texel_from_source(const pyramid_job *job, int f, int x, int y,
+                              const float (*g)[GEOMETRY_FIELDS])
 {
     static const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
     const ibl_specular_plan *p = job->p;
     source_level *s = &job->p->pyramid[job->level];
-    int M = s->edge, K = 1 << job->level, cached = K * K <= CACHED_CHILDREN;
+    int K = 1 << job->level;
     const float *face = ibl_cubemap_face(job->src, 0, f);
-    float cache_g[CACHED_CHILDREN][GEOMETRY_FIELDS];
-    double cache_w[CACHED_CHILDREN];
-    for (int x = 0; x < M; x++) {
-        float g[GEOMETRY_FIELDS];
-        double W = 0, m[3] = {0, 0, 0}, P[3] = {0, 0, 0}, pw[3];
-        int child = 0;
+    float own[GEOMETRY_FIELDS];
+    double weight[CACHED_CHILDREN];
+    double W = 0, m[3] = {0, 0, 0}, P[3] = {0, 0, 0}, pw[3];
+    int child = 0;
+    for (int cy = K * y; cy < K * (y + 1); cy++)
+        for (int cx = K * x; cx < K * (x + 1); cx++, child++) {
+            const float *gc = g ? g[child] : own;
+            if (!g) level0_face_moments(p, cx, cy, own);
+            double w = source_child_power(p, face, cx, cy, gc, pw);
+            if (g) weight[child] = w;
+            for (int c = 0; c < 3; c++) P[c] += pw[c];
+            W += w;
+            for (int c = 0; c < 3; c++) m[c] += w * gc[FIELD_MEAN + c];
+        }
+    float *o = s->records + record_index(s, f, x, y, FIELD_LUM_MEAN); /* fields from it */
+    if (W > 0) {
+        double C[6] = {0, 0, 0, 0, 0, 0}, e = 0;
+        for (int c = 0; c < 3; c++) m[c] /= W;
+        child = 0;
         for (int cy = K * y; cy < K * (y + 1); cy++)
             for (int cx = K * x; cx < K * (x + 1); cx++, child++) {
-                double w = source_child(p, face, cx, cy, g, pw);
-                for (int c = 0; c < 3; c++) P[c] += pw[c];
-                W += w;
-                for (int c = 0; c < 3; c++) m[c] += w * g[FIELD_MEAN + c];
-                if (cached) {
-                    memcpy(cache_g[child], g, sizeof g);
-                    cache_w[child] = w;
+                const float *gc = g ? g[child] : own;
+                double a;
+                if (g) {
+                    a = weight[child] / W;
+                } else {
+                    level0_face_moments(p, cx, cy, own);
+                    a = source_child_power(p, face, cx, cy, own, pw) / W;
                 }
+                double d[3] = {gc[FIELD_MEAN] - m[0], gc[FIELD_MEAN + 1] - m[1], gc[FIELD_MEAN + 2] - m[2]};
+                for (int c = 0; c < 6; c++)
+                    C[c] += a * (gc[FIELD_COVARIANCE + c] + d[pair[c][0]] * d[pair[c][1]]);
+                e += a * (gc[FIELD_SPREAD] + 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
             }
-        float *o = s->records + record_index(s, f, x, y, FIELD_LUM_MEAN); /* fields from it */
-        if (W > 0) {
-            double C[6] = {0, 0, 0, 0, 0, 0}, e = 0;
-            for (int c = 0; c < 3; c++) m[c] /= W;
-            child = 0;
+        moments_to_world(p->face_axis[f], p->face_sign[f], m, e, C, o, BLOCK_TEXELS);
+    } else { /* no light: the geometric moments */
+        level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, own);
+        for (int k = 0; k < 10; k++) o[k * BLOCK_TEXELS] = own[FIELD_MEAN + k];
+    }
+    for (int c = 0; c < 3; c++) o[(FIELD_POWER - FIELD_LUM_MEAN + c) * BLOCK_TEXELS] = (float)P[c];
+}
+
+/* Row y of the first stored level, on all six faces, straight from the source texels (no
+ * sub-texels): the K x K children of a texel are uniform texels whose geometric moments are
+ * face 0's face-local ones, the same on every face (the levels between are read by nothing and
+ * not kept). So each texel's children are unfolded from level 0's stored eighth once, for the
+ * six faces and both passes: the unfolding's reads, scattered across the eighth where a child
+ * lies beyond its diagonal, were most of the level's cost when each face made its own. */
+static void level_row_from_source(const pyramid_job *job, int y)
+{
+    const ibl_specular_plan *p = job->p;
+    int M = job->p->pyramid[job->level].edge, K = 1 << job->level;
+    int cached = K * K <= CACHED_CHILDREN;
+    float g[CACHED_CHILDREN][GEOMETRY_FIELDS];
+    for (int x = 0; x < M; x++) {
+        if (cached) {
+            int child = 0;
             for (int cy = K * y; cy < K * (y + 1); cy++)
-                for (int cx = K * x; cx < K * (x + 1); cx++, child++) {
-                    const float *gc = g;
-                    double a;
-                    if (cached) {
-                        gc = cache_g[child];
-                        a = cache_w[child] / W;
-                    } else {
-                        a = source_child(p, face, cx, cy, g, pw) / W;
-                    }
-                    double d[3] = {gc[FIELD_MEAN] - m[0], gc[FIELD_MEAN + 1] - m[1], gc[FIELD_MEAN + 2] - m[2]};
-                    for (int c = 0; c < 6; c++)
-                        C[c] += a * (gc[FIELD_COVARIANCE + c] + d[pair[c][0]] * d[pair[c][1]]);
-                    e += a * (gc[FIELD_SPREAD] + 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-                }
-            moments_to_world(p->face_axis[f], p->face_sign[f], m, e, C, o, BLOCK_TEXELS);
-        } else { /* no light: the geometric moments */
-            level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, g);
-            for (int k = 0; k < 10; k++) o[k * BLOCK_TEXELS] = g[FIELD_MEAN + k];
+                for (int cx = K * x; cx < K * (x + 1); cx++) level0_face_moments(p, cx, cy, g[child++]);
         }
-        for (int c = 0; c < 3; c++) o[(FIELD_POWER - FIELD_LUM_MEAN + c) * BLOCK_TEXELS] = (float)P[c];
+        for (int f = 0; f < 6; f++) texel_from_source(job, f, x, y, cached ? (const float(*)[GEOMETRY_FIELDS])g : NULL);
     }
 }
 
@@ -176,18 +191,9 @@ static void level_row(const pyramid_job *job, int f, int y)
     }
 }
 
-/* One block row of one face of a coarse level, and its luminance power. */
-static void level_task(void *arg, int index)
+/* The luminance power of block row `block_row` of face f of a coarse level. */
+static double block_row_power(const source_level *s, int f, int block_row)
 {
-    const pyramid_job *job = arg;
-    source_level *s = &job->p->pyramid[job->level];
-    int f = index / s->blocks_y, block_row = index % s->blocks_y;
-    /* the first stored level: from the source, unless it is level 1 over level 0's records */
-    int from_source = job->level == job->p->first_stored && (job->level > 1 || !job->p->has_level0_records);
-    for (int y = block_row * BLOCK_H; y < (block_row + 1) * BLOCK_H && y < s->edge; y++) {
-        if (from_source) level_row_from_source(job, f, y);
-        else level_row(job, f, y);
-    }
     double power = 0;
     for (int bx = 0; bx < s->blocks_x; bx++) {
         const float *P = s->records +
@@ -195,14 +201,39 @@ static void level_task(void *arg, int index)
         for (int t = 0; t < BLOCK_TEXELS; t++)
             power += luminance(P[t], P[BLOCK_TEXELS + t], P[2 * BLOCK_TEXELS + t]);
     }
-    s->row_power[index] = power;
+    return power;
+}
+
+/* One block row of one face of a coarse level, and its luminance power. */
+static void level_task(void *arg, int index)
+{
+    const pyramid_job *job = arg;
+    source_level *s = &job->p->pyramid[job->level];
+    int f = index / s->blocks_y, block_row = index % s->blocks_y;
+    for (int y = block_row * BLOCK_H; y < (block_row + 1) * BLOCK_H && y < s->edge; y++) level_row(job, f, y);
+    s->row_power[index] = block_row_power(s, f, block_row);
+}
+
+/* One block row of the first stored level made from the source, on all six faces, and the
+ * luminance power of each face's. */
+static void level_from_source_task(void *arg, int block_row)
+{
+    const pyramid_job *job = arg;
+    source_level *s = &job->p->pyramid[job->level];
+    for (int y = block_row * BLOCK_H; y < (block_row + 1) * BLOCK_H && y < s->edge; y++)
+        level_row_from_source(job, y);
+    for (int f = 0; f < 6; f++) s->row_power[f * s->blocks_y + block_row] = block_row_power(s, f, block_row);
 }
 
 void ibl__fast_pyramid_level(ibl_specular_plan *p, const ibl_cubemap *src, int level)
 {
     source_level *s = &p->pyramid[level];
     pyramid_job job = {p, src, level};
-    ibl_parallel_for(p->ctx, 6 * s->blocks_y, level_task, &job);
+    /* the first stored level: from the source, unless it is level 1 over level 0's records */
+    if (level == p->first_stored && (level > 1 || !p->has_level0_records))
+        ibl_parallel_for(p->ctx, s->blocks_y, level_from_source_task, &job);
+    else
+        ibl_parallel_for(p->ctx, 6 * s->blocks_y, level_task, &job);
     s->power = 0;
     for (int i = 0; i < 6 * s->blocks_y; i++) s->power += s->row_power[i];
 }
