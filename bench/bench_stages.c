@@ -1,0 +1,214 @@
+/* Where the time of `ibl prefilter -q IN -o OUT.ktx2 --size N` goes, stage by stage, in one
+ * process that makes the same calls as the command (the CLI's allocator, arena.c, included):
+ * read and decode (with the sanitize pass), the conversion to the working cube, the fast
+ * plan's creation, its pyramid, each level's grids, the output levels, the KTX2 encode
+ * (rgba16f) and the file's write. The specular sources the CLI adds for an equirect (a few
+ * ms) are left out; the chain is GGX with the linear mapping, as the command's default.
+ *
+ * Usage: bench_stages IN SIZE [THREADS] [OUT.ktx2]   (threads 0: every core)
+ *
+ * Per stage: wall ms, CPU ms of the process (user + sys, getrusage), each thread's run time
+ * (the kernel's per-task schedstat: a thread spinning in the pool's wait counts as running,
+ * about 0.1 ms a parallel-for), the page faults taken and the RSS after it. Linux only (the
+ * /proc files); elsewhere the thread and RSS columns are blank. */
+#include "ibl/ibl.h"
+#include "bake/specular_internal.h"
+#include "../cli/arena.h"
+
+#include <dirent.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+
+enum { MAX_THREADS = 16 };
+
+typedef struct snapshot {
+    double wall, user, sys;
+    long faults, rss_mb;
+    int threads;
+    double thread_ms[MAX_THREADS];
+} snapshot;
+
+static double seconds(const struct timeval *t) { return (double)t->tv_sec + t->tv_usec * 1e-6; }
+
+/* Each thread's run time so far, in the order /proc lists them (the main thread first). */
+static int thread_times(double *ms)
+{
+    int n = 0;
+    DIR *d = opendir("/proc/self/task");
+    struct dirent *e;
+    while (d && (e = readdir(d)) != NULL && n < MAX_THREADS) {
+        if (e->d_name[0] == '.') continue;
+        char path[300];
+        snprintf(path, sizeof path, "/proc/self/task/%s/schedstat", e->d_name);
+        FILE *f = fopen(path, "r");
+        unsigned long long ns = 0;
+        if (f) {
+            if (fscanf(f, "%llu", &ns) != 1) ns = 0;
+            fclose(f);
+        }
+        ms[n++] = (double)ns * 1e-6;
+    }
+    if (d) closedir(d);
+    return n;
+}
+
+static void take(snapshot *s)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    s->wall = (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+    s->user = seconds(&ru.ru_utime), s->sys = seconds(&ru.ru_stime);
+    s->faults = ru.ru_minflt + ru.ru_majflt;
+    long pages = 0, resident = 0;
+    FILE *f = fopen("/proc/self/statm", "r");
+    if (f) {
+        if (fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+        fclose(f);
+    }
+    s->rss_mb = resident * 4096 / 1000000;
+    s->threads = thread_times(s->thread_ms);
+}
+
+typedef struct timeline {
+    snapshot last, start;
+    double cpu_total;
+} timeline;
+
+/* Prints the stage since the last mark and starts the next. */
+static void mark(timeline *t, const char *stage)
+{
+    snapshot now;
+    take(&now);
+    double cpu = (now.user - t->last.user + now.sys - t->last.sys) * 1e3;
+    printf("%-22s %8.1f %8.1f %8.1f %8.1f %7ld %6ld  ", stage, (now.wall - t->last.wall) * 1e3,
+           cpu, (now.user - t->last.user) * 1e3, (now.sys - t->last.sys) * 1e3,
+           now.faults - t->last.faults, now.rss_mb);
+    for (int i = 0; i < now.threads; i++)
+        printf(" %7.1f", now.thread_ms[i] - (i < t->last.threads ? t->last.thread_ms[i] : 0.0));
+    printf("\n");
+    t->last = now;
+}
+
+/* The pyramid and every level's grids report progress after each level (plan.c): a mark each. */
+typedef struct progress_marks {
+    timeline *t;
+    int levels, next;
+} progress_marks;
+
+static int on_progress(void *user, const char *stage, double fraction)
+{
+    progress_marks *m = user;
+    if (!m->t || strcmp(stage, "prefilter") != 0) return 0;
+    int level = (int)(fraction * m->levels + 0.5) - 1;
+    if (level < m->next) return 0;
+    char name[40];
+    snprintf(name, sizeof name, level == 0 ? "pyramid, level 0" : "grids, level %d", level);
+    mark(m->t, name);
+    m->next = level + 1;
+    return 0;
+}
+
+static int fail(ibl_context *ctx, const char *what)
+{
+    fprintf(stderr, "bench_stages: %s: %s\n", what, ibl_context_message(ctx));
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 3) {
+        fprintf(stderr, "usage: bench_stages IN SIZE [THREADS] [OUT.ktx2]\n");
+        return 2;
+    }
+    const char *in = argv[1], *out = argc > 4 ? argv[4] : NULL;
+    int size = atoi(argv[2]), threads = argc > 3 ? atoi(argv[3]) : 0;
+    timeline t;
+    memset(&t, 0, sizeof t);
+    progress_marks marks = {NULL, 0, 0};
+    ibl_context_desc cd;
+    memset(&cd, 0, sizeof cd);
+    cd.threads = threads;
+    cd.allocator.alloc = cli_arena_alloc;
+    cd.allocator.free = cli_arena_free;
+    cd.progress = on_progress;
+    cd.progress_user = &marks;
+    ibl_context *ctx = NULL;
+    if (ibl_context_create(&cd, &ctx) != IBL_OK) return 1;
+    printf("%s -> GGX %d, %d threads\n%-22s %8s %8s %8s %8s %7s %6s   %s\n", in, size, threads,
+           "stage", "wall ms", "CPU ms", "user", "sys", "faults", "RSS MB",
+           "run time per thread, ms");
+    take(&t.start);
+    t.last = t.start;
+
+    ibl_texture tex;
+    ibl_read_desc rd = {0};
+    if (ibl_read_texture(ctx, in, &rd, &tex, NULL) != IBL_OK) return fail(ctx, in);
+    mark(&t, "read, decode");
+    ibl_image image = {tex.width, tex.height, ibl_texture_level(&tex, 0, 0)};
+    ibl_to_cube_desc td = {0};
+    ibl_cubemap cube;
+    if (ibl_image_to_cubemap(ctx, &image, &td, &cube) != IBL_OK) return fail(ctx, "to cube");
+    ibl_texture_free(ctx, &tex);
+    mark(&t, "to cube");
+
+    /* as ibl_specular_prefilter does for the fast method (src/bake/specular.c) */
+    ibl_specular_desc d;
+    memset(&d, 0, sizeof d);
+    d.size = size;
+    ibl_specular_info info;
+    int edge = 0;
+    if (ibl_specular_levels(ctx, &d, cube.size, &info) != IBL_OK ||
+        ibl_specular_source_size(ctx, &d, cube.size, &edge) != IBL_OK)
+        return fail(ctx, "levels");
+    d.levels = info.levels;
+    ibl_cubemap work = cube;
+    if (edge != cube.size) {
+        if (ibl_cubemap_alloc(ctx, edge, 1, &work) != IBL_OK ||
+            ibl_cubemap_resample(ctx, &cube, &work) != IBL_OK)
+            return fail(ctx, "resample");
+        ibl_cubemap_free(ctx, &cube);
+        mark(&t, "resample");
+    }
+    d.source_size = work.size;
+    ibl_specular_plan *plan = NULL;
+    if (ibl__specular_plan_create(ctx, &d, 1, &plan) != IBL_OK) return fail(ctx, "plan");
+    mark(&t, "plan");
+    marks.t = &t, marks.levels = info.levels;
+    if (ibl__specular_plan_run_grids(plan, &work) != IBL_OK) return fail(ctx, "grids");
+    marks.t = NULL;
+    ibl_cubemap chain;
+    if (ibl_cubemap_alloc(ctx, size, info.levels, &chain) != IBL_OK ||
+        ibl__specular_plan_run_output(plan, &work, &chain) != IBL_OK)
+        return fail(ctx, "output");
+    ibl_specular_plan_destroy(plan);
+    ibl_cubemap_free(ctx, &work);
+    mark(&t, "output levels");
+
+    ibl_texture chain_tex = ibl_texture_from_cubemap(&chain);
+    ibl_write_desc wd = {0};
+    void *bytes = NULL;
+    size_t bytes_size = 0;
+    if (ibl_specular_set_metadata(ctx, &info, &chain_tex) != IBL_OK ||
+        ibl_encode_texture(ctx, IBL_FILE_KTX2, &chain_tex, &wd, &bytes, &bytes_size) != IBL_OK)
+        return fail(ctx, "encode");
+    ibl_texture_free(ctx, &chain_tex);
+    ibl_cubemap_free(ctx, &chain);
+    mark(&t, "encode (KTX2)");
+    if (out) {
+        if (ibl_write_file_atomic(ctx, out, bytes, bytes_size) != IBL_OK) return fail(ctx, out);
+        mark(&t, "write");
+    }
+    ibl_free(ctx, bytes);
+    snapshot end;
+    take(&end);
+    printf("%-22s %8.1f %8.1f %8.1f %8.1f %7ld %6ld\n", "total", (end.wall - t.start.wall) * 1e3,
+           (end.user - t.start.user + end.sys - t.start.sys) * 1e3, (end.user - t.start.user) * 1e3,
+           (end.sys - t.start.sys) * 1e3, end.faults - t.start.faults, end.rss_mb);
+    ibl_context_destroy(ctx);
+    return 0;
+}
