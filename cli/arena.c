@@ -28,9 +28,8 @@
  * faults (and the kernel zeroes) its own 2 MiB pages in parallel. A header at the block's
  * start made the allocating thread fault the block's first huge page, serially and inside the
  * mutex (13% of the 256 GGX chain's samples, on a host slow to back fresh memory). The
- * library's ibl_alloc still writes its own 64-byte header at the start of what it gets
- * (src/core/context.c), so that one page is still faulted by the allocating thread, now
- * outside this mutex.
+ * library's ibl_alloc keeps no header in its large blocks either (src/core/context.c): the
+ * blocks this returns from the arena start on a page boundary, which is what it asks of them.
  *
  * Kept, but not without end: freed arena memory whose pages are still there is counted, and
  * beyond ARENA_KEEP bytes the largest such free blocks are given back to the kernel

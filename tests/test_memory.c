@@ -622,6 +622,138 @@ static void parallel_loop_inside_a_task(void **state)
     }
 }
 
+/* An allocator that hands out page-aligned blocks filled with 0xab and keeps a list of them,
+ * so a test can see which bytes ibl_alloc wrote and that ibl_free gives back each block it
+ * got, once. Pool tasks allocate too: a mutex. */
+enum { RECORDED_BLOCKS = 512 };
+typedef struct recording_allocator {
+    pthread_mutex_t lock;
+    void *start[RECORDED_BLOCKS];
+    size_t bytes[RECORDED_BLOCKS];
+    int live, unknown_frees;
+} recording_allocator;
+
+static void *recording_alloc(size_t bytes, void *user)
+{
+    recording_allocator *r = user;
+    size_t rounded = (bytes + 4095) & ~(size_t)4095;
+    void *p = aligned_alloc(4096, rounded ? rounded : 4096);
+    if (!p) return NULL;
+    memset(p, 0xab, bytes);
+    pthread_mutex_lock(&r->lock);
+    if (r->live == RECORDED_BLOCKS) fail_msg("more than %d blocks at once", RECORDED_BLOCKS);
+    r->start[r->live] = p;
+    r->bytes[r->live++] = bytes;
+    pthread_mutex_unlock(&r->lock);
+    return p;
+}
+
+static void recording_free(void *ptr, void *user)
+{
+    recording_allocator *r = user;
+    pthread_mutex_lock(&r->lock);
+    int i = 0;
+    while (i < r->live && r->start[i] != ptr) i++;
+    if (i == r->live) {
+        r->unknown_frees++;
+    } else {
+        r->live--;
+        r->start[i] = r->start[r->live];
+        r->bytes[i] = r->bytes[r->live];
+        free(ptr);
+    }
+    pthread_mutex_unlock(&r->lock);
+}
+
+/* Whether the allocator block holding p still has every byte it was handed out with. */
+static int untouched_block(recording_allocator *r, const void *p)
+{
+    for (int i = 0; i < r->live; i++) {
+        const uint8_t *b = r->start[i];
+        if ((const uint8_t *)p < b || (const uint8_t *)p >= b + r->bytes[i]) continue;
+        for (size_t k = 0; k < r->bytes[i]; k++)
+            if (b[k] != 0xab) return 0;
+        return 1;
+    }
+    fail_msg("no block holds %p", p);
+    return 0;
+}
+
+static ibl_context *recording_context(recording_allocator *r, int threads)
+{
+    ibl_context_desc d = {0};
+    d.threads = threads;
+    d.max_bytes = 64 * MiB;
+    d.allocator.alloc = recording_alloc;
+    d.allocator.free = recording_free;
+    d.allocator.user = r;
+    ibl_context *ctx = NULL;
+    assert_int_equal(ibl_context_create(&d, &ctx), IBL_OK);
+    return ctx;
+}
+
+typedef struct swap_job {
+    ibl_context *ctx;
+    void *from_caller[8]; /* freed by the tasks */
+    void *from_tasks[8];  /* allocated by them */
+} swap_job;
+
+static void swap_task(void *arg, int index)
+{
+    swap_job *j = arg;
+    ibl_free(j->ctx, j->from_caller[index]);
+    j->from_tasks[index] = ibl_alloc(j->ctx, MiB + (size_t)index * 4096);
+    if (j->from_tasks[index]) memset(j->from_tasks[index], index, MiB);
+}
+
+/* Large blocks (64 KiB and more) carry no header: ibl_alloc writes nothing into them, so
+ * their first page is first touched by whoever fills it (a small block's header shows that
+ * the check sees a write). Their bytes are counted and given back when freed on a pool's
+ * thread, allocated on another; through another context they are freed and stay counted in
+ * the first; past the context's table of them (256) they take a header and count the same. */
+static void large_blocks_keep_no_header(void **state)
+{
+    (void)state;
+    static recording_allocator r = {.lock = PTHREAD_MUTEX_INITIALIZER};
+    ibl_context *ctx = recording_context(&r, 2), *other = recording_context(&r, 1);
+    uint8_t *small = ibl_alloc(ctx, 1000), *large = ibl_alloc(ctx, 3 * MiB + 5);
+    assert_non_null(small);
+    assert_non_null(large);
+    assert_false(untouched_block(&r, small));
+    assert_true(untouched_block(&r, large));
+    assert_int_equal(ibl_context_current_bytes(ctx), 1000 + 3 * MiB + 5);
+
+    static swap_job job;
+    job.ctx = ctx;
+    for (int i = 0; i < 8; i++) assert_non_null(job.from_caller[i] = ibl_alloc(ctx, 2 * MiB + (size_t)i));
+    ibl_parallel_for(ctx, 8, swap_task, &job);
+    uint64_t tasks_bytes = 0;
+    for (int i = 0; i < 8; i++) {
+        assert_non_null(job.from_tasks[i]);
+        tasks_bytes += MiB + (uint64_t)i * 4096;
+    }
+    assert_int_equal(ibl_context_current_bytes(ctx), 1000 + 3 * MiB + 5 + tasks_bytes);
+    for (int i = 0; i < 8; i++) ibl_free(ctx, job.from_tasks[i]);
+    assert_int_equal(ibl_context_current_bytes(ctx), 1000 + 3 * MiB + 5);
+
+    ibl_free(other, large); /* freed, still counted where it was allocated */
+    assert_int_equal(ibl_context_current_bytes(ctx), 1000 + 3 * MiB + 5);
+    assert_int_equal(ibl_context_current_bytes(other), 0);
+    ibl_free(ctx, small);
+    assert_int_equal(ibl_context_current_bytes(ctx), 3 * MiB + 5);
+    assert_int_equal(r.live, 2); /* the two contexts */
+
+    static void *many[300];
+    for (int i = 0; i < 300; i++) assert_non_null(many[i] = ibl_alloc(other, 64 * KiB));
+    assert_int_equal(ibl_context_current_bytes(other), 300 * 64 * KiB);
+    for (int i = 0; i < 300; i++) ibl_free(other, many[i]);
+    assert_int_equal(ibl_context_current_bytes(other), 0);
+    ibl_context_destroy(ctx);
+    ibl_context_destroy(other);
+    assert_int_equal(r.live, 0);
+    assert_int_equal(r.unknown_frees, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -630,6 +762,7 @@ int main(void)
         cmocka_unit_test(parallel_loop_inside_a_task),
         cmocka_unit_test(budget_default),
         cmocka_unit_test(freed_through_another_context),
+        cmocka_unit_test(large_blocks_keep_no_header),
         cmocka_unit_test(budget_across_threads),
         cmocka_unit_test(peak_of_a_read),
         cmocka_unit_test(jpeg_bomb),

@@ -17,6 +17,15 @@
 
 enum { MAX_POOL_THREADS = 64, MESSAGE_BYTES = 512 };
 
+/* Blocks of ibl_alloc: see "the memory budget" below. A large block is kept without a header,
+ * its start and its size as asked for in the context's table of LARGE_BLOCK_SLOTS. */
+enum { BLOCK_HEADER = 64, HEADER_SLACK = 2 * BLOCK_HEADER, PAGE_BYTES = 4096, LARGE_BLOCK_SLOTS = 256 };
+#define LARGE_BLOCK_MIN ((size_t)64 << 10)
+typedef struct large_block {
+    void *start;
+    size_t bytes;
+} large_block;
+
 typedef struct thread_pool {
     pthread_t threads[MAX_POOL_THREADS];
     int worker_count; /* threads besides the caller */
@@ -46,6 +55,11 @@ struct ibl_context {
     atomic_flag message_lock; /* a failure on a worker thread may race one on another */
     ibl_status last_status;
     char message[MESSAGE_BYTES];
+    /* The large blocks this context counts, whose size is kept here rather than in a header
+     * (see "the memory budget" below). Pool tasks allocate too: one writer at a time. */
+    atomic_flag large_lock;
+    int large_count;
+    large_block large[LARGE_BLOCK_SLOTS];
     /* state kept across calls (ibl__context_cache), published by compare-and-swap */
     void *_Atomic caches[IBL__CACHE_SLOTS];
     ibl__cache_free_fn cache_free[IBL__CACHE_SLOTS]; /* written by the thread that published */
@@ -72,7 +86,8 @@ static void *default_alloc(size_t bytes, void *user)
     (void)user;
     void *p = NULL;
     if (bytes == 0) bytes = 1;
-    if (posix_memalign(&p, 64, bytes) != 0) return NULL;
+    /* large blocks on a page boundary, so that ibl_alloc keeps their header out of them */
+    if (posix_memalign(&p, bytes >= LARGE_BLOCK_MIN ? PAGE_BYTES : 64, bytes) != 0) return NULL;
     return p;
 }
 
@@ -84,17 +99,61 @@ static void default_free(void *ptr, void *user)
 
 /* ---- the memory budget --------------------------------------------------------------- */
 
-/* Every block from ibl_alloc starts with a header holding its size, so that ibl_free can give
- * the bytes back to the budget, and the context that counted them: a block freed through
- * another context (or none) is not subtracted from that one's count, which would wrap. 64
- * bytes keep the caller's block at the allocator's alignment (64 with the default allocator:
- * cache lines and AVX-512 loads). */
-enum { BLOCK_HEADER = 64 };
+/* What ibl_free needs to know of a block: its size, to give the bytes back to the budget, and
+ * the context that counted them: a block freed through another context (or none) is not
+ * subtracted from that one's count, which would wrap.
+ *
+ * Small blocks keep it in a 64-byte header just before the caller's bytes (64 keep them at
+ * the allocator's alignment: cache lines and AVX-512 loads with the default allocator).
+ *
+ * Large blocks (LARGE_BLOCK_MIN bytes and more) keep it beside them, in the context's table:
+ * a header written at allocation would be the first touch of the block's first page, so that
+ * page would be faulted and zeroed by the allocating thread rather than by the worker that
+ * fills it. With the CLI's arena that page is a 2 MiB huge page (cli/arena.c): on two threads
+ * those serial faults were about 7 ms of the 256 GGX chain's 120. Such a block is the
+ * allocator's pointer itself, and only when that is page-aligned (the arena's and the default
+ * allocator's large blocks are); a block with a header is never page-aligned (its start moves
+ * 64 bytes further when it would be). So ibl_free tells the two kinds apart by the address
+ * alone, through any context, without reading outside the block. */
 
 typedef struct block_header {
     size_t bytes;    /* as asked for by the caller */
     uintptr_t owner; /* the context whose budget counts them (0: none); only compared */
+    void *start;     /* what the allocator returned */
 } block_header;
+
+static void cpu_relax(void);
+
+static int page_aligned(const void *p)
+{
+    return (uintptr_t)p % PAGE_BYTES == 0;
+}
+
+/* Records a large block in the table; 0 when the table is full (the block then takes a
+ * header). A few dozen large blocks live at once in a prefilter, so the search is in order. */
+static int large_remember(ibl_context *ctx, void *start, size_t bytes)
+{
+    while (atomic_flag_test_and_set_explicit(&ctx->large_lock, memory_order_acquire)) cpu_relax();
+    int kept = ctx->large_count < LARGE_BLOCK_SLOTS;
+    if (kept) ctx->large[ctx->large_count++] = (large_block){start, bytes};
+    atomic_flag_clear_explicit(&ctx->large_lock, memory_order_release);
+    return kept;
+}
+
+/* Takes a block out of the table: 1 and its size if this context counted it. */
+static int large_forget(ibl_context *ctx, const void *start, size_t *bytes)
+{
+    while (atomic_flag_test_and_set_explicit(&ctx->large_lock, memory_order_acquire)) cpu_relax();
+    int found = 0;
+    for (int i = ctx->large_count - 1; i >= 0 && !found; i--) {
+        if (ctx->large[i].start != start) continue;
+        *bytes = ctx->large[i].bytes;
+        ctx->large[i] = ctx->large[--ctx->large_count];
+        found = 1;
+    }
+    atomic_flag_clear_explicit(&ctx->large_lock, memory_order_release);
+    return found;
+}
 
 /* A decimal number from a one-line file such as a cgroup limit; 0 if absent or "max". */
 static uint64_t read_limit_file(const char *path)
@@ -340,6 +399,7 @@ ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out)
     atomic_init(&ctx->live_bytes, 0);
     atomic_init(&ctx->peak_bytes, 0);
     atomic_flag_clear(&ctx->message_lock);
+    atomic_flag_clear(&ctx->large_lock);
     for (int i = 0; i < IBL__CACHE_SLOTS; i++) atomic_init(&ctx->caches[i], NULL);
     ctx->thread_count = 1;
     ctx->cpu_features = d.kernels == IBL_KERNELS_PORTABLE ? 0u : ibl__cpu_detect();
@@ -433,33 +493,48 @@ ibl_status ibl__fail(ibl_context *ctx, ibl_status status, const char *fmt, ...)
     return status;
 }
 
+/* The allocator's block of `total` bytes for ctx (malloc's when there is none). */
+static void *allocate_raw(ibl_context *ctx, size_t total)
+{
+    return ctx ? ctx->desc.allocator.alloc(total, ctx->desc.allocator.user) : default_alloc(total, NULL);
+}
+
+static void free_raw(ibl_context *ctx, void *start)
+{
+    if (ctx) ctx->desc.allocator.free(start, ctx->desc.allocator.user);
+    else free(start);
+}
+
 void *ibl_alloc(ibl_context *ctx, size_t bytes)
 {
-    if (bytes > SIZE_MAX - BLOCK_HEADER) {
+    if (bytes > SIZE_MAX - HEADER_SLACK) {
         ibl__fail(ctx, IBL_ERR_TOO_LARGE, "needs %zu bytes, more than the address space", bytes);
         return NULL;
     }
-    block_header *h;
-    if (!ctx) {
-        h = default_alloc(bytes + BLOCK_HEADER, NULL);
-    } else {
-        if (!budget_take(ctx, bytes)) {
-            budget_refuse(ctx, bytes);
-            return NULL;
-        }
-        h = ctx->desc.allocator.alloc(bytes + BLOCK_HEADER, ctx->desc.allocator.user);
-        if (!h) {
+    if (ctx && !budget_take(ctx, bytes)) {
+        budget_refuse(ctx, bytes);
+        return NULL;
+    }
+    /* the slack leaves room for a header in either place, whichever kind the block becomes */
+    char *start = allocate_raw(ctx, bytes + HEADER_SLACK);
+    if (!start) {
+        if (ctx) {
             ibl__budget_release(ctx, bytes);
             char need[32];
             format_bytes(need, sizeof need, bytes);
             ibl__fail(ctx, IBL_ERR_OUT_OF_MEMORY, "out of memory allocating %s", need);
-            return NULL;
         }
+        return NULL;
     }
-    if (!h) return NULL;
+    if (ctx && bytes >= LARGE_BLOCK_MIN && page_aligned(start) && large_remember(ctx, start, bytes))
+        return start;
+    char *block = start + BLOCK_HEADER;
+    if (page_aligned(block)) block += BLOCK_HEADER;
+    block_header *h = (block_header *)(void *)(block - BLOCK_HEADER);
     h->bytes = bytes;
     h->owner = (uintptr_t)ctx;
-    return (char *)h + BLOCK_HEADER;
+    h->start = start;
+    return block;
 }
 
 void *ibl_calloc(ibl_context *ctx, size_t count, size_t size)
@@ -485,13 +560,15 @@ char *ibl__strdup(ibl_context *ctx, const char *s)
 void ibl_free(ibl_context *ctx, void *ptr)
 {
     if (!ptr) return;
-    block_header *h = (block_header *)(void *)((char *)ptr - BLOCK_HEADER);
-    if (!ctx) {
-        free(h);
+    if (page_aligned(ptr)) { /* a large block without a header */
+        size_t bytes;
+        if (ctx && large_forget(ctx, ptr, &bytes)) ibl__budget_release(ctx, bytes);
+        free_raw(ctx, ptr);
         return;
     }
-    if (h->owner == (uintptr_t)ctx) ibl__budget_release(ctx, h->bytes);
-    ctx->desc.allocator.free(h, ctx->desc.allocator.user);
+    block_header *h = (block_header *)(void *)((char *)ptr - BLOCK_HEADER);
+    if (ctx && h->owner == (uintptr_t)ctx) ibl__budget_release(ctx, h->bytes);
+    free_raw(ctx, h->start);
 }
 
 void ibl_parallel_for(ibl_context *ctx, int count, ibl_task_fn task, void *task_arg)
