@@ -5,6 +5,7 @@
 #include "bake/specular_internal.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -353,6 +354,51 @@ static void mirror_level(void **state)
         ibl_cubemap_free(ctx, &out);
     }
     ibl_cubemap_free(ctx, &src);
+    ibl_context_destroy(ctx);
+}
+
+/* The lobes the plan makes for all levels at once, in parallel (ibl__lobes_for_levels), are
+ * each level's ibl__lobe_for_level to the bit, and ibl__level_is_mirror says which are mirrors
+ * as the lobe's kind does: GGX chains (level 0 a mirror: roughness 0) with a roughness either
+ * side of the mirror threshold (1e-3), Phong and Blinn chains with and without --mirror with
+ * an exponent of 0, infinity and beyond 1e7 (mirrors) among ordinary ones. */
+static void lobes_of_all_levels(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(2);
+    ibl_specular_filter filters[3] = {IBL_FILTER_GGX, IBL_FILTER_PHONG, IBL_FILTER_BLINN};
+    int mirrors = 0, lobes = 0;
+    for (int i = 0; i < 3; i++)
+        for (int mirror = 0; mirror < 2; mirror++) {
+            ibl_specular_desc d = {0};
+            d.filter = filters[i];
+            d.size = 256;
+            d.mirror = mirror;
+            ibl_specular_info info;
+            assert_int_equal(ibl_specular_levels(ctx, &d, 256, &info), IBL_OK);
+            if (filters[i] == IBL_FILTER_GGX) {
+                info.roughness[1] = 0.999e-3f; /* a mirror, and just not */
+                info.roughness[2] = 1.001e-3f;
+            } else {
+                info.shininess[1] = 0.0f;
+                info.shininess[2] = INFINITY;
+                info.shininess[3] = 1e9f; /* beyond 1e7 in Blinn units too */
+            }
+            ibl__lobe all[IBL_MAX_LEVELS];
+            ibl__lobes_for_levels(ctx, &info, info.levels, all);
+            for (int l = 0; l < info.levels; l++) {
+                ibl__lobe one = ibl__lobe_for_level(&info, l);
+                assert_int_equal(all[l].kind, one.kind);
+                /* every double after the kind, bit for bit (the padding after it is not set) */
+                assert_memory_equal(&all[l].n, &one.n, sizeof one - offsetof(ibl__lobe, n));
+                assert_int_equal(ibl__level_is_mirror(&info, l), one.kind == IBL__LOBE_MIRROR);
+                mirrors += one.kind == IBL__LOBE_MIRROR;
+                lobes += one.kind != IBL__LOBE_MIRROR;
+            }
+        }
+    /* GGX: level 0 and level 1, twice; Phong and Blinn: the three set, and level 0 with --mirror */
+    assert_int_equal(mirrors, 2 * 2 + 2 * (3 + 3 + 1));
+    assert_int_equal(mirrors + lobes, 44); /* 9 levels a GGX chain, fewer with tri-Ace's mapping */
     ibl_context_destroy(ctx);
 }
 
@@ -774,6 +820,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(white_furnace),
         cmocka_unit_test(mirror_level),
+        cmocka_unit_test(lobes_of_all_levels),
         cmocka_unit_test(single_texel_lobe),
         cmocka_unit_test(symmetry),
         cmocka_unit_test(threads_and_plan),

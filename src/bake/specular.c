@@ -211,8 +211,7 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
     } else if (desc.method == IBL_METHOD_REFERENCE) {
         st = ibl__specular_reference(ctx, s, &desc, &info, out);
         for (int l = 0; st == IBL_OK && l < L; l++) {
-            ibl__lobe lobe = ibl__lobe_for_level(&info, l);
-            if (lobe.kind == IBL__LOBE_MIRROR) st = mirror_level(ctx, s, out, l);
+            if (ibl__level_is_mirror(&info, l)) st = mirror_level(ctx, s, out, l);
             if (st == IBL_OK) st = ibl_edge_fixup_apply(ctx, desc.edge_fixup, out, l);
         }
     } else {
@@ -227,7 +226,7 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
          * source's) is area-resampled here, as the reference does */
         for (int l = 0; st == IBL_OK && l < L; l++) {
             int n = ibl_level_size(N, l);
-            if (ibl__lobe_for_level(&info, l).kind != IBL__LOBE_MIRROR || n >= s->size ||
+            if (!ibl__level_is_mirror(&info, l) || n >= s->size ||
                 s->size % n == 0)
                 continue;
             st = mirror_level(ctx, s, out, l);

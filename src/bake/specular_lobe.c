@@ -125,19 +125,46 @@ static ibl__lobe make_ggx(double roughness)
     return l;
 }
 
+/* A GGX level whose roughness is at most this is a mirror: its lobe is far narrower than any
+ * texel we handle. */
+#define GGX_MIRROR_ROUGHNESS 1e-3
+
+int ibl__level_is_mirror(const ibl_specular_info *info, int level)
+{
+    if (info->filter == IBL_FILTER_GGX) return !(info->roughness[level] > GGX_MIRROR_ROUGHNESS);
+    double n = ibl__level_phong_exponent(info, level);
+    return !(n > 0.0) || isinf(n) || n > 1e7;
+}
+
 ibl__lobe ibl__lobe_for_level(const ibl_specular_info *info, int level)
 {
-    ibl__lobe mirror = {0};
-    mirror.kind = IBL__LOBE_MIRROR;
+    if (ibl__level_is_mirror(info, level)) {
+        ibl__lobe mirror = {0};
+        mirror.kind = IBL__LOBE_MIRROR;
+        return mirror;
+    }
     if (info->filter == IBL_FILTER_GGX) {
         double r = info->roughness[level];
-        /* below this the lobe is far narrower than any texel we handle: a mirror */
-        if (!(r > 1e-3)) return mirror;
         return make_ggx(r > 1.0 ? 1.0 : r);
     }
-    double n = ibl__level_phong_exponent(info, level);
-    if (!(n > 0.0) || isinf(n) || n > 1e7) return mirror;
-    return make_phong(n);
+    return make_phong(ibl__level_phong_exponent(info, level));
+}
+
+typedef struct lobes_job {
+    const ibl_specular_info *info;
+    ibl__lobe *out;
+} lobes_job;
+
+static void lobe_task(void *arg, int level)
+{
+    lobes_job *j = arg;
+    j->out[level] = ibl__lobe_for_level(j->info, level);
+}
+
+void ibl__lobes_for_levels(ibl_context *ctx, const ibl_specular_info *info, int levels, ibl__lobe *out)
+{
+    lobes_job job = {info, out};
+    ibl_parallel_for(ctx, levels, lobe_task, &job);
 }
 
 double ibl__rect_radius(int face, double u0, double v0, double u1, double v1, double centre[3])

@@ -134,16 +134,45 @@ static int first_read_level(const ibl_specular_plan *p)
     return first;
 }
 
+/* The lobes of every level, made in parallel (a GGX lobe's peak search is ~0.1 ms). */
+static void plan_lobes(ibl_specular_plan *p)
+{
+    ibl__lobe lobes[IBL_MAX_LEVELS];
+    ibl__lobes_for_levels(p->ctx, &p->info, p->output_levels, lobes);
+    for (int l = 0; l < p->output_levels; l++) p->levels[l].lobe = lobes[l];
+}
+
+typedef struct pieces_job {
+    ibl_specular_plan *p;
+    ibl_status status[IBL_MAX_LEVELS];
+} pieces_job;
+
+static void pieces_task(void *arg, int level)
+{
+    pieces_job *j = arg;
+    j->status[level] = level_is_mirror(j->p, level) ? IBL_OK : ibl__fast_plan_pieces(j->p, level);
+}
+
+/* The pieces and grids of every filtered level: a level's depend on its lobe and the pyramid's
+ * edges only, so the levels are planned in parallel (their tables, piece_describe in pieces.c,
+ * were ~1 ms of one thread at 256). The first failure in level order is the one returned. */
+static ibl_status plan_pieces(ibl_specular_plan *p)
+{
+    pieces_job job = {.p = p};
+    ibl_parallel_for(p->ctx, p->output_levels, pieces_task, &job);
+    for (int l = 0; l < p->output_levels; l++)
+        if (job.status[l] != IBL_OK) return job.status[l];
+    return IBL_OK;
+}
+
 /* Everything of the fast method's plan after the checks and the mapping. */
 static ibl_status plan_fast(ibl_specular_plan *p)
 {
-    for (int l = 0; l < p->output_levels; l++) p->levels[l].lobe = ibl__lobe_for_level(&p->info, l);
+    plan_lobes(p);
     choose_subtexel_split(p);
     p->pyramid_levels = ibl_full_mip_count(p->source_edge * p->subtexel_split);
     ibl__fast_pyramid_edges(p);
-    ibl_status st = IBL_OK;
-    for (int l = 0; st == IBL_OK && l < p->output_levels; l++)
-        if (!level_is_mirror(p, l)) st = ibl__fast_plan_pieces(p, l);
+    ibl_status st = plan_pieces(p);
     p->first_stored = first_read_level(p);
     if (st == IBL_OK) st = ibl__fast_build_moments(p);
     for (int l = 0; st == IBL_OK && l < p->output_levels; l++)
@@ -167,17 +196,18 @@ static ibl_status plan_fast(ibl_specular_plan *p)
  * kept (tuning.h: an area mean puts a texel's light at its centre, where the pyramid would have
  * kept its luminance centroid), and never less than the chain's own edge (a mirror level 0).
  * A source of at most this edge is used as it is. */
-static int needed_source_edge(const ibl_specular_desc *desc, const ibl_specular_info *info,
-                              int levels)
+static int needed_source_edge(ibl_context *ctx, const ibl_specular_desc *desc,
+                              const ibl_specular_info *info, int levels)
 {
     double acc = desc->accuracy > 0 ? desc->accuracy / ACCURACY_DEFAULT : 1.0;
     int edge = 1;
     while (edge < desc->size) edge *= 2;
+    ibl__lobe lobes[IBL_MAX_LEVELS];
+    ibl__lobes_for_levels(ctx, info, levels, lobes);
     for (int l = 0; l < levels; l++) {
-        ibl__lobe lobe = ibl__lobe_for_level(info, l);
-        if (lobe.kind == IBL__LOBE_MIRROR) continue;
+        if (lobes[l].kind == IBL__LOBE_MIRROR) continue;
         int core = MIN_SOURCE_EDGE;
-        while (core < 16384 && texel_angle(core) > core_source_width(&lobe, acc)) core *= 2;
+        while (core < 16384 && texel_angle(core) > core_source_width(&lobes[l], acc)) core *= 2;
         if ((core << SOURCE_LEVELS_BELOW_CORE) > edge) edge = core << SOURCE_LEVELS_BELOW_CORE;
     }
     return edge < 16384 ? edge : 16384;
@@ -201,7 +231,7 @@ ibl_status ibl_specular_source_size(ibl_context *ctx, const ibl_specular_desc *d
     if (info.levels < levels) levels = info.levels;
     int pow2 = 1;
     while (pow2 < source_size) pow2 *= 2;
-    int needed = needed_source_edge(&d, &info, levels);
+    int needed = needed_source_edge(ctx, &d, &info, levels);
     *out = needed < pow2 ? needed : pow2;
     return IBL_OK;
 }
