@@ -10,8 +10,10 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 #include <pthread.h>
+#include <stdatomic.h>
 
 static const uint64_t KiB = 1024, MiB = 1024 * 1024;
 
@@ -622,6 +624,45 @@ static void parallel_loop_inside_a_task(void **state)
     }
 }
 
+/* Many short jobs, some after a pause long enough for the pool's workers to fall asleep (a
+ * worker woken after the caller took every index does not join that job, and must not run
+ * the next one's indices with this one's task): every index of every job runs once, with its
+ * own job's argument, on 2 and 8 threads. */
+typedef struct tally_job {
+    int id;
+    _Atomic int runs[32];
+    _Atomic int wrong_job;
+} tally_job;
+
+static void tally_task(void *arg, int index)
+{
+    tally_job *j = arg;
+    atomic_fetch_add(&j->runs[index], 1);
+    if (j->id < 0) atomic_fetch_add(&j->wrong_job, 1);
+}
+
+static void every_index_once_across_jobs(void **state)
+{
+    (void)state;
+    static const int threads[2] = {2, 8};
+    for (int t = 0; t < 2; t++) {
+        ibl_context *ctx = budget_context(MiB, threads[t]);
+        for (int round = 0; round < 600; round++) {
+            tally_job job = {.id = round};
+            int count = 1 + round % 32;
+            for (int i = 0; i < 32; i++) atomic_init(&job.runs[i], 0);
+            atomic_init(&job.wrong_job, 0);
+            struct timespec pause = {0, 300000}; /* longer than a worker spins before sleeping */
+            if (round % 7 == 0) nanosleep(&pause, NULL);
+            ibl_parallel_for(ctx, count, tally_task, &job);
+            job.id = -1; /* a late run of this job's task would count as wrong */
+            for (int i = 0; i < 32; i++) assert_int_equal(atomic_load(&job.runs[i]), i < count);
+            assert_int_equal(atomic_load(&job.wrong_job), 0);
+        }
+        ibl_context_destroy(ctx);
+    }
+}
+
 /* An allocator that hands out page-aligned blocks filled with 0xab and keeps a list of them,
  * so a test can see which bytes ibl_alloc wrote and that ibl_free gives back each block it
  * got, once. Pool tasks allocate too: a mutex. */
@@ -763,6 +804,7 @@ int main(void)
         cmocka_unit_test(budget_default),
         cmocka_unit_test(freed_through_another_context),
         cmocka_unit_test(large_blocks_keep_no_header),
+        cmocka_unit_test(every_index_once_across_jobs),
         cmocka_unit_test(budget_across_threads),
         cmocka_unit_test(peak_of_a_read),
         cmocka_unit_test(jpeg_bomb),
