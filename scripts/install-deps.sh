@@ -7,8 +7,9 @@
 #              libjpeg-dev (libjpeg-turbo: JPEG reading and writing)
 #              libdeflate-dev (EXR ZIP/ZIPS chunks: 2-3x faster whole-buffer inflate than zlib)
 #              libjansson-dev (JSON: the bake manifest, sh.json, --json outputs, probe sets)
-#              libassimp-dev (glTF 2.0 scenes for probe capture, through its C API)
-#              libembree-dev (Intel Embree 3: ray casting in those scenes)
+#              libassimp-dev (glTF 2.0 scenes for probe capture, through its C API; loaded
+#                when a scene is read, src/scene/libraries.h)
+#              libembree-dev (Intel Embree 3: ray casting in those scenes; loaded likewise)
 #              libzstd-dev (Zstandard: KTX2 supercompression, written with --zstd, read always)
 #              libastcenc-dev (ARM's astcenc 4.2: ASTC HDR encoding and decoding)
 #   tests:     libcmocka-dev (test framework; CTest drives it), parallel (GNU parallel: the

@@ -23,6 +23,7 @@
 
 typedef struct loader {
     ibl_context *ctx;
+    ibl__assimp api; /* loaded for the import (libraries.h) */
     const char *path;
     const struct aiScene *ai;
     double *strengths;   /* emissive strength per glTF material (1 without the extension) */
@@ -114,7 +115,7 @@ static ibl_status texture_index(loader *l, const struct aiMaterial *m, enum aiTe
 {
     *index = -1;
     struct aiString name;
-    if (aiGetMaterialTexture(m, type, 0, &name, NULL, NULL, NULL, NULL, NULL, NULL) != aiReturn_SUCCESS)
+    if (l->api.aiGetMaterialTexture(m, type, 0, &name, NULL, NULL, NULL, NULL, NULL, NULL) != aiReturn_SUCCESS)
         return IBL_OK;
     for (int i = 0; i < l->texture_count; i++)
         if (strcmp(l->texture_names[i], name.data) == 0) {
@@ -162,13 +163,14 @@ static ibl_status texture_index(loader *l, const struct aiMaterial *m, enum aiTe
 
 /* ---- materials ----------------------------------------------------------------------------- */
 
-static float get_float(const struct aiMaterial *m, const char *key, unsigned type,
-                       unsigned index, float fallback)
+static float get_float(const loader *l, const struct aiMaterial *m, const char *key,
+                       unsigned type, unsigned index, float fallback)
 {
     ai_real v;
     unsigned max = 1;
-    return aiGetMaterialFloatArray(m, key, type, index, &v, &max) == aiReturn_SUCCESS ? (float)v
-                                                                                     : fallback;
+    return l->api.aiGetMaterialFloatArray(m, key, type, index, &v, &max) == aiReturn_SUCCESS
+               ? (float)v
+               : fallback;
 }
 
 static ibl_status read_material(loader *l, int i, ibl_scene_material *out)
@@ -176,16 +178,16 @@ static ibl_status read_material(loader *l, int i, ibl_scene_material *out)
     const struct aiMaterial *m = l->ai->mMaterials[i];
     *out = ibl_scene_material_default();
     struct aiString name;
-    if (aiGetMaterialString(m, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS)
+    if (l->api.aiGetMaterialString(m, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS)
         snprintf(out->name, sizeof out->name, "%.63s", name.data);
     struct aiColor4D c;
-    if (aiGetMaterialColor(m, AI_MATKEY_BASE_COLOR, &c) == aiReturn_SUCCESS ||
-        aiGetMaterialColor(m, AI_MATKEY_COLOR_DIFFUSE, &c) == aiReturn_SUCCESS)
+    if (l->api.aiGetMaterialColor(m, AI_MATKEY_BASE_COLOR, &c) == aiReturn_SUCCESS ||
+        l->api.aiGetMaterialColor(m, AI_MATKEY_COLOR_DIFFUSE, &c) == aiReturn_SUCCESS)
         out->base_color[0] = c.r, out->base_color[1] = c.g, out->base_color[2] = c.b;
-    out->metallic = get_float(m, AI_MATKEY_METALLIC_FACTOR, 1.0f);
-    out->roughness = get_float(m, AI_MATKEY_ROUGHNESS_FACTOR, 1.0f);
+    out->metallic = get_float(l, m, AI_MATKEY_METALLIC_FACTOR, 1.0f);
+    out->roughness = get_float(l, m, AI_MATKEY_ROUGHNESS_FACTOR, 1.0f);
     double strength = i < l->strength_count ? l->strengths[i] : 1.0;
-    if (aiGetMaterialColor(m, AI_MATKEY_COLOR_EMISSIVE, &c) == aiReturn_SUCCESS) {
+    if (l->api.aiGetMaterialColor(m, AI_MATKEY_COLOR_EMISSIVE, &c) == aiReturn_SUCCESS) {
         out->emissive[0] = (float)(c.r * strength);
         out->emissive[1] = (float)(c.g * strength);
         out->emissive[2] = (float)(c.b * strength);
@@ -261,7 +263,7 @@ static ibl_status gather(loader *l, arrays *a)
 static ibl_status assimp_failure(loader *l)
 {
     char msg[300];
-    snprintf(msg, sizeof msg, "%s", aiGetErrorString());
+    snprintf(msg, sizeof msg, "%s", l->api.aiGetErrorString());
     for (char *p = msg; *p; p++)
         if (*p == '\n' || *p == '\r' || *p == '\t') *p = ' ';
     size_t n = strlen(msg);
@@ -282,22 +284,28 @@ static void loader_free(loader *l, arrays *a, ibl_scene_material *mats)
     ibl_free(l->ctx, a->uvs);
     ibl_free(l->ctx, a->indices);
     ibl_free(l->ctx, a->material_ids);
-    if (l->ai) aiReleaseImport(l->ai);
+    if (l->ai) l->api.aiReleaseImport(l->ai);
+    ibl__assimp_unload(&l->api);
 }
 
 static ibl_status load_scene(ibl_context *ctx, const char *path, int obj, ibl_scene **out)
 {
     if (!ctx || !path || !out) return IBL_ERR_INVALID_ARGUMENT;
     *out = NULL;
-    loader l = {ctx, path, NULL, NULL, 0, NULL, NULL, 0, 0, obj};
+    loader l;
+    memset(&l, 0, sizeof l);
+    l.ctx = ctx;
+    l.path = path;
+    l.obj = obj;
     arrays a;
     memset(&a, 0, sizeof a);
     ibl_scene_material *mats = NULL;
     ibl_status st = read_strengths(&l); /* also the readable-file and JSON checks */
+    if (st == IBL_OK) st = ibl__assimp_load(ctx, path, &l.api);
     if (st == IBL_OK) {
-        l.ai = aiImportFile(path, aiProcess_Triangulate | aiProcess_PreTransformVertices |
-                                      aiProcess_GenSmoothNormals | aiProcess_FlipUVs |
-                                      aiProcess_ValidateDataStructure);
+        l.ai = l.api.aiImportFile(path, aiProcess_Triangulate | aiProcess_PreTransformVertices |
+                                            aiProcess_GenSmoothNormals | aiProcess_FlipUVs |
+                                            aiProcess_ValidateDataStructure);
         if (!l.ai) st = assimp_failure(&l);
     }
     if (st == IBL_OK && l.ai->mNumMaterials == 0)

@@ -115,27 +115,30 @@ static void vertex_attributes(ibl_scene *s, const ibl_scene_desc *d)
 
 static ibl_status build_embree(ibl_context *ctx, ibl_scene *s, const char *name)
 {
-    s->device = rtcNewDevice("threads=1,set_affinity=0,verbose=0");
+    ibl_status st = ibl__embree_load(ctx, name, &s->embree);
+    if (st != IBL_OK) return st;
+    const ibl__embree *rtc = &s->embree;
+    s->device = rtc->rtcNewDevice("threads=1,set_affinity=0,verbose=0");
     if (!s->device)
         return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: Embree could not create a device (%d)",
-                         name, (int)rtcGetDeviceError(NULL));
-    s->rtc = rtcNewScene(s->device);
-    rtcSetSceneFlags(s->rtc, RTC_SCENE_FLAG_ROBUST);
-    rtcSetSceneBuildQuality(s->rtc, RTC_BUILD_QUALITY_HIGH);
-    RTCGeometry g = rtcNewGeometry(s->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                       3 * sizeof(float), (size_t)s->vertex_count);
-    unsigned *ix = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                           3 * sizeof(unsigned), (size_t)s->triangle_count);
+                         name, (int)rtc->rtcGetDeviceError(NULL));
+    s->rtc = rtc->rtcNewScene(s->device);
+    rtc->rtcSetSceneFlags(s->rtc, RTC_SCENE_FLAG_ROBUST);
+    rtc->rtcSetSceneBuildQuality(s->rtc, RTC_BUILD_QUALITY_HIGH);
+    RTCGeometry g = rtc->rtcNewGeometry(s->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    float *v = rtc->rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                            3 * sizeof(float), (size_t)s->vertex_count);
+    unsigned *ix = rtc->rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                3 * sizeof(unsigned), (size_t)s->triangle_count);
     if (v && ix) {
         memcpy(v, s->positions, (size_t)s->vertex_count * 3 * sizeof(float));
         memcpy(ix, s->indices, (size_t)s->triangle_count * 3 * sizeof(unsigned));
-        rtcCommitGeometry(g);
-        rtcAttachGeometry(s->rtc, g);
+        rtc->rtcCommitGeometry(g);
+        rtc->rtcAttachGeometry(s->rtc, g);
     }
-    rtcReleaseGeometry(g);
-    if (v && ix) rtcCommitScene(s->rtc);
-    enum RTCError e = rtcGetDeviceError(s->device);
+    rtc->rtcReleaseGeometry(g);
+    if (v && ix) rtc->rtcCommitScene(s->rtc);
+    enum RTCError e = rtc->rtcGetDeviceError(s->device);
     if (!v || !ix || e != RTC_ERROR_NONE)
         return ibl__fail(ctx, e == RTC_ERROR_OUT_OF_MEMORY ? IBL_ERR_OUT_OF_MEMORY : IBL_ERR_FORMAT,
                          "%s: Embree could not build the scene (error %d)", name, (int)e);
@@ -189,8 +192,9 @@ void ibl_scene_destroy(ibl_scene *s)
 {
     if (!s) return;
     ibl_context *ctx = s->ctx;
-    if (s->rtc) rtcReleaseScene(s->rtc);
-    if (s->device) rtcReleaseDevice(s->device);
+    if (s->rtc) s->embree.rtcReleaseScene(s->rtc);
+    if (s->device) s->embree.rtcReleaseDevice(s->device);
+    ibl__embree_unload(&s->embree);
     for (int i = 0; i < s->texture_count; i++) ibl_image_free(ctx, &s->textures[i]);
     ibl_free(ctx, s->textures);
     ibl_free(ctx, s->positions);
@@ -242,7 +246,7 @@ int ibl_scene_intersect(const ibl_scene *s, ibl_vec3 o, ibl_vec3 d, float tmin, 
     init_ray(&rh.ray, o, d, tmin, tmax);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(s->rtc, &ic, &rh);
+    s->embree.rtcIntersect1(s->rtc, &ic, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
     int t = (int)rh.hit.primID;
     float w[3] = {1.0f - rh.hit.u - rh.hit.v, rh.hit.u, rh.hit.v};
@@ -277,7 +281,7 @@ int ibl_scene_occluded(const ibl_scene *s, ibl_vec3 o, ibl_vec3 d, float tmin, f
     rtcInitIntersectContext(&ic);
     struct RTCRay r;
     init_ray(&r, o, d, tmin, tmax);
-    rtcOccluded1(s->rtc, &ic, &r);
+    s->embree.rtcOccluded1(s->rtc, &ic, &r);
     return r.tfar < 0.0f; /* Embree sets tfar to -inf on a hit */
 }
 

@@ -4,8 +4,7 @@
 #define IBL_SCENE_INTERNAL_H
 
 #include "ibl/scene.h"
-
-#include <embree3/rtcore.h>
+#include "scene/libraries.h"
 
 struct ibl_scene {
     ibl_context *ctx;
@@ -21,6 +20,7 @@ struct ibl_scene {
     ibl_image *textures;
     int emissive_count;   /* triangles whose material emits        */
     float bounds_min[3], bounds_max[3];
+    ibl__embree embree; /* loaded for the scene (libraries.h) */
     RTCDevice device;
     RTCScene rtc;
 };
