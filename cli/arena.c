@@ -31,12 +31,16 @@
  * library's ibl_alloc keeps no header in its large blocks either (src/core/context.c): the
  * blocks this returns from the arena start on a page boundary, which is what it asks of them.
  *
- * Kept, but not without end: freed arena memory whose pages are still there is counted, and
- * beyond ARENA_KEEP bytes the largest such free blocks are given back to the kernel
- * (madvise MADV_DONTNEED: the address range stays reserved, its pages are dropped at once, so
- * the RSS falls; the next use faults in zeroed pages). ARENA_KEEP is above what the usual
- * commands ever free (the 512 GGX chain peaks at 193 MB), so their reuse is untouched; a 16k
- * input's 2 GiB image, freed once it is a cube, goes back.
+ * Kept, but never beside fresh memory: freed arena memory whose pages are still there is
+ * counted, and only when a request fits no free block and takes fresh address space from the
+ * arena's top are the free blocks with the most resident pages given back to the kernel, as
+ * many bytes as the request takes (madvise MADV_DONTNEED: the address range stays reserved,
+ * its pages are dropped at once; a later use faults in zeroed pages). So the RSS never grows
+ * while freed pages sit idle, the peak is the most the command has in use at once (plus the
+ * free blocks too small for anything), and freed memory that a later request fits is reused
+ * with its pages: giving back the 1024 chain's freed working buffers before the output chain
+ * was allocated made the chain fault 95 MB in again, and the 2048 chain ~1.9 GB
+ * (bench/bench_stages.c shows each stage's faults).
  *
  * One mutex: the library allocates from its worker threads as well, but rarely (a few hundred
  * calls per command, a few dozen blocks alive at once, so the lists are searched in order). */
@@ -44,7 +48,6 @@
 #define ARENA_MIN ((size_t)64 << 10)
 #define ARENA_ALIGN ((size_t)2 << 20)
 #define ARENA_RESERVE ((size_t)64 << 30)
-#define ARENA_KEEP ((size_t)256 << 20)
 
 /* One block of the arena, in use or free. The blocks tile [base, top) in address order. */
 typedef struct span {
@@ -117,6 +120,32 @@ static void unlink_span(span *s)
     free(s);
 }
 
+/* Drops the pages of a free block (spans start and end on page boundaries). */
+static void arena_release(span *s)
+{
+    if (madvise(s->start, s->size, MADV_DONTNEED) == 0) {
+        arena.kept -= s->resident;
+        s->resident = 0;
+    }
+}
+
+/* Before `fresh` bytes are taken from the arena's top: gives back the free blocks with the
+ * most resident bytes until that many are gone (or none are left). */
+static void arena_release_for(size_t fresh)
+{
+    size_t released = 0;
+    while (released < fresh) {
+        span *most = NULL;
+        for (span *s = arena.first; s; s = s->next)
+            if (!s->used && s->resident && (!most || s->resident > most->resident)) most = s;
+        if (!most) break;
+        size_t before = arena.kept;
+        arena_release(most);
+        if (arena.kept == before) break; /* madvise refused: keep the pages */
+        released += before - arena.kept;
+    }
+}
+
 /* A block of `size` bytes (a multiple of ARENA_MIN) from the arena, or NULL. */
 static span *arena_take(size_t size)
 {
@@ -143,6 +172,7 @@ static span *arena_take(size_t size)
         return best;
     }
     if ((size_t)(arena.end - arena.top) < size) return NULL;
+    arena_release_for(size);
     span *s = malloc(sizeof *s);
     if (!s) return NULL;
     s->start = arena.top;
@@ -154,28 +184,6 @@ static span *arena_take(size_t size)
     return s;
 }
 
-/* Drops the pages of a free block (spans start and end on page boundaries). */
-static void arena_release(span *s)
-{
-    if (madvise(s->start, s->size, MADV_DONTNEED) == 0) {
-        arena.kept -= s->resident;
-        s->resident = 0;
-    }
-}
-
-/* Gives back the free blocks with the most resident bytes until at most ARENA_KEEP are kept. */
-static void arena_trim(void)
-{
-    while (arena.kept > ARENA_KEEP) {
-        span *most = NULL;
-        for (span *s = arena.first; s; s = s->next)
-            if (!s->used && s->resident && (!most || s->resident > most->resident)) most = s;
-        if (!most) break;
-        size_t before = arena.kept;
-        arena_release(most);
-        if (arena.kept == before) break; /* madvise refused: keep the pages */
-    }
-}
 
 /* Frees the block starting at p (nothing when no block in use starts there). */
 static void arena_give(char *p)
@@ -197,7 +205,6 @@ static void arena_give(char *p)
         prev->resident += s->resident;
         unlink_span(s);
     }
-    arena_trim();
 }
 
 void *cli_arena_alloc(size_t bytes, void *user)
