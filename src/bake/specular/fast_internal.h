@@ -293,6 +293,10 @@ struct precomputed_piece {
     int correction_difference; /* the corrections are summed as moment leaf minus uniform leaf on
                                 * the piece's correction grid; the corrected texels stay in the
                                 * padded source */
+    /* a one-shot plan's piece on a Lagrange grid computes its weights once, at the run: its
+     * normalisers are found with them (ibl__fast_precomputed_refill) and added to the grid's
+     * then, and the level's bars take the piece's integral instead (gathering.c) */
+    int normalisers_at_run;
     int correction_capacity, correction_block_count;
     float *correction_records; /* run: in the plan's correction pool                           */
     float *correction_cones;
@@ -490,6 +494,7 @@ void ibl__fast_uniform_level(ibl_specular_plan *p, int level);
 /* ---- pieces.c ---- */
 ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level);
 double ibl__fast_piece_peak(const lobe_piece *piece);
+double ibl__fast_piece_integral(const lobe_piece *piece);
 
 /* ---- leaf_sums.c ---- */
 void ibl__fast_normalisers(ibl_specular_plan *p, int level);

@@ -352,6 +352,6 @@ void ibl__fast_normalisers(ibl_specular_plan *p, int level)
             for (size_t i = 3; i < face; i += 4) gr->sums[f * face + i] = gr->sums[i];
     }
     for (int k = 0; k < lv->piece_count; k++)
-        if (lv->pieces[k].precomputed)
+        if (lv->pieces[k].precomputed && !lv->pieces[k].precomputed->normalisers_at_run)
             ibl__fast_precomputed_normalisers(lv->pieces[k].precomputed, lv->grids[lv->pieces[k].grid].sums);
 }

@@ -98,6 +98,16 @@ double ibl__fast_piece_peak(const lobe_piece *pc)
     return peak;
 }
 
+/* The piece's integral over the sphere, 2 pi times the integral of g over u (dOmega = 2 pi du
+ * about the lobe's axis), by the trapezoid rule on its table: what its normaliser is at any
+ * direction, to the table's and the leaves' precision. */
+double ibl__fast_piece_integral(const lobe_piece *pc)
+{
+    double sum = 0.5 * (pc->table[0] + pc->table[2 * PIECE_TABLE_STEPS]);
+    for (int i = 1; i < PIECE_TABLE_STEPS; i++) sum += pc->table[2 * i];
+    return 2.0 * IBL_PI * sum * (pc->u_hi - pc->u_lo) / PIECE_TABLE_STEPS;
+}
+
 /* The coarsest pyramid level whose texels are at most `width` wide (0 if none is) and whose
  * faces are at least MIN_SOURCE_EDGE texels. */
 static int source_level_for(const ibl_specular_plan *p, double width)

@@ -373,10 +373,14 @@ static ibl_status precompute_piece(ibl_specular_plan *p, int level, int k)
                                   ibl_cube_texel_solid_angle(S, S / 2, S / 2));
         if (!(c->weight_scale > 0)) c->weight_scale = 1.0f;
         /* a one-shot plan keeps the rows and the normalisers only: its weights are made again
-         * for the products (ibl__fast_precomputed_refill) */
+         * for the products (ibl__fast_precomputed_refill); on a Lagrange grid, the core of a
+         * narrow Phong lobe with the most weights a point of any piece, they are made there
+         * only, and so are the normalisers (a Lagrange grid holds no other piece's, so they
+         * add up to the same bits) */
+        c->normalisers_at_run = p->one_shot && gr->lagrange;
         job.weights = c->weights;
         if (c->weights) ibl_parallel_for(ctx, (int)bases, weights_task, &job);
-        else if (one_shot_normalisers(ctx, &job) != IBL_OK) packed = -1;
+        else if (!c->normalisers_at_run && one_shot_normalisers(ctx, &job) != IBL_OK) packed = -1;
         /* the normalisers of the bases below the diagonal: their mirrors' (the same weights) */
         for (int b = 0; b < c->base_edge; b++)
             for (int a = b + 1; a < c->base_edge; a++)
@@ -417,5 +421,13 @@ ibl_status ibl__fast_precomputed_refill(ibl_specular_plan *p, int level, int k)
         ibl_parallel_for(ctx, (int)bases, weights_task, &job);
     }
     ibl_free(ctx, geometry);
+    if (st == IBL_OK && c->normalisers_at_run) {
+        /* the normalisers the plan left to this run: the bases below the diagonal take their
+         * mirrors', as precompute_piece does, and all are added to the grid's sums */
+        for (int b = 0; b < c->base_edge; b++)
+            for (int a = b + 1; a < c->base_edge; a++)
+                c->normaliser[b * c->base_edge + a] = c->normaliser[a * c->base_edge + b];
+        ibl__fast_precomputed_normalisers(c, lv->grids[pc->grid].sums);
+    }
     return st;
 }
