@@ -14,6 +14,7 @@
 
 #if IBL_HAVE_X86_KERNELS
 #include <immintrin.h>
+#include <math.h>
 
 #define KERNEL_INLINE IBL_TARGET_AVX2 __attribute__((always_inline)) static inline
 
@@ -26,6 +27,7 @@ typedef struct lobe_vectors {
     __m256 n1, three, amin, tiny; /* Phong's mean over the spread at the horizon */
     __m256 u_start, u_end; /* the inner step's start, the outer's end: g = g'' = 0 outside */
     int has_in, has_out;
+    int phong_series;      /* Phong x^n through series in u (phong_series_leaf)              */
 } lobe_vectors;
 
 IBL_TARGET_AVX2 static void lobe_setup(const lobe_piece *pc, lobe_vectors *k)
@@ -50,6 +52,11 @@ IBL_TARGET_AVX2 static void lobe_setup(const lobe_piece *pc, lobe_vectors *k)
     k->u_end = _mm256_set1_ps(k->has_out ? (1.0f + pc->outer.offset) / pc->outer.scale : 4.0f);
     /* ... and psi_in = 1 = psi_out (p0 = p1 = p2 = 0) while s_in = u scale - offset <= 0 */
     k->u_start = _mm256_set1_ps(k->has_in ? pc->inner.offset / pc->inner.scale : -1.0f);
+    /* the series' first dropped terms, n u^7 / 7 in the exponent and u^7 in 1 / x, at the
+     * piece's end */
+    double u7 = pow(pc->u_hi, 7.0);
+    k->phong_series = !pc->is_ggx && pc->u_hi <= PHONG_SERIES_MAX_U &&
+                      pc->phong_n * u7 / 7.0 <= PHONG_SERIES_MAX_ERROR;
 }
 
 /* ln x for x in (0, 1]: x = m 2^e with m in [sqrt(1/2), sqrt(2)), ln m = 2 atanh(r),
@@ -135,6 +142,31 @@ KERNEL_INLINE __m256 phong_horizon(const lobe_vectors *k, __m256 w, __m256 u, __
     return _mm256_blendv_ps(w, _mm256_mul_ps(box, p0), near);
 }
 
+/* Phong's f = x^n, -f' and f'' in u = 1 - x, for the pieces of a narrow lobe (u <= 0.1 where
+ * they are not zero): ln x = -(u + u^2/2 + ... + u^6/6) and 1 / x = 1 + u + ... + u^6 by Horner,
+ * whose first dropped terms are within PHONG_SERIES_MAX_ERROR of f (relative) and 1e-7 of 1 / x
+ * at the piece's end (lobe_setup). This is the closed form without vector_log's division and
+ * 1 / x's, and from u itself: x = 1 - u rounded to a float moves n ln x by up to n 6e-8 (1.2e-4
+ * at n = 2049) next to the axis, where u ~ 1e-4. Beyond the piece's end (its outer step, or
+ * for the last piece, the lobe's 1e-9 cull, u >= 20.7 / n) the truncated series only keeps f
+ * as small: every term is positive. Nor does the horizon's closed-form mean (phong_horizon)
+ * apply: it takes texels with u >= 1/3, where such a lobe is below (2/3)^200. */
+KERNEL_INLINE void phong_series_leaf(const lobe_vectors *k, __m256 u, __m256 *f0, __m256 *f1,
+                                     __m256 *f2)
+{
+    __m256 s = _mm256_fmadd_ps(u, _mm256_set1_ps(1.0f / 6.0f), _mm256_set1_ps(1.0f / 5.0f));
+    s = _mm256_fmadd_ps(u, s, _mm256_set1_ps(0.25f));
+    s = _mm256_fmadd_ps(u, s, _mm256_set1_ps(1.0f / 3.0f));
+    s = _mm256_fmadd_ps(u, s, k->half);
+    s = _mm256_fmadd_ps(u, s, k->one);
+    __m256 ix = _mm256_fmadd_ps(u, k->one, k->one);
+    for (int i = 0; i < 5; i++) ix = _mm256_fmadd_ps(u, ix, k->one);
+    *f0 = vector_exp(_mm256_mul_ps(_mm256_sub_ps(k->zero, k->n), _mm256_mul_ps(u, s)));
+    __m256 fx = _mm256_mul_ps(*f0, ix);
+    *f1 = _mm256_sub_ps(k->zero, _mm256_mul_ps(k->n, fx));
+    *f2 = _mm256_mul_ps(k->nn1, _mm256_mul_ps(fx, ix));
+}
+
 /* g + g'' q / 2 of the piece at u, in closed form. */
 KERNEL_INLINE __m256 vector_leaf(const lobe_vectors *k, int ggx, __m256 u, __m256 q)
 {
@@ -152,6 +184,8 @@ KERNEL_INLINE __m256 vector_leaf(const lobe_vectors *k, int ggx, __m256 u, __m25
         f1 = _mm256_and_ps(front, _mm256_fnmsub_ps(A, _mm256_mul_ps(_mm256_add_ps(k->slope, k->slope), xi), A));
         f2 = _mm256_and_ps(front, _mm256_mul_ps(_mm256_mul_ps(A, it),
                                                 _mm256_fmadd_ps(k->slope6, xi, _mm256_mul_ps(k->c4, k->slope))));
+    } else if (k->phong_series) {
+        phong_series_leaf(k, u, &f0, &f1, &f2);
     } else {
         /* Phong: f = x^n, f' = -n f / x, f'' = n (n - 1) f / x^2 (in u = 1 - x) */
         __m256 xs = _mm256_max_ps(x, k->xmin), ix = _mm256_div_ps(k->one, xs);
@@ -174,7 +208,7 @@ KERNEL_INLINE __m256 vector_leaf(const lobe_vectors *k, int ggx, __m256 u, __m25
     __m256 g = _mm256_mul_ps(f0, p0);
     __m256 g2 = _mm256_fmadd_ps(f2, p0, _mm256_fmadd_ps(_mm256_add_ps(f1, f1), p1, _mm256_mul_ps(f0, p2)));
     __m256 w = _mm256_fmadd_ps(_mm256_mul_ps(k->half, g2), q, g);
-    return ggx ? w : phong_horizon(k, w, u, q, xraw, p0);
+    return ggx || k->phong_series ? w : phong_horizon(k, w, u, q, xraw, p0);
 }
 
 IBL_TARGET_AVX2 static double horizontal_sum(__m256 v)

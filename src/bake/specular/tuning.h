@@ -86,6 +86,12 @@
 /* Phong rings stop where the lobe falls below 1e-9 of its peak (x^n dies fast; GGX's long tail
  * goes to the horizon). */
 #define PHONG_CULL 1e-9
+/* The AVX2 kernels evaluate the Phong pieces that end before u = 0.1 by series in u (ln x to
+ * u^6 / 6, kernels_avx2.c), when the first dropped term moves f by at most 1e-6 of itself at
+ * the piece's end: the pieces of lobes from n ~ 200 on, whose leaves are most of the narrow
+ * levels' work (cmft's exponents 2049, 862 and 363 at 256). */
+#define PHONG_SERIES_MAX_U 0.1
+#define PHONG_SERIES_MAX_ERROR 1e-6
 /* Steps of the tabulated piece (portable kernels and the bars): the portable and AVX2 sums then
  * differ by ~1e-4 of a value. */
 #define PIECE_TABLE_STEPS 2048
