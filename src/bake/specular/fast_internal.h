@@ -231,6 +231,7 @@ typedef struct lobe_piece {
      * weights (if precomputed over a coarse level) go on this coarser grid, in difference form
      * (gathering.c) */
     int has_correction_grid, correction_grid;
+    int split_ring;        /* the outer part of a split core (pieces.c, split_core_step)        */
     precomputed_piece *precomputed; /* its weights, when precomputed (NULL: summed by leaves) */
 } lobe_piece;
 
