@@ -223,6 +223,7 @@ typedef struct lobe_piece {
     /* in closed form for the AVX2 kernels: GGX f = (1 - u) alpha4 / T^2, T = alpha2 + slope u */
     float ggx_alpha2, ggx_slope, ggx_alpha4;
     float phong_n;         /* Phong exponent                                                   */
+    int phong_series;      /* the AVX2 kernels may take x^n by series in u (kernels_avx2.c)     */
     int is_ggx;
     psi_step outer, inner;
     int bright_apart;      /* a ring on a coarse grid whose bright texels are summed apart      */
@@ -231,7 +232,6 @@ typedef struct lobe_piece {
      * weights (if precomputed over a coarse level) go on this coarser grid, in difference form
      * (gathering.c) */
     int has_correction_grid, correction_grid;
-    int split_ring;        /* the outer part of a split core (pieces.c, split_core_step)        */
     precomputed_piece *precomputed; /* its weights, when precomputed (NULL: summed by leaves) */
 } lobe_piece;
 

@@ -71,8 +71,7 @@ ibl_status ibl__fast_plan_bars(ibl_specular_plan *p, int level)
         correction_bounds(pc, den, c);
         /* no more blocks than the level has: a capacity it cannot fill would only take memory */
         size_t blocks = source_block_count(&p->pyramid[c->source_level]);
-        int cap = pc->split_ring ? SPLIT_RING_CORRECTION_BLOCKS : CORRECTION_BLOCKS;
-        c->correction_capacity = blocks < (size_t)cap ? (int)blocks : cap;
+        c->correction_capacity = blocks < CORRECTION_BLOCKS ? (int)blocks : CORRECTION_BLOCKS;
         p->correction_pool_blocks += (size_t)c->correction_capacity;
         c->correction_cones =
             ibl_alloc(p->ctx, cone_slots(c->correction_capacity) * CONE_FLOATS * sizeof(float));

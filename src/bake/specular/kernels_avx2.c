@@ -14,7 +14,6 @@
 
 #if IBL_HAVE_X86_KERNELS
 #include <immintrin.h>
-#include <math.h>
 
 #define KERNEL_INLINE IBL_TARGET_AVX2 __attribute__((always_inline)) static inline
 
@@ -52,11 +51,7 @@ IBL_TARGET_AVX2 static void lobe_setup(const lobe_piece *pc, lobe_vectors *k)
     k->u_end = _mm256_set1_ps(k->has_out ? (1.0f + pc->outer.offset) / pc->outer.scale : 4.0f);
     /* ... and psi_in = 1 = psi_out (p0 = p1 = p2 = 0) while s_in = u scale - offset <= 0 */
     k->u_start = _mm256_set1_ps(k->has_in ? pc->inner.offset / pc->inner.scale : -1.0f);
-    /* the series' first dropped terms, n u^7 / 7 in the exponent and u^7 in 1 / x, at the
-     * piece's end */
-    double u7 = pow(pc->u_hi, 7.0);
-    k->phong_series = !pc->is_ggx && pc->u_hi <= PHONG_SERIES_MAX_U &&
-                      pc->phong_n * u7 / 7.0 <= PHONG_SERIES_MAX_ERROR;
+    k->phong_series = pc->phong_series;
 }
 
 /* ln x for x in (0, 1]: x = m 2^e with m in [sqrt(1/2), sqrt(2)), ln m = 2 atanh(r),
@@ -145,7 +140,7 @@ KERNEL_INLINE __m256 phong_horizon(const lobe_vectors *k, __m256 w, __m256 u, __
 /* Phong's f = x^n, -f' and f'' in u = 1 - x, for the pieces of a narrow lobe (u <= 0.1 where
  * they are not zero): ln x = -(u + u^2/2 + ... + u^6/6) and 1 / x = 1 + u + ... + u^6 by Horner,
  * whose first dropped terms are within PHONG_SERIES_MAX_ERROR of f (relative) and 1e-7 of 1 / x
- * at the piece's end (lobe_setup). This is the closed form without vector_log's division and
+ * at the piece's end (lobe_piece.phong_series, pieces.c). This is the closed form without vector_log's division and
  * 1 / x's, and from u itself: x = 1 - u rounded to a float moves n ln x by up to n 6e-8 (1.2e-4
  * at n = 2049) next to the axis, where u ~ 1e-4. Beyond the piece's end (its outer step, or
  * for the last piece, the lobe's 1e-9 cull, u >= 20.7 / n) the truncated series only keeps f

@@ -76,6 +76,10 @@ static ibl_status piece_describe(ibl_context *ctx, const ibl__lobe *lobe, double
     pc->table_scale = (float)(PIECE_TABLE_STEPS / (pc->u_hi - pc->u_lo));
     pc->is_ggx = lobe->kind == IBL__LOBE_GGX;
     pc->phong_n = (float)lobe->n;
+    /* the series' first dropped terms, n u^7 / 7 in the exponent and u^7 in 1 / x, at the
+     * piece's end */
+    pc->phong_series = !pc->is_ggx && pc->u_hi <= PHONG_SERIES_MAX_U &&
+                       lobe->n * pow(pc->u_hi, 7.0) / 7.0 <= PHONG_SERIES_MAX_ERROR;
     double alpha2 = lobe->alpha * lobe->alpha;
     pc->ggx_alpha2 = (float)alpha2;
     pc->ggx_slope = (float)(0.5 * (1.0 - alpha2));
@@ -205,51 +209,6 @@ static void place_core(const ibl_specular_plan *p, level_plan *lv, int output_ed
     }
 }
 
-/* Where a Phong core is split (0: it is not), as the scale of its inner step in u.
- *
- * The core is summed over the coarsest level whose texels are at most 1/2.5 of the half width,
- * so the dyadic levels leave it between 2.5 and 5 texels a half width; its weights cover the
- * disc out to the end of its step (4 half widths), ~16 (h / t)^2 pi texels for texels t wide.
- * Near 5 texels a half width (cmft's exponent 2049 at 256: 4.6) most of them lie where the
- * lobe is under 1/16 of its peak, on texels twice as fine as that part needs. There the core
- * is cut in two by the same partition of unity: an inner core whose step starts at A, summed
- * as before, and a *split ring* from A to the core's own step, summed over the next coarser
- * level like any ring (texels at most RING_SOURCE_TEXEL_PRECOMPUTED A wide, their centroid
- * corrections gathered) but on the core's own grid, so that the two add up at the grid points
- * to the core they replace and the grid's interpolation is unchanged. A is the smallest inner
- * radius the coarser level allows a ring; the weights become ~(4.4^2 + 4 (h / t)^2) pi, half
- * of them at 4.6 texels a half width. Only for smooth Phong cores (the Lagrange grids; a lobe
- * reaching the horizon keeps its core whole) on centred directions, from
- * SPLIT_CORE_TEXELS_PER_HALF_WIDTH texels a half width, and only when A is at least
- * SPLIT_CORE_MIN_HALF_WIDTHS: the split ring must not reach into the lobe's peak. */
-static double split_core_step(const ibl_specular_plan *p, const level_plan *lv, int core_level,
-                              double core_end, double acc)
-{
-    const ibl__lobe *lobe = &lv->lobe;
-    if (lobe->kind != IBL__LOBE_PHONG || !(lobe->horizon < PHONG_CULL) || !centred_directions(p))
-        return 0.0;
-    if (core_level + 1 >= p->pyramid_levels || p->pyramid[core_level + 1].edge < MIN_SOURCE_EDGE)
-        return 0.0;
-    double half = lobe->half_angle, texel = texel_angle(p->pyramid[core_level].edge);
-    if (half < SPLIT_CORE_TEXELS_PER_HALF_WIDTH * acc * texel) return 0.0;
-    /* a hair wider than the coarser texel allows, so that source_level_for picks that level */
-    double A = texel_angle(p->pyramid[core_level + 1].edge) / (RING_SOURCE_TEXEL_PRECOMPUTED * acc) * 1.0001;
-    if (A < SPLIT_CORE_MIN_HALF_WIDTHS * half || A >= core_end) return 0.0;
-    return 1.0 - cos(A);
-}
-
-/* The split ring (split_core_step) over pyramid level `level`, on the core's grid and with the
- * core's correction grid: the core's sum at the grid points, in two parts. */
-static void place_split_ring(level_plan *lv, int level, lobe_piece *pc)
-{
-    const lobe_piece *core = &lv->pieces[0];
-    pc->source_level = level;
-    pc->split_ring = 1;
-    pc->grid = core->grid;
-    pc->has_correction_grid = core->has_correction_grid;
-    pc->correction_grid = core->correction_grid;
-}
-
 /* Every grid's leaf-sum tasks (6 faces of tiles) and its sums. */
 static ibl_status allocate_grids(ibl_specular_plan *p, level_plan *lv)
 {
@@ -294,11 +253,6 @@ ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level)
      * reaches that end is the last one, without an outer step: the pieces still add up to the
      * lobe exactly, up to the cull. */
     const double u_cull = cull > 0 ? 1.0 - pow(cull, 1.0 / lobe->n) : 2.0;
-    /* a split core's inner step: the core ends at U_split, and the ring from U_split to the
-     * core's own step (U) is summed over the next coarser level on the core's grid */
-    const double U_split = split_core_step(p, lv, core_level, core_end, acc);
-    const double U_core = U;
-    if (U_split > 0) U = U_split;
     double previous_U = 0.0, inner[MAX_PIECES]; /* each piece's inner step scale (0: none) */
     for (int j = 0; j < MAX_PIECES; j++) {
         lobe_piece *pc = &lv->pieces[lv->piece_count];
@@ -316,8 +270,6 @@ ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level)
         if (j == 0) {
             pc->source_level = core_level;
             place_core(p, lv, n, acc, pc);
-        } else if (j == 1 && U_split > 0) {
-            place_split_ring(lv, core_level + 1, pc);
         } else {
             place_ring(p, lv, n, acc, pc);
         }
@@ -343,7 +295,7 @@ ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level)
         }
         if (last) break;
         previous_U = U;
-        U = j == 0 && U_split > 0 ? U_core : 4.0 * U;
+        U *= 4.0;
     }
     return allocate_grids(p, lv);
 }

@@ -71,15 +71,6 @@
  * (docs/SPECULAR.md "Accuracy"): that level went from 0.28% to 0.39% RMS at worst (interior)
  * and from 3.0% to 3.7% max (night); the other chains' grids are the same at 0.31 and 0.45. */
 #define CORE_GRID_SPACING_LAGRANGE 0.45
-/* A smooth Phong core summed over texels finer than 1/4 of its half width is split in two
- * (pieces.c, split_core_step): its inner part over those texels, the rest, from A on, as a ring
- * over the next coarser level on the core's grid -- provided A, the smallest inner radius that
- * level allows a ring, is at least 0.95 half widths (the ring then starts where the lobe is
- * under 0.53 of its peak). cmft's exponent 2049 at 256 (4.6 texels a half width, A = 0.966
- * half widths): half the weights. */
-#define SPLIT_CORE_TEXELS_PER_HALF_WIDTH 4.0
-#define SPLIT_CORE_MIN_HALF_WIDTHS 0.95
-#define SPLIT_RING_CORRECTION_BLOCKS 256
 /* Lagrange grids have at least 32 points a face edge: on 16 the face's own curvature (texels
  * 1.38 times the mean at its centre, 0.6 at its corners) cost phong level 3 of the 256 chain
  * (exponent 15.6) 0.2% RMS and up to 2.8% max. */
