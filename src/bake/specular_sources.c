@@ -98,12 +98,6 @@ struct ibl_specular_sources {
     int working_size;
     int groups;
     source_group *group;
-    /* the cells of the group being made (then copied to its own block: every block the
-     * sources keep while the chain is filtered stays small, so an allocator that keeps
-     * freed large blocks for reuse, as the CLI's, is not made to grow past them) */
-    double *cell_dir; /* 3 per cell, unit            */
-    double *cell_w;   /* 3 per cell: solid angle x radiance (negative for the working cube) */
-    size_t cells, capacity;
 };
 
 static double texel_angle(int size)
@@ -128,9 +122,20 @@ static double lobe_normaliser(const ibl__lobe *lobe)
     return IBL_TWO_PI * lobe->a4 / (k * k) * (log(t1 / t0) + (1.0 + k) * (1.0 / t1 - 1.0 / t0));
 }
 
-static ibl_status add_cell(ibl_specular_sources *s, const double d[3], const double w[3])
+/* The cells of a group being made, on the thread that makes it (then copied to the group's
+ * own block: every block the sources keep while the chain is filtered stays small, so an
+ * allocator that keeps freed large blocks for reuse, as the CLI's, is not made to grow past
+ * them). */
+typedef struct cell_list {
+    ibl_context *ctx;
+    double *dir; /* 3 per cell, unit            */
+    double *w;   /* 3 per cell: solid angle x radiance (negative for the working cube) */
+    size_t count, capacity;
+} cell_list;
+
+static ibl_status add_cell(cell_list *s, const double d[3], const double w[3])
 {
-    if (s->cells == s->capacity) {
+    if (s->count == s->capacity) {
         size_t cap = s->capacity ? 2 * s->capacity : 1024;
         double *dir = ibl_alloc(s->ctx, cap * 3 * sizeof(double));
         double *wt = dir ? ibl_alloc(s->ctx, cap * 3 * sizeof(double)) : NULL;
@@ -138,17 +143,17 @@ static ibl_status add_cell(ibl_specular_sources *s, const double d[3], const dou
             ibl_free(s->ctx, dir);
             return ibl_context_status(s->ctx);
         }
-        if (s->cells) {
-            memcpy(dir, s->cell_dir, s->cells * 3 * sizeof(double));
-            memcpy(wt, s->cell_w, s->cells * 3 * sizeof(double));
+        if (s->count) {
+            memcpy(dir, s->dir, s->count * 3 * sizeof(double));
+            memcpy(wt, s->w, s->count * 3 * sizeof(double));
         }
-        ibl_free(s->ctx, s->cell_dir);
-        ibl_free(s->ctx, s->cell_w);
-        s->cell_dir = dir, s->cell_w = wt, s->capacity = cap;
+        ibl_free(s->ctx, s->dir);
+        ibl_free(s->ctx, s->w);
+        s->dir = dir, s->w = wt, s->capacity = cap;
     }
-    memcpy(s->cell_dir + s->cells * 3, d, 3 * sizeof(double));
-    memcpy(s->cell_w + s->cells * 3, w, 3 * sizeof(double));
-    s->cells++;
+    memcpy(s->dir + s->count * 3, d, 3 * sizeof(double));
+    memcpy(s->w + s->count * 3, w, 3 * sizeof(double));
+    s->count++;
     return IBL_OK;
 }
 
@@ -201,29 +206,58 @@ static double luminance(const float *p)
     return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
 }
 
-/* The solid-angle-weighted mean luminance of the image (rows weighted by their exact solid
- * angles; the working cube's would cost a texel solid angle each). */
-static double image_mean_luminance(const ibl_image *im)
+/* The whole-image scans (the mean luminance, the source pixels) run in SCAN_BANDS bands of
+ * rows through the context's parallel-for: a fixed split, and each band's results are merged
+ * in band order, so the result does not depend on the thread count. */
+#define SCAN_BANDS 16
+
+static int band_row(int H, int band)
 {
-    int W = im->width, H = im->height;
-    double sum = 0;
-    for (int y = 0; y < H; y++) {
-        double row = 0;
-        const float *p = im->pixels + (size_t)y * W * 4;
-        for (int x = 0; x < W; x++) row += luminance(p + (size_t)x * 4);
-        sum += row * (IBL_TWO_PI / W) * (cos(IBL_PI * y / H) - cos(IBL_PI * (y + 1) / H));
-    }
-    return sum / (4.0 * IBL_PI);
+    return (int)((long long)H * band / SCAN_BANDS);
 }
 
+typedef struct mean_job {
+    const ibl_image *im;
+    double *row_term; /* per row: its luminance sum times one pixel's exact solid angle */
+} mean_job;
+
+static void mean_band(void *arg, int band)
+{
+    const mean_job *j = arg;
+    int W = j->im->width, H = j->im->height;
+    for (int y = band_row(H, band); y < band_row(H, band + 1); y++) {
+        double row = 0;
+        const float *p = j->im->pixels + (size_t)y * W * 4;
+        for (int x = 0; x < W; x++) row += luminance(p + (size_t)x * 4);
+        j->row_term[y] = row * (IBL_TWO_PI / W) * (cos(IBL_PI * y / H) - cos(IBL_PI * (y + 1) / H));
+    }
+}
+
+/* The solid-angle-weighted mean luminance of the image (rows weighted by their exact solid
+ * angles; the working cube's would cost a texel solid angle each); the rows' terms added in
+ * row order. */
+static ibl_status image_mean_luminance(ibl_context *ctx, const ibl_image *im, double *mean)
+{
+    mean_job job = {im, ibl_alloc(ctx, (size_t)im->height * sizeof(double))};
+    if (!job.row_term) return ibl_context_status(ctx);
+    ibl_parallel_for(ctx, SCAN_BANDS, mean_band, &job);
+    double sum = 0;
+    for (int y = 0; y < im->height; y++) sum += job.row_term[y];
+    ibl_free(ctx, job.row_term);
+    *mean = sum / (4.0 * IBL_PI);
+    return IBL_OK;
+}
+
+/* A source: an input pixel (index y W + x), or in the polar caps a working texel (index
+ * (face M + y) M + x). */
 typedef struct candidate {
     float power;
-    uint32_t pixel;
+    uint32_t index;
 } candidate;
 
 static int better(const candidate *a, const candidate *b)
 {
-    return a->power > b->power || (a->power == b->power && a->pixel < b->pixel);
+    return a->power > b->power || (a->power == b->power && a->index < b->index);
 }
 
 static int by_power(const void *a, const void *b)
@@ -251,21 +285,36 @@ static void heap_offer(candidate *h, int *n, candidate c)
     h[i] = c;
 }
 
-/* The source pixels, brightest first (at most MAX_SOURCE_PIXELS), away from the poles, where
- * the conversion integrates whole rows (its polar region: 3 texels or 4 rows). */
-static void find_sources(const ibl_image *im, int working_size, double bar, double margin,
-                         candidate *c, int *count)
+/* The polar cap of the pixel scan: the conversion's directly integrated polar region (3
+ * texels or 4 rows, src/layout/equirect/to_cube.c) and the region's margin. */
+static double polar_cap(int working_size, int H, double margin)
 {
+    return fmax(atan(3.0 * 2.0 / working_size), 4.0 * IBL_PI / H) + margin;
+}
+
+typedef struct scan_job {
+    const ibl_image *im;
+    double bar, polar;
+    candidate *best; /* SCAN_BANDS heaps of MAX_SOURCE_PIXELS */
+    int count[SCAN_BANDS];
+} scan_job;
+
+/* One band's source pixels, away from the polar caps (find_polar_sources takes those). */
+static void scan_band(void *arg, int band)
+{
+    scan_job *job = arg;
+    const ibl_image *im = job->im;
     int W = im->width, H = im->height, n = 0;
-    double polar = fmax(atan(3.0 * 2.0 / working_size), 4.0 * IBL_PI / H) + margin;
-    for (int y = 1; y + 1 < H; y++) {
+    candidate *heap = job->best + (size_t)band * MAX_SOURCE_PIXELS;
+    int y0 = band_row(H, band), y1 = band_row(H, band + 1);
+    for (int y = y0 < 1 ? 1 : y0; y < y1 && y + 1 < H; y++) {
         double t0 = IBL_PI * y / H, t1 = IBL_PI * (y + 1) / H;
-        if (t0 < polar || t1 > IBL_PI - polar) continue;
+        if (t0 < job->polar || t1 > IBL_PI - job->polar) continue;
         double dw = IBL_TWO_PI / W * (cos(t0) - cos(t1));
         const float *row = im->pixels + (size_t)y * W * 4;
         for (int x = 0; x < W; x++) {
             double lum = luminance(row + (size_t)x * 4);
-            if (!(lum * dw >= bar) || !isfinite(lum)) continue;
+            if (!(lum * dw >= job->bar) || !isfinite(lum)) continue;
             /* only its excess over its eight neighbours' mean is misplaced to first order */
             double around = 0;
             for (int j = -1; j <= 1; j++)
@@ -274,15 +323,101 @@ static void find_sources(const ibl_image *im, int working_size, double bar, doub
                     if (i || j) around += luminance(im->pixels + ((size_t)(y + j) * W + xx) * 4);
                 }
             double power = (lum - around / 8.0) * dw;
-            if (power >= bar) heap_offer(c, &n, (candidate){(float)power, (uint32_t)((size_t)y * W + x)});
+            if (power >= job->bar)
+                heap_offer(heap, &n, (candidate){(float)power, (uint32_t)((size_t)y * W + x)});
         }
     }
-    qsort(c, (size_t)n, sizeof *c, by_power);
-    *count = n;
+    job->count[band] = n;
+}
+
+/* The source pixels, brightest first (at most MAX_SOURCE_PIXELS): each band keeps its best
+ * MAX_SOURCE_PIXELS, and the best of their union are the image's (better() is a total order,
+ * so the set and its order are the same however the rows are split). */
+static ibl_status find_sources(ibl_context *ctx, const ibl_image *im, double bar, double polar,
+                               candidate *c, int *count)
+{
+    scan_job *job = ibl_alloc(ctx, sizeof *job);
+    candidate *best = ibl_alloc(ctx, (size_t)SCAN_BANDS * MAX_SOURCE_PIXELS * sizeof *best);
+    if (!job || !best) {
+        ibl_free(ctx, job);
+        ibl_free(ctx, best);
+        return ibl_context_status(ctx);
+    }
+    job->im = im, job->bar = bar, job->polar = polar, job->best = best;
+    ibl_parallel_for(ctx, SCAN_BANDS, scan_band, job);
+    size_t n = 0;
+    for (int b = 0; b < SCAN_BANDS; b++) {
+        memmove(best + n, best + (size_t)b * MAX_SOURCE_PIXELS, (size_t)job->count[b] * sizeof *best);
+        n += (size_t)job->count[b];
+    }
+    qsort(best, n, sizeof *best, by_power);
+    *count = n < MAX_SOURCE_PIXELS ? (int)n : MAX_SOURCE_PIXELS;
+    memcpy(c, best, (size_t)*count * sizeof *c);
+    ibl_free(ctx, best);
+    ibl_free(ctx, job);
+    return IBL_OK;
+}
+
+/* The angle from a pole within which a texel meets the cap (a texel's corner is at most
+ * sqrt 2 / M from its centre), and the half side in texels of the square round the pole on
+ * its face that holds those texels. */
+static double polar_reach(int M, int H, double polar)
+{
+    return polar + IBL_PI / H + sqrt(2.0) / M;
+}
+
+static int polar_square(int M, double reach)
+{
+    return (int)ceil(tan(fmin(reach, 1.0)) * M / 2.0) + 1;
+}
+
+static void unit(double d[3])
+{
+    double l = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (int m = 0; m < 3; m++) d[m] /= l;
+}
+
+/* The sources in the polar caps. There a pixel is a thin wedge (a row of them, a ring round
+ * the pole) holding a tiny part of a sun, so pixels are not compared with their neighbours:
+ * working texels are, with the same bar, a texel's power (its luminance times its solid angle)
+ * in excess of its eight neighbours' mean. The texels taken are those meeting the cap (the
+ * caps' rows reach a row past it). The pole is at a face's centre for every orientation
+ * (quarter turns, mirror, z-up, yaw about the pole); where the cap does not fit on one face,
+ * there are none. Brightest first, at most `capacity`. */
+static int find_polar_sources(const ibl_cubemap *working, const frame *fr, int H, double bar,
+                              double polar, candidate *out, int capacity)
+{
+    int M = working->size, n = 0;
+    double reach = polar_reach(M, H, polar);
+    int R = polar_square(M, reach);
+    for (int pole = 0; pole < 2; pole++) {
+        double p[3], s, t;
+        picture_direction(fr, pole ? IBL_PI : 0.0, 0.0, p);
+        int f = ibl_cube_face_st_d(p, &s, &t), ci = (int)(s * M), cj = (int)(t * M);
+        if (ci - R - 1 < 0 || ci + R + 1 >= M || cj - R - 1 < 0 || cj + R + 1 >= M) continue;
+        const float *face = ibl_cubemap_face(working, 0, f);
+        for (int y = cj - R; y <= cj + R; y++)
+            for (int x = ci - R; x <= ci + R; x++) {
+                double c[3];
+                ibl_cube_direction_d(f, (x + 0.5) / M, (y + 0.5) / M, c);
+                unit(c);
+                if (c[0] * p[0] + c[1] * p[1] + c[2] * p[2] < cos(reach)) continue;
+                double lum = luminance(face + ((size_t)y * M + x) * 4), around = 0;
+                if (!isfinite(lum)) continue;
+                for (int j = -1; j <= 1; j++)
+                    for (int i = -1; i <= 1; i++)
+                        if (i || j) around += luminance(face + ((size_t)(y + j) * M + x + i) * 4);
+                double power = (lum - around / 8.0) * ibl_cube_texel_solid_angle(M, x, y);
+                if (power >= bar && n < capacity)
+                    out[n++] = (candidate){(float)power, (uint32_t)(((size_t)f * M + y) * M + x)};
+            }
+    }
+    qsort(out, (size_t)n, sizeof *out, by_power);
+    return n;
 }
 
 /* The set of region texels: open addressing over REGION_HASH slots (twice the most texels a
- * region holds with one pixel's disc on top). */
+ * region holds with one source's disc on top). */
 #define REGION_HASH 8192
 static int region_insert(uint32_t *table, uint32_t key)
 {
@@ -296,35 +431,69 @@ static int region_insert(uint32_t *table, uint32_t key)
     }
 }
 
-/* Marks the texels within `margin` radians of each source pixel's centre (sampled on its
- * tangent plane at `step`), a pixel at a time, until MAX_REGION_TEXELS would be passed;
- * region[] receives them (the last pixel's past the count returned are not part of it). */
-static int mark_region(const ibl_image *im, const frame *fr, int M, const candidate *c, int count,
+/* Points of a disc sampled on the tangent plane at `step` out to `radius`: (2 half + 1)^2 at
+ * most. */
+static int disc_half(double radius, double step)
+{
+    return (int)ceil(radius / step);
+}
+
+/* Adds to out[] the texels not yet in the table that meet the disc of `radius` radians round
+ * unit direction d (sampled on its tangent plane at `step`); returns how many. */
+static int mark_disc(int M, const double d[3], double radius, double step, uint32_t *table,
+                     uint32_t *out)
+{
+    int half = disc_half(radius, step), added = 0;
+    /* a tangent basis: u orthogonal to d and to its smallest axis, v = d x u */
+    double u[3], v[3];
+    int a = fabs(d[0]) < fabs(d[1]) ? (fabs(d[0]) < fabs(d[2]) ? 0 : 2) : (fabs(d[1]) < fabs(d[2]) ? 1 : 2);
+    double e[3] = {0, 0, 0};
+    e[a] = 1;
+    u[0] = d[1] * e[2] - d[2] * e[1], u[1] = d[2] * e[0] - d[0] * e[2], u[2] = d[0] * e[1] - d[1] * e[0];
+    double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    for (int k = 0; k < 3; k++) u[k] /= ul;
+    v[0] = d[1] * u[2] - d[2] * u[1], v[1] = d[2] * u[0] - d[0] * u[2], v[2] = d[0] * u[1] - d[1] * u[0];
+    for (int j = -half; j <= half; j++)
+        for (int k = -half; k <= half; k++) {
+            if (j * j + k * k > half * half) continue;
+            double q[3];
+            for (int m = 0; m < 3; m++) q[m] = d[m] + step * (k * u[m] + j * v[m]);
+            uint32_t t = (uint32_t)texel_index(M, q);
+            if (region_insert(table, t)) out[added++] = t;
+        }
+    return added;
+}
+
+/* The sources, pixels and polar texels, brightest first. */
+typedef struct source_list {
+    const candidate *pixel, *texel;
+    int pixels, texels;
+} source_list;
+
+/* Marks the texels round each source, the brightest first, until MAX_REGION_TEXELS would be
+ * passed; region[] receives them (the last source's past the count returned are not part of
+ * it). Round a source pixel: within `margin` of its centre. Round a polar texel: within
+ * `margin` of any of its points (sqrt 2 / M past its centre: a corner on a face's middle). */
+static int mark_region(const ibl_image *im, const frame *fr, int M, const source_list *src,
                        double margin, double step, uint32_t *table, uint32_t *region)
 {
     int W = im->width, H = im->height, marked = 0;
-    int half = (int)ceil(margin / step);
-    for (int i = 0; i < count; i++) {
-        int px = (int)(c[i].pixel % W), py = (int)(c[i].pixel / W), added = 0;
-        double d[3], u[3], v[3];
-        picture_direction(fr, IBL_PI * (py + 0.5) / H, IBL_TWO_PI * ((px + 0.5) / W - 0.5), d);
-        /* a tangent basis: u orthogonal to d and to its smallest axis, v = d x u */
-        int a = fabs(d[0]) < fabs(d[1]) ? (fabs(d[0]) < fabs(d[2]) ? 0 : 2) : (fabs(d[1]) < fabs(d[2]) ? 1 : 2);
-        double e[3] = {0, 0, 0};
-        e[a] = 1;
-        u[0] = d[1] * e[2] - d[2] * e[1], u[1] = d[2] * e[0] - d[0] * e[2], u[2] = d[0] * e[1] - d[1] * e[0];
-        double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-        for (int k = 0; k < 3; k++) u[k] /= ul;
-        v[0] = d[1] * u[2] - d[2] * u[1], v[1] = d[2] * u[0] - d[0] * u[2], v[2] = d[0] * u[1] - d[1] * u[0];
-        for (int j = -half; j <= half; j++)
-            for (int k = -half; k <= half; k++) {
-                if (j * j + k * k > half * half) continue;
-                double q[3];
-                for (int m = 0; m < 3; m++) q[m] = d[m] + step * (k * u[m] + j * v[m]);
-                uint32_t t = (uint32_t)texel_index(M, q);
-                if (region_insert(table, t)) region[marked + added++] = t;
-            }
-        if (marked + added > MAX_REGION_TEXELS) break; /* not this pixel, nor later ones */
+    for (int i = 0, k = 0; i < src->pixels || k < src->texels;) {
+        int texel = k < src->texels && (i == src->pixels || better(&src->texel[k], &src->pixel[i]));
+        double d[3];
+        int added;
+        if (texel) {
+            uint32_t t = src->texel[k++].index;
+            ibl_cube_direction_d((int)(t / ((uint32_t)M * M)), (t % M + 0.5) / M, (t / M % M + 0.5) / M, d);
+            unit(d);
+            added = mark_disc(M, d, margin + sqrt(2.0) / M, step, table, region + marked);
+        } else {
+            uint32_t p = src->pixel[i++].index;
+            int px = (int)(p % W), py = (int)(p / W);
+            picture_direction(fr, IBL_PI * (py + 0.5) / H, IBL_TWO_PI * ((px + 0.5) / W - 0.5), d);
+            added = mark_disc(M, d, margin, step, table, region + marked);
+        }
+        if (marked + added > MAX_REGION_TEXELS) break; /* not this source, nor later ones */
         marked += added;
     }
     return marked;
@@ -354,8 +523,58 @@ static int pixel_cells(const frame *fr, int M, int W, int H, int x, int y)
 
 /* The cells of one region texel: its own k x k (negative: the working cube's radiance), then
  * those of the input pixels around it whose centres fall in it. */
-static ibl_status texel_cells(ibl_specular_sources *s, const ibl_image *im, const frame *fr,
-                              const ibl_cubemap *working, int face, int tx, int ty)
+
+/* The columns one cell spans in row y: 1 outside the polar caps; in a cap, where a pixel is
+ * a wedge much narrower than tall, as many as make a cell about as wide as a k-th of a row
+ * (k the row's split in latitude, kp), so that a cell stays within a quarter of a texel both
+ * ways without a ring of thousands of cells round the pole. Whole groups of columns from
+ * column 0, the last one shorter: the split depends on the row alone, so the texels cutting a
+ * group share it (as pixel_cells' k). */
+static int cap_columns(int W, int H, int y, double polar, int kp)
+{
+    double t0 = IBL_PI * y / H, t1 = IBL_PI * (y + 1) / H;
+    if (!(t0 < polar || t1 > IBL_PI - polar)) return 1;
+    double wide = IBL_TWO_PI / W * fmax(sin(t0), sin(t1)), g = floor(IBL_PI / H / (kp * wide));
+    return g < 2 ? 1 : g > W ? W : (int)g;
+}
+
+/* The cells of one region texel's input pixels, row y, columns [x0, x1] (past the seam where
+ * needed), in a polar cap where `group` columns make a cell: kp rows of cells, each cell the
+ * group's pixels' light at its centre. */
+static ibl_status cap_row_cells(cell_list *s, const ibl_image *im, const frame *fr, int M,
+                                size_t self, int y, int x0, int x1, int group, int kp)
+{
+    int W = im->width, H = im->height, groups = (W + group - 1) / group;
+    double pixel = IBL_PI / H, t0 = pixel * y, t1 = pixel * (y + 1);
+    int all = x1 - x0 + 1 + 2 * group >= W; /* (then no group is met twice across the seam) */
+    for (int xx = all ? 0 : x0; xx <= (all ? groups - 1 : x1); xx++) {
+        int x = ((xx % W) + W) % W, g = all ? xx : x / group;
+        if (!all && xx != x0 && x % group) continue; /* the group was taken at its first column */
+        int gx0 = g * group, gx1 = gx0 + group < W ? gx0 + group : W;
+        double sum[3] = {0, 0, 0};
+        for (int c = gx0; c < gx1; c++) {
+            const float *p = im->pixels + ((size_t)y * W + c) * 4;
+            if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) continue;
+            for (int m = 0; m < 3; m++) sum[m] += p[m];
+        }
+        double phi = IBL_TWO_PI * (0.5 * (gx0 + gx1) / W - 0.5);
+        for (int j = 0; j < kp; j++) {
+            double a0 = t0 + (t1 - t0) * j / kp, a1 = t0 + (t1 - t0) * (j + 1) / kp;
+            double dw = IBL_TWO_PI / W * (cos(a0) - cos(a1)), q[3];
+            picture_direction(fr, 0.5 * (a0 + a1), phi, q);
+            if (texel_index(M, q) != self) continue;
+            double w[3] = {dw * sum[0], dw * sum[1], dw * sum[2]};
+            ibl_status st = add_cell(s, q, w);
+            if (st != IBL_OK) return st;
+        }
+    }
+    return IBL_OK;
+}
+
+/* The cells of one region texel: its own k x k (negative: the working cube's radiance), then
+ * those of the input pixels around it whose centres fall in it. */
+static ibl_status texel_cells(cell_list *s, const ibl_image *im, const frame *fr,
+                              const ibl_cubemap *working, double polar, int face, int tx, int ty)
 {
     int M = working->size, W = im->width, H = im->height;
     size_t self = ((size_t)face * M + ty) * M + tx;
@@ -367,7 +586,7 @@ static ibl_status texel_cells(ibl_specular_sources *s, const ibl_image *im, cons
     kt = kt < MIN_CELLS ? MIN_CELLS : kt > MAX_CELLS ? MAX_CELLS : kt;
     double omega = ibl_cube_texel_solid_angle(M, tx, ty), wsum = 0;
     size_t first = 0;
-    s->cells = 0;
+    s->count = 0;
     for (int j = 0; j < kt; j++)
         for (int i = 0; i < kt; i++) {
             double q[3], w[3];
@@ -378,8 +597,8 @@ static ibl_status texel_cells(ibl_specular_sources *s, const ibl_image *im, cons
             ibl_status st = add_cell(s, q, w);
             if (st != IBL_OK) return st;
         }
-    for (size_t n = first; n < s->cells; n++)
-        for (int m = 0; m < 3; m++) s->cell_w[n * 3 + m] *= omega / wsum;
+    for (size_t n = first; n < s->count; n++)
+        for (int m = 0; m < 3; m++) s->w[n * 3 + m] *= omega / wsum;
     /* the pixels the texel can touch: the picture-angle box of its corners, edge midpoints
      * and centre, one pixel wider (a texel edge bulges in theta between its corners) */
     double tmin = 1e9, tmax = -1e9, pc, tc, pmin = 1e9, pmax = -1e9;
@@ -396,9 +615,19 @@ static ibl_status texel_cells(ibl_specular_sources *s, const ibl_image *im, cons
     int y0 = (int)floor(tmin / pixel) - 1, y1 = (int)floor(tmax / pixel) + 1;
     double col = IBL_TWO_PI / W, base = pc + IBL_PI; /* phi + pi = column units x col */
     int x0 = (int)floor((base + pmin) / col) - 1, x1 = (int)floor((base + pmax) / col) + 1;
+    /* a texel on a pole, or close to it, has no box in longitude: every column, from the
+     * pole's row (one of its 9 points is within 0.75 texel of any point of it) */
+    if (tmin < 2.0 * pixel + 1.5 * 2.0 / M) y0 = 0, x0 = 0, x1 = W - 1;
+    if (tmax > IBL_PI - 2.0 * pixel - 1.5 * 2.0 / M) y1 = H - 1, x0 = 0, x1 = W - 1;
     y0 = y0 < 0 ? 0 : y0, y1 = y1 >= H ? H - 1 : y1;
     for (int y = y0; y <= y1; y++) {
         double t0 = pixel * y, t1 = pixel * (y + 1);
+        int row_k = pixel_cells(fr, M, W, H, 0, y), group = cap_columns(W, H, y, polar, row_k);
+        if (group > 1) {
+            ibl_status st = cap_row_cells(s, im, fr, M, self, y, x0, x1, group, row_k);
+            if (st != IBL_OK) return st;
+            continue;
+        }
         for (int xx = x0; xx <= x1; xx++) {
             int x = ((xx % W) + W) % W;
             const float *p = im->pixels + ((size_t)y * W + x) * 4;
@@ -442,73 +671,112 @@ static void group_stats(source_group *g)
     g->radius = acos(min_cos > 1 ? 1 : min_cos) + 1e-9;
 }
 
-static ibl_status build(ibl_specular_sources *s, const ibl_image *image, const frame *fr,
-                        const ibl_cubemap *working, double lobe_normaliser_min)
+
+/* Each region texel's group is made alone (its cells, then their sums), one task each. */
+typedef struct group_job {
+    ibl_specular_sources *s;
+    const ibl_image *image;
+    const frame *fr;
+    const ibl_cubemap *working;
+    const uint32_t *region;
+    double polar;
+    ibl_status *status; /* per group */
+} group_job;
+
+static ibl_status make_group(const group_job *job, int index)
 {
-    ibl_context *ctx = s->ctx;
-    int M = working->size, H = image->height;
-    double mean_lum = image_mean_luminance(image);
-    if (!(mean_lum > 0) || !isfinite(mean_lum)) return IBL_OK;
-    double step = fmin(IBL_PI / H, 2.0 / (3.0 * M)) / 2.0;
-    double margin = MARGIN_PIXELS * IBL_PI / H + step;
-    int half = (int)ceil(margin / step), count = 0;
-    /* one pixel's disc adds at most (2 half + 1)^2 texels past MAX_REGION_TEXELS */
-    size_t disc = (size_t)(2 * half + 1) * (2 * half + 1);
-    if (MAX_REGION_TEXELS + disc > REGION_HASH / 2) return IBL_OK; /* a step far below a texel */
-    candidate *c = ibl_alloc(ctx, MAX_SOURCE_PIXELS * sizeof *c);
-    uint32_t *table = ibl_alloc(ctx, REGION_HASH * sizeof(uint32_t));
-    uint32_t *region = ibl_alloc(ctx, (MAX_REGION_TEXELS + disc) * sizeof(uint32_t));
-    ibl_status st = IBL_OK;
-    if (!c || !table || !region) {
-        st = ibl_context_status(ctx);
-        goto done;
-    }
-    find_sources(image, M, BRIGHT_PEAK_SHARE * mean_lum * lobe_normaliser_min, margin, c, &count);
-    memset(table, 0xff, REGION_HASH * sizeof(uint32_t));
-    int marked = mark_region(image, fr, M, c, count, margin, step, table, region);
-    qsort(region, (size_t)marked, sizeof *region, by_index); /* groups in (face, y, x) order */
-    s->group = ibl_alloc(ctx, (size_t)(marked ? marked : 1) * sizeof *s->group);
-    if (!s->group) {
-        st = ibl_context_status(ctx);
-        goto done;
-    }
-    for (int i = 0; i < marked && st == IBL_OK; i++) {
-        size_t t = region[i];
-        source_group *g = &s->group[s->groups];
-        st = texel_cells(s, image, fr, working, (int)(t / ((size_t)M * M)), (int)(t % M),
-                         (int)(t / M % M));
-        if (st != IBL_OK) break;
-        g->count = s->cells;
+    ibl_context *ctx = job->s->ctx;
+    int M = job->working->size;
+    size_t t = job->region[index];
+    source_group *g = &job->s->group[index];
+    cell_list cells = {ctx, NULL, NULL, 0, 0};
+    ibl_status st = texel_cells(&cells, job->image, job->fr, job->working, job->polar,
+                                (int)(t / ((size_t)M * M)), (int)(t % M), (int)(t / M % M));
+    if (st == IBL_OK) {
+        g->count = cells.count;
         g->cell = ibl_alloc(ctx, (g->count ? g->count : 1) * 6 * sizeof(double));
-        if (!g->cell) {
-            st = ibl_context_status(ctx);
-            break;
-        }
+        if (!g->cell) st = ibl_context_status(ctx);
+    }
+    if (st == IBL_OK) {
         for (size_t n = 0; n < g->count; n++) {
-            memcpy(g->cell + n * 6, s->cell_dir + n * 3, 3 * sizeof(double));
-            memcpy(g->cell + n * 6 + 3, s->cell_w + n * 3, 3 * sizeof(double));
+            memcpy(g->cell + n * 6, cells.dir + n * 3, 3 * sizeof(double));
+            memcpy(g->cell + n * 6 + 3, cells.w + n * 3, 3 * sizeof(double));
         }
         group_stats(g);
         g->padded = (g->count + NEAR_LANES - 1) / NEAR_LANES * NEAR_LANES;
         g->lanes = ibl_calloc(ctx, (g->padded ? g->padded : 1) * 6, sizeof(float));
-        if (!g->lanes) {
-            st = ibl_context_status(ctx);
-            break;
-        }
+        if (!g->lanes) st = ibl_context_status(ctx);
+    }
+    if (st == IBL_OK)
         for (size_t n = 0; n < g->count; n++)
             for (int m = 0; m < 3; m++) {
                 g->lanes[m * g->padded + n] = (float)(g->cell[n * 6 + m] - g->centre[m]);
                 g->lanes[(3 + m) * g->padded + n] = (float)g->cell[n * 6 + 3 + m];
             }
-        s->groups++;
+    ibl_free(ctx, cells.dir);
+    ibl_free(ctx, cells.w);
+    return st;
+}
+
+static void group_task(void *arg, int index)
+{
+    const group_job *job = arg;
+    job->status[index] = make_group(job, index);
+}
+
+static ibl_status build(ibl_specular_sources *s, const ibl_image *image, const frame *fr,
+                        const ibl_cubemap *working, double lobe_normaliser_min)
+{
+    ibl_context *ctx = s->ctx;
+    int M = working->size, H = image->height;
+    double mean_lum = 0;
+    ibl_status st = image_mean_luminance(ctx, image, &mean_lum);
+    if (st != IBL_OK) return st;
+    if (!(mean_lum > 0) || !isfinite(mean_lum)) return IBL_OK;
+    double step = fmin(IBL_PI / H, 2.0 / (3.0 * M)) / 2.0;
+    double margin = MARGIN_PIXELS * IBL_PI / H + step, polar = polar_cap(M, H, margin);
+    double bar = BRIGHT_PEAK_SHARE * mean_lum * lobe_normaliser_min;
+    /* one source's disc adds at most (2 half + 1)^2 texels past MAX_REGION_TEXELS; the polar
+     * texels' discs are wider, and left out where they would not fit */
+    int half = disc_half(margin, step), polar_half = disc_half(margin + sqrt(2.0) / M, step);
+    size_t disc = (size_t)(2 * half + 1) * (2 * half + 1);
+    size_t polar_disc = (size_t)(2 * polar_half + 1) * (2 * polar_half + 1);
+    if (MAX_REGION_TEXELS + disc > REGION_HASH / 2) return IBL_OK; /* a step far below a texel */
+    int polar_sources = MAX_REGION_TEXELS + polar_disc <= REGION_HASH / 2;
+    if (polar_sources) disc = polar_disc;
+    int square = 2 * polar_square(M, polar_reach(M, H, polar)) + 1;
+    int polar_capacity = polar_sources ? 2 * square * square : 0;
+    candidate *c = ibl_alloc(ctx, MAX_SOURCE_PIXELS * sizeof *c);
+    candidate *pc = ibl_alloc(ctx, (size_t)(polar_capacity ? polar_capacity : 1) * sizeof *pc);
+    uint32_t *table = ibl_alloc(ctx, REGION_HASH * sizeof(uint32_t));
+    uint32_t *region = ibl_alloc(ctx, (MAX_REGION_TEXELS + disc) * sizeof(uint32_t));
+    ibl_status *status = NULL;
+    source_list src = {c, pc, 0, 0};
+    if (!c || !pc || !table || !region) {
+        st = ibl_context_status(ctx);
+        goto done;
     }
+    st = find_sources(ctx, image, bar, polar, c, &src.pixels);
+    if (st != IBL_OK) goto done;
+    if (polar_sources) src.texels = find_polar_sources(working, fr, H, bar, polar, pc, polar_capacity);
+    memset(table, 0xff, REGION_HASH * sizeof(uint32_t));
+    int marked = mark_region(image, fr, M, &src, margin, step, table, region);
+    qsort(region, (size_t)marked, sizeof *region, by_index); /* groups in (face, y, x) order */
+    s->group = ibl_calloc(ctx, (size_t)(marked ? marked : 1), sizeof *s->group);
+    status = ibl_alloc(ctx, (size_t)(marked ? marked : 1) * sizeof *status);
+    if (!s->group || !status) {
+        st = ibl_context_status(ctx);
+        goto done;
+    }
+    s->groups = marked; /* (every group is freed by destroy, made or not) */
+    group_job job = {s, image, fr, working, region, polar, status};
+    ibl_parallel_for(ctx, marked, group_task, &job);
+    for (int i = 0; i < marked && st == IBL_OK; i++) st = status[i];
 done:
-    ibl_free(ctx, s->cell_dir);
-    ibl_free(ctx, s->cell_w);
-    s->cell_dir = s->cell_w = NULL;
-    s->cells = s->capacity = 0;
+    ibl_free(ctx, status);
     ibl_free(ctx, region);
     ibl_free(ctx, table);
+    ibl_free(ctx, pc);
     ibl_free(ctx, c);
     return st;
 }
@@ -521,8 +789,6 @@ void ibl_specular_sources_destroy(ibl_specular_sources *s)
         ibl_free(s->ctx, s->group[g].lanes);
     }
     ibl_free(s->ctx, s->group);
-    ibl_free(s->ctx, s->cell_dir);
-    ibl_free(s->ctx, s->cell_w);
     ibl_free(s->ctx, s);
 }
 
