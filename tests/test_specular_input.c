@@ -309,6 +309,68 @@ static void phong_chain_matches_input(void **state)
     free(im.pixels);
 }
 
+/* A round sun of 0.6 degrees across (pixels weighted by the share of their area inside it, as
+ * a resampled photograph has them), `theta_deg` from the zenith. */
+static void add_round_sun(ibl_image *im, double theta_deg, double phi_deg, double value)
+{
+    double s[3], r = 0.3 * PI / 180;
+    pixel_direction(theta_deg * PI / 180, phi_deg * PI / 180, s);
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            double d[3], cover = 0;
+            pixel_direction(PI * (y + 0.5) / H, 2 * PI * ((x + 0.5) / W - 0.5), d);
+            if (d[0] * s[0] + d[1] * s[1] + d[2] * s[2] < cos(r + 4 * PI / H)) continue;
+            for (int j = 0; j < 16; j++)
+                for (int i = 0; i < 16; i++) {
+                    double e[3];
+                    pixel_direction(PI * (y + (j + 0.5) / 16) / H, 2 * PI * ((x + (i + 0.5) / 16) / W - 0.5), e);
+                    cover += (e[0] * s[0] + e[1] * s[1] + e[2] * s[2] >= cos(r)) / 256.0;
+                }
+            float *p = im->pixels + ((size_t)y * W + x) * 4;
+            p[0] += (float)(value * cover), p[1] += (float)(0.95 * value * cover), p[2] += (float)(0.85 * value * cover);
+        }
+}
+
+/* Suns at and next to the poles, where the conversion integrates the input's pixels directly
+ * (src/layout/equirect/polar_texels.c) and a pixel is a thin wedge of a ring round the pole:
+ * the sources there are the polar cap's bright working texels, and the cap's pixels are cut
+ * into cells of several columns (specular_sources.c). A sun on the zenith (all in the first
+ * row), one 1 degree off it, and one on the nadir, each alone in the sky; level 1 (2.3 working
+ * texels a half width, the only refined level of the 128 chain) against the brute force.
+ * Measured: 0.16%, 0.20% and 0.16% RMS, 0.88%, 2.46% and 0.88% max; without the polar sources
+ * 2.7%, 7.8% and 2.7% RMS, 4.0%, 10.6% and 4.0% max. The bars: the accuracy bar against the
+ * input (0.5% RMS; max 4%, under the bar's 5%: the 1-degree sun's worst texel is where its
+ * lobe's edge crosses the region's), three times the RMS measured; a sun left to the working
+ * cube fails the first by five times. */
+static void polar_suns_match_input(void **state)
+{
+    (void)state;
+    static const double sun[3][2] = {{0, 0}, {1, 30}, {180, 0}};
+    ibl_context *ctx = context(2);
+    ibl_to_cube_desc conv = {.layout = IBL_LAYOUT_EQUIRECT, .size = SIZE};
+    ibl_specular_desc desc = {.size = SIZE};
+    centre_tables();
+    for (int i = 0; i < 3; i++) {
+        ibl_image im;
+        make_sky(&im);
+        add_round_sun(&im, sun[i][0], sun[i][1], 20000);
+        ibl_cubemap chain;
+        ibl_specular_info info;
+        assert_int_equal(ibl_specular_prefilter_image(ctx, &im, &conv, &desc, &chain, &info), IBL_OK);
+        double rms, max, alpha = (double)info.roughness[1] * info.roughness[1];
+        test_lobe lobe = {0, alpha * alpha, 0};
+        level_error(&im, &chain, 1, &lobe, 0, &rms, &max);
+        print_message("sun %.0f degrees from the zenith, level 1: %.3f%% RMS, %.2f%% max\n", sun[i][0],
+                      100 * rms, 100 * max);
+        assert_true(rms < 0.005);
+        assert_true(max < 0.04);
+        if (i == 0) assert_same_on_one_thread(&im, &conv, &desc, &chain);
+        ibl_cubemap_free(ctx, &chain);
+        free(im.pixels);
+    }
+    ibl_context_destroy(ctx);
+}
+
 /* Inputs the sources do not apply to give an empty set, and apply then leaves the chain as
  * it is: another layout, a box chain, a chain whose narrowest lobe is wide. */
 static void no_sources_where_not_needed(void **state)
@@ -343,6 +405,7 @@ int main(void)
         cmocka_unit_test(chain_matches_input),
         cmocka_unit_test(suns_cut_by_texels),
         cmocka_unit_test(phong_chain_matches_input),
+        cmocka_unit_test(polar_suns_match_input),
         cmocka_unit_test(no_sources_where_not_needed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
