@@ -98,6 +98,10 @@ struct ibl_specular_sources {
     int working_size;
     int groups;
     source_group *group;
+    /* per level: its lobe, and whether it is refined (made once, each level on its own task:
+     * a GGX lobe's set-up scans its slope at 4000 angles) */
+    ibl__lobe lobe[IBL_MAX_LEVELS];
+    int refined[IBL_MAX_LEVELS];
 };
 
 static double texel_angle(int size)
@@ -174,10 +178,16 @@ static void frame_make(const ibl_orientation *o, frame *fr)
 
 /* World direction of picture angles (theta from +Y, phi; docs/CONVENTIONS.md: the centre
  * column looks toward -Z, the right quarter toward +X). */
+static void picture_direction_sc(const frame *fr, double st, double ct, double sp, double cp,
+                                 double out[3])
+{
+    double p[3] = {st * sp, ct, -st * cp};
+    for (int i = 0; i < 3; i++) out[i] = fr->m[i][0] * p[0] + fr->m[i][1] * p[1] + fr->m[i][2] * p[2];
+}
+
 static void picture_direction(const frame *fr, double theta, double phi, double out[3])
 {
-    double st = sin(theta), p[3] = {st * sin(phi), cos(theta), -st * cos(phi)};
-    for (int i = 0; i < 3; i++) out[i] = fr->m[i][0] * p[0] + fr->m[i][1] * p[1] + fr->m[i][2] * p[2];
+    picture_direction_sc(fr, sin(theta), cos(theta), sin(phi), cos(phi), out);
 }
 
 /* Picture angles of a world direction (the inverse: m is orthogonal). */
@@ -628,17 +638,31 @@ static ibl_status texel_cells(cell_list *s, const ibl_image *im, const frame *fr
             if (st != IBL_OK) return st;
             continue;
         }
+        /* the sines and cosines of the cells' latitudes (for the row's last k) and of the
+         * pixel's cells' longitudes: 2 k per pixel, not 2 k^2 */
+        int row_kp = 0;
+        double sub_st[MAX_CELLS], sub_ct[MAX_CELLS], sub_dw[MAX_CELLS], sp[MAX_CELLS], cp[MAX_CELLS];
         for (int xx = x0; xx <= x1; xx++) {
             int x = ((xx % W) + W) % W;
             const float *p = im->pixels + ((size_t)y * W + x) * 4;
             if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) continue;
             int kp = pixel_cells(fr, M, W, H, x, y);
-            for (int j = 0; j < kp; j++) {
+            for (int j = 0; kp != row_kp && j < kp; j++) {
                 double a0 = t0 + (t1 - t0) * j / kp, a1 = t0 + (t1 - t0) * (j + 1) / kp;
-                double dw = IBL_TWO_PI / W / kp * (cos(a0) - cos(a1)), am = 0.5 * (a0 + a1);
+                double am = 0.5 * (a0 + a1);
+                sub_dw[j] = IBL_TWO_PI / W / kp * (cos(a0) - cos(a1));
+                sub_st[j] = sin(am), sub_ct[j] = cos(am);
+            }
+            row_kp = kp;
+            for (int i = 0; i < kp; i++) {
+                double phi = IBL_TWO_PI * ((xx + (i + 0.5) / kp) / W - 0.5);
+                sp[i] = sin(phi), cp[i] = cos(phi);
+            }
+            for (int j = 0; j < kp; j++) {
+                double dw = sub_dw[j];
                 for (int i = 0; i < kp; i++) {
                     double q[3], w[3] = {dw * p[0], dw * p[1], dw * p[2]};
-                    picture_direction(fr, am, IBL_TWO_PI * ((xx + (i + 0.5) / kp) / W - 0.5), q);
+                    picture_direction_sc(fr, sub_st[j], sub_ct[j], sp[i], cp[i], q);
                     if (texel_index(M, q) != self) continue;
                     ibl_status st = add_cell(s, q, w);
                     if (st != IBL_OK) return st;
@@ -792,6 +816,12 @@ void ibl_specular_sources_destroy(ibl_specular_sources *s)
     ibl_free(s->ctx, s);
 }
 
+static void lobe_task(void *arg, int level)
+{
+    ibl_specular_sources *s = arg;
+    s->refined[level] = level_refined(&s->info, s->working_size, level, &s->lobe[level]);
+}
+
 ibl_status ibl_specular_sources_create(ibl_context *ctx, const ibl_image *image,
                                        const ibl_to_cube_desc *conversion,
                                        const ibl_cubemap *working, const ibl_specular_desc *desc,
@@ -815,11 +845,11 @@ ibl_status ibl_specular_sources_create(ibl_context *ctx, const ibl_image *image,
         !desc->dynamic && image->width >= 8 && image->height >= 4 &&
         (size_t)image->width * image->height <= UINT32_MAX) {
         st = ibl_specular_levels(ctx, desc, working->size, &s->info);
+        if (st == IBL_OK) ibl_parallel_for(ctx, s->info.levels, lobe_task, s);
         double narrowest = 0;
         for (int l = 0; st == IBL_OK && l < s->info.levels; l++) {
-            ibl__lobe lobe;
-            if (!level_refined(&s->info, working->size, l, &lobe)) continue;
-            double n = lobe_normaliser(&lobe);
+            if (!s->refined[l]) continue;
+            double n = lobe_normaliser(&s->lobe[l]);
             if (narrowest == 0 || n < narrowest) narrowest = n;
         }
         if (st == IBL_OK && narrowest > 0) {
@@ -987,7 +1017,8 @@ ibl_status ibl_specular_sources_apply(const ibl_specular_sources *s, ibl_cubemap
     for (int l = 0; l < chain->levels; l++) {
         apply_job job;
         memset(&job, 0, sizeof job);
-        if (!level_refined(&s->info, s->working_size, l, &job.lobe)) continue;
+        if (!s->refined[l]) continue;
+        job.lobe = s->lobe[l];
         job.s = s;
         job.inv_norm = 1.0 / lobe_normaliser(&job.lobe);
         job.near = NEAR_HALF_WIDTHS * job.lobe.half_angle;
