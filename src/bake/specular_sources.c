@@ -28,8 +28,18 @@
  * The normaliser int f dl is the lobe's closed form over the sphere (GGX: Walter et al. 2007's
  * D with v = n, as in the fast method; Phong: 2 pi / (n + 1)).
  *
- * Every output texel is summed alone, in a fixed order of groups and cells, so the result
- * does not depend on the thread count. */
+ * Near the poles (the conversion's directly integrated polar region, src/layout/equirect/
+ * polar_texels.c, and the region's margin: the polar cap) a pixel is a thin wedge of a ring
+ * round the pole, and a sun there is spread over many of them, none bright on its own: the
+ * cap's sources are its working texels instead, by the same bar (find_polar_sources), with the
+ * texels within the margin of any of their points. The conversion keeps a polar pixel's light
+ * as compact as any other's (within 1.8 rows of its centre, measured with one lit pixel per
+ * row), so the same region holds it; the cap's pixels are cut into cells of several columns
+ * (cap_columns), a quarter of a texel or less both ways.
+ *
+ * The whole-image scans run in row bands, and the groups are made one per task, through the
+ * context's parallel-for; every output texel is summed alone, in a fixed order of groups and
+ * cells, so the result does not depend on the thread count. */
 #include "specular_internal.h"
 #include "core/context_internal.h"
 #include "core/numeric.h"
@@ -531,9 +541,6 @@ static int pixel_cells(const frame *fr, int M, int W, int H, int x, int y)
     return k < MIN_CELLS ? MIN_CELLS : k > MAX_CELLS ? MAX_CELLS : k;
 }
 
-/* The cells of one region texel: its own k x k (negative: the working cube's radiance), then
- * those of the input pixels around it whose centres fall in it. */
-
 /* The columns one cell spans in row y: 1 outside the polar caps; in a cap, where a pixel is
  * a wedge much narrower than tall, as many as make a cell about as wide as a k-th of a row
  * (k the row's split in latitude, kp), so that a cell stays within a quarter of a texel both
@@ -581,6 +588,27 @@ static ibl_status cap_row_cells(cell_list *s, const ibl_image *im, const frame *
     return IBL_OK;
 }
 
+/* The columns [x0, x1] (past the seam where needed) of row y whose pixel centres are within
+ * `radius` of the direction at picture angles (tc, pc): by the spherical law of cosines,
+ * |phi - pc| <= acos((cos radius - cos theta cos tc) / (sin theta sin tc)), theta the row's
+ * centre's (one column more each way). 0 if there are none. */
+static int pole_row_columns(int W, int H, int y, double tc, double pc, double radius, int *x0,
+                            int *x1)
+{
+    double th = IBL_PI * (y + 0.5) / H, den = sin(th) * sin(tc), col = IBL_TWO_PI / W;
+    double rhs = den > 1e-12 ? (cos(radius) - cos(th) * cos(tc)) / den : (fabs(th - tc) <= radius ? -2.0 : 2.0);
+    if (rhs > 1.0) return 0;
+    if (rhs <= -1.0) {
+        *x0 = 0, *x1 = W - 1;
+        return 1;
+    }
+    double half = acos(rhs);
+    *x0 = (int)floor((pc + IBL_PI - half) / col - 0.5) - 1;
+    *x1 = (int)floor((pc + IBL_PI + half) / col - 0.5) + 1;
+    if (*x1 - *x0 + 1 >= W) *x0 = 0, *x1 = W - 1;
+    return 1;
+}
+
 /* The cells of one region texel: its own k x k (negative: the working cube's radiance), then
  * those of the input pixels around it whose centres fall in it. */
 static ibl_status texel_cells(cell_list *s, const ibl_image *im, const frame *fr,
@@ -611,13 +639,17 @@ static ibl_status texel_cells(cell_list *s, const ibl_image *im, const frame *fr
         for (int m = 0; m < 3; m++) s->w[n * 3 + m] *= omega / wsum;
     /* the pixels the texel can touch: the picture-angle box of its corners, edge midpoints
      * and centre, one pixel wider (a texel edge bulges in theta between its corners) */
-    double tmin = 1e9, tmax = -1e9, pc, tc, pmin = 1e9, pmax = -1e9;
+    double tmin = 1e9, tmax = -1e9, pc, tc, pmin = 1e9, pmax = -1e9, cu[3] = {c[0], c[1], c[2]};
+    double cos_circ = 1; /* of the largest angle from the centre to the nine points */
     picture_angles(fr, c, &tc, &pc);
+    unit(cu);
     for (int j = 0; j <= 2; j++)
         for (int i = 0; i <= 2; i++) {
             double q[3], t, p;
             ibl_cube_direction_d(face, (tx + 0.5 * i) / M, (ty + 0.5 * j) / M, q);
             picture_angles(fr, q, &t, &p);
+            unit(q);
+            cos_circ = fmin(cos_circ, cu[0] * q[0] + cu[1] * q[1] + cu[2] * q[2]);
             p -= pc;
             p = p > IBL_PI ? p - IBL_TWO_PI : p < -IBL_PI ? p + IBL_TWO_PI : p;
             tmin = fmin(tmin, t), tmax = fmax(tmax, t), pmin = fmin(pmin, p), pmax = fmax(pmax, p);
@@ -625,13 +657,17 @@ static ibl_status texel_cells(cell_list *s, const ibl_image *im, const frame *fr
     int y0 = (int)floor(tmin / pixel) - 1, y1 = (int)floor(tmax / pixel) + 1;
     double col = IBL_TWO_PI / W, base = pc + IBL_PI; /* phi + pi = column units x col */
     int x0 = (int)floor((base + pmin) / col) - 1, x1 = (int)floor((base + pmax) / col) + 1;
-    /* a texel on a pole, or close to it, has no box in longitude: every column, from the
-     * pole's row (one of its 9 points is within 0.75 texel of any point of it) */
-    if (tmin < 2.0 * pixel + 1.5 * 2.0 / M) y0 = 0, x0 = 0, x1 = W - 1;
-    if (tmax > IBL_PI - 2.0 * pixel - 1.5 * 2.0 / M) y1 = H - 1, x0 = 0, x1 = W - 1;
+    /* a texel on a pole, or close to it, has no box in longitude: from the pole's row (one of
+     * its 9 points is within 0.75 texel of any point of it), each row's columns whose pixel
+     * centres are near enough its centre for a cell of theirs to be in it */
+    int pole = tmin < 2.0 * pixel + 1.5 * 2.0 / M || tmax > IBL_PI - 2.0 * pixel - 1.5 * 2.0 / M;
+    double near_pole = acos(fmin(cos_circ, 1.0)) + 0.5 * (pixel + col) + 1e-9;
+    if (pole && tmin < IBL_HALF_PI) y0 = 0;
+    if (pole && tmax > IBL_HALF_PI) y1 = H - 1;
     y0 = y0 < 0 ? 0 : y0, y1 = y1 >= H ? H - 1 : y1;
     for (int y = y0; y <= y1; y++) {
         double t0 = pixel * y, t1 = pixel * (y + 1);
+        if (pole && !pole_row_columns(W, H, y, tc, pc, near_pole, &x0, &x1)) continue;
         int row_k = pixel_cells(fr, M, W, H, 0, y), group = cap_columns(W, H, y, polar, row_k);
         if (group > 1) {
             ibl_status st = cap_row_cells(s, im, fr, M, self, y, x0, x1, group, row_k);
