@@ -337,7 +337,7 @@ static void add_round_sun(ibl_image *im, double theta_deg, double phi_deg, doubl
  * into cells of several columns (specular_sources.c). A sun on the zenith (all in the first
  * row), one 1 degree off it, and one on the nadir, each alone in the sky; level 1 (2.3 working
  * texels a half width, the only refined level of the 128 chain) against the brute force.
- * Measured: 0.16%, 0.20% and 0.16% RMS, 0.88%, 2.46% and 0.88% max; without the polar sources
+ * Measured: 0.16%, 0.20% and 0.16% RMS, 0.87%, 2.46% and 0.89% max; without the polar sources
  * 2.7%, 7.8% and 2.7% RMS, 4.0%, 10.6% and 4.0% max. The bars: the accuracy bar against the
  * input (0.5% RMS; max 4%, under the bar's 5%: the 1-degree sun's worst texel is where its
  * lobe's edge crosses the region's), three times the RMS measured; a sun left to the working
