@@ -30,10 +30,13 @@ static const char *load_error(void)
     return e ? e : "unknown reason";
 }
 
-/* Opens `soname` into *library and stores each symbol's address at its offset in `table`. */
+/* Opens `soname` into *library and stores each symbol's address at its offset in `table`
+ * (`table_bytes` long, *library inside it); on failure the table is left all zero. */
 static ibl_status load(ibl_context *ctx, const char *what, const char *soname,
-                       const library_symbol *symbols, size_t count, void **library, void *table)
+                       const library_symbol *symbols, size_t count, void **library, void *table,
+                       size_t table_bytes)
 {
+    memset(table, 0, table_bytes);
     void *handle = dlopen(soname, RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
     if (!handle)
         return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: cannot load %s: %s", what, soname, load_error());
@@ -43,6 +46,7 @@ static ibl_status load(ibl_context *ctx, const char *what, const char *soname,
             ibl_status st = ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: %s has no %s", what, soname,
                                       symbols[i].name);
             dlclose(handle);
+            memset(table, 0, table_bytes);
             return st;
         }
         /* POSIX: a function's address from dlsym is used through a copy of its bytes */
@@ -54,24 +58,14 @@ static ibl_status load(ibl_context *ctx, const char *what, const char *soname,
 
 ibl_status ibl__embree_load(ibl_context *ctx, const char *what, ibl__embree *out)
 {
-    memset(out, 0, sizeof *out);
-    ibl__embree api;
-    memset(&api, 0, sizeof api);
-    ibl_status st = load(ctx, what, IBL_EMBREE_SONAME, embree_symbols,
-                         sizeof embree_symbols / sizeof embree_symbols[0], &api.library, &api);
-    if (st == IBL_OK) *out = api;
-    return st;
+    return load(ctx, what, IBL_EMBREE_SONAME, embree_symbols,
+                sizeof embree_symbols / sizeof embree_symbols[0], &out->library, out, sizeof *out);
 }
 
 ibl_status ibl__assimp_load(ibl_context *ctx, const char *what, ibl__assimp *out)
 {
-    memset(out, 0, sizeof *out);
-    ibl__assimp api;
-    memset(&api, 0, sizeof api);
-    ibl_status st = load(ctx, what, IBL_ASSIMP_SONAME, assimp_symbols,
-                         sizeof assimp_symbols / sizeof assimp_symbols[0], &api.library, &api);
-    if (st == IBL_OK) *out = api;
-    return st;
+    return load(ctx, what, IBL_ASSIMP_SONAME, assimp_symbols,
+                sizeof assimp_symbols / sizeof assimp_symbols[0], &out->library, out, sizeof *out);
 }
 
 void ibl__embree_unload(ibl__embree *api)
