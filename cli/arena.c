@@ -31,16 +31,19 @@
  * library's ibl_alloc keeps no header in its large blocks either (src/core/context.c): the
  * blocks this returns from the arena start on a page boundary, which is what it asks of them.
  *
- * Kept, but never beside fresh memory: freed arena memory whose pages are still there is
- * counted, and only when a request fits no free block and takes fresh address space from the
- * arena's top are the free blocks with the most resident pages given back to the kernel, as
- * many bytes as the request takes (madvise MADV_DONTNEED: the address range stays reserved,
- * its pages are dropped at once; a later use faults in zeroed pages). So the RSS never grows
- * while freed pages sit idle, the peak is the most the command has in use at once (plus the
- * free blocks too small for anything), and freed memory that a later request fits is reused
- * with its pages: giving back the 1024 chain's freed working buffers before the output chain
- * was allocated made the chain fault 95 MB in again, and the 2048 chain ~1.9 GB
- * (bench/bench_stages.c shows each stage's faults).
+ * Kept, but never beside fresh memory: a free block either still has its pages ("paged": it
+ * was freed after use) or had them dropped (madvise MADV_DONTNEED: the address range stays
+ * reserved, the pages go at once; a later use faults in zeroed ones), and free neighbours merge
+ * only with their own kind, so what reusing a block costs is known. A request takes the best
+ * paged block that fits; only when none does, and it is about to fault in fresh pages (a block
+ * without pages, or address space from the arena's top), are the largest paged blocks given
+ * back first, as many bytes as it takes. So the RSS never grows while freed pages sit idle, the
+ * peak is the most the command has in use at once (plus the paged blocks too small for
+ * anything), and freed memory that a later request fits is reused with its pages: giving back
+ * the 1024 chain's freed working buffers before the output chain was allocated made the chain
+ * fault 95 MB in again, and the 2048 chain ~1.9 GB (bench/bench_stages.c shows each stage's
+ * faults). A block of both kinds in one would hide where its pages are: reusing it could fault
+ * in fresh pages while paged ones sit idle elsewhere in it.
  *
  * One mutex: the library allocates from its worker threads as well, but rarely (a few hundred
  * calls per command, a few dozen blocks alive at once, so the lists are searched in order). */
@@ -53,7 +56,7 @@
 typedef struct span {
     char *start;
     size_t size;     /* bytes, a multiple of ARENA_MIN */
-    size_t resident; /* free blocks: at most this many of its bytes still have pages */
+    int paged;       /* free blocks: its pages may still be there (1) or were dropped (0) */
     int used;
     struct span *prev, *next;
 } span;
@@ -63,7 +66,7 @@ static struct {
     int tried;
     char *base, *top, *end; /* reserved [base, end), handed out [base, top) */
     span *first, *last;     /* every block of [base, top), by address */
-    size_t kept;            /* the sum of the free blocks' resident bytes */
+    size_t kept;            /* the sum of the paged free blocks' sizes */
 } arena = {PTHREAD_MUTEX_INITIALIZER, 0, NULL, NULL, NULL, NULL, NULL, 0};
 
 /* AddressSanitizer sees overruns of malloc'd blocks only: its builds keep every block there */
@@ -120,70 +123,96 @@ static void unlink_span(span *s)
     free(s);
 }
 
-/* Drops the pages of a free block (spans start and end on page boundaries). */
-static void arena_release(span *s)
+/* Merges the free block s with its free neighbours of the same kind (paged or not: a block is
+ * one or the other, so what its reuse costs is known); returns the merged block. */
+static span *merge_free(span *s)
 {
-    if (madvise(s->start, s->size, MADV_DONTNEED) == 0) {
-        arena.kept -= s->resident;
-        s->resident = 0;
+    span *next = s->next, *prev = s->prev;
+    if (next && !next->used && next->paged == s->paged) {
+        s->size += next->size;
+        unlink_span(next);
     }
+    if (prev && !prev->used && prev->paged == s->paged) {
+        prev->size += s->size;
+        unlink_span(s);
+        s = prev;
+    }
+    return s;
 }
 
-/* Before `fresh` bytes are taken from the arena's top: gives back the free blocks with the
- * most resident bytes until that many are gone (or none are left). */
+/* Drops the pages of a free block (spans start and end on page boundaries): 1 if it did. */
+static int arena_release(span *s)
+{
+    if (madvise(s->start, s->size, MADV_DONTNEED) != 0) return 0;
+    arena.kept -= s->size;
+    s->paged = 0;
+    merge_free(s);
+    return 1;
+}
+
+/* Before `fresh` bytes without pages are handed out: gives back the largest paged free blocks
+ * until that many are gone (or none are left), so the RSS does not grow while they sit idle. */
 static void arena_release_for(size_t fresh)
 {
     size_t released = 0;
     while (released < fresh) {
         span *most = NULL;
         for (span *s = arena.first; s; s = s->next)
-            if (!s->used && s->resident && (!most || s->resident > most->resident)) most = s;
+            if (!s->used && s->paged && (!most || s->size > most->size)) most = s;
         if (!most) break;
-        size_t before = arena.kept;
-        arena_release(most);
-        if (arena.kept == before) break; /* madvise refused: keep the pages */
-        released += before - arena.kept;
+        size_t bytes = most->size;
+        if (!arena_release(most)) break; /* madvise refused: keep the pages */
+        released += bytes;
     }
 }
 
-/* A block of `size` bytes (a multiple of ARENA_MIN) from the arena, or NULL. */
-static span *arena_take(size_t size)
+/* The smallest free block of `paged` kind that holds size bytes, or NULL. */
+static span *best_fit(size_t size, int paged)
 {
     span *best = NULL;
     for (span *s = arena.first; s; s = s->next)
-        if (!s->used && s->size >= size && (!best || s->size < best->size)) best = s;
-    if (best) {
-        /* where in a block its resident pages are is not known: the part taken is assumed to
-         * hold as many of them as fit, the rest keeps what remains */
-        size_t taken = best->resident < size ? best->resident : size;
-        span *rest = best->size - size >= ARENA_MIN ? malloc(sizeof *rest) : NULL;
-        if (rest) { /* the rest stays free, after it */
-            rest->start = best->start + size;
-            rest->size = best->size - size;
-            rest->resident = best->resident - taken;
-            rest->used = 0;
-            link_after(best, rest);
-            best->size = size;
-        } else {
-            taken = best->resident;
-        }
-        arena.kept -= taken;
-        best->used = 1;
-        return best;
+        if (!s->used && s->paged == paged && s->size >= size && (!best || s->size < best->size)) best = s;
+    return best;
+}
+
+/* Hands out the first size bytes of free block b; the rest stays free, after it, same kind. */
+static span *take_from(span *b, size_t size)
+{
+    span *rest = b->size - size >= ARENA_MIN ? malloc(sizeof *rest) : NULL;
+    if (rest) {
+        rest->start = b->start + size;
+        rest->size = b->size - size;
+        rest->paged = b->paged;
+        rest->used = 0;
+        link_after(b, rest);
+        b->size = size;
     }
-    if ((size_t)(arena.end - arena.top) < size) return NULL;
+    if (b->paged) arena.kept -= b->size;
+    b->used = 1;
+    return b;
+}
+
+/* A block of `size` bytes (a multiple of ARENA_MIN) from the arena, or NULL: a paged free block
+ * if one fits; otherwise, once as many paged bytes are given back, a free block without pages,
+ * or fresh address space from the arena's top. */
+static span *arena_take(size_t size)
+{
+    span *b = best_fit(size, 1);
+    if (b) return take_from(b, size);
     arena_release_for(size);
+    b = best_fit(size, 0);
+    if (b) return take_from(b, size);
+    if ((size_t)(arena.end - arena.top) < size) return NULL;
     span *s = malloc(sizeof *s);
     if (!s) return NULL;
     s->start = arena.top;
     s->size = size;
-    s->resident = 0;
+    s->paged = 0;
     s->used = 1;
     link_after(arena.last, s);
     arena.top += size;
     return s;
 }
-
 
 /* Frees the block starting at p (nothing when no block in use starts there). */
 static void arena_give(char *p)
@@ -192,19 +221,9 @@ static void arena_give(char *p)
     while (s && s->start != p) s = s->prev;
     if (!s || !s->used) return;
     s->used = 0;
-    s->resident = s->size; /* it was in use: every page may have been touched */
+    s->paged = 1; /* it was in use: every page may have been touched */
     arena.kept += s->size;
-    span *next = s->next, *prev = s->prev;
-    if (next && !next->used) { /* merge with the next */
-        s->size += next->size;
-        s->resident += next->resident;
-        unlink_span(next);
-    }
-    if (prev && !prev->used) { /* merge into the previous */
-        prev->size += s->size;
-        prev->resident += s->resident;
-        unlink_span(s);
-    }
+    merge_free(s);
 }
 
 void *cli_arena_alloc(size_t bytes, void *user)
