@@ -8,7 +8,8 @@
  * quintic steps of the partition. Phong texels whose spread reaches the horizon take the
  * closed-form mean of x^n over the spread. The products convert eight half-float weights at a
  * time (F16C) and keep two sets of accumulators, so that the loads bound them rather than the
- * FMA latency. */
+ * FMA latency. The functions are named avx2_* and their twins portable_*: under one name, a
+ * profile of a binary without debug information (perf report) cannot tell which one ran. */
 #include "bake/specular/fast_internal.h"
 #include "core/cpu.h"
 
@@ -215,8 +216,8 @@ IBL_TARGET_AVX2 static double horizontal_sum(__m256 v)
     return s;
 }
 
-IBL_TARGET_AVX2 static void sum_leaves(const leaf_batch *batch, const float R[3], const float RR[6],
-                                       double out[4])
+IBL_TARGET_AVX2 static void avx2_sum_leaves(const leaf_batch *batch, const float R[3],
+                                            const float RR[6], double out[4])
 {
     const int B = BLOCK_TEXELS;
     lobe_vectors k;
@@ -271,10 +272,11 @@ IBL_TARGET_AVX2 static void sum_leaves(const leaf_batch *batch, const float R[3]
 }
 
 /* One setup for the whole base texel: per row it cost as much as a row's weights. */
-IBL_TARGET_AVX2 static void base_weights(const lobe_piece *pc, const float R[3], const float RR[6],
-                                         const float *geometry, size_t plane, int padded_edge,
-                                         int origin, const int32_t *rows, int row_count,
-                                         float inv_scale, uint16_t *w, float lanes[8])
+IBL_TARGET_AVX2 static void avx2_base_weights(const lobe_piece *pc, const float R[3],
+                                              const float RR[6], const float *geometry,
+                                              size_t plane, int padded_edge, int origin,
+                                              const int32_t *rows, int row_count, float inv_scale,
+                                              uint16_t *w, float lanes[8])
 {
     lobe_vectors k;
     lobe_setup(pc, &k);
@@ -306,8 +308,8 @@ IBL_TARGET_AVX2 static void base_weights(const lobe_piece *pc, const float R[3],
     _mm256_storeu_ps(lanes, acc);
 }
 
-IBL_TARGET_AVX2 static void row_extent(const float *g, size_t plane, int n, const float R[3],
-                                       float cos_reach, int *first, int *last)
+IBL_TARGET_AVX2 static void avx2_row_extent(const float *g, size_t plane, int n, const float R[3],
+                                            float cos_reach, int *first, int *last)
 {
     const __m256 r0 = _mm256_set1_ps(R[0]), r1 = _mm256_set1_ps(R[1]), r2 = _mm256_set1_ps(R[2]);
     const __m256 c = _mm256_set1_ps(cos_reach), zero = _mm256_setzero_ps();
@@ -342,8 +344,8 @@ KERNEL_INLINE void mac3(__m256 w, const float *q, size_t plane, __m256 *r, __m25
     *b = _mm256_fmadd_ps(w, _mm256_loadu_ps(q + 2 * plane), *b);
 }
 
-IBL_TARGET_AVX2 static void product(const precomputed_piece *c, size_t base, const float *planes,
-                                    int flip_x, int flip_y, double out[3])
+IBL_TARGET_AVX2 static void avx2_product(const precomputed_piece *c, size_t base,
+                                         const float *planes, int flip_x, int flip_y, double out[3])
 {
     const uint16_t *w = c->weights + c->first_weight[base];
     const uint16_t *vec = c->vector_cells + 2 * (c->first_weight[base] / 8);
@@ -381,6 +383,7 @@ IBL_TARGET_AVX2 static void product(const precomputed_piece *c, size_t base, con
     out[2] = horizontal_sum(ab) * c->weight_scale;
 }
 
-const fast_kernels ibl__fast_kernels_avx2 = {sum_leaves, base_weights, row_extent, product};
+const fast_kernels ibl__fast_kernels_avx2 = {avx2_sum_leaves, avx2_base_weights, avx2_row_extent,
+                                             avx2_product};
 
 #endif

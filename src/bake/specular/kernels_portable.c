@@ -46,7 +46,8 @@ static float piece_leaf(const lobe_piece *pc, float u, float q)
     return g + 0.5f * g2 * q;
 }
 
-static void sum_leaves(const leaf_batch *batch, const float R[3], const float RR[6], double out[4])
+static void portable_sum_leaves(const leaf_batch *batch, const float R[3], const float RR[6],
+                                double out[4])
 {
     const int B = BLOCK_TEXELS;
     int moments = batch->mode == LEAF_COARSE || batch->mode == LEAF_DIFFERENCE ? FIELD_LUM_MEAN : FIELD_MEAN;
@@ -82,10 +83,10 @@ static void sum_leaves(const leaf_batch *batch, const float R[3], const float RR
     for (int k = 0; k < 4; k++) out[k] += acc[k];
 }
 
-static void base_weights(const lobe_piece *pc, const float R[3], const float RR[6],
-                         const float *geometry, size_t plane, int padded_edge, int origin,
-                         const int32_t *rows, int row_count, float inv_scale, uint16_t *w,
-                         float lanes[8])
+static void portable_base_weights(const lobe_piece *pc, const float R[3], const float RR[6],
+                                  const float *geometry, size_t plane, int padded_edge, int origin,
+                                  const int32_t *rows, int row_count, float inv_scale, uint16_t *w,
+                                  float lanes[8])
 {
     for (int r = 0; r < row_count; r++) {
         const int32_t *row = rows + 3 * r;
@@ -104,8 +105,8 @@ static void base_weights(const lobe_piece *pc, const float R[3], const float RR[
     }
 }
 
-static void row_extent(const float *g, size_t plane, int n, const float R[3], float cos_reach,
-                       int *first, int *last)
+static void portable_row_extent(const float *g, size_t plane, int n, const float R[3],
+                                float cos_reach, int *first, int *last)
 {
     *first = *last = -1;
     for (int i = 0; i < n; i++) {
@@ -116,8 +117,8 @@ static void row_extent(const float *g, size_t plane, int n, const float R[3], fl
     }
 }
 
-static void product(const precomputed_piece *c, size_t base, const float *planes, int flip_x,
-                    int flip_y, double out[3])
+static void portable_product(const precomputed_piece *c, size_t base, const float *planes,
+                             int flip_x, int flip_y, double out[3])
 {
     size_t plane = (size_t)c->padded_edge * c->padded_edge;
     const uint16_t *w = c->weights + c->first_weight[base];
@@ -143,4 +144,5 @@ static void product(const precomputed_piece *c, size_t base, const float *planes
     }
 }
 
-const fast_kernels ibl__fast_kernels_portable = {sum_leaves, base_weights, row_extent, product};
+const fast_kernels ibl__fast_kernels_portable = {portable_sum_leaves, portable_base_weights,
+                                                  portable_row_extent, portable_product};
