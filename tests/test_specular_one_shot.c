@@ -3,7 +3,10 @@
  *
  * A one-shot plan keeps the geometric fields of the coarse levels only the run's pyramid reads
  * apart (face-local, once for all six faces), makes those levels' records during the run and
- * frees them as the pyramid goes, finds its precomputed normalisers without keeping the
+ * frees them as the pyramid goes (the first of them made block row by block row with the next
+ * one, never whole: pyramid.c, ibl__fast_pyramid_streamed; the GGX 128 and 64 cases below
+ * take that path, with centroid corrections made again from the source), finds its
+ * precomputed normalisers without keeping the
  * weights, makes the weights again just before their products, and frees everything but the
  * grids before the output is allocated. A reusable plan (ibl_specular_plan_create) keeps its
  * weights and its records, and its runs allocate nothing. Both must give the output bit for

@@ -491,6 +491,10 @@ void ibl__fast_free_run_records(ibl_specular_plan *p, int level);
 void ibl__fast_pyramid_level0(ibl_specular_plan *p, const ibl_cubemap *src);
 void ibl__fast_pyramid_level(ibl_specular_plan *p, const ibl_cubemap *src, int level);
 void ibl__fast_uniform_level(ibl_specular_plan *p, int level);
+int ibl__fast_pyramid_streams(const ibl_specular_plan *p, int level);
+ibl_status ibl__fast_pyramid_streamed(ibl_specular_plan *p, const ibl_cubemap *src, int level);
+const float *ibl__fast_streamed_texel(const ibl_specular_plan *p, const ibl_cubemap *src, int level,
+                                      int f, int x, int y, float *row);
 
 /* ---- pieces.c ---- */
 ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level);
@@ -515,7 +519,11 @@ void ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src)
 ibl_status ibl__fast_plan_bars(ibl_specular_plan *p, int level);
 ibl_status ibl__fast_gathering_buffers(ibl_specular_plan *p);
 void ibl__fast_select_bright(ibl_specular_plan *p, int level);
-void ibl__fast_select_corrections(ibl_specular_plan *p, precomputed_piece *c);
+/* (src: the run's source, from which a streamed level's gathered texels are made again) */
+ibl_status ibl__fast_select_corrections(ibl_specular_plan *p, precomputed_piece *c,
+                                        const ibl_cubemap *src);
+void ibl__fast_block_bounds(const ibl_specular_plan *p, const precomputed_piece *c,
+                            const source_level *s, size_t b, const float *lum);
 
 /* ---- combine.c ---- */
 void ibl__fast_combine(ibl_specular_plan *p, ibl_cubemap *dst, int level);

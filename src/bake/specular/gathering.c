@@ -201,11 +201,22 @@ static void super_cones(const float *cones, int count, float *supers)
     }
 }
 
+/* Where the records of level s come from when the level has none (a streamed level,
+ * ibl__fast_pyramid_streamed): each gathered texel is made again from the source, in the same
+ * operations, into one block row of scratch. */
+typedef struct texel_remake {
+    const ibl_cubemap *src;
+    int level;
+    float *row;
+} texel_remake;
+
 /* Gathers the `count` texels of `keys` in key order, eight to a block of records with their
  * power from field power_field, then their cones (one per block, then one per
- * SUPER_CONE_BLOCKS blocks after `capacity` cones); the number of blocks. */
+ * SUPER_CONE_BLOCKS blocks after `capacity` cones); the number of blocks. The records are s's,
+ * or made again (remake, when s has none). */
 static int gather_texels(const ibl_specular_plan *p, const source_level *s, uint64_t *keys,
-                         int count, int power_field, float *records, float *cones, int capacity)
+                         int count, int power_field, float *records, float *cones, int capacity,
+                         const texel_remake *remake)
 {
     const int B = BLOCK_TEXELS;
     qsort(keys, (size_t)count, sizeof *keys, key_order);
@@ -216,11 +227,16 @@ static int gather_texels(const ibl_specular_plan *p, const source_level *s, uint
         texel_of_key(s, keys[k], &b, &t);
         block_texel(s, b, t, &f, &x, &y);
         level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, g);
+        /* the texel's fields from GEOMETRY_FIELDS on, B floats apart */
+        const float *rec = remake ? ibl__fast_streamed_texel(p, remake->src, remake->level, f, x, y,
+                                                             remake->row)
+                                  : s->records + field_index(s, b, GEOMETRY_FIELDS, t);
         float *dst = records + (size_t)(k / B) * COARSE_FIELDS * B + k % B;
         for (int field = 0; field < GEOMETRY_FIELDS; field++) dst[field * B] = g[field];
         for (int field = GEOMETRY_FIELDS; field < COARSE_FIELDS; field++)
-            dst[field * B] = s->records[field_index(s, b, field, t)];
-        for (int c = 0; c < 3; c++) dst[(FIELD_POWER + c) * B] = s->records[field_index(s, b, power_field + c, t)];
+            dst[field * B] = rec[(field - GEOMETRY_FIELDS) * B];
+        for (int c = 0; c < 3; c++)
+            dst[(FIELD_POWER + c) * B] = rec[(power_field + c - GEOMETRY_FIELDS) * B];
     }
     for (int i = count; i < (count + B - 1) / B * B; i++) { /* the rest of the last block: nothing */
         float *dst = records + (size_t)(i / B) * COARSE_FIELDS * B + i % B;
@@ -261,7 +277,7 @@ void ibl__fast_select_bright(ibl_specular_plan *p, int level)
         }
     }
     s->bright_block_count = gather_texels(p, s, s->bright_keys, k, FIELD_POWER, s->bright_records,
-                                          s->bright_cones, s->bright_capacity);
+                                          s->bright_cones, s->bright_capacity, NULL);
 }
 
 typedef struct bound_job {
@@ -269,44 +285,48 @@ typedef struct bound_job {
     precomputed_piece *c;
 } bound_job;
 
-/* How far each texel's moment leaf can be from its uniform leaf, per unit of the normaliser:
- * in float, lane by lane. */
+/* How far each texel of block b of level s can be from its uniform leaf, per unit of the
+ * normaliser, in float, lane by lane, into c->texel_bound; lum: the block's fields from
+ * FIELD_LUM_MEAN on (BLOCK_TEXELS floats apart), the geometric ones apart (a level may keep
+ * them apart: level_texel_geometry). */
+void ibl__fast_block_bounds(const ibl_specular_plan *p, const precomputed_piece *c,
+                            const source_level *s, size_t b, const float *lum)
+{
+    const int B = BLOCK_TEXELS;
+    const float a1 = (float)c->bound_mean, a2 = (float)c->bound_spread, a3 = (float)c->bound_covariance;
+    const float l0 = (float)LUMINANCE_R, l1 = (float)LUMINANCE_G, l2 = (float)LUMINANCE_B;
+    const float *pw = lum + (FIELD_POWER - FIELD_LUM_MEAN) * B;
+    float *out = c->texel_bound + b * B;
+    for (int t = 0; t < B; t++) {
+        int f, x, y;
+        float geo[GEOMETRY_FIELDS];
+        block_texel(s, b, t, &f, &x, &y);
+        level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, geo);
+        float P = l0 * pw[t] + l1 * pw[B + t] + l2 * pw[2 * B + t];
+        float dm = 0, dc = 0;
+        for (int k = 0; k < 3; k++) {
+            float d = lum[k * B + t] - geo[FIELD_MEAN + k];
+            dm += d * d;
+        }
+        for (int k = 0; k < 6; k++) {
+            float d = fabsf(lum[(FIELD_LUM_COVARIANCE - FIELD_LUM_MEAN + k) * B + t] -
+                            geo[FIELD_COVARIANCE + k]);
+            dc = d > dc ? d : dc;
+        }
+        float de = fabsf(lum[(FIELD_LUM_SPREAD - FIELD_LUM_MEAN) * B + t] - geo[FIELD_SPREAD]);
+        out[t] = P > 0 ? P * (a1 * sqrtf(dm) + a2 * de + a3 * dc) : 0.0f;
+    }
+}
+
+/* The bounds of BOUND_BLOCKS_PER_TASK blocks. */
 static void bound_task(void *arg, int index)
 {
     const bound_job *j = arg;
-    const precomputed_piece *c = j->c;
-    const source_level *s = &j->p->pyramid[c->source_level];
-    const int B = BLOCK_TEXELS;
+    const source_level *s = &j->p->pyramid[j->c->source_level];
     size_t b0 = (size_t)index * BOUND_BLOCKS_PER_TASK, b1 = b0 + BOUND_BLOCKS_PER_TASK;
     size_t blocks = source_block_count(s);
-    const float a1 = (float)c->bound_mean, a2 = (float)c->bound_spread, a3 = (float)c->bound_covariance;
-    const float l0 = (float)LUMINANCE_R, l1 = (float)LUMINANCE_G, l2 = (float)LUMINANCE_B;
-    for (size_t b = b0; b < b1 && b < blocks; b++) {
-        /* the luminance fields and the power from FIELD_LUM_MEAN on, the geometric ones apart
-         * (a level may keep them apart: level_texel_geometry) */
-        const float *lum = s->records + field_index(s, b, FIELD_LUM_MEAN, 0);
-        const float *pw = lum + (FIELD_POWER - FIELD_LUM_MEAN) * B;
-        float *out = c->texel_bound + b * B;
-        for (int t = 0; t < B; t++) {
-            int f, x, y;
-            float geo[GEOMETRY_FIELDS];
-            block_texel(s, b, t, &f, &x, &y);
-            level_texel_geometry(j->p->face_axis[f], j->p->face_sign[f], s, f, x, y, geo);
-            float P = l0 * pw[t] + l1 * pw[B + t] + l2 * pw[2 * B + t];
-            float dm = 0, dc = 0;
-            for (int k = 0; k < 3; k++) {
-                float d = lum[k * B + t] - geo[FIELD_MEAN + k];
-                dm += d * d;
-            }
-            for (int k = 0; k < 6; k++) {
-                float d = fabsf(lum[(FIELD_LUM_COVARIANCE - FIELD_LUM_MEAN + k) * B + t] -
-                                geo[FIELD_COVARIANCE + k]);
-                dc = d > dc ? d : dc;
-            }
-            float de = fabsf(lum[(FIELD_LUM_SPREAD - FIELD_LUM_MEAN) * B + t] - geo[FIELD_SPREAD]);
-            out[t] = P > 0 ? P * (a1 * sqrtf(dm) + a2 * de + a3 * dc) : 0.0f;
-        }
-    }
+    for (size_t b = b0; b < b1 && b < blocks; b++)
+        ibl__fast_block_bounds(j->p, j->c, s, b, s->records + field_index(s, b, FIELD_LUM_MEAN, 0));
 }
 
 /* Gathers each texel over the threshold with its luminance moments and its power from
@@ -314,31 +334,44 @@ static void bound_task(void *arg, int index)
  * summed as a leaf while the padded source leaves it out (products.c), it turns the texel's
  * uniform share into its moment leaf. */
 static int gather_corrections(const ibl_specular_plan *p, precomputed_piece *c,
-                              const source_level *s, double threshold, int power_field)
+                              const source_level *s, double threshold, int power_field,
+                              const texel_remake *remake)
 {
     const int B = BLOCK_TEXELS;
     size_t blocks = source_block_count(s);
     int k = 0;
     for (size_t b = 0; b < blocks; b++) {
-        const float *P = s->records + field_index(s, b, power_field, 0);
+        /* (a streamed level has no records to look at: but its texels over the threshold have
+         * a positive luminance power, P > 0 in bound_task, so never all three channels 0; and
+         * it has no bright texels, so power_field is FIELD_POWER) */
+        const float *P = remake ? NULL : s->records + field_index(s, b, power_field, 0);
         for (int t = 0; t < B; t++) {
             if (!(c->texel_bound[b * B + t] > threshold)) continue;
-            if (P[t] == 0 && P[B + t] == 0 && P[2 * B + t] == 0) continue;
+            if (P && P[t] == 0 && P[B + t] == 0 && P[2 * B + t] == 0) continue;
             c->correction_keys[k++] = texel_key(s, b, t);
         }
     }
     return gather_texels(p, s, c->correction_keys, k, power_field, c->correction_records,
-                         c->correction_cones, c->correction_capacity);
+                         c->correction_cones, c->correction_capacity, remake);
 }
 
-void ibl__fast_select_corrections(ibl_specular_plan *p, precomputed_piece *c)
+ibl_status ibl__fast_select_corrections(ibl_specular_plan *p, precomputed_piece *c,
+                                        const ibl_cubemap *src)
 {
     const source_level *s = &p->pyramid[c->source_level];
     size_t blocks = source_block_count(s);
     int power_field = c->without_bright ? FIELD_POWER_NOT_BRIGHT : FIELD_POWER;
-    bound_job job = {p, c};
-    ibl_parallel_for(p->ctx, (int)((blocks + BOUND_BLOCKS_PER_TASK - 1) / BOUND_BLOCKS_PER_TASK),
-                     bound_task, &job);
+    /* a streamed level's bounds were found as it was made */
+    texel_remake remake = {src, c->source_level, NULL};
+    if (!s->records) {
+        size_t row_floats = (size_t)6 * s->blocks_x * s->fields * BLOCK_TEXELS;
+        remake.row = ibl_calloc(p->ctx, row_floats, sizeof(float));
+        if (!remake.row) return ibl_context_status(p->ctx);
+    } else {
+        bound_job job = {p, c};
+        ibl_parallel_for(p->ctx, (int)((blocks + BOUND_BLOCKS_PER_TASK - 1) / BOUND_BLOCKS_PER_TASK),
+                         bound_task, &job);
+    }
     double bar = CORRECTION_BAR * accuracy_scale(p) * s->power / (4.0 * IBL_PI);
     int capacity = c->correction_capacity * BLOCK_TEXELS;
     for (;;) {
@@ -349,5 +382,8 @@ void ibl__fast_select_corrections(ibl_specular_plan *p, precomputed_piece *c)
     }
     /* the padded source and the gathering compare the same floats */
     c->correction_threshold = (float)bar;
-    c->correction_block_count = gather_corrections(p, c, s, c->correction_threshold, power_field);
+    c->correction_block_count = gather_corrections(p, c, s, c->correction_threshold, power_field,
+                                                   remake.row ? &remake : NULL);
+    ibl_free(p->ctx, remake.row);
+    return IBL_OK;
 }

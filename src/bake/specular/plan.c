@@ -295,33 +295,47 @@ static ibl_status run_dynamic(ibl_specular_plan *p, const ibl_cubemap *src, ibl_
 
 /* The precomputed pieces over pyramid level `level` gather their centroid corrections, one
  * after the other in the correction pool (pool_used: its blocks taken so far). */
-static void gather_corrections(ibl_specular_plan *p, int level, size_t *pool_used)
+static ibl_status gather_corrections(ibl_specular_plan *p, const ibl_cubemap *src, int level,
+                                     size_t *pool_used)
 {
     for (int l = 0; l < p->output_levels; l++)
         for (int k = 0; k < p->levels[l].piece_count; k++) {
             precomputed_piece *c = p->levels[l].pieces[k].precomputed;
             if (!c || c->correction_capacity == 0 || c->source_level != level) continue;
             c->correction_records = p->correction_pool + *pool_used * COARSE_FIELDS * BLOCK_TEXELS;
-            ibl__fast_select_corrections(p, c);
+            ibl_status st = ibl__fast_select_corrections(p, c, src);
+            if (st != IBL_OK) return st;
             *pool_used += (size_t)c->correction_block_count;
         }
+    return IBL_OK;
 }
 
 /* The radiance pyramid and what is gathered from it: level by level, the records (those only
  * the pyramid reads are made here), the bright texels, the uniform images and the centroid
  * corrections of the precomputed pieces over it. A one-shot plan frees a level's records
- * once the next level is made from them (ibl__fast_free_run_records: no-op for kept ones). */
+ * once the next level is made from them (ibl__fast_free_run_records: no-op for kept ones),
+ * and makes its first stored level block row by block row with the next one, without its
+ * records, where it can (ibl__fast_pyramid_streamed). */
 static ibl_status run_pyramid(ibl_specular_plan *p, const ibl_cubemap *src)
 {
     if (p->has_level0_records) ibl__fast_pyramid_level0(p, src);
     size_t pool_used = 0;
+    int made = -1; /* the level made with the streamed one */
     for (int l = p->first_stored; l < p->pyramid_levels; l++) {
-        ibl_status st = ibl__fast_run_records(p, l);
+        ibl_status st = IBL_OK;
+        if (l != made && ibl__fast_pyramid_streams(p, l)) {
+            st = ibl__fast_run_records(p, l + 1);
+            if (st == IBL_OK) st = ibl__fast_pyramid_streamed(p, src, l);
+            made = l + 1;
+        } else if (l != made) {
+            st = ibl__fast_run_records(p, l);
+            if (st == IBL_OK) ibl__fast_pyramid_level(p, src, l);
+        }
         if (st != IBL_OK) return st;
-        ibl__fast_pyramid_level(p, src, l);
         if (p->pyramid[l].bright_scale > 0) ibl__fast_select_bright(p, l);
-        ibl__fast_uniform_level(p, l);
-        gather_corrections(p, l, &pool_used);
+        if (l != made - 1) ibl__fast_uniform_level(p, l); /* (a streamed level's: made with it) */
+        st = gather_corrections(p, src, l, &pool_used);
+        if (st != IBL_OK) return st;
         if (p->one_shot && l > p->first_stored) ibl__fast_free_run_records(p, l - 1);
     }
     if (p->one_shot && p->pyramid_levels > p->first_stored)

@@ -58,10 +58,10 @@ enum { CACHED_CHILDREN = 64 };
 
 /* Texel (x, y) of face f of the first stored level from its K x K source children (row by
  * row): their luminance-weighted moments by the parallel-axis rule, in face-local coordinates,
- * turned to face f's world coordinates once. g holds the children's face-local moments (NULL:
- * unfolded here). */
-static void texel_from_source(const pyramid_job *job, int f, int x, int y,
-                              const float (*g)[GEOMETRY_FIELDS])
+ * turned to face f's world coordinates once, into dst's records (the level's, or a view of
+ * rows from row0 on). g holds the children's face-local moments (NULL: unfolded here). */
+static void texel_from_source(const pyramid_job *job, const source_level *dst, int row0, int f,
+                              int x, int y, const float (*g)[GEOMETRY_FIELDS])
 {
     static const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
     const ibl_specular_plan *p = job->p;
@@ -82,7 +82,7 @@ static void texel_from_source(const pyramid_job *job, int f, int x, int y,
             W += w;
             for (int c = 0; c < 3; c++) m[c] += w * gc[FIELD_MEAN + c];
         }
-    float *o = s->records + record_index(s, f, x, y, FIELD_LUM_MEAN); /* fields from it */
+    float *o = dst->records + record_index(dst, f, x, y - row0, FIELD_LUM_MEAN); /* fields from it */
     if (W > 0) {
         double C[6] = {0, 0, 0, 0, 0, 0}, e = 0;
         for (int c = 0; c < 3; c++) m[c] /= W;
@@ -116,7 +116,7 @@ static void texel_from_source(const pyramid_job *job, int f, int x, int y,
  * not kept). So each texel's children are unfolded from level 0's stored eighth once, for the
  * six faces and both passes: the unfolding's reads, scattered across the eighth where a child
  * lies beyond its diagonal, were most of the level's cost when each face made its own. */
-static void level_row_from_source(const pyramid_job *job, int y)
+static void level_row_from_source(const pyramid_job *job, const source_level *dst, int row0, int y)
 {
     const ibl_specular_plan *p = job->p;
     int M = job->p->pyramid[job->level].edge, K = 1 << job->level;
@@ -128,7 +128,8 @@ static void level_row_from_source(const pyramid_job *job, int y)
             for (int cy = K * y; cy < K * (y + 1); cy++)
                 for (int cx = K * x; cx < K * (x + 1); cx++) level0_face_moments(p, cx, cy, g[child++]);
         }
-        for (int f = 0; f < 6; f++) texel_from_source(job, f, x, y, cached ? (const float(*)[GEOMETRY_FIELDS])g : NULL);
+        for (int f = 0; f < 6; f++)
+            texel_from_source(job, dst, row0, f, x, y, cached ? (const float(*)[GEOMETRY_FIELDS])g : NULL);
     }
 }
 
@@ -154,11 +155,11 @@ static void child_moments(const source_level *lo, int level, int f, int x, int y
     }
 }
 
-/* Row y of face f of a coarse level from the records of the level below. */
-static void level_row(const pyramid_job *job, int f, int y)
+/* Row y of face f of a coarse level from the records of the level below, lo (that level's, or a
+ * view of its rows from lo_row0 on). */
+static void level_row(const pyramid_job *job, const source_level *lo, int lo_row0, int f, int y)
 {
     const ibl_specular_plan *p = job->p;
-    const source_level *lo = &job->p->pyramid[job->level - 1];
     source_level *s = &job->p->pyramid[job->level];
     const int B = BLOCK_TEXELS;
     for (int x = 0; x < s->edge; x++) {
@@ -167,7 +168,7 @@ static void level_row(const pyramid_job *job, int f, int y)
         double w[4], P[3] = {0, 0, 0};
         for (int k = 0; k < 4; k++) {
             double pw[3];
-            child_moments(lo, job->level, f, 2 * x + (k & 1), 2 * y + (k >> 1), &parts[k], pw);
+            child_moments(lo, job->level, f, 2 * x + (k & 1), 2 * y + (k >> 1) - lo_row0, &parts[k], pw);
             w[k] = luminance(pw[0], pw[1], pw[2]);
             if (!(w[k] > 0)) w[k] = 0;
             for (int c = 0; c < 3; c++) P[c] += pw[c];
@@ -210,7 +211,9 @@ static void level_task(void *arg, int index)
     const pyramid_job *job = arg;
     source_level *s = &job->p->pyramid[job->level];
     int f = index / s->blocks_y, block_row = index % s->blocks_y;
-    for (int y = block_row * BLOCK_H; y < (block_row + 1) * BLOCK_H && y < s->edge; y++) level_row(job, f, y);
+    const source_level *lo = &job->p->pyramid[job->level - 1];
+    for (int y = block_row * BLOCK_H; y < (block_row + 1) * BLOCK_H && y < s->edge; y++)
+        level_row(job, lo, 0, f, y);
     s->row_power[index] = block_row_power(s, f, block_row);
 }
 
@@ -221,7 +224,7 @@ static void level_from_source_task(void *arg, int block_row)
     const pyramid_job *job = arg;
     source_level *s = &job->p->pyramid[job->level];
     for (int y = block_row * BLOCK_H; y < (block_row + 1) * BLOCK_H && y < s->edge; y++)
-        level_row_from_source(job, y);
+        level_row_from_source(job, s, 0, y);
     for (int f = 0; f < 6; f++) s->row_power[f * s->blocks_y + block_row] = block_row_power(s, f, block_row);
 }
 
@@ -238,14 +241,14 @@ void ibl__fast_pyramid_level(ibl_specular_plan *p, const ibl_cubemap *src, int l
     for (int i = 0; i < 6 * s->blocks_y; i++) s->power += s->row_power[i];
 }
 
-/* Row `index` (face edge + y) of the level's uniform images. */
-static void uniform_task(void *arg, int index)
+/* Row y of face f of level s's uniform images, from the records of `recs` (s's, or a view of
+ * its rows from row0 on). */
+static void uniform_row(const source_level *s, const source_level *recs, int row0, int f, int y)
 {
-    const pyramid_job *job = arg;
-    const source_level *s = &job->p->pyramid[job->level];
-    int M = s->edge, f = index / M, y = index % M;
+    int M = s->edge;
     for (int x = 0; x < M; x++) {
-        const float *rec = s->records + record_index(s, f, x, y, FIELD_POWER); /* fields from it */
+        /* fields from FIELD_POWER on */
+        const float *rec = recs->records + record_index(recs, f, x, y - row0, FIELD_POWER);
         float om = s->first_field ? s->geometry[((size_t)y * M + x) * GEOMETRY_FIELDS + FIELD_SOLID_ANGLE]
                                   : s->records[record_index(s, f, x, y, FIELD_SOLID_ANGLE)];
         float inv = om > 0 ? 1.0f / om : 0.0f;
@@ -262,10 +265,127 @@ static void uniform_task(void *arg, int index)
     }
 }
 
+/* Row `index` (face edge + y) of the level's uniform images. */
+static void uniform_task(void *arg, int index)
+{
+    const pyramid_job *job = arg;
+    const source_level *s = &job->p->pyramid[job->level];
+    uniform_row(s, s, 0, index / s->edge, index % s->edge);
+}
+
 void ibl__fast_uniform_level(ibl_specular_plan *p, int level)
 {
     const source_level *s = &p->pyramid[level];
     if (!s->uniform && !s->uniform_not_bright) return;
     pyramid_job job = {p, NULL, level};
     ibl_parallel_for(p->ctx, 6 * s->edge, uniform_task, &job);
+}
+
+/* ---- the first stored level, streamed ---- */
+
+/* A one-shot plan's first stored level, when only the pyramid reads its records, made a block
+ * row at a time into scratch: each block row gives the level's uniform rows, its luminance
+ * power, the centroid-correction bounds of the precomputed pieces over it and the next level's
+ * row of texels (whose four children are that block row's), so the level's records are never
+ * held whole (100 MB at the 512 level of a 1024 source, the largest block of the 1024 chain's
+ * peak). The centroid corrections then make their few gathered texels again from the source
+ * (ibl__fast_streamed_texel). Every texel goes through the same operations as in the level's
+ * records, so the results are the same bits. Not for a level with bright texels (their
+ * selection reads the whole level) or an image without them. */
+int ibl__fast_pyramid_streams(const ibl_specular_plan *p, int level)
+{
+    const source_level *s = &p->pyramid[level];
+    if (!p->one_shot || level != p->first_stored || level + 1 >= p->pyramid_levels) return 0;
+    if (level == 1 && p->has_level0_records) return 0; /* made from level 0's records */
+    if (s->records || !s->geometry || s->first_field != GEOMETRY_FIELDS) return 0;
+    if (s->bright_scale > 0 || s->uniform_not_bright || s->edge % BLOCK_W || s->edge % BLOCK_H) return 0;
+    for (int l = 0; l < p->output_levels; l++)
+        for (int k = 0; k < p->levels[l].piece_count; k++) {
+            const precomputed_piece *c = p->levels[l].pieces[k].precomputed;
+            if (c && c->source_level == level && c->without_bright) return 0;
+        }
+    return 1;
+}
+
+/* Block rows made per parallel-for, each into its own scratch. */
+enum { STREAM_BLOCK_ROWS = 16 };
+
+typedef struct stream_job {
+    pyramid_job level, next; /* the streamed level and the one made from it */
+    float *scratch;          /* STREAM_BLOCK_ROWS block rows of six faces' records */
+    int first_block_row;
+    int bounded_count;       /* the precomputed pieces with correction bounds over the level */
+    precomputed_piece *bounded[IBL_MAX_LEVELS * MAX_PIECES];
+} stream_job;
+
+/* A view of `row`, one block row of six faces' records of level s, as records of rows from
+ * 2 block_row on; its geometric fields stay in s->geometry, read with the level's own rows. */
+static source_level block_row_view(const source_level *s, float *row)
+{
+    source_level v = *s;
+    v.records = row;
+    v.blocks_y = 1;
+    return v;
+}
+
+static void streamed_task(void *arg, int index)
+{
+    const stream_job *j = arg;
+    const ibl_specular_plan *p = j->level.p;
+    source_level *s = &j->level.p->pyramid[j->level.level];
+    int block_row = j->first_block_row + index, row0 = block_row * BLOCK_H;
+    size_t row_floats = (size_t)6 * s->blocks_x * s->fields * BLOCK_TEXELS;
+    source_level v = block_row_view(s, j->scratch + (size_t)index * row_floats);
+    for (int y = row0; y < row0 + BLOCK_H; y++) level_row_from_source(&j->level, &v, row0, y);
+    for (int f = 0; f < 6; f++) s->row_power[f * s->blocks_y + block_row] = block_row_power(&v, f, 0);
+    for (int f = 0; s->uniform && f < 6; f++)
+        for (int y = row0; y < row0 + BLOCK_H; y++) uniform_row(s, &v, row0, f, y);
+    for (int k = 0; k < j->bounded_count; k++)
+        for (int f = 0; f < 6; f++)
+            for (int bx = 0; bx < s->blocks_x; bx++) {
+                size_t b = ((size_t)f * s->blocks_y + block_row) * s->blocks_x + bx;
+                const float *lum = v.records + field_index(&v, (size_t)f * s->blocks_x + bx, FIELD_LUM_MEAN, 0);
+                ibl__fast_block_bounds(p, j->bounded[k], s, b, lum);
+            }
+    for (int f = 0; f < 6; f++) level_row(&j->next, &v, row0, f, block_row);
+}
+
+ibl_status ibl__fast_pyramid_streamed(ibl_specular_plan *p, const ibl_cubemap *src, int level)
+{
+    source_level *s = &p->pyramid[level], *n = &p->pyramid[level + 1];
+    stream_job job = {{p, src, level}, {p, src, level + 1}, NULL, 0, 0, {NULL}};
+    for (int l = 0; l < p->output_levels; l++)
+        for (int k = 0; k < p->levels[l].piece_count; k++) {
+            precomputed_piece *c = p->levels[l].pieces[k].precomputed;
+            if (c && c->source_level == level && c->correction_capacity > 0)
+                job.bounded[job.bounded_count++] = c;
+        }
+    size_t row_floats = (size_t)6 * s->blocks_x * s->fields * BLOCK_TEXELS;
+    job.scratch = ibl_alloc(p->ctx, STREAM_BLOCK_ROWS * row_floats * sizeof(float));
+    if (!job.scratch) return ibl_context_status(p->ctx);
+    for (int first = 0; first < s->blocks_y; first += STREAM_BLOCK_ROWS) {
+        job.first_block_row = first;
+        int rows = s->blocks_y - first < STREAM_BLOCK_ROWS ? s->blocks_y - first : STREAM_BLOCK_ROWS;
+        ibl_parallel_for(p->ctx, rows, streamed_task, &job);
+    }
+    ibl_free(p->ctx, job.scratch);
+    s->power = 0;
+    for (int i = 0; i < 6 * s->blocks_y; i++) s->power += s->row_power[i];
+    /* each block row of the next level is made by two streamed ones: its power once all are */
+    for (int i = 0; i < 6 * n->blocks_y; i++)
+        n->row_power[i] = block_row_power(n, i / n->blocks_y, i % n->blocks_y);
+    n->power = 0;
+    for (int i = 0; i < 6 * n->blocks_y; i++) n->power += n->row_power[i];
+    return IBL_OK;
+}
+
+const float *ibl__fast_streamed_texel(const ibl_specular_plan *p, const ibl_cubemap *src, int level,
+                                      int f, int x, int y, float *row)
+{
+    const source_level *s = &p->pyramid[level];
+    pyramid_job job = {(ibl_specular_plan *)p, src, level};
+    source_level v = block_row_view(s, row);
+    int row0 = y - y % BLOCK_H;
+    texel_from_source(&job, &v, row0, f, x, y, NULL);
+    return v.records + record_index(&v, f, x, y - row0, GEOMETRY_FIELDS);
 }
