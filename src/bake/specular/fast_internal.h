@@ -358,10 +358,11 @@ typedef struct fast_kernels {
     /* first and last of n cells within reach of R (m.R >= cos_reach, a texel there); -1 none */
     void (*row_extent)(const float *geometry, size_t plane, int n, const float R[3],
                        float cos_reach, int *first, int *last);
-    /* base texel `base`'s weights times an image of the padded source (rgb planes), flipped by
-     * flip_x / flip_y */
-    void (*product)(const precomputed_piece *c, size_t base, const float *planes, int flip_x,
-                    int flip_y, double out[3]);
+    /* base texel `base`'s weights (from w on, their vectors' first cells from cells on) times an
+     * image of the padded source (rgb planes), flipped by flip_x / flip_y */
+    void (*product)(const precomputed_piece *c, size_t base, const uint16_t *w,
+                    const uint16_t *cells, const float *planes, int flip_x, int flip_y,
+                    double out[3]);
 } fast_kernels;
 
 extern const fast_kernels ibl__fast_kernels_portable;
@@ -511,9 +512,12 @@ void ibl__fast_precomputed_normalisers(const precomputed_piece *c, float *sums);
 void ibl__fast_precomputed_destroy(ibl_context *ctx, precomputed_piece *c);
 void ibl__fast_precomputed_release(ibl_context *ctx, precomputed_piece *c);
 ibl_status ibl__fast_precomputed_refill(ibl_specular_plan *p, int level, int k);
+float *ibl__fast_precomputed_geometry(ibl_specular_plan *p, int level, int k);
+void ibl__fast_precomputed_weights(ibl_specular_plan *p, int level, int k, const float *geometry,
+                                   size_t first, size_t end, uint16_t *weights, uint16_t *cells);
 
 /* ---- products.c ---- */
-void ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src);
+ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src);
 
 /* ---- gathering.c ---- */
 ibl_status ibl__fast_plan_bars(ibl_specular_plan *p, int level);

@@ -344,11 +344,10 @@ KERNEL_INLINE void mac3(__m256 w, const float *q, size_t plane, __m256 *r, __m25
     *b = _mm256_fmadd_ps(w, _mm256_loadu_ps(q + 2 * plane), *b);
 }
 
-IBL_TARGET_AVX2 static void avx2_product(const precomputed_piece *c, size_t base,
-                                         const float *planes, int flip_x, int flip_y, double out[3])
+IBL_TARGET_AVX2 static void avx2_product(const precomputed_piece *c, size_t base, const uint16_t *w,
+                                         const uint16_t *vec, const float *planes, int flip_x,
+                                         int flip_y, double out[3])
 {
-    const uint16_t *w = c->weights + c->first_weight[base];
-    const uint16_t *vec = c->vector_cells + 2 * (c->first_weight[base] / 8);
     int nvec = (int)((c->first_weight[base + 1] - c->first_weight[base]) / 8);
     size_t plane = (size_t)c->padded_edge * c->padded_edge;
     /* the first cell of vector k in the flipped image: y' = flip_y ? S - 1 + 2 origin - y : y,

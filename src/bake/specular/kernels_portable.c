@@ -117,11 +117,12 @@ static void portable_row_extent(const float *g, size_t plane, int n, const float
     }
 }
 
-static void portable_product(const precomputed_piece *c, size_t base, const float *planes,
-                             int flip_x, int flip_y, double out[3])
+static void portable_product(const precomputed_piece *c, size_t base, const uint16_t *w,
+                             const uint16_t *cells, const float *planes, int flip_x, int flip_y,
+                             double out[3])
 {
     size_t plane = (size_t)c->padded_edge * c->padded_edge;
-    const uint16_t *w = c->weights + c->first_weight[base];
+    (void)cells; /* (the rows say where the weights go) */
     const int32_t *rows = c->rows + 3 * (size_t)c->first_row[base];
     int row_count = (int)(c->first_row[base + 1] - c->first_row[base]), S = c->source_edge;
     float acc[3][8] = {{0}};

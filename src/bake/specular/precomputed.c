@@ -401,6 +401,39 @@ ibl_status ibl__fast_precompute_level(ibl_specular_plan *p, int level)
     return IBL_OK;
 }
 
+/* A one-shot plan's piece k of a level, batch by batch (products.c): its padded geometry, made
+ * once (NULL: no memory; ibl_free it after), then the weights of bases [first, end) written
+ * from `weights` on and their vectors' first cells from `cells` on: the same halves as
+ * weights_task stores for the whole piece (ibl__fast_precomputed_refill). */
+float *ibl__fast_precomputed_geometry(ibl_specular_plan *p, int level, int k)
+{
+    const precomputed_piece *c = p->levels[level].pieces[k].precomputed;
+    float *geometry = ibl_alloc(p->ctx, GEOMETRY_FIELDS * (size_t)c->padded_edge * c->padded_edge * sizeof(float));
+    if (!geometry) return NULL;
+    weights_job job = {p, p->levels[level].pieces[k].precomputed, &p->levels[level].pieces[k],
+                       &p->levels[level].lobe, geometry, NULL, NULL, 0.0, 0.0, NULL, 0, 0};
+    ibl_parallel_for(p->ctx, c->padded_edge, geometry_task, &job);
+    return geometry;
+}
+
+void ibl__fast_precomputed_weights(ibl_specular_plan *p, int level, int k, const float *geometry,
+                                   size_t first, size_t end, uint16_t *weights, uint16_t *cells)
+{
+    lobe_piece *pc = &p->levels[level].pieces[k];
+    precomputed_piece *c = pc->precomputed;
+    size_t origin = c->first_weight[first];
+    weights_job job = {p, c, pc, &p->levels[level].lobe, (float *)geometry, NULL, NULL, 0.0, 0.0,
+                       weights, origin, (int)first};
+    ibl_parallel_for(p->ctx, (int)(end - first), weights_task, &job);
+    /* each vector's first cell (as vector_cells) */
+    size_t v = 0;
+    for (size_t r = c->first_row[first]; r < c->first_row[end]; r++)
+        for (int i = 0; i < c->rows[3 * r + 2]; i += 8, v++) {
+            cells[2 * v] = (uint16_t)(c->rows[3 * r + 1] + i + c->origin);
+            cells[2 * v + 1] = (uint16_t)(c->rows[3 * r] + c->origin);
+        }
+}
+
 /* The weights of a one-shot plan's piece k of a level again, from its rows: the same geometry,
  * rows and scale, so the same halves (and normalisers) as the plan found. */
 ibl_status ibl__fast_precomputed_refill(ibl_specular_plan *p, int level, int k)

@@ -16,9 +16,23 @@ typedef struct product_job {
     ibl_specular_plan *p;
     const precomputed_piece *c;
     const ibl_cubemap *src;
-    float *sums;  /* the numerators of the piece's grid */
-    int face;     /* the face being summed (its padded source in p->padded_source) */
+    float *sums;    /* the numerators of the piece's grid */
+    int face;       /* the face being summed */
+    /* the padded sources (and transposes) of faces 0-5, 6 padded_edge^2 floats apart, or of
+     * j->face alone (p->padded_source, every face in turn) */
+    float *padded;
+    int all_faces;
+    /* the weights and their vectors' cells at hand: from base weight_origin on */
+    const uint16_t *weights, *cells;
+    size_t weight_origin;
+    int first_row;  /* the task index's base row: first_row + index */
 } product_job;
+
+/* Face f's padded source (3 planes), then its transpose (3 more). */
+static float *face_padded(const product_job *j, int f)
+{
+    return j->all_faces ? j->padded + (size_t)f * 6 * j->c->padded_edge * j->c->padded_edge : j->padded;
+}
 
 /* Row `row` of face j->face's padded source. */
 static void padded_row_task(void *arg, int row)
@@ -29,7 +43,7 @@ static void padded_row_task(void *arg, int row)
     while ((1 << shift) < S) shift++;
     size_t plane = (size_t)c->padded_edge * c->padded_edge;
     const int32_t *cells = c->cell_texel + (size_t)row * c->padded_edge;
-    float *out = j->p->padded_source + (size_t)row * c->padded_edge;
+    float *out = face_padded(j, f) + (size_t)row * c->padded_edge;
     const source_level *s = &j->p->pyramid[c->source_level];
     /* level 0: the source texels; a coarse level: its texels as uniform light, those with a
      * centroid correction left out (their moment leaves are summed instead) */
@@ -78,52 +92,130 @@ static void transpose_task(void *arg, int index)
     int y1 = y0 + TRANSPOSE_ROWS < P ? y0 + TRANSPOSE_ROWS : P;
     size_t plane = (size_t)P * P;
     for (int ch = 0; ch < 3; ch++) {
-        const float *in = j->p->padded_source + ch * plane;
-        float *out = j->p->padded_source + (3 + ch) * plane;
+        const float *in = face_padded(j, j->face) + ch * plane;
+        float *out = face_padded(j, j->face) + (3 + ch) * plane;
         for (int X = 0; X < P; X++)
             for (int Y = y0; Y < y1; Y++) out[(size_t)Y * P + X] = in[(size_t)X * P + Y];
     }
 }
 
-/* One row b of base texels into the images of face j->face. Image by image, so that the source
- * rows under the row's windows stay in L1 while the row's weights stream from L2 (base by base,
- * every base re-read its windows from L2: measured 1.6x slower). */
-static void product_row_task(void *arg, int b)
+/* One base's product with one image, added to the grid point it stands for: (x, y) of face
+ * j->face, through the base's weights on the padded source flipped by flip_x / flip_y
+ * (transposed: the source's transpose). */
+static void product_at(const product_job *j, size_t base, int transposed, int flip_x, int flip_y,
+                       int x, int y)
+{
+    const precomputed_piece *c = j->c;
+    size_t plane = (size_t)c->padded_edge * c->padded_edge, first = c->first_weight[base] - j->weight_origin;
+    const float *planes = face_padded(j, j->face) + (transposed ? 3 * plane : 0);
+    double s[3];
+    j->p->kernels->product(c, base, j->weights + first, j->cells + 2 * (first / 8), planes, flip_x, flip_y, s);
+    float *o = j->sums + (((size_t)j->face * c->grid_edge + y) * c->grid_edge + x) * 4;
+    for (int ch = 0; ch < 3; ch++) o[ch] = (float)(o[ch] + s[ch]);
+}
+
+/* Row b = j->first_row + index of base texels (a, b), a <= b, into the images of face j->face:
+ * each base's own four flips at (a, b), and for a < b its mirror's at (b, a) (the reflection
+ * x <-> y: the same weights on the transposed source, flips swapped), so that a row needs the
+ * weights of its own bases only. Image by image, so that the source rows under the row's windows
+ * stay in L1 while the row's weights stream from L2 (base by base, every base re-read its windows
+ * from L2: measured 1.6x slower). Every grid point gets one product, as from any order. */
+static void product_row_task(void *arg, int index)
 {
     const product_job *j = arg;
-    const precomputed_piece *c = j->c;
-    size_t plane = (size_t)c->padded_edge * c->padded_edge;
-    int n = c->grid_edge, nb = c->base_edge;
-    for (int fy = 0; fy < 2; fy++) {
-        int y = fy ? n - 1 - b : b;
-        if (fy && y == b) continue;
-        for (int fx = 0; fx < 2; fx++)
-            for (int a = 0; a < nb; a++) {
-                int x = fx ? n - 1 - a : a;
-                if (fx && x == a) continue;
-                /* below the diagonal: the mirror's weights on the transposed source */
-                int mirror = a > b;
-                size_t base = mirror ? (size_t)a * nb + b : (size_t)b * nb + a;
-                const float *planes = j->p->padded_source + (mirror ? 3 * plane : 0);
-                double s[3];
-                j->p->kernels->product(c, base, planes, mirror ? fy : fx, mirror ? fx : fy, s);
-                float *o = j->sums + (((size_t)j->face * n + y) * n + x) * 4;
-                for (int ch = 0; ch < 3; ch++) o[ch] = (float)(o[ch] + s[ch]);
-            }
+    int n = j->c->grid_edge, nb = j->c->base_edge, b = j->first_row + index;
+    for (int fy = 0; fy < 2; fy++)
+        for (int fx = 0; fx < 2; fx++) {
+            int y = fy ? n - 1 - b : b;
+            if (!(fy && y == b))
+                for (int a = 0; a <= b; a++) {
+                    int x = fx ? n - 1 - a : a;
+                    if (!(fx && x == a)) product_at(j, (size_t)b * nb + a, 0, fx, fy, x, y);
+                }
+            /* the mirrors: base (b, a) below the diagonal, at x from b (flip fx), y from a (fy) */
+            int x = fx ? n - 1 - b : b;
+            if (!(fx && x == b))
+                for (int a = 0; a < b; a++) {
+                    int ym = fy ? n - 1 - a : a;
+                    if (!(fy && ym == a)) product_at(j, (size_t)b * nb + a, 1, fy, fx, x, ym);
+                }
+        }
+}
+
+/* Face j->face's padded source and its transpose. */
+static void padded_face(ibl_specular_plan *p, product_job *j)
+{
+    int P = j->c->padded_edge;
+    ibl_parallel_for(p->ctx, P, padded_row_task, j);
+    ibl_parallel_for(p->ctx, (P + TRANSPOSE_ROWS - 1) / TRANSPOSE_ROWS, transpose_task, j);
+}
+
+/* A piece whose weights the plan holds: face by face, every base row. */
+static void products_kept(ibl_specular_plan *p, product_job *job)
+{
+    const precomputed_piece *c = job->c;
+    job->padded = p->padded_source, job->all_faces = 0;
+    job->weights = c->weights, job->cells = c->vector_cells, job->weight_origin = 0;
+    for (job->face = 0; job->face < 6; job->face++) {
+        padded_face(p, job);
+        job->first_row = 0;
+        ibl_parallel_for(p->ctx, c->base_edge, product_row_task, job);
     }
 }
 
-void ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src)
+/* About this many batches of a one-shot plan's weights are made, one after the other. */
+enum { WEIGHT_BATCHES = 16 };
+
+/* A one-shot plan's piece (its weights not held): the six faces' padded sources first, then
+ * the weights batch by batch of base rows, each batch's products with the six faces. Where
+ * the plan's 44 M weights of the 1024 chain's level 1 took 110 MB with their cells, a batch
+ * takes a sixteenth; the six padded faces 55 MB. */
+static ibl_status products_batched(ibl_specular_plan *p, int level, int k, product_job *job)
+{
+    const precomputed_piece *c = job->c;
+    ibl_context *ctx = p->ctx;
+    size_t P = (size_t)c->padded_edge, nb = (size_t)c->base_edge, total = c->first_weight[nb * nb];
+    size_t cap = total / WEIGHT_BATCHES + 1;
+    for (size_t b = 0; b < nb; b++) /* at least one base row a batch */
+        if (c->first_weight[(b + 1) * nb] - c->first_weight[b * nb] > cap)
+            cap = c->first_weight[(b + 1) * nb] - c->first_weight[b * nb];
+    float *geometry = ibl__fast_precomputed_geometry(p, level, k);
+    float *padded = ibl_alloc(ctx, 36 * P * P * sizeof(float));
+    uint16_t *weights = ibl_alloc(ctx, cap * sizeof(uint16_t));
+    uint16_t *cells = ibl_alloc(ctx, (cap / 8 + 1) * 2 * sizeof(uint16_t));
+    ibl_status st = geometry && padded && weights && cells ? IBL_OK : ibl_context_status(ctx);
+    if (st == IBL_OK) {
+        job->padded = padded, job->all_faces = 1, job->weights = weights, job->cells = cells;
+        for (job->face = 0; job->face < 6; job->face++) padded_face(p, job);
+        for (size_t r0 = 0, r1; r0 < nb; r0 = r1) {
+            for (r1 = r0 + 1; r1 < nb && c->first_weight[(r1 + 1) * nb] - c->first_weight[r0 * nb] <= cap;) r1++;
+            ibl__fast_precomputed_weights(p, level, k, geometry, r0 * nb, r1 * nb, weights, cells);
+            job->weight_origin = c->first_weight[r0 * nb];
+            job->first_row = (int)r0;
+            for (job->face = 0; job->face < 6; job->face++)
+                ibl_parallel_for(ctx, (int)(r1 - r0), product_row_task, job);
+        }
+    }
+    ibl_free(ctx, cells);
+    ibl_free(ctx, weights);
+    ibl_free(ctx, padded);
+    ibl_free(ctx, geometry);
+    return st;
+}
+
+ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src)
 {
     level_plan *lv = &p->levels[level];
     for (int k = 0; k < lv->piece_count; k++) {
         const precomputed_piece *c = lv->pieces[k].precomputed;
         if (!c) continue;
-        product_job job = {p, c, src, lv->grids[lv->pieces[k].grid].sums, 0};
-        for (job.face = 0; job.face < 6; job.face++) {
-            ibl_parallel_for(p->ctx, c->padded_edge, padded_row_task, &job);
-            ibl_parallel_for(p->ctx, (c->padded_edge + TRANSPOSE_ROWS - 1) / TRANSPOSE_ROWS, transpose_task, &job);
-            ibl_parallel_for(p->ctx, c->base_edge, product_row_task, &job);
+        product_job job = {p, c, src, lv->grids[lv->pieces[k].grid].sums, 0, NULL, 0, NULL, NULL, 0, 0};
+        if (c->weights) {
+            products_kept(p, &job);
+            continue;
         }
+        ibl_status st = products_batched(p, level, k, &job);
+        if (st != IBL_OK) return st;
     }
+    return IBL_OK;
 }
