@@ -518,6 +518,9 @@ void ibl__fast_precomputed_weights(ibl_specular_plan *p, int level, int k, const
 
 /* ---- products.c ---- */
 ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src);
+/* whether a one-shot plan's piece makes its weights batch by batch in the products (else whole,
+ * ibl__fast_precomputed_refill) */
+int ibl__fast_products_batched(const precomputed_piece *c);
 
 /* ---- gathering.c ---- */
 ibl_status ibl__fast_plan_bars(ibl_specular_plan *p, int level);

@@ -357,15 +357,14 @@ static ibl_status check_run(const ibl_specular_plan *p, const ibl_cubemap *src,
 }
 
 /* A filtered level's grids: leaf sums, then products (a one-shot plan's weights made for them
- * and freed after: whole for a piece whose normalisers are found at the run, else batch by
- * batch by the products). */
+ * and freed after: whole, or batch by batch by the products where that takes less memory). */
 static ibl_status level_sums(ibl_specular_plan *p, const ibl_cubemap *src, int l)
 {
     level_plan *lv = &p->levels[l];
     ibl__fast_leaf_sums(p, l);
     for (int k = 0; k < lv->piece_count; k++) {
         const precomputed_piece *c = lv->pieces[k].precomputed;
-        ibl_status st = c && c->normalisers_at_run ? ibl__fast_precomputed_refill(p, l, k) : IBL_OK;
+        ibl_status st = c && !ibl__fast_products_batched(c) ? ibl__fast_precomputed_refill(p, l, k) : IBL_OK;
         if (st != IBL_OK) return st;
     }
     ibl_status st = ibl__fast_products(p, l, src);

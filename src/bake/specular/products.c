@@ -166,10 +166,20 @@ static void products_kept(ibl_specular_plan *p, product_job *job)
 /* About this many batches of a one-shot plan's weights are made, one after the other. */
 enum { WEIGHT_BATCHES = 16 };
 
-/* A one-shot plan's piece (its weights not held): the six faces' padded sources first, then
- * the weights batch by batch of base rows, each batch's products with the six faces. Where
- * the plan's 44 M weights of the 1024 chain's level 1 took 110 MB with their cells, a batch
- * takes a sixteenth; the six padded faces 55 MB. */
+int ibl__fast_products_batched(const precomputed_piece *c)
+{
+    /* the weights (2 bytes) and their cells (4 bytes a vector of 8) against the six faces'
+     * padded sources and transposes, beyond the one face's the plan holds */
+    size_t bases = (size_t)c->base_edge * c->base_edge, P = (size_t)c->padded_edge;
+    return !c->weights && !c->normalisers_at_run &&
+           (double)c->first_weight[bases] * 2.5 > 30.0 * P * P * sizeof(float);
+}
+
+/* A one-shot plan's piece whose weights take more memory than the six faces' padded sources
+ * (ibl__fast_products_batched): the padded sources first, then the weights batch by batch of
+ * base rows, each batch's products with the six faces. Where the 44 M weights of the 1024
+ * chain's level 1 took 110 MB with their cells, a batch takes a sixteenth and the six padded
+ * faces 55 MB; at 256 the weights are the smaller, and are made whole (plan.c). */
 static ibl_status products_batched(ibl_specular_plan *p, int level, int k, product_job *job)
 {
     const precomputed_piece *c = job->c;
