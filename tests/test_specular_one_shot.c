@@ -6,9 +6,9 @@
  * frees them as the pyramid goes (the first of them made block row by block row with the next
  * one, never whole: pyramid.c, ibl__fast_pyramid_streamed; the GGX 128 and 64 cases below
  * take that path, with centroid corrections made again from the source), finds its
- * precomputed normalisers without keeping the
- * weights, makes the weights again just before their products, and frees everything but the
- * grids before the output is allocated. A reusable plan (ibl_specular_plan_create) keeps its
+ * precomputed normalisers without keeping the weights, makes the weights again just before
+ * their products (batch by batch of base rows where they outweigh the six padded faces: the
+ * triace case below), and frees everything but the grids before the output is allocated. A reusable plan (ibl_specular_plan_create) keeps its
  * weights and its records, and its runs allocate nothing. Both must give the output bit for
  * bit: compared here on chains that use every mechanism the one-shot plan changes (precomputed
  * pieces over the source and over coarse levels with centroid corrections, bright texels
@@ -29,13 +29,21 @@ typedef struct chain_case {
     ibl_specular_filter filter;
     int size, mirror;
     ibl_edge_fixup fixup;
+    ibl_specular_mapping mapping;
 } chain_case;
 
 static const chain_case cases[] = {
-    {"city.exr", IBL_FILTER_GGX, 128, 0, IBL_EDGE_FIXUP_NONE},   /* corrections, bright texels */
-    {"city.exr", IBL_FILTER_GGX, 64, 1, IBL_EDGE_FIXUP_NONE},    /* mirror level from the pyramid */
-    {"forest.exr", IBL_FILTER_BLINN, 64, 0, IBL_EDGE_FIXUP_NONE}, /* Lagrange grids */
-    {"night.exr", IBL_FILTER_PHONG, 32, 1, IBL_EDGE_FIXUP_BENT}, /* sub-texels, leaf sums */
+    /* corrections, bright texels */
+    {"city.exr", IBL_FILTER_GGX, 128, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_DEFAULT},
+    /* mirror level from the pyramid */
+    {"city.exr", IBL_FILTER_GGX, 64, 1, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_DEFAULT},
+    /* Lagrange grids */
+    {"forest.exr", IBL_FILTER_BLINN, 64, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_DEFAULT},
+    /* sub-texels, leaf sums */
+    {"night.exr", IBL_FILTER_PHONG, 32, 1, IBL_EDGE_FIXUP_BENT, IBL_MAPPING_DEFAULT},
+    /* level 0's core at ~4.5 texels a half width: its weights outweigh the six padded faces,
+     * so the one-shot plan makes them batch by batch of base rows (products.c) */
+    {"city.exr", IBL_FILTER_GGX, 128, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_TRIACE},
 };
 
 /* The source cube the prefilter itself would use for this chain from an input of edge
@@ -58,6 +66,7 @@ static ibl_specular_desc case_desc(const chain_case *c)
     d.size = c->size;
     d.mirror = c->mirror;
     d.edge_fixup = c->fixup;
+    d.mapping = c->mapping;
     return d;
 }
 
@@ -166,7 +175,7 @@ static void one_shot_peak_is_lower(void **state)
 {
     (void)state;
     ibl_context *ctx = test_context(1);
-    chain_case c = {"city.exr", IBL_FILTER_GGX, 256, 0, IBL_EDGE_FIXUP_NONE};
+    chain_case c = {"city.exr", IBL_FILTER_GGX, 256, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_DEFAULT};
     ibl_specular_desc d = case_desc(&c);
     ibl_cubemap src;
     read_source(ctx, &c, &d, c.size, &src);
