@@ -81,8 +81,9 @@ static void choose_subtexel_split(ibl_specular_plan *p)
 }
 
 /* What a run needs besides the levels' own buffers: one padded face and its transpose for the
- * precomputed pieces (which run one after the other, face by face), and the uniform images of
- * the coarse levels they read. */
+ * precomputed pieces (which run one after the other, face by face; those whose weights are made
+ * batch by batch make their own six, products.c), and the uniform images of the coarse levels
+ * they read. */
 static ibl_status run_buffers(ibl_specular_plan *p)
 {
     ibl_context *ctx = p->ctx;
@@ -91,7 +92,8 @@ static ibl_status run_buffers(ibl_specular_plan *p)
         for (int k = 0; k < p->levels[l].piece_count; k++) {
             const precomputed_piece *c = p->levels[l].pieces[k].precomputed;
             if (!c) continue;
-            if ((size_t)6 * c->padded_edge * c->padded_edge > padded)
+            /* (a piece whose products make their own six padded faces needs none) */
+            if (!ibl__fast_products_batched(c) && (size_t)6 * c->padded_edge * c->padded_edge > padded)
                 padded = (size_t)6 * c->padded_edge * c->padded_edge;
             if (c->source_level == 0) continue;
             source_level *s = &p->pyramid[c->source_level];

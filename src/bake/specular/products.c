@@ -175,6 +175,20 @@ int ibl__fast_products_batched(const precomputed_piece *c)
            (double)c->first_weight[bases] * 2.5 > 30.0 * P * P * sizeof(float);
 }
 
+/* Whether a one-shot plan still reads the uniform image (with or without bright texels, as
+ * piece k of `level` reads) of that piece's source level after the piece: a later piece of any
+ * level over the same image. */
+static int uniform_read_later(const ibl_specular_plan *p, int level, int k)
+{
+    const precomputed_piece *c = p->levels[level].pieces[k].precomputed;
+    for (int l = level; l < p->output_levels; l++)
+        for (int i = l == level ? k + 1 : 0; i < p->levels[l].piece_count; i++) {
+            const precomputed_piece *o = p->levels[l].pieces[i].precomputed;
+            if (o && o->source_level == c->source_level && o->without_bright == c->without_bright) return 1;
+        }
+    return 0;
+}
+
 /* A one-shot plan's piece whose weights take more memory than the six faces' padded sources
  * (ibl__fast_products_batched): the padded sources first, then the weights batch by batch of
  * base rows, each batch's products with the six faces. Where the 44 M weights of the 1024
@@ -189,14 +203,27 @@ static ibl_status products_batched(ibl_specular_plan *p, int level, int k, produ
     for (size_t b = 0; b < nb; b++) /* at least one base row a batch */
         if (c->first_weight[(b + 1) * nb] - c->first_weight[b * nb] > cap)
             cap = c->first_weight[(b + 1) * nb] - c->first_weight[b * nb];
-    float *geometry = ibl__fast_precomputed_geometry(p, level, k);
-    float *padded = ibl_alloc(ctx, 36 * P * P * sizeof(float));
-    uint16_t *weights = ibl_alloc(ctx, cap * sizeof(uint16_t));
-    uint16_t *cells = ibl_alloc(ctx, (cap / 8 + 1) * 2 * sizeof(uint16_t));
-    ibl_status st = geometry && padded && weights && cells ? IBL_OK : ibl_context_status(ctx);
+    float *geometry = NULL, *padded = ibl_alloc(ctx, 36 * P * P * sizeof(float));
+    uint16_t *weights = NULL, *cells = NULL;
+    ibl_status st = padded ? IBL_OK : ibl_context_status(ctx);
     if (st == IBL_OK) {
-        job->padded = padded, job->all_faces = 1, job->weights = weights, job->cells = cells;
+        job->padded = padded, job->all_faces = 1;
         for (job->face = 0; job->face < 6; job->face++) padded_face(p, job);
+        /* the level's uniform image is in the padded faces now: if nothing reads it after this
+         * piece, its memory (25 MB at the 1024 chain's level 1) goes to the weights */
+        source_level *s = &p->pyramid[c->source_level];
+        if (c->source_level > 0 && p->one_shot && !uniform_read_later(p, level, k)) {
+            float **image = c->without_bright ? &s->uniform_not_bright : &s->uniform;
+            ibl_free(ctx, *image);
+            *image = NULL;
+        }
+        geometry = ibl__fast_precomputed_geometry(p, level, k);
+        weights = ibl_alloc(ctx, cap * sizeof(uint16_t));
+        cells = ibl_alloc(ctx, (cap / 8 + 1) * 2 * sizeof(uint16_t));
+        if (!geometry || !weights || !cells) st = ibl_context_status(ctx);
+        job->weights = weights, job->cells = cells;
+    }
+    if (st == IBL_OK) {
         for (size_t r0 = 0, r1; r0 < nb; r0 = r1) {
             for (r1 = r0 + 1; r1 < nb && c->first_weight[(r1 + 1) * nb] - c->first_weight[r0 * nb] <= cap;) r1++;
             ibl__fast_precomputed_weights(p, level, k, geometry, r0 * nb, r1 * nb, weights, cells);
