@@ -346,8 +346,10 @@ static inline const float *candidate_record(const leaf_batch *batch, int index, 
  * context allows them, the portable C versions otherwise. R is a unit direction, RR its
  * quadratic terms (xx, yy, zz, 2xy, 2xz, 2yz) that turn a covariance into R^T C R. */
 typedef struct fast_kernels {
-    /* sum over the batch's leaves for direction R, added to out (rgb, normaliser) */
-    void (*sum_leaves)(const leaf_batch *batch, const float R[3], const float RR[6], double out[4]);
+    /* for each of `points` directions R[i] (RR[i] its quadratic terms), the sum over the
+     * batch's leaves, added to out[i] (rgb, normaliser) */
+    void (*sum_leaves)(const leaf_batch *batch, int points, const float (*R)[3],
+                       const float (*RR)[6], double (*out)[4]);
     /* a base texel's weights over its rows of the padded geometry (GEOMETRY_FIELDS planes
      * `plane` apart), divided by the weight scale (inv_scale), stored as halves; the stored
      * halves summed per lane into lanes */

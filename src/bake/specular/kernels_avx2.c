@@ -216,12 +216,11 @@ IBL_TARGET_AVX2 static double horizontal_sum(__m256 v)
     return s;
 }
 
-IBL_TARGET_AVX2 static void avx2_sum_leaves(const leaf_batch *batch, const float R[3],
-                                            const float RR[6], double out[4])
+/* The batch's leaves for direction R, added to out (k: the piece's constants). */
+KERNEL_INLINE void leaves_at(const leaf_batch *batch, const lobe_vectors *k, const float R[3],
+                             const float RR[6], double out[4])
 {
     const int B = BLOCK_TEXELS;
-    lobe_vectors k;
-    lobe_setup(batch->piece, &k);
     const __m256 r0 = _mm256_set1_ps(R[0]), r1 = _mm256_set1_ps(R[1]), r2 = _mm256_set1_ps(R[2]);
     const __m256 q0 = _mm256_set1_ps(RR[0]), q1 = _mm256_set1_ps(RR[1]), q2 = _mm256_set1_ps(RR[2]);
     const __m256 q3 = _mm256_set1_ps(RR[3]), q4 = _mm256_set1_ps(RR[4]), q5 = _mm256_set1_ps(RR[5]);
@@ -230,11 +229,11 @@ IBL_TARGET_AVX2 static void avx2_sum_leaves(const leaf_batch *batch, const float
                     ? (batch->without_bright ? FIELD_POWER_NOT_BRIGHT : FIELD_POWER)
                     : FIELD_RADIANCE;
     int ggx = batch->piece->is_ggx, difference = batch->mode == LEAF_DIFFERENCE;
-    __m256 ar = k.zero, ag = k.zero, ab = k.zero, aw = k.zero;
+    __m256 ar = k->zero, ag = k->zero, ab = k->zero, aw = k->zero;
     for (int ci = 0; ci < batch->count; ci++) {
         const float *rec = candidate_record(batch, ci, R);
         if (!rec) continue;
-        __m256 w = k.zero;
+        __m256 w = k->zero;
         /* the difference form: the moment leaf, then minus the leaf at the geometric moments */
         for (int pass = 0; pass <= difference; pass++) {
             const float *m = rec + (pass ? FIELD_MEAN : moments) * B;
@@ -242,7 +241,7 @@ IBL_TARGET_AVX2 static void avx2_sum_leaves(const leaf_batch *batch, const float
             __m256 dy = _mm256_sub_ps(r1, _mm256_loadu_ps(m + B));
             __m256 dz = _mm256_sub_ps(r2, _mm256_loadu_ps(m + 2 * B));
             __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
-            __m256 u = _mm256_fmadd_ps(k.half, d2, _mm256_loadu_ps(m + 3 * B));
+            __m256 u = _mm256_fmadd_ps(k->half, d2, _mm256_loadu_ps(m + 3 * B));
             const float *c = m + 4 * B;
             __m256 q = _mm256_mul_ps(q0, _mm256_loadu_ps(c));
             q = _mm256_fmadd_ps(q1, _mm256_loadu_ps(c + B), q);
@@ -252,9 +251,9 @@ IBL_TARGET_AVX2 static void avx2_sum_leaves(const leaf_batch *batch, const float
             q = _mm256_fmadd_ps(q5, _mm256_loadu_ps(c + 5 * B), q);
             /* eight texels past the outer step or inside the inner one (blocks of scattered
              * gathered texels, whose cones are wide, often are) add exactly zero */
-            __m256 live = _mm256_and_ps(_mm256_cmp_ps(u, k.u_end, _CMP_LT_OQ),
-                                        _mm256_cmp_ps(u, k.u_start, _CMP_GT_OQ));
-            __m256 v = _mm256_movemask_ps(live) ? vector_leaf(&k, ggx, u, q) : k.zero;
+            __m256 live = _mm256_and_ps(_mm256_cmp_ps(u, k->u_end, _CMP_LT_OQ),
+                                        _mm256_cmp_ps(u, k->u_start, _CMP_GT_OQ));
+            __m256 v = _mm256_movemask_ps(live) ? vector_leaf(k, ggx, u, q) : k->zero;
             w = pass ? _mm256_sub_ps(w, v) : v;
         }
         if (batch->mode == LEAF_NORMALISER) {
@@ -269,6 +268,16 @@ IBL_TARGET_AVX2 static void avx2_sum_leaves(const leaf_batch *batch, const float
     }
     out[0] += horizontal_sum(ar), out[1] += horizontal_sum(ag), out[2] += horizontal_sum(ab);
     out[3] += horizontal_sum(aw);
+}
+
+/* One setup of the piece's constants for all the points: per point it cost as much as the
+ * leaves of a point with few candidates (the centroid corrections at the output texels). */
+IBL_TARGET_AVX2 static void avx2_sum_leaves(const leaf_batch *batch, int points, const float (*R)[3],
+                                            const float (*RR)[6], double (*out)[4])
+{
+    lobe_vectors k;
+    lobe_setup(batch->piece, &k);
+    for (int i = 0; i < points; i++) leaves_at(batch, &k, R[i], RR[i], out[i]);
 }
 
 /* One setup for the whole base texel: per row it cost as much as a row's weights. */

@@ -46,8 +46,7 @@ static float piece_leaf(const lobe_piece *pc, float u, float q)
     return g + 0.5f * g2 * q;
 }
 
-static void portable_sum_leaves(const leaf_batch *batch, const float R[3], const float RR[6],
-                                double out[4])
+static void leaves_at(const leaf_batch *batch, const float R[3], const float RR[6], double out[4])
 {
     const int B = BLOCK_TEXELS;
     int moments = batch->mode == LEAF_COARSE || batch->mode == LEAF_DIFFERENCE ? FIELD_LUM_MEAN : FIELD_MEAN;
@@ -81,6 +80,12 @@ static void portable_sum_leaves(const leaf_batch *batch, const float R[3], const
         }
     }
     for (int k = 0; k < 4; k++) out[k] += acc[k];
+}
+
+static void portable_sum_leaves(const leaf_batch *batch, int points, const float (*R)[3],
+                                const float (*RR)[6], double (*out)[4])
+{
+    for (int i = 0; i < points; i++) leaves_at(batch, R[i], RR[i], out[i]);
 }
 
 static void portable_base_weights(const lobe_piece *pc, const float R[3], const float RR[6],

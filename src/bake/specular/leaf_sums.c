@@ -99,13 +99,15 @@ static int add_candidate(leaf_batch *batch, leaf_candidate *list, const reach_te
 /* Sums the batch at every point of the tile and empties it. */
 static void sum_batch(const ibl_specular_plan *p, leaf_batch *batch, tile_points *tp)
 {
+    float R[TILE_EDGE * TILE_EDGE][3], RR[TILE_EDGE * TILE_EDGE][6];
     for (int k = 0; k < tp->count; k++) {
         const double *d = tp->dir[k];
-        float R[3] = {(float)d[0], (float)d[1], (float)d[2]};
-        float RR[6] = {R[0] * R[0], R[1] * R[1], R[2] * R[2],
-                       2 * R[0] * R[1], 2 * R[0] * R[2], 2 * R[1] * R[2]};
-        p->kernels->sum_leaves(batch, R, RR, tp->sums[k]);
+        float *r = R[k], *q = RR[k];
+        r[0] = (float)d[0], r[1] = (float)d[1], r[2] = (float)d[2];
+        q[0] = r[0] * r[0], q[1] = r[1] * r[1], q[2] = r[2] * r[2];
+        q[3] = 2 * r[0] * r[1], q[4] = 2 * r[0] * r[2], q[5] = 2 * r[1] * r[2];
     }
+    p->kernels->sum_leaves(batch, tp->count, (const float(*)[3])R, (const float(*)[6])RR, tp->sums);
     batch->count = 0;
 }
 
