@@ -9,7 +9,11 @@
  * mirror's weights on the transposed source with its flips swapped. A level-0 piece reads the
  * source texels; a coarse one reads the level's texels as uniform light, with the texels that
  * get a centroid correction left out (gathering.c sums them as leaves), unless the corrections
- * are in difference form (moment leaf minus uniform leaf, on a coarser grid). */
+ * are in difference form (moment leaf minus uniform leaf, on a coarser grid).
+ *
+ * A one-shot plan whose piece's weights would take more memory than the six padded faces makes
+ * the six first and the weights a batch of base rows at a time (products_batched): a base row's
+ * task applies its bases and their mirrors, so a batch needs only its own rows' weights. */
 #include "bake/specular/fast_internal.h"
 
 typedef struct product_job {
