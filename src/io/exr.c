@@ -336,10 +336,35 @@ typedef struct exr_bands {
     size_t size;
     const ibl__exr_header *hd;
     float *rgba;
-    int lines, count;
+    int width, lines, count;
+    const ibl__pixel_policy *policy; /* NULL: the caller sanitizes the image */
+    ibl_pixel_report reports[EXR_MAX_BANDS];
     int rc[EXR_MAX_BANDS];
     char err[EXR_MAX_BANDS][256];
 } exr_bands;
+
+/* Applies the pixel policy to `rows` decoded rows of `width` texels from row `row` on. */
+static void sanitize_rows(const ibl__pixel_policy *policy, float *rgba, int width, int row, int rows,
+                          ibl_pixel_report *report)
+{
+    size_t first = (size_t)row * (size_t)width, count = (size_t)rows * (size_t)width;
+    (void)ibl_sanitize_pixels(NULL, rgba + first * 4, count, policy->clamp_infinite,
+                              policy->clamp_value, report);
+}
+
+/* The bands' reports summed (integers: the same in any order) into the policy's. */
+static void policy_done(ibl__pixel_policy *policy, const ibl_pixel_report *reports, int count,
+                        uint64_t texels)
+{
+    ibl_pixel_report r = {0, 0, 0, texels};
+    for (int i = 0; i < count; i++) {
+        r.nan_count += reports[i].nan_count;
+        r.inf_count += reports[i].inf_count;
+        r.negative_count += reports[i].negative_count;
+    }
+    policy->report = r;
+    policy->done = 1;
+}
 
 static void band_task(void *arg, int index)
 {
@@ -348,6 +373,9 @@ static void band_task(void *arg, int index)
     int y1 = index == b->count - 1 ? b->hd->data_max_y : y0 + b->lines - 1;
     b->rc[index] = ibl__exr_read_rows(b->bytes, b->size, b->hd, b->rgba, y0, y1, b->err[index],
                                       sizeof b->err[index]);
+    if (b->rc[index] == 0 && b->policy)
+        sanitize_rows(b->policy, b->rgba, b->width, y0 - b->hd->data_min_y, y1 - y0 + 1,
+                      &b->reports[index]);
 }
 
 /* ---- fast path: scanline files without compression or with ZIP / ZIPS ----------------- *
@@ -380,6 +408,8 @@ typedef struct exr_fast {
     int slot_count;
     atomic_int busy[EXR_MAX_SLOTS];
     int failed[EXR_MAX_BANDS];
+    const ibl__pixel_policy *policy; /* NULL: the caller sanitizes the image */
+    ibl_pixel_report reports[EXR_MAX_BANDS];
 } exr_fast;
 
 /* Finds the channels the reader wants (the names OpenEXR is asked for in exr_cpp.cpp) in the
@@ -477,6 +507,11 @@ static int fast_band(exr_fast *f, int band, uint8_t *buf, uint8_t *raw)
     if (!inflater) return 1;
     int rc = fast_band_with(f, band, buf, raw, inflater);
     libdeflate_free_decompressor(inflater);
+    if (rc == 0 && f->policy) {
+        int row0 = band * f->chunks_per_band * f->lines;
+        int row1 = row0 + f->chunks_per_band * f->lines < f->h ? row0 + f->chunks_per_band * f->lines : f->h;
+        sanitize_rows(f->policy, f->rgba, f->w, row0, row1 - row0, &f->reports[band]);
+    }
     return rc;
 }
 
@@ -551,7 +586,7 @@ static void fast_task(void *arg, int band)
 /* 1: decoded; 0: not a file for this path, it found something unexpected or its buffers
  * could not be allocated (OpenEXR reads the file then, with its own buffers as before). */
 static int read_fast(ibl_context *ctx, const uint8_t *bytes, size_t size, const exr_shape *sh,
-                     const ibl__exr_header *hd, float *rgba)
+                     const ibl__exr_header *hd, float *rgba, ibl__pixel_policy *policy)
 {
     int comp = sh->compression;
     if (sh->tiled || sh->multipart || sh->subsampled || !sh->chlist ||
@@ -565,6 +600,7 @@ static int read_fast(ibl_context *ctx, const uint8_t *bytes, size_t size, const 
     f->sh = sh;
     f->hd = hd;
     f->rgba = rgba;
+    f->policy = policy;
     f->w = (int)box_extent(sh->data, 0);
     f->h = (int)box_extent(sh->data, 1);
     f->lines = lines_per_chunk[comp];
@@ -601,6 +637,7 @@ static int read_fast(ibl_context *ctx, const uint8_t *bytes, size_t size, const 
             for (int b = 0; b < f->bands; b++) f->failed[b] = fast_band(f, b, f->work, f->work + f->work_bytes);
         for (int b = 0; b < f->bands; b++)
             if (f->failed[b]) rc = 0;
+        if (rc == 1 && policy) policy_done(policy, f->reports, f->bands, (uint64_t)f->w * (uint64_t)f->h);
     }
     ibl_free(ctx, f->work);
     ibl_free(ctx, table);
@@ -623,14 +660,14 @@ static uint64_t openexr_bytes(const exr_shape *sh, const ibl__exr_header *hd, ui
 }
 
 static int read_pixels(ibl_context *ctx, const uint8_t *bytes, size_t size, const exr_shape *sh,
-                       ibl__exr_reader *reader, const ibl__exr_header *hd, float *rgba, char *err,
-                       size_t err_size)
+                       ibl__exr_reader *reader, const ibl__exr_header *hd, float *rgba,
+                       ibl__pixel_policy *policy, char *err, size_t err_size)
 {
     uint64_t w = (uint64_t)box_extent(sh->data, 0), h = (uint64_t)box_extent(sh->data, 1);
     uint64_t lines = sh->tiled ? sh->tile_h : (uint64_t)lines_per_chunk[sh->compression];
     uint64_t chunks = (h + lines - 1) / lines;
     uint64_t per_band = (chunks + EXR_MAX_BANDS - 1) / EXR_MAX_BANDS;
-    if (read_fast(ctx, bytes, size, sh, hd, rgba)) return 0;
+    if (read_fast(ctx, bytes, size, sh, hd, rgba, policy)) return 0;
     exr_bands *b = NULL;
     if (hd->layout != IBL__EXR_LUMA_CHROMA && chunks >= 2 &&
         w * lines * (sh->pixel_bytes > 16 ? sh->pixel_bytes : 16) <= EXR_BAND_BUFFER)
@@ -651,8 +688,10 @@ static int read_pixels(ibl_context *ctx, const uint8_t *bytes, size_t size, cons
         b->size = size;
         b->hd = hd;
         b->rgba = rgba;
+        b->width = (int)w;
         b->lines = (int)(per_band * lines);
         b->count = bands;
+        b->policy = policy;
         ibl_parallel_for(ctx, b->count, band_task, b);
         /* the first failing band's message: the one a reader going down the image meets first */
         for (int i = 0; i < b->count && !rc; i++)
@@ -660,6 +699,7 @@ static int read_pixels(ibl_context *ctx, const uint8_t *bytes, size_t size, cons
                 rc = b->rc[i];
                 snprintf(err, err_size, "%s", b->err[i]);
             }
+        if (!rc && policy) policy_done(policy, b->reports, b->count, w * h);
         ibl_free(ctx, b);
     }
     ibl__budget_release(ctx, reserved);
@@ -668,6 +708,13 @@ static int read_pixels(ibl_context *ctx, const uint8_t *bytes, size_t size, cons
 
 ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info)
+{
+    return ibl__exr_decode_sanitized(ctx, bytes, size, name, out, info, NULL);
+}
+
+ibl_status ibl__exr_decode_sanitized(ibl_context *ctx, const uint8_t *bytes, size_t size,
+                                     const char *name, ibl_texture *out, ibl_file_info *info,
+                                     ibl__pixel_policy *policy)
 {
     exr_shape sh;
     ibl_status s = check_structure(ctx, bytes, size, name, &sh);
@@ -732,7 +779,9 @@ ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
             return ibl__fail_named(ctx, s, name);
         }
     }
-    rc = read_pixels(ctx, bytes, size, &sh, reader, &hd, target, err, sizeof err);
+    /* the bands sanitize their rows only where they are the image's (no window to copy) */
+    if (policy) policy->done = 0;
+    rc = read_pixels(ctx, bytes, size, &sh, reader, &hd, target, same ? policy : NULL, err, sizeof err);
     ibl__exr_close(reader);
     if (rc) {
         if (!same) ibl_free(ctx, target);

@@ -414,6 +414,15 @@ static void sanitize_task(void *arg, int index)
                               &j->report[index]);
 }
 
+/* The message of ibl_sanitize_pixels for a whole image sanitized in parts. */
+static ibl_status pixel_verdict(ibl_context *ctx, const ibl_pixel_report *r, int clamp_infinite)
+{
+    if (r->inf_count && !clamp_infinite)
+        return ibl__fail(ctx, IBL_ERR_BAD_PIXELS, "%llu texels are infinite (use --clamp to clamp them)",
+                        (unsigned long long)r->inf_count);
+    return IBL_OK;
+}
+
 static ibl_status sanitize(ibl_context *ctx, float *rgba, size_t count, int clamp_infinite,
                            float clamp_value, ibl_pixel_report *report)
 {
@@ -437,11 +446,7 @@ static ibl_status sanitize(ibl_context *ctx, float *rgba, size_t count, int clam
     }
     ibl_free(ctx, j);
     if (report) *report = r;
-    /* the message of ibl_sanitize_pixels, for the whole image */
-    if (r.inf_count && !clamp_infinite)
-        return ibl__fail(ctx, IBL_ERR_BAD_PIXELS, "%llu texels are infinite (use --clamp to clamp them)",
-                        (unsigned long long)r.inf_count);
-    return IBL_OK;
+    return pixel_verdict(ctx, &r, clamp_infinite);
 }
 
 ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, const char *name,
@@ -457,11 +462,12 @@ ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, 
     ibl_file_info fi;
     memset(&fi, 0, sizeof fi);
     const uint8_t *b = bytes;
+    ibl__pixel_policy policy = {rd.clamp_infinite, rd.clamp_value, 0, {0, 0, 0, 0}};
     fi.type = ibl_file_type_sniff(b, size);
     ibl_status s;
     switch (fi.type) {
     case IBL_FILE_HDR: s = ibl__hdr_decode(ctx, b, size, name, out, &fi); break;
-    case IBL_FILE_EXR: s = ibl__exr_decode(ctx, b, size, name, out, &fi); break;
+    case IBL_FILE_EXR: s = ibl__exr_decode_sanitized(ctx, b, size, name, out, &fi, &policy); break;
     case IBL_FILE_PFM: s = ibl__pfm_decode(ctx, b, size, name, out, &fi); break;
     case IBL_FILE_PNG: s = ibl__png_decode_as(ctx, b, size, name, rd.as_data, out, &fi); break;
     case IBL_FILE_JPEG: s = ibl__jpeg_decode(ctx, b, size, name, out, &fi); break;
@@ -483,7 +489,12 @@ ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, 
     if (fi.format == IBL_FORMAT_DEFAULT) fi.format = out->format;
     if (out->format == IBL_FORMAT_DEFAULT) out->format = fi.format;
     size_t texels = ibl_texture_floats(out->kind, out->width, out->height, out->depth, out->levels) / 4;
-    s = sanitize(ctx, out->data, texels, rd.clamp_infinite, rd.clamp_value, &fi.pixels);
+    if (policy.done) {
+        fi.pixels = policy.report;
+        s = pixel_verdict(ctx, &policy.report, rd.clamp_infinite);
+    } else {
+        s = sanitize(ctx, out->data, texels, rd.clamp_infinite, rd.clamp_value, &fi.pixels);
+    }
     if (info) *info = fi;
     if (s != IBL_OK) {
         ibl_texture_free(ctx, out);

@@ -69,9 +69,25 @@ static inline uint8_t ibl__display_code(const ibl__display_encoder *d, float lin
     int code = d->base[(int)(t * IBL_DISPLAY_BUCKETS)];
     return (uint8_t)(code + (d->level[code] <= t));
 }
-/* OpenEXR (src/io/exr.c, with the C++ part in src/io/exr_cpp.cpp). */
+/* The pixel policy of ibl_decode_texture (ibl_sanitize_pixels) for a decoder that applies it
+ * itself, band by band inside its own parallel loop while the rows are still in cache: one
+ * loop and one wait fewer, and a thread that finishes its band early sanitizes it while the
+ * other still decodes. `done` is set when every texel of the result went through it; then
+ * `report` is the whole image's, in the same integers ibl_sanitize_pixels counts. */
+typedef struct ibl__pixel_policy {
+    int clamp_infinite;
+    float clamp_value;
+    int done;
+    ibl_pixel_report report;
+} ibl__pixel_policy;
+
+/* OpenEXR (src/io/exr.c, with the C++ part in src/io/exr_cpp.cpp). The second applies policy
+ * as it decodes where it can (policy->done tells). */
 ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info);
+ibl_status ibl__exr_decode_sanitized(ibl_context *ctx, const uint8_t *bytes, size_t size,
+                                     const char *name, ibl_texture *out, ibl_file_info *info,
+                                     ibl__pixel_policy *policy);
 ibl_status ibl__exr_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size);
 
