@@ -149,12 +149,35 @@ static char *temporary_name(ibl_context *ctx, const char *folder, const char *ba
     return t;
 }
 
+/* A large file is written in slices of WRITEBACK_SLICE bytes, each handed to the disk
+ * (sync_file_range: the writeback starts, nothing waits) as soon as it is in the page cache,
+ * so the disk writes one slice while the next is copied and the fsync that makes the file
+ * durable waits for the last slice only: with one write and one fsync the 256 chain's 4 MB
+ * KTX2 took the write's copy plus the whole flush. The fsync still comes before the rename. */
+#define WRITEBACK_SLICE ((size_t)1 << 20)
+
+static ibl_status write_slices(int fd, const unsigned char *p, size_t n)
+{
+#ifdef SYNC_FILE_RANGE_WRITE
+    for (size_t done = 0; done < n;) {
+        size_t slice = n - done < WRITEBACK_SLICE ? n - done : WRITEBACK_SLICE;
+        if (write_all(fd, p + done, slice) != IBL_OK) return IBL_ERR_IO;
+        /* advice: where it fails (a file system without it), the fsync does all the work */
+        (void)sync_file_range(fd, (off_t)done, (off_t)slice, SYNC_FILE_RANGE_WRITE);
+        done += slice;
+    }
+    return IBL_OK;
+#else
+    return write_all(fd, p, n);
+#endif
+}
+
 /* Writes bytes to fd and flushes them; keeps the mode of a replaced file. 0 or errno, and
  * what failed. */
 static int fill(int fd, const pending_file *f, const void *bytes, size_t size, const char **what)
 {
     *what = "write";
-    if (write_all(fd, bytes, size) != IBL_OK) return errno;
+    if (write_slices(fd, bytes, size) != IBL_OK) return errno;
     *what = "set the mode of";
     if (f->replaced && fchmod(fd, f->mode) != 0) return errno;
     *what = "flush";
