@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <time.h>
 #include <unistd.h>
 
 enum { MAX_POOL_THREADS = 64, MESSAGE_BYTES = 512 };
@@ -293,9 +294,15 @@ static void run_indices(thread_pool *pool)
 }
 
 /* A parallel-for usually follows the last one within microseconds, so a thread waits awake
- * for a while (about 0.1 ms) before it sleeps on a condition variable: a wake-up through the
- * kernel cost ~35 us per call on a 2-core VM, and a prefilter makes hundreds of calls. */
-enum { SPIN_ROUNDS = 4000 };
+ * for a while before it sleeps on a condition variable: a wake-up through the kernel cost
+ * ~35 us per call on a 2-core VM, and a prefilter makes hundreds of calls. The while is
+ * SPIN_NS of the monotonic clock (read every SPIN_CHECK pauses; a pause takes ~25 ns on one
+ * CPU and ~140 on another): 0.5 ms covers most of the serial stretches between a prefilter's
+ * loops (the 256 GGX chain has ~14 a run over 0.1 ms, ~12 of them under 0.5 ms), after
+ * which a worker woken through the kernel joined ~75 us late; with 0.1 ms of spinning that
+ * was ~1 ms a run of the caller working alone. */
+#define SPIN_NS 500000L
+enum { SPIN_CHECK = 64 };
 
 static void cpu_relax(void)
 {
@@ -304,6 +311,40 @@ static void cpu_relax(void)
 #elif defined(__aarch64__)
     __asm__ __volatile__("yield");
 #endif
+}
+
+static long monotonic_ns(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (long)t.tv_sec * 1000000000L + t.tv_nsec;
+}
+
+/* A worker's wake-up: a new job (generation past `seen`) or the end of the pool. */
+static int job_posted(thread_pool *pool, unsigned seen)
+{
+    return atomic_load(&pool->generation) != seen || atomic_load(&pool->quit);
+}
+
+/* The caller's: every worker that joined the job is done. */
+static int workers_done(thread_pool *pool, unsigned unused)
+{
+    (void)unused;
+    return atomic_load(&pool->active_workers) == 0;
+}
+
+/* Waits awake, up to SPIN_NS, until ready(pool, arg). */
+static void spin_until(int (*ready)(thread_pool *, unsigned), thread_pool *pool, unsigned arg)
+{
+    long deadline = 0;
+    for (int i = 0; !ready(pool, arg); i++) {
+        if (i % SPIN_CHECK == 0) {
+            long now = monotonic_ns();
+            if (!deadline) deadline = now + SPIN_NS;
+            else if (now >= deadline) return;
+        }
+        cpu_relax();
+    }
 }
 
 /* A worker joins a job only while the caller has not finished it: a worker woken late (it
@@ -315,8 +356,7 @@ static void *worker_main(void *arg)
     thread_pool *pool = arg;
     unsigned seen = 0;
     for (;;) {
-        for (int i = 0; i < SPIN_ROUNDS && atomic_load(&pool->generation) == seen && !atomic_load(&pool->quit); i++)
-            cpu_relax();
+        spin_until(job_posted, pool, seen);
         pthread_mutex_lock(&pool->lock);
         while (!atomic_load(&pool->quit) && atomic_load(&pool->generation) == seen)
             pthread_cond_wait(&pool->wake, &pool->lock);
@@ -383,7 +423,7 @@ static void pool_run(thread_pool *pool, int count, ibl_task_fn task, void *arg)
     pthread_mutex_lock(&pool->lock);
     pool->open = 0;
     pthread_mutex_unlock(&pool->lock);
-    for (int i = 0; i < SPIN_ROUNDS && atomic_load(&pool->active_workers) > 0; i++) cpu_relax();
+    spin_until(workers_done, pool, 0);
     if (atomic_load(&pool->active_workers) > 0) {
         pthread_mutex_lock(&pool->lock);
         while (atomic_load(&pool->active_workers) > 0) pthread_cond_wait(&pool->done, &pool->lock);
