@@ -641,6 +641,18 @@ void ibl_parallel_for(ibl_context *ctx, int count, ibl_task_fn task, void *task_
     atomic_flag_clear(&ctx->pool->running);
 }
 
+void ibl__parallel_warm(ibl_context *ctx)
+{
+    if (!ctx || !ctx->pool || atomic_flag_test_and_set(&ctx->pool->running)) return;
+    thread_pool *pool = ctx->pool;
+    /* a generation without a job (open stays 0): the workers wake, join nothing, and spin */
+    pthread_mutex_lock(&pool->lock);
+    atomic_fetch_add(&pool->generation, 1u);
+    pthread_cond_broadcast(&pool->wake);
+    pthread_mutex_unlock(&pool->lock);
+    atomic_flag_clear(&pool->running);
+}
+
 ibl_status ibl__progress(ibl_context *ctx, const char *stage, double fraction)
 {
     if (!ctx || !ctx->desc.progress) return IBL_OK;

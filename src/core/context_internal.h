@@ -16,6 +16,13 @@ char *ibl__strdup(ibl_context *ctx, const char *s);
 /* Reports progress; returns IBL_ERR_CANCELLED (with a message) if the host asked to stop. */
 ibl_status ibl__progress(ibl_context *ctx, const char *stage, double fraction);
 
+/* Wakes the context's pool threads without a job: they wait awake (spinning, ~0.5 ms) for
+ * the next parallel-for instead of asleep. For a caller about to start a loop after a short
+ * serial stretch that follows a long pause (a decoder parsing a header before its first
+ * loop): a sleeping worker joined the 256 chain's first loop ~1 ms late. A no-op without a
+ * pool or while a loop runs. */
+void ibl__parallel_warm(ibl_context *ctx);
+
 /* The memory budget (ibl_context_desc.max_bytes) for memory the library does not allocate
  * itself: third-party decoders (stb_image, OpenEXR) allocate with malloc, so their estimated
  * need is reserved while they run and released afterwards. Reserve fails with

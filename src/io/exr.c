@@ -716,6 +716,8 @@ ibl_status ibl__exr_decode_sanitized(ibl_context *ctx, const uint8_t *bytes, siz
                                      const char *name, ibl_texture *out, ibl_file_info *info,
                                      ibl__pixel_policy *policy)
 {
+    /* the header is parsed and the image allocated before the first band: wake the pool now */
+    ibl__parallel_warm(ctx);
     exr_shape sh;
     ibl_status s = check_structure(ctx, bytes, size, name, &sh);
     if (s != IBL_OK) return s;
