@@ -1,8 +1,11 @@
 /* Cube geometry, exact solid angles, seamless sampling and the mip chain, against analytic
  * values and a brute-force double integral. */
 #include "test_support.h"
+#include "core/context_internal.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <time.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -254,6 +257,56 @@ static void parallel_for_covers_every_index(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* ibl__parallel_warm wakes the pool's workers without a job: loops after it still run every
+ * index exactly once (a worker that joined the empty job would run the last loop's indices
+ * again), on more than one thread (the warm call leaves the pool free), and inside a task it
+ * is a no-op (the pool is busy) rather than a deadlock. */
+typedef struct warm_job {
+    ibl_context *ctx;
+    int hits[64];
+    pthread_t thread[64];
+} warm_job;
+
+static void warm_task(void *arg, int index)
+{
+    warm_job *j = arg;
+    if (index == 0) ibl__parallel_warm(j->ctx); /* nested: must return at once */
+    j->thread[index] = pthread_self();
+    struct timespec t0, t;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    do clock_gettime(CLOCK_MONOTONIC, &t); /* 0.1 ms of work: the other thread gets a share */
+    while ((t.tv_sec - t0.tv_sec) * 1000000000L + (t.tv_nsec - t0.tv_nsec) < 100000L);
+    __atomic_fetch_add(&j->hits[index], 1, __ATOMIC_RELAXED);
+}
+
+static void parallel_warm_then_loop(void **state)
+{
+    (void)state;
+    ibl__parallel_warm(NULL);
+    ibl_context *single = test_context(1);
+    ibl__parallel_warm(single);
+    ibl_context_destroy(single);
+    ibl_context *ctx = test_context(2);
+    static warm_job j;
+    memset(&j, 0, sizeof j);
+    j.ctx = ctx;
+    int shared = 0;
+    enum { REPS = 20 };
+    for (int rep = 0; rep < REPS; rep++) {
+        ibl__parallel_warm(ctx);
+        if (rep % 2) ibl__parallel_warm(ctx); /* twice in a row: still no job */
+        ibl_parallel_for(ctx, 64, warm_task, &j);
+        for (int i = 1; i < 64; i++)
+            if (!pthread_equal(j.thread[i], j.thread[0])) {
+                shared++;
+                break;
+            }
+    }
+    for (int i = 0; i < 64; i++) assert_int_equal(j.hits[i], REPS);
+    assert_true(shared > 0);
+    ibl_context_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -268,6 +321,7 @@ int main(void)
         cmocka_unit_test(sanitize_policy),
         cmocka_unit_test(solid_angle_table),
         cmocka_unit_test(parallel_for_covers_every_index),
+        cmocka_unit_test(parallel_warm_then_loop),
     };
     return cmocka_run_group_tests_name("cubemap", tests, NULL, NULL);
 }
