@@ -256,7 +256,7 @@ static int gather_texels(const ibl_specular_plan *p, const source_level *s, uint
  * chain, between loops): counting the texels over the bar (integers, summed in task order),
  * then marking them, each task writing its keys after those of the tasks before it, so the
  * keys come in block order as one pass gives them. */
-enum { SCAN_TASKS = 128 };
+enum { SCAN_TASKS = 128, SCAN_MIN_BLOCKS = 256 /* ~2 us of counting: small levels run inline */ };
 
 typedef struct bright_scan {
     source_level *s;
@@ -304,7 +304,7 @@ void ibl__fast_select_bright(ibl_specular_plan *p, int level)
     j.s = s;
     j.blocks = source_block_count(s);
     j.per_task = (j.blocks + SCAN_TASKS - 1) / SCAN_TASKS;
-    if (j.per_task == 0) j.per_task = 1;
+    if (j.per_task < SCAN_MIN_BLOCKS) j.per_task = SCAN_MIN_BLOCKS;
     int tasks = (int)((j.blocks + j.per_task - 1) / j.per_task);
     j.bar = BRIGHT_BAR * accuracy_scale(p) * s->power / (4.0 * IBL_PI) * s->bright_scale;
     int count;
