@@ -210,6 +210,49 @@ typedef struct texel_remake {
     float *row;
 } texel_remake;
 
+/* The records of the sorted keys, GATHER_KEYS a task (whole blocks) through ibl_parallel_for:
+ * each key fills its own slot. Filled on the calling thread they were, at 512, ~7 ms between
+ * loops, most of it faulting in the fresh pages of the correction pool. Texels made again from
+ * the source share one scratch row, so those are gathered in one task. */
+enum { GATHER_KEYS = 64 * BLOCK_TEXELS };
+
+typedef struct gather_job {
+    const ibl_specular_plan *p;
+    const source_level *s;
+    const uint64_t *keys;
+    int count, power_field, per_task;
+    float *records;
+    const texel_remake *remake;
+} gather_job;
+
+static void gather_task(void *arg, int index)
+{
+    const gather_job *j = arg;
+    const ibl_specular_plan *p = j->p;
+    const source_level *s = j->s;
+    const texel_remake *remake = j->remake;
+    const int B = BLOCK_TEXELS;
+    int k0 = index * j->per_task, k1 = j->count - k0 < j->per_task ? j->count : k0 + j->per_task;
+    for (int k = k0; k < k1; k++) {
+        size_t b;
+        int t, f, x, y;
+        float g[GEOMETRY_FIELDS];
+        texel_of_key(s, j->keys[k], &b, &t);
+        block_texel(s, b, t, &f, &x, &y);
+        level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, g);
+        /* the texel's fields from GEOMETRY_FIELDS on, B floats apart */
+        const float *rec = remake ? ibl__fast_streamed_texel(p, remake->src, remake->level, f, x, y,
+                                                             remake->row)
+                                  : s->records + field_index(s, b, GEOMETRY_FIELDS, t);
+        float *dst = j->records + (size_t)(k / B) * COARSE_FIELDS * B + k % B;
+        for (int field = 0; field < GEOMETRY_FIELDS; field++) dst[field * B] = g[field];
+        for (int field = GEOMETRY_FIELDS; field < COARSE_FIELDS; field++)
+            dst[field * B] = rec[(field - GEOMETRY_FIELDS) * B];
+        for (int c = 0; c < 3; c++)
+            dst[(FIELD_POWER + c) * B] = rec[(j->power_field + c - GEOMETRY_FIELDS) * B];
+    }
+}
+
 /* Gathers the `count` texels of `keys` in key order, eight to a block of records with their
  * power from field power_field, then their cones (one per block, then one per
  * SUPER_CONE_BLOCKS blocks after `capacity` cones); the number of blocks. The records are s's,
@@ -220,24 +263,9 @@ static int gather_texels(const ibl_specular_plan *p, const source_level *s, uint
 {
     const int B = BLOCK_TEXELS;
     qsort(keys, (size_t)count, sizeof *keys, key_order);
-    for (int k = 0; k < count; k++) {
-        size_t b;
-        int t, f, x, y;
-        float g[GEOMETRY_FIELDS];
-        texel_of_key(s, keys[k], &b, &t);
-        block_texel(s, b, t, &f, &x, &y);
-        level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, g);
-        /* the texel's fields from GEOMETRY_FIELDS on, B floats apart */
-        const float *rec = remake ? ibl__fast_streamed_texel(p, remake->src, remake->level, f, x, y,
-                                                             remake->row)
-                                  : s->records + field_index(s, b, GEOMETRY_FIELDS, t);
-        float *dst = records + (size_t)(k / B) * COARSE_FIELDS * B + k % B;
-        for (int field = 0; field < GEOMETRY_FIELDS; field++) dst[field * B] = g[field];
-        for (int field = GEOMETRY_FIELDS; field < COARSE_FIELDS; field++)
-            dst[field * B] = rec[(field - GEOMETRY_FIELDS) * B];
-        for (int c = 0; c < 3; c++)
-            dst[(FIELD_POWER + c) * B] = rec[(power_field + c - GEOMETRY_FIELDS) * B];
-    }
+    int per_task = remake || count == 0 ? (count > 0 ? count : 1) : GATHER_KEYS;
+    gather_job job = {p, s, keys, count, power_field, per_task, records, remake};
+    ibl_parallel_for(p->ctx, (count + per_task - 1) / per_task, gather_task, &job);
     for (int i = count; i < (count + B - 1) / B * B; i++) { /* the rest of the last block: nothing */
         float *dst = records + (size_t)(i / B) * COARSE_FIELDS * B + i % B;
         for (int field = 0; field < COARSE_FIELDS; field++) dst[field * B] = 0.0f;
