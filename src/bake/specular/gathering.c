@@ -263,7 +263,7 @@ static int gather_texels(const ibl_specular_plan *p, const source_level *s, uint
 {
     const int B = BLOCK_TEXELS;
     qsort(keys, (size_t)count, sizeof *keys, key_order);
-    int per_task = remake || count == 0 ? (count > 0 ? count : 1) : GATHER_KEYS;
+    int per_task = remake && count > 0 ? count : GATHER_KEYS; /* remade: one task */
     gather_job job = {p, s, keys, count, power_field, per_task, records, remake};
     ibl_parallel_for(p->ctx, (count + per_task - 1) / per_task, gather_task, &job);
     for (int i = count; i < (count + B - 1) / B * B; i++) { /* the rest of the last block: nothing */
