@@ -7,6 +7,8 @@
 # worktree) each hyperfine call runs both binaries side by side. The ratio to read is the
 # -j 1 mean over the -j 2 mean; on a shared host also compare user+sys, which others' load
 # changes less than the wall clock.
+# Last, bench_pool_ceiling at 1 and 2 threads: what a perfectly parallel process of the same
+# shape gains on this host.
 set -eu
 BUILD=${1:-build}
 OTHER=${2:-}
@@ -24,3 +26,8 @@ for c in "$(dirname "$0")/../tests/data/city.exr|256" "$DIR/city2048.exr|512"; d
     hyperfine -N -w 2 -r "$RUNS" "$IBL $cmd -j 1" "$IBL $cmd -j 2"
   fi
 done
+# The host's own ceiling for a process of the 256 command's shape (bench_pool_ceiling.c: as
+# many parallel-fors through the same pool, arithmetic only, no serial code): the ratio the
+# command's can be read against.
+C=$BUILD/bench/bench_pool_ceiling
+if [ -x "$C" ]; then hyperfine -N -w 2 -r "$RUNS" "$C 1" "$C 2"; fi
