@@ -19,7 +19,6 @@
  * constant environment stays constant too. */
 #include "bake/specular/fast_internal.h"
 
-#include <limits.h>
 #include <math.h>
 #include <string.h>
 #if defined(__SSE2__)
@@ -189,13 +188,10 @@ static void row_sources_of(const ibl_specular_plan *p, const level_plan *lv, int
     }
 }
 
-/* The grid columns under an output row, interpolated along y: a window of TAPS columns that
- * slides with x (the output's texels are at least twice as many as the grid's, so each column
- * is interpolated once per row, and a texel costs TAPS taps along x, not TAPS^2). */
-typedef struct lagrange_window {
-    int first;             /* grid column of column[0] (INT_MIN: empty)                        */
-    float column[TAPS][4];
-} lagrange_window;
+/* A Lagrange grid's y pass covers the grid columns under a span of at most LAGRANGE_SPAN output
+ * texels at a time: its grid is at least twice as coarse as the output (it divides the output's
+ * edge and is coarser), so a span reads at most LAGRANGE_SPAN / 2 + TAPS columns. */
+enum { LAGRANGE_SPAN = 64, LAGRANGE_SPAN_COLUMNS = LAGRANGE_SPAN / 2 + TAPS };
 
 /* Grid column c of Lagrange grid k interpolated along y at the row, into out. */
 static void lagrange_column(const row_sources *rs, int k, int c, float out[4])
@@ -214,28 +210,99 @@ static void lagrange_column(const row_sources *rs, int k, int c, float out[4])
 #endif
 }
 
-/* Adds Lagrange grid k of the row at output column x to v: TAPS x TAPS points, the y pass from
- * the window (x rises along a row, so the window only moves forward). */
-static void add_lagrange(const row_sources *rs, int k, int x, lagrange_window *w, float v[4])
+/* The first grid column Lagrange grid k reads at output column x, and the position gx. */
+static int lagrange_first_column(const row_sources *rs, int k, int x, float *gx)
 {
-    float gx = (x + 0.5f) * rs->lagrange_scale[k] - 0.5f;
-    int ix = (int)floorf(gx), first = ix - TAP_OFFSET;
-    if (w->first != first) {
-        int keep = w->first != INT_MIN && first > w->first && first - w->first < TAPS
-                       ? TAPS - (first - w->first) : 0;
-        if (keep) memmove(w->column[0], w->column[TAPS - keep], (size_t)keep * 4 * sizeof(float));
-        for (int q = keep; q < TAPS; q++) lagrange_column(rs, k, first + q, w->column[q]);
-        w->first = first;
-    }
-    float computed[TAPS];
-    const float *wx = computed;
-    if (rs->lagrange_ratio[k] <= LAGRANGE_PHASES) wx = rs->lagrange_wx[k][x % rs->lagrange_ratio[k]];
-    else lagrange_weights(gx - ix, computed);
-    for (int q = 0; q < TAPS; q++)
-        for (int c = 0; c < 4; c++) v[c] += wx[q] * w->column[q][c];
+    *gx = (x + 0.5f) * rs->lagrange_scale[k] - 0.5f;
+    return (int)floorf(*gx) - TAP_OFFSET;
 }
 
-/* Row `index` (face n + y) of the output level. */
+/* Adds Lagrange grid k at output columns x0 .. x1 - 1 of the row to sums (4 floats a column):
+ * the grid columns under the span interpolated along y once (a column serves every output
+ * column over it), then TAPS taps along x per output column, with the column weights of its
+ * phase x % ratio. The same products, added in the same order, as a texel-by-texel 6 x 6 read
+ * of the y-interpolated columns. */
+static void add_lagrange_span(const row_sources *rs, int k, int x0, int x1, float (*sums)[4])
+{
+    float columns[LAGRANGE_SPAN_COLUMNS][4], gx;
+    int first = lagrange_first_column(rs, k, x0, &gx);
+    int last = lagrange_first_column(rs, k, x1 - 1, &gx) + TAPS - 1;
+    for (int c = first; c <= last; c++) lagrange_column(rs, k, c, columns[c - first]);
+    int ratio = rs->lagrange_ratio[k];
+    for (int x = x0; x < x1; x++) {
+        int ix = lagrange_first_column(rs, k, x, &gx) - first;
+        float computed[TAPS];
+        const float *wx = computed;
+        if (ratio <= LAGRANGE_PHASES) wx = rs->lagrange_wx[k][x % ratio];
+        else lagrange_weights(gx - floorf(gx), computed);
+        float *v = sums[x - x0];
+#if defined(__SSE2__)
+        __m128 acc = _mm_loadu_ps(v);
+        for (int q = 0; q < TAPS; q++)
+            acc = _mm_add_ps(acc, _mm_mul_ps(_mm_set1_ps(wx[q]), _mm_loadu_ps(columns[ix + q])));
+        _mm_storeu_ps(v, acc);
+#else
+        for (int q = 0; q < TAPS; q++)
+            for (int c = 0; c < 4; c++) v[c] += wx[q] * columns[ix + q][c];
+#endif
+    }
+}
+
+/* The sums of the grids at output column x of the row, added to v: the grid at the output
+ * texels and the bilinear grids read by rows. */
+static void add_texel_grids(const row_sources *rs, int n, int face, int y, int x, float v[4])
+{
+    if (rs->at_output) {
+        const float *a = rs->at_output->sums + (((size_t)face * n + y) * n + x) * 4;
+        for (int c = 0; c < 4; c++) v[c] = a[c];
+    }
+#if defined(__SSE2__)
+    __m128 acc = _mm_loadu_ps(v);
+    for (int k = 0; k < rs->row_count; k++) {
+        float gx = (x + 0.5f) * rs->scale[k] - 0.5f;
+        int ix = (int)floorf(gx);
+        const float *a = rs->rows[k][0] + (ptrdiff_t)ix * 4, *b = rs->rows[k][1] + (ptrdiff_t)ix * 4;
+        __m128 fx = _mm_set1_ps(gx - ix), a0 = _mm_loadu_ps(a), b0 = _mm_loadu_ps(b);
+        __m128 top = _mm_add_ps(a0, _mm_mul_ps(fx, _mm_sub_ps(_mm_loadu_ps(a + 4), a0)));
+        __m128 bot = _mm_add_ps(b0, _mm_mul_ps(fx, _mm_sub_ps(_mm_loadu_ps(b + 4), b0)));
+        acc = _mm_add_ps(acc, _mm_add_ps(top, _mm_mul_ps(_mm_set1_ps(rs->fy[k]), _mm_sub_ps(bot, top))));
+    }
+    _mm_storeu_ps(v, acc);
+#else
+    for (int k = 0; k < rs->row_count; k++) {
+        float gx = (x + 0.5f) * rs->scale[k] - 0.5f;
+        int ix = (int)floorf(gx);
+        float fx = gx - ix;
+        const float *a = rs->rows[k][0] + (ptrdiff_t)ix * 4, *b = rs->rows[k][1] + (ptrdiff_t)ix * 4;
+        for (int c = 0; c < 4; c++) {
+            float top = a[c] + fx * (a[4 + c] - a[c]);
+            float bot = b[c] + fx * (b[4 + c] - b[c]);
+            v[c] += top + rs->fy[k] * (bot - top);
+        }
+    }
+#endif
+}
+
+/* The grids sampled by direction (edge fixups, or grids that do not divide the level's edge) at
+ * output column x of the row, added to v. */
+static void add_sampled_grids(const ibl_specular_plan *p, const level_plan *lv,
+                              const row_sources *rs, int n, int face, int y, int x, float v[4])
+{
+    double d[3];
+    ibl__output_direction(&p->desc, &lv->lobe, face, n, x, y, d);
+    ibl_vec3 dv = {(float)d[0], (float)d[1], (float)d[2]};
+    for (int k = 0; k < rs->sampled_count; k++) {
+        const sum_grid *gr = &lv->grids[rs->sampled[k]];
+        ibl_cubemap cube = {gr->edge, 1, gr->sums, 0};
+        float s4[4];
+        ibl_cubemap_sample_bilinear(&cube, 0, dv, s4);
+        for (int c = 0; c < 4; c++) v[c] += s4[c];
+    }
+}
+
+/* Row `index` (face n + y) of the output level, LAGRANGE_SPAN texels at a time: the grids read
+ * by rows, then the Lagrange grids over the span, then the grids sampled by direction (every
+ * texel adds them in that order). */
 static void combine_task(void *arg, int index)
 {
     const combine_job *job = arg;
@@ -245,59 +312,26 @@ static void combine_task(void *arg, int index)
     float *row = ibl_cubemap_face(job->dst, job->level, face) + (size_t)y * n * 4;
     row_sources rs;
     row_sources_of(p, lv, n, face, y, &rs);
-    lagrange_window windows[LAGRANGE_GRIDS];
-    for (int k = 0; k < LAGRANGE_GRIDS; k++) windows[k].first = INT_MIN;
-    for (int x = 0; x < n; x++) {
-        float v[4] = {0, 0, 0, 0};
-        if (rs.at_output) {
-            const float *a = rs.at_output->sums + (((size_t)face * n + y) * n + x) * 4;
-            for (int c = 0; c < 4; c++) v[c] = a[c];
+    for (int x0 = 0; x0 < n; x0 += LAGRANGE_SPAN) {
+        int x1 = x0 + LAGRANGE_SPAN < n ? x0 + LAGRANGE_SPAN : n;
+        float sums[LAGRANGE_SPAN][4];
+        for (int x = x0; x < x1; x++) {
+            float *v = sums[x - x0];
+            v[0] = v[1] = v[2] = v[3] = 0.0f;
+            add_texel_grids(&rs, n, face, y, x, v);
         }
-#if defined(__SSE2__)
-        __m128 acc = _mm_loadu_ps(v);
-        for (int k = 0; k < rs.row_count; k++) {
-            float gx = (x + 0.5f) * rs.scale[k] - 0.5f;
-            int ix = (int)floorf(gx);
-            const float *a = rs.rows[k][0] + (ptrdiff_t)ix * 4, *b = rs.rows[k][1] + (ptrdiff_t)ix * 4;
-            __m128 fx = _mm_set1_ps(gx - ix), a0 = _mm_loadu_ps(a), b0 = _mm_loadu_ps(b);
-            __m128 top = _mm_add_ps(a0, _mm_mul_ps(fx, _mm_sub_ps(_mm_loadu_ps(a + 4), a0)));
-            __m128 bot = _mm_add_ps(b0, _mm_mul_ps(fx, _mm_sub_ps(_mm_loadu_ps(b + 4), b0)));
-            acc = _mm_add_ps(acc, _mm_add_ps(top, _mm_mul_ps(_mm_set1_ps(rs.fy[k]), _mm_sub_ps(bot, top))));
-        }
-        _mm_storeu_ps(v, acc);
-#else
-        for (int k = 0; k < rs.row_count; k++) {
-            float gx = (x + 0.5f) * rs.scale[k] - 0.5f;
-            int ix = (int)floorf(gx);
-            float fx = gx - ix;
-            const float *a = rs.rows[k][0] + (ptrdiff_t)ix * 4, *b = rs.rows[k][1] + (ptrdiff_t)ix * 4;
-            for (int c = 0; c < 4; c++) {
-                float top = a[c] + fx * (a[4 + c] - a[c]);
-                float bot = b[c] + fx * (b[4 + c] - b[c]);
-                v[c] += top + rs.fy[k] * (bot - top);
+        for (int k = 0; k < rs.lagrange_count; k++) add_lagrange_span(&rs, k, x0, x1, sums);
+        for (int x = x0; x < x1; x++) {
+            float *v = sums[x - x0];
+            if (rs.sampled_count) add_sampled_grids(p, lv, &rs, n, face, y, x, v);
+            float *o = row + x * 4;
+            float inv = v[3] > 0 ? 1.0f / v[3] : 0.0f;
+            for (int c = 0; c < 3; c++) {
+                float r = v[c] * inv;
+                o[c] = r > 0 ? r : 0.0f;
             }
+            o[3] = 1.0f;
         }
-#endif
-        for (int k = 0; k < rs.lagrange_count; k++) add_lagrange(&rs, k, x, &windows[k], v);
-        if (rs.sampled_count) {
-            double d[3];
-            ibl__output_direction(&p->desc, &lv->lobe, face, n, x, y, d);
-            ibl_vec3 dv = {(float)d[0], (float)d[1], (float)d[2]};
-            for (int k = 0; k < rs.sampled_count; k++) {
-                const sum_grid *gr = &lv->grids[rs.sampled[k]];
-                ibl_cubemap cube = {gr->edge, 1, gr->sums, 0};
-                float s4[4];
-                ibl_cubemap_sample_bilinear(&cube, 0, dv, s4);
-                for (int c = 0; c < 4; c++) v[c] += s4[c];
-            }
-        }
-        float *o = row + x * 4;
-        float inv = v[3] > 0 ? 1.0f / v[3] : 0.0f;
-        for (int c = 0; c < 3; c++) {
-            float r = v[c] * inv;
-            o[c] = r > 0 ? r : 0.0f;
-        }
-        o[3] = 1.0f;
     }
 }
 
