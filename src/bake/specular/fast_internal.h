@@ -503,6 +503,7 @@ const float *ibl__fast_streamed_texel(const ibl_specular_plan *p, const ibl_cube
 ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level);
 double ibl__fast_piece_peak(const lobe_piece *piece);
 double ibl__fast_piece_integral(const lobe_piece *piece);
+int ibl__fast_core_normalisers_later(const level_plan *lv);
 
 /* ---- leaf_sums.c ---- */
 void ibl__fast_normalisers(ibl_specular_plan *p, int level);

@@ -55,8 +55,8 @@ ibl_status ibl__fast_plan_bars(ibl_specular_plan *p, int level)
     const sum_grid *core_grid = &lv->grids[lv->pieces[0].grid];
     size_t face = (size_t)core_grid->edge * core_grid->edge;
     double den = 0;
-    if (core_grid->lagrange) {
-        /* a Lagrange grid's normalisers may be found only at the run (precomputed.c,
+    if (ibl__fast_core_normalisers_later(lv)) {
+        /* the core grid's normalisers may be found only at the run (pieces.c, precomputed.c
          * normalisers_at_run): its pieces' integrals, the same whether they are or not */
         for (int k = 0; k < lv->piece_count; k++)
             if (lv->pieces[k].grid == lv->pieces[0].grid) den += ibl__fast_piece_integral(&lv->pieces[k]);

@@ -209,6 +209,23 @@ static void place_core(const ibl_specular_plan *p, level_plan *lv, int output_ed
     }
 }
 
+/* Whether the core's grid holds the core's normaliser alone and may get it at a one-shot run,
+ * where the weights are made for the products anyway (precomputed.c, normalisers_at_run), so
+ * that the level's bars take the pieces' integrals as their scale (gathering.c) in every plan:
+ * a Lagrange grid (only the core is read by one), and the output texels of a smooth Phong core
+ * (nil before the horizon) when no ring is summed there (a cmft exponent of 862 at 128 found
+ * its 1.7 M weights twice, for the plan's normalisers and for the products). A single piece's
+ * normaliser added at the run is the same bits as at the plan. */
+int ibl__fast_core_normalisers_later(const level_plan *lv)
+{
+    const sum_grid *core = &lv->grids[lv->pieces[0].grid];
+    if (core->lagrange) return 1;
+    if (lv->lobe.kind != IBL__LOBE_PHONG || !(lv->lobe.horizon < PHONG_CULL)) return 0;
+    for (int k = 1; k < lv->piece_count; k++)
+        if (lv->pieces[k].grid == lv->pieces[0].grid) return 0;
+    return 1;
+}
+
 /* Every grid's leaf-sum tasks (6 faces of tiles) and its sums. */
 static ibl_status allocate_grids(ibl_specular_plan *p, level_plan *lv)
 {

@@ -400,11 +400,11 @@ static ibl_status precompute_piece(ibl_specular_plan *p, int level, int k)
                                   ibl_cube_texel_solid_angle(S, S / 2, S / 2));
         if (!(c->weight_scale > 0)) c->weight_scale = 1.0f;
         /* a one-shot plan keeps the rows and the normalisers only: its weights are made again
-         * for the products (ibl__fast_precomputed_refill); on a Lagrange grid, the core of a
-         * narrow Phong lobe with the most weights a point of any piece, they are made there
-         * only, and so are the normalisers (a Lagrange grid holds no other piece's, so they
-         * add up to the same bits) */
-        c->normalisers_at_run = p->one_shot && gr->lagrange;
+         * for the products (ibl__fast_precomputed_refill); a core whose grid holds no other
+         * piece's normaliser (a narrow Phong lobe's, with the most weights a point of any
+         * piece: pieces.c, ibl__fast_core_normalisers_later) makes them there only, and its
+         * normalisers with them (the same bits: no other piece adds to them) */
+        c->normalisers_at_run = p->one_shot && k == 0 && ibl__fast_core_normalisers_later(lv);
         job.weights = c->weights;
         if (c->weights) ibl_parallel_for(ctx, (int)bases, weights_task, &job);
         else if (!c->normalisers_at_run && one_shot_normalisers(ctx, &job) != IBL_OK) packed = -1;
