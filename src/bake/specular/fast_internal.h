@@ -298,6 +298,9 @@ struct precomputed_piece {
      * normalisers are found with them (ibl__fast_precomputed_refill) and added to the grid's
      * then, and the level's bars take the piece's integral instead (gathering.c) */
     int normalisers_at_run;
+    /* a block of corrections spans at most this many texels of its first (0: no limit; the
+     * Phong pieces', gathering.c) */
+    int gather_span;
     int correction_capacity, correction_block_count;
     float *correction_records; /* run: in the plan's correction pool                           */
     float *correction_cones;

@@ -149,13 +149,15 @@ static int key_order(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* The cones of `count` texels gathered in blocks (records): around the mean of each block's
- * texel directions, out to the farthest one plus `texel_radius`. */
-static void gathered_cones(const float *records, float *cones, int count, double texel_radius)
+/* The cones of `blocks` blocks of gathered texels (records; a block's texels fill its first
+ * lanes, an empty lane has no solid angle): around the mean of each block's texel directions,
+ * out to the farthest one plus `texel_radius`. */
+static void gathered_cones(const float *records, float *cones, int blocks, double texel_radius)
 {
-    for (int b = 0; b < (count + BLOCK_TEXELS - 1) / BLOCK_TEXELS; b++) {
+    for (int b = 0; b < blocks; b++) {
         const float *rec = records + (size_t)b * COARSE_FIELDS * BLOCK_TEXELS;
-        int n = count - b * BLOCK_TEXELS < BLOCK_TEXELS ? count - b * BLOCK_TEXELS : BLOCK_TEXELS;
+        int n = 0;
+        while (n < BLOCK_TEXELS && rec[FIELD_SOLID_ANGLE * BLOCK_TEXELS + n] > 0) n++;
         double d[BLOCK_TEXELS][3], c[3] = {0, 0, 0}, r = 0;
         for (int t = 0; t < n; t++) {
             for (int i = 0; i < 3; i++) d[t][i] = rec[(FIELD_MEAN + i) * BLOCK_TEXELS + t];
@@ -210,10 +212,32 @@ typedef struct texel_remake {
     float *row;
 } texel_remake;
 
-/* The records of the sorted keys, GATHER_KEYS a task (whole blocks) through ibl_parallel_for:
- * each key fills its own slot. Filled on the calling thread they were, at 512, ~7 ms between
- * loops, most of it faulting in the fresh pages of the correction pool. Texels made again from
- * the source share one scratch row, so those are gathered in one task. */
+/* Fills lane dst (of a block of records, B floats a field) with the texel of key: its geometry,
+ * its fields from s's records (or made again from the source: remake) and its power from field
+ * power_field. */
+static void fill_texel(const ibl_specular_plan *p, const source_level *s, uint64_t key,
+                       const texel_remake *remake, int power_field, float *dst)
+{
+    const int B = BLOCK_TEXELS;
+    size_t b;
+    int t, f, x, y;
+    float g[GEOMETRY_FIELDS];
+    texel_of_key(s, key, &b, &t);
+    block_texel(s, b, t, &f, &x, &y);
+    level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, g);
+    /* the texel's fields from GEOMETRY_FIELDS on, B floats apart */
+    const float *rec = remake ? ibl__fast_streamed_texel(p, remake->src, remake->level, f, x, y, remake->row)
+                              : s->records + field_index(s, b, GEOMETRY_FIELDS, t);
+    for (int field = 0; field < GEOMETRY_FIELDS; field++) dst[field * B] = g[field];
+    for (int field = GEOMETRY_FIELDS; field < COARSE_FIELDS; field++)
+        dst[field * B] = rec[(field - GEOMETRY_FIELDS) * B];
+    for (int c = 0; c < 3; c++) dst[(FIELD_POWER + c) * B] = rec[(power_field + c - GEOMETRY_FIELDS) * B];
+}
+
+/* Lane by lane in key order (texel k in lane k), GATHER_KEYS a task (whole blocks) through
+ * ibl_parallel_for: each key fills its own slot. Filled on the calling thread they were, at
+ * 512, ~7 ms between loops, most of it faulting in the fresh pages of the correction pool.
+ * Texels made again from the source share one scratch row, so those are gathered in one task. */
 enum { GATHER_KEYS = 64 * BLOCK_TEXELS };
 
 typedef struct gather_job {
@@ -228,51 +252,94 @@ typedef struct gather_job {
 static void gather_task(void *arg, int index)
 {
     const gather_job *j = arg;
-    const ibl_specular_plan *p = j->p;
-    const source_level *s = j->s;
-    const texel_remake *remake = j->remake;
     const int B = BLOCK_TEXELS;
     int k0 = index * j->per_task, k1 = j->count - k0 < j->per_task ? j->count : k0 + j->per_task;
-    for (int k = k0; k < k1; k++) {
-        size_t b;
-        int t, f, x, y;
-        float g[GEOMETRY_FIELDS];
-        texel_of_key(s, j->keys[k], &b, &t);
-        block_texel(s, b, t, &f, &x, &y);
-        level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, g);
-        /* the texel's fields from GEOMETRY_FIELDS on, B floats apart */
-        const float *rec = remake ? ibl__fast_streamed_texel(p, remake->src, remake->level, f, x, y,
-                                                             remake->row)
-                                  : s->records + field_index(s, b, GEOMETRY_FIELDS, t);
-        float *dst = j->records + (size_t)(k / B) * COARSE_FIELDS * B + k % B;
-        for (int field = 0; field < GEOMETRY_FIELDS; field++) dst[field * B] = g[field];
-        for (int field = GEOMETRY_FIELDS; field < COARSE_FIELDS; field++)
-            dst[field * B] = rec[(field - GEOMETRY_FIELDS) * B];
-        for (int c = 0; c < 3; c++)
-            dst[(FIELD_POWER + c) * B] = rec[(j->power_field + c - GEOMETRY_FIELDS) * B];
-    }
+    for (int k = k0; k < k1; k++)
+        fill_texel(j->p, j->s, j->keys[k], j->remake, j->power_field,
+                   j->records + (size_t)(k / B) * COARSE_FIELDS * B + k % B);
 }
 
-/* Gathers the `count` texels of `keys` in key order, eight to a block of records with their
- * power from field power_field, then their cones (one per block, then one per
- * SUPER_CONE_BLOCKS blocks after `capacity` cones); the number of blocks. The records are s's,
- * or made again (remake, when s has none). */
+/* Where the texels of `keys` (sorted) go, in key order, eight to a block; with span > 0 a texel
+ * also starts a new block when it is on another face or more than `span` texels (either axis)
+ * from its block's first texel, so that a block's cone stays small: a block of texels scattered
+ * along the Morton curve has a cone as wide as their spread and is summed at every grid point
+ * its cone reaches (the 128 level's corrections of cmft's exponent 862 had cones of 13 texels
+ * on average, against a reach of 14). */
+typedef struct lane_cursor {
+    int span, blocks, fill, face, x, y; /* fill: texels in the last block; face, x, y: its first's */
+} lane_cursor;
+
+/* The lane (block x BLOCK_TEXELS + lane) of the next texel, (f, x, y). */
+static int next_lane(lane_cursor *c, int f, int x, int y)
+{
+    int open = c->blocks > 0 && c->fill < BLOCK_TEXELS;
+    if (open && c->span > 0 && (f != c->face || abs(x - c->x) > c->span || abs(y - c->y) > c->span))
+        open = 0;
+    if (!open) c->blocks++, c->fill = 0, c->face = f, c->x = x, c->y = y;
+    return (c->blocks - 1) * BLOCK_TEXELS + c->fill++;
+}
+
+/* The blocks that next_lane's spans give the sorted keys (on the calling thread: a lane depends
+ * on every texel before it); a new block's lanes are emptied before they are filled. */
+static int gather_spans(const ibl_specular_plan *p, const source_level *s, const uint64_t *keys,
+                        int count, int span, int power_field, float *records,
+                        const texel_remake *remake)
+{
+    const int B = BLOCK_TEXELS;
+    lane_cursor cursor = {span, 0, 0, 0, 0, 0};
+    for (int k = 0; k < count; k++) {
+        size_t b;
+        int t, f, x, y;
+        texel_of_key(s, keys[k], &b, &t);
+        block_texel(s, b, t, &f, &x, &y);
+        int blocks_before = cursor.blocks, lane = next_lane(&cursor, f, x, y);
+        float *block = records + (size_t)(lane / B) * COARSE_FIELDS * B;
+        for (int i = cursor.blocks > blocks_before ? 0 : B; i < B; i++) { /* a new block: empty */
+            for (int field = 0; field < COARSE_FIELDS; field++) block[field * B + i] = 0.0f;
+            block[FIELD_LUM_SPREAD * B + i] = 0.5f;
+        }
+        fill_texel(p, s, keys[k], remake, power_field, block + lane % B);
+    }
+    return cursor.blocks;
+}
+
+/* Gathers the `count` texels of `keys` in key order, eight to a block of records (a new block
+ * also past `span` texels of a block's first, next_lane, unless that takes more than `capacity`
+ * blocks; 0: no limit) with their power from field power_field, then their cones (one per
+ * block, then one per SUPER_CONE_BLOCKS blocks after `capacity` cones); the number of blocks.
+ * Unfilled lanes hold nothing: no power, no solid angle, beyond every piece. The records are
+ * s's, or made again (remake, when s has none). */
 static int gather_texels(const ibl_specular_plan *p, const source_level *s, uint64_t *keys,
-                         int count, int power_field, float *records, float *cones, int capacity,
-                         const texel_remake *remake)
+                         int count, int span, int power_field, float *records, float *cones,
+                         int capacity, const texel_remake *remake)
 {
     const int B = BLOCK_TEXELS;
     qsort(keys, (size_t)count, sizeof *keys, key_order);
-    int per_task = remake && count > 0 ? count : GATHER_KEYS; /* remade: one task */
-    gather_job job = {p, s, keys, count, power_field, per_task, records, remake};
-    ibl_parallel_for(p->ctx, (count + per_task - 1) / per_task, gather_task, &job);
-    for (int i = count; i < (count + B - 1) / B * B; i++) { /* the rest of the last block: nothing */
-        float *dst = records + (size_t)(i / B) * COARSE_FIELDS * B + i % B;
-        for (int field = 0; field < COARSE_FIELDS; field++) dst[field * B] = 0.0f;
-        dst[FIELD_LUM_SPREAD * B] = 0.5f;
+    if (span > 0) {
+        lane_cursor trial = {span, 0, 0, 0, 0, 0};
+        for (int k = 0; k < count; k++) {
+            size_t b;
+            int t, f, x, y;
+            texel_of_key(s, keys[k], &b, &t);
+            block_texel(s, b, t, &f, &x, &y);
+            next_lane(&trial, f, x, y);
+        }
+        if (trial.blocks > capacity) span = 0;
     }
-    gathered_cones(records, cones, count, 1.5 / s->edge);
     int blocks = (count + B - 1) / B;
+    if (span > 0) {
+        blocks = gather_spans(p, s, keys, count, span, power_field, records, remake);
+    } else {
+        int per_task = remake && count > 0 ? count : GATHER_KEYS; /* remade: one task */
+        gather_job job = {p, s, keys, count, power_field, per_task, records, remake};
+        ibl_parallel_for(p->ctx, (count + per_task - 1) / per_task, gather_task, &job);
+        for (int i = count; i < blocks * B; i++) { /* the rest of the last block: nothing */
+            float *dst = records + (size_t)(i / B) * COARSE_FIELDS * B + i % B;
+            for (int field = 0; field < COARSE_FIELDS; field++) dst[field * B] = 0.0f;
+            dst[FIELD_LUM_SPREAD * B] = 0.5f;
+        }
+    }
+    gathered_cones(records, cones, blocks, 1.5 / s->edge);
     super_cones(cones, blocks, cones + (size_t)capacity * CONE_FLOATS);
     return blocks;
 }
@@ -344,7 +411,7 @@ void ibl__fast_select_bright(ibl_specular_plan *p, int level)
         j.bar *= 2.0;
     }
     ibl_parallel_for(p->ctx, tasks, bright_mark_task, &j);
-    s->bright_block_count = gather_texels(p, s, s->bright_keys, count, FIELD_POWER, s->bright_records,
+    s->bright_block_count = gather_texels(p, s, s->bright_keys, count, 0, FIELD_POWER, s->bright_records,
                                           s->bright_cones, s->bright_capacity, NULL);
 }
 
@@ -419,7 +486,7 @@ static int gather_corrections(const ibl_specular_plan *p, precomputed_piece *c,
             c->correction_keys[k++] = texel_key(s, b, t);
         }
     }
-    return gather_texels(p, s, c->correction_keys, k, power_field, c->correction_records,
+    return gather_texels(p, s, c->correction_keys, k, c->gather_span, power_field, c->correction_records,
                          c->correction_cones, c->correction_capacity, remake);
 }
 

@@ -377,6 +377,12 @@ static ibl_status precompute_piece(ibl_specular_plan *p, int level, int k)
     ibl_context *ctx = p->ctx;
     precomputed_piece *c = precomputed_new(p, pc, gr, S, W);
     if (!c) return ibl_context_status(ctx);
+    /* a Phong piece's corrections in blocks spanning at most a fraction of its reach (gathering.c;
+     * GGX's are packed as they come, its output unchanged) */
+    if (lv->lobe.kind == IBL__LOBE_PHONG) {
+        int span = (int)(GATHER_SPAN_OF_REACH * pc->angle_out / texel_angle(S));
+        c->gather_span = span > 1 ? span : 1;
+    }
     size_t plane = (size_t)c->padded_edge * c->padded_edge, bases = (size_t)c->base_edge * c->base_edge;
     /* u0 = 1 - R.m for a leaf at centroid m: the piece is zero from u_hi on, exactly */
     double cos_end = 1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0) - 1e-6;
