@@ -298,6 +298,9 @@ struct precomputed_piece {
      * normalisers are found with them (ibl__fast_precomputed_refill) and added to the grid's
      * then, and the level's bars take the piece's integral instead (gathering.c) */
     int normalisers_at_run;
+    /* ... and keeps the padded geometry its rows were found on for those weights when it is
+     * small (KEPT_GEOMETRY_BYTES), instead of making it again; NULL otherwise */
+    float *kept_geometry;
     /* a block of corrections spans at most this many texels of its first (0: no limit; the
      * Phong pieces', gathering.c) */
     int gather_span;

@@ -56,6 +56,7 @@ void ibl__fast_precomputed_destroy(ibl_context *ctx, precomputed_piece *c)
     ibl_free(ctx, c->correction_keys);
     ibl_free(ctx, c->correction_cones);
     ibl_free(ctx, c->texel_bound);
+    ibl_free(ctx, c->kept_geometry);
     ibl_free(ctx, c);
 }
 
@@ -419,6 +420,9 @@ static ibl_status precompute_piece(ibl_specular_plan *p, int level, int k)
             for (int a = b + 1; a < c->base_edge; a++)
                 c->normaliser[b * c->base_edge + a] = c->normaliser[a * c->base_edge + b];
         if (packed == 1) pc->precomputed = c;
+        if (packed == 1 && c->normalisers_at_run &&
+            GEOMETRY_FIELDS * plane * sizeof(float) <= KEPT_GEOMETRY_BYTES)
+            c->kept_geometry = geometry, geometry = NULL;
     }
     ibl_free(ctx, geometry);
     if (packed != 1) ibl__fast_precomputed_destroy(ctx, c);
@@ -478,15 +482,18 @@ ibl_status ibl__fast_precomputed_refill(ibl_specular_plan *p, int level, int k)
     ibl_context *ctx = p->ctx;
     size_t plane = (size_t)c->padded_edge * c->padded_edge, bases = (size_t)c->base_edge * c->base_edge;
     double cos_end = 1.0 - (pc->u_hi < 2.0 ? pc->u_hi : 2.0) - 1e-6;
-    float *geometry = ibl_alloc(ctx, GEOMETRY_FIELDS * plane * sizeof(float));
+    /* the plan's geometry when it kept it (the same floats), else made again */
+    float *geometry = c->kept_geometry ? c->kept_geometry
+                                       : ibl_alloc(ctx, GEOMETRY_FIELDS * plane * sizeof(float));
     ibl_status st = geometry ? allocate_weights(ctx, c) : ibl_context_status(ctx);
     if (st == IBL_OK) {
         weights_job job = {p, c, pc, &lv->lobe, geometry, NULL, NULL, 0.0, cos_end, c->weights, 0, 0};
         pack(ctx, c, NULL, NULL, 1);
-        ibl_parallel_for(ctx, c->padded_edge, geometry_task, &job);
+        if (!c->kept_geometry) ibl_parallel_for(ctx, c->padded_edge, geometry_task, &job);
         ibl_parallel_for(ctx, (int)bases, weights_task, &job);
     }
     ibl_free(ctx, geometry);
+    c->kept_geometry = NULL;
     if (st == IBL_OK && c->normalisers_at_run) {
         /* the normalisers the plan left to this run: the bases below the diagonal take their
          * mirrors', as precompute_piece does, and all are added to the grid's sums */
