@@ -269,9 +269,13 @@ typedef struct lane_cursor {
     int span, blocks, fill, face, x, y; /* fill: texels in the last block; face, x, y: its first's */
 } lane_cursor;
 
-/* The lane (block x BLOCK_TEXELS + lane) of the next texel, (f, x, y). */
-static int next_lane(lane_cursor *c, int f, int x, int y)
+/* The lane (block x BLOCK_TEXELS + lane) of the next texel, the one of `key` in level s. */
+static int next_lane(lane_cursor *c, const source_level *s, uint64_t key)
 {
+    size_t b;
+    int t, f, x, y;
+    texel_of_key(s, key, &b, &t);
+    block_texel(s, b, t, &f, &x, &y);
     int open = c->blocks > 0 && c->fill < BLOCK_TEXELS;
     if (open && c->span > 0 && (f != c->face || abs(x - c->x) > c->span || abs(y - c->y) > c->span))
         open = 0;
@@ -288,11 +292,7 @@ static int gather_spans(const ibl_specular_plan *p, const source_level *s, const
     const int B = BLOCK_TEXELS;
     lane_cursor cursor = {span, 0, 0, 0, 0, 0};
     for (int k = 0; k < count; k++) {
-        size_t b;
-        int t, f, x, y;
-        texel_of_key(s, keys[k], &b, &t);
-        block_texel(s, b, t, &f, &x, &y);
-        int blocks_before = cursor.blocks, lane = next_lane(&cursor, f, x, y);
+        int blocks_before = cursor.blocks, lane = next_lane(&cursor, s, keys[k]);
         float *block = records + (size_t)(lane / B) * COARSE_FIELDS * B;
         for (int i = cursor.blocks > blocks_before ? 0 : B; i < B; i++) { /* a new block: empty */
             for (int field = 0; field < COARSE_FIELDS; field++) block[field * B + i] = 0.0f;
@@ -317,13 +317,7 @@ static int gather_texels(const ibl_specular_plan *p, const source_level *s, uint
     qsort(keys, (size_t)count, sizeof *keys, key_order);
     if (span > 0) {
         lane_cursor trial = {span, 0, 0, 0, 0, 0};
-        for (int k = 0; k < count; k++) {
-            size_t b;
-            int t, f, x, y;
-            texel_of_key(s, keys[k], &b, &t);
-            block_texel(s, b, t, &f, &x, &y);
-            next_lane(&trial, f, x, y);
-        }
+        for (int k = 0; k < count; k++) next_lane(&trial, s, keys[k]);
         if (trial.blocks > capacity) span = 0;
     }
     int blocks = (count + B - 1) / B;
