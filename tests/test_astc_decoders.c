@@ -106,7 +106,10 @@ static void reuse_matches_fresh(void **state)
         assert_true(held >= 8 * DECODER_BYTES);                     /* at least one per footprint */
         assert_true(held <= 8 * (uint64_t)threads * DECODER_BYTES + MiB); /* + the list itself */
         for (int i = 0; i < 8; i++) decode_and_compare(ctx, c, i);
-        assert_int_equal(ibl_context_current_bytes(ctx), held);     /* reused, none built */
+        /* on one thread every decoder is reused and none is built; on more, a footprint whose
+         * bands first overlap in this round may build one more, never past the bound */
+        if (threads == 1) assert_int_equal(ibl_context_current_bytes(ctx), held);
+        assert_true(ibl_context_current_bytes(ctx) <= 8 * (uint64_t)threads * DECODER_BYTES + MiB);
         ibl_context_destroy(ctx);
     }
 }
