@@ -29,7 +29,7 @@ typedef struct product_job {
     /* the weights and their vectors' cells at hand: from base weight_origin on */
     const uint16_t *weights, *cells;
     size_t weight_origin;
-    int first_row;  /* the task index's base row: first_row + index */
+    int first_row, rows; /* the loop's base rows: first_row .. first_row + rows - 1 */
 } product_job;
 
 /* Face f's padded source (3 planes), then its transpose (3 more). */
@@ -118,16 +118,18 @@ static void product_at(const product_job *j, size_t base, int transposed, int fl
     for (int ch = 0; ch < 3; ch++) o[ch] = (float)(o[ch] + s[ch]);
 }
 
-/* Row b = j->first_row + index of base texels (a, b), a <= b, into the images of face j->face:
- * each base's own four flips at (a, b), and for a < b its mirror's at (b, a) (the reflection
- * x <-> y: the same weights on the transposed source, flips swapped), so that a row needs the
- * weights of its own bases only. Image by image, so that the source rows under the row's windows
- * stay in L1 while the row's weights stream from L2 (base by base, every base re-read its windows
- * from L2: measured 1.6x slower). Every grid point gets one product, as from any order. */
+/* Row b of base texels (a, b), a <= b, into the images of face j->face: each base's own four
+ * flips at (a, b), and for a < b its mirror's at (b, a) (the reflection x <-> y: the same
+ * weights on the transposed source, flips swapped), so that a row needs the weights of its own
+ * bases only. Row b holds 2b + 1 products, so the loop takes its rows from the last: the
+ * longest go first and each thread ends on a short one. Image by image, so that the source rows
+ * under the row's windows stay in L1 while the row's weights stream from L2 (base by base,
+ * every base re-read its windows from L2: measured 1.6x slower). Every grid point gets one
+ * product, as from any order. */
 static void product_row_task(void *arg, int index)
 {
     const product_job *j = arg;
-    int n = j->c->grid_edge, nb = j->c->base_edge, b = j->first_row + index;
+    int n = j->c->grid_edge, nb = j->c->base_edge, b = j->first_row + j->rows - 1 - index;
     for (int fy = 0; fy < 2; fy++)
         for (int fx = 0; fx < 2; fx++) {
             int y = fy ? n - 1 - b : b;
@@ -162,8 +164,8 @@ static void products_kept(ibl_specular_plan *p, product_job *job)
     job->weights = c->weights, job->cells = c->vector_cells, job->weight_origin = 0;
     for (job->face = 0; job->face < 6; job->face++) {
         padded_face(p, job);
-        job->first_row = 0;
-        ibl_parallel_for(p->ctx, c->base_edge, product_row_task, job);
+        job->first_row = 0, job->rows = c->base_edge;
+        ibl_parallel_for(p->ctx, job->rows, product_row_task, job);
     }
 }
 
@@ -232,9 +234,9 @@ static ibl_status products_batched(ibl_specular_plan *p, int level, int k, produ
             for (r1 = r0 + 1; r1 < nb && c->first_weight[(r1 + 1) * nb] - c->first_weight[r0 * nb] <= cap;) r1++;
             ibl__fast_precomputed_weights(p, level, k, geometry, r0 * nb, r1 * nb, weights, cells);
             job->weight_origin = c->first_weight[r0 * nb];
-            job->first_row = (int)r0;
+            job->first_row = (int)r0, job->rows = (int)(r1 - r0);
             for (job->face = 0; job->face < 6; job->face++)
-                ibl_parallel_for(ctx, (int)(r1 - r0), product_row_task, job);
+                ibl_parallel_for(ctx, job->rows, product_row_task, job);
         }
     }
     ibl_free(ctx, cells);
@@ -250,7 +252,7 @@ ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap
     for (int k = 0; k < lv->piece_count; k++) {
         const precomputed_piece *c = lv->pieces[k].precomputed;
         if (!c) continue;
-        product_job job = {p, c, src, lv->grids[lv->pieces[k].grid].sums, 0, NULL, 0, NULL, NULL, 0, 0};
+        product_job job = {p, c, src, lv->grids[lv->pieces[k].grid].sums, 0, NULL, 0, NULL, NULL, 0, 0, 0};
         if (c->weights) {
             products_kept(p, &job);
             continue;
