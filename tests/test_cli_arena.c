@@ -180,6 +180,58 @@ static void fresh_blocks_are_untouched(void **state)
 #endif
 }
 
+/* A freed block gives back only the whole 2 MiB pages inside it: the pages at its ends that
+ * share a 2 MiB page with a block in use stay (dropping part of a huge page splits it, and the
+ * range then faults 4 KiB at a time). 2 MiB is the arena's alignment and the huge page size
+ * on x86-64; with 4 KiB pages only, the same bytes stay and go. */
+static void release_keeps_shared_huge_pages(void **state)
+{
+    (void)state;
+#if defined(__SANITIZE_ADDRESS__)
+    skip();
+#else
+    const size_t MB = (size_t)1 << 20, huge = 2 * MB, KB64 = (size_t)64 << 10;
+    /* a block whose start and end fall inside 2 MiB pages shared with its used neighbours:
+     * after a 1 MiB + 64 KiB neighbour, whatever the arena's top was, one of the two ends is
+     * off a 2 MiB boundary; 9 MiB + 64 KiB holds at least three whole 2 MiB pages */
+    unsigned char *before = cli_arena_alloc(MB + KB64, NULL);
+    unsigned char *x = cli_arena_alloc(9 * MB + KB64, NULL);
+    unsigned char *after = cli_arena_alloc(MB, NULL);
+    assert_non_null(before);
+    assert_non_null(x);
+    assert_non_null(after);
+    size_t n = 9 * MB + KB64;
+    memset(before, 1, MB + KB64);
+    memset(x, 2, n);
+    memset(after, 3, MB);
+    unsigned char *from = (unsigned char *)(((uintptr_t)x + huge - 1) & ~(uintptr_t)(huge - 1));
+    unsigned char *to = (unsigned char *)(((uintptr_t)x + n) & ~(uintptr_t)(huge - 1));
+    assert_true(to - from >= (ptrdiff_t)(3 * huge));
+    assert_true(from > x || to < x + n);
+    cli_arena_free(x, NULL);
+    /* a request larger than every free block: the free blocks' whole 2 MiB pages go back */
+    const size_t large = (size_t)2 << 30;
+    unsigned char *fresh = cli_arena_alloc(large, NULL);
+    assert_non_null(fresh);
+    assert_int_equal(resident_bytes(from, (size_t)(to - from)), 0);
+    assert_int_equal(resident_bytes(x, (size_t)(from - x)), (size_t)(from - x));
+    assert_int_equal(resident_bytes(to, (size_t)(x + n - to)), (size_t)(x + n - to));
+    /* the kept ends are paged free blocks: a request they fit reuses one, with its bytes */
+    size_t head = (size_t)(from - x), tail = (size_t)(x + n - to);
+    if (head >= KB64) {
+        unsigned char *again = cli_arena_alloc(head, NULL);
+        assert_ptr_equal(again, x);
+        assert_true(again[0] == 2 && again[head - 1] == 2);
+        cli_arena_free(again, NULL);
+    } else {
+        assert_true(tail >= KB64);
+    }
+    cli_arena_free(fresh, NULL);
+    cli_arena_free(before, NULL);
+    cli_arena_free(after, NULL);
+#endif
+}
+
 static void *churn(void *arg)
 {
     unsigned seed = (unsigned)(uintptr_t)arg;
@@ -218,6 +270,7 @@ int main(void)
         cmocka_unit_test(freed_blocks_are_reused), /* first: on a fresh arena, addresses are known */
         cmocka_unit_test(fresh_blocks_are_untouched),
         cmocka_unit_test(freed_memory_goes_back), /* after those two only: 40 MiB freed so far */
+        cmocka_unit_test(release_keeps_shared_huge_pages),
         cmocka_unit_test(blocks_are_disjoint),
         cmocka_unit_test(threads_share_it),
     };
