@@ -1,6 +1,9 @@
 #include "input.h"
 
 #include <math.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -69,6 +72,13 @@ int cli_read_input_texture(ibl_context *ctx, const cli_common *c, const char *pa
     ibl_read_desc rd = {.clamp_infinite = c->clamp};
     ibl_file_info info;
     ibl_status st = ibl_read_texture(ctx, path, &rd, tex, &info);
+#if defined(__GLIBC__)
+    /* OpenEXR's decoders allocate with malloc (3 chunks a reader, one reader a thread: 19 MB
+     * for a 1024x512 DWAB file on two threads) and free it all, but glibc keeps the pages of
+     * its heaps for later mallocs that a command, whose large blocks come from cli/arena.c,
+     * never makes: 3.4 MB of the 256 chain's peak RSS on one thread, 6.9 MB on two. */
+    malloc_trim(0);
+#endif
     if (st != IBL_OK) {
         cli_error("%s", ibl_context_message(ctx));
         return cli_exit_code(st) == CLI_EXIT_USAGE ? CLI_EXIT_BAD_INPUT : cli_exit_code(st);

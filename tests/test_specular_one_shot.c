@@ -170,7 +170,13 @@ static uint64_t peak_bytes(const ibl_cubemap *src, const ibl_specular_desc *desc
 /* The 256 GGX chain from city.exr on a 256 source. Measured when written: the reusable plan
  * peaks at 46.7 MB (every coarse level's records next to every piece's weights and the chain),
  * the one-shot prefilter at 32.3 MB (0.69). The bar, 0.8 of the reusable plan's peak, fails if
- * the one-shot plan comes to hold its weights or its pyramid's records through the run again. */
+ * the one-shot plan comes to hold its weights or its pyramid's records through the run again.
+ * And a bar of its own: `ibl prefilter IN.exr --size 256` of a 1024x512 image is held to
+ * 3 x (the image in float RGBA + the chain in float RGBA) = 50 MB of peak RSS, of which the
+ * process itself takes 5.5 MB (`ibl --version`) and the 256 source cube 6.3 MB; the count
+ * here is exact (the blocks' sizes; the same at every run on two threads), so 35 MB leaves
+ * the command under 47 MB with the arena's rounding, and fails if the run comes to hold
+ * 2.7 MB more at its peak. */
 static void one_shot_peak_is_lower(void **state)
 {
     (void)state;
@@ -184,6 +190,7 @@ static void one_shot_peak_is_lower(void **state)
     printf("  256 GGX chain: reusable plan peak %.1f MB, one-shot %.1f MB\n", reusable / 1e6,
            once / 1e6);
     assert_true((double)once < 0.8 * (double)reusable);
+    assert_true(once <= 35000000u);
     ibl_cubemap_free(ctx, &src);
     ibl_context_destroy(ctx);
 }
