@@ -73,10 +73,11 @@ int cli_read_input_texture(ibl_context *ctx, const cli_common *c, const char *pa
     ibl_file_info info;
     ibl_status st = ibl_read_texture(ctx, path, &rd, tex, &info);
 #if defined(__GLIBC__)
-    /* OpenEXR's decoders allocate with malloc (3 chunks a reader, one reader a thread: 19 MB
-     * for a 1024x512 DWAB file on two threads) and free it all, but glibc keeps the pages of
-     * its heaps for later mallocs that a command, whose large blocks come from cli/arena.c,
-     * never makes: 3.4 MB of the 256 chain's peak RSS on one thread, 6.9 MB on two. */
+    /* OpenEXR's decoders allocate with malloc (about three chunks a reader, one reader a
+     * thread: 19 MB at the peak for a 1024x512 DWAB file on two threads) and free it all, but
+     * glibc keeps the pages of its heaps for later mallocs that a command, whose large blocks
+     * come from cli/arena.c, never makes: 3.5 MB of the 256 GGX chain's peak RSS on one thread,
+     * 6.9 MB on two (docs/PERFORMANCE.md "At large sizes"). */
     malloc_trim(0);
 #endif
     if (st != IBL_OK) {

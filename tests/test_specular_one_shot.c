@@ -171,12 +171,13 @@ static uint64_t peak_bytes(const ibl_cubemap *src, const ibl_specular_desc *desc
  * peaks at 46.7 MB (every coarse level's records next to every piece's weights and the chain),
  * the one-shot prefilter at 32.3 MB (0.69). The bar, 0.8 of the reusable plan's peak, fails if
  * the one-shot plan comes to hold its weights or its pyramid's records through the run again.
- * And a bar of its own: `ibl prefilter IN.exr --size 256` of a 1024x512 image is held to
- * 3 x (the image in float RGBA + the chain in float RGBA) = 50 MB of peak RSS, of which the
- * process itself takes 5.5 MB (`ibl --version`) and the 256 source cube 6.3 MB; the count
- * here is exact (the blocks' sizes; the same at every run on two threads), so 35 MB leaves
- * the command under 47 MB with the arena's rounding, and fails if the run comes to hold
- * 2.7 MB more at its peak. */
+ * And a bar of its own, on the count (exact: the blocks' sizes, the same at every run): the
+ * command `ibl prefilter city.exr --size 256` is held to 47 MB of peak RSS, 3 MB under its
+ * bound of 3 x (the 1024x512 image in float RGBA + the chain in float RGBA) = 50 MB. It peaks
+ * at 46.5 MB (docs/PERFORMANCE.md "At large sizes"): this count (32.3 MB) plus the source cube
+ * (6.3 MB), the process (5.5 MB: `ibl --version`) and the arena's free ends of 2 MiB pages.
+ * So the count may grow by 0.4 MB at most: 32.75 MB, which fails if the run comes to hold one
+ * more buffer at its peak. */
 static void one_shot_peak_is_lower(void **state)
 {
     (void)state;
@@ -187,10 +188,10 @@ static void one_shot_peak_is_lower(void **state)
     read_source(ctx, &c, &d, c.size, &src);
     assert_int_equal(src.size, 256);
     uint64_t reusable = peak_bytes(&src, &d, 0), once = peak_bytes(&src, &d, 1);
-    printf("  256 GGX chain: reusable plan peak %.1f MB, one-shot %.1f MB\n", reusable / 1e6,
+    printf("  256 GGX chain: reusable plan peak %.3f MB, one-shot %.3f MB\n", reusable / 1e6,
            once / 1e6);
     assert_true((double)once < 0.8 * (double)reusable);
-    assert_true(once <= 35000000u);
+    assert_true(once <= 32750000u);
     ibl_cubemap_free(ctx, &src);
     ibl_context_destroy(ctx);
 }
