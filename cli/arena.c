@@ -31,20 +31,21 @@
  * library's ibl_alloc keeps no header in its large blocks either (src/core/context.c): the
  * blocks this returns from the arena start on a page boundary, which is what it asks of them.
  *
- * Kept, but never beside fresh memory: a free block either still has its pages ("paged": it
- * was freed after use) or had them dropped (madvise MADV_DONTNEED: the address range stays
- * reserved, the pages go at once; a later use faults in zeroed ones; only the whole 2 MiB pages
- * inside the block go, see arena_release), and free neighbours merge
- * only with their own kind, so what reusing a block costs is known. A request takes the best
- * paged block that fits; only when none does, and it is about to fault in fresh pages (a block
- * without pages, or address space from the arena's top), are the largest paged blocks given
- * back first, as many bytes as it takes. So the RSS never grows while freed pages sit idle, the
- * peak is the most the command has in use at once (plus the paged blocks too small for
- * anything), and freed memory that a later request fits is reused with its pages: giving back
- * the 1024 chain's freed working buffers before the output chain was allocated made the chain
- * fault 95 MB in again, and the 2048 chain ~1.9 GB (bench/bench_stages.c shows each stage's
- * faults). A block of both kinds in one would hide where its pages are: reusing it could fault
- * in fresh pages while paged ones sit idle elsewhere in it.
+ * Kept, but never beside fresh memory: a free block either still has pages ("paged": its user
+ * wrote some of it) or has none (never written, or dropped with madvise MADV_DONTNEED: the
+ * address range stays reserved, the pages go at once; a later use faults in zeroed ones; only
+ * the whole 2 MiB pages inside the block go, see arena_release), and free neighbours merge
+ * only with their own kind. Which pages a block holds is the kernel's count (mincore), not its
+ * size: buffers sized for the worst case (gathered records, bright blocks) are often mostly
+ * unwritten, and counting them whole let the 256 GGX chain's output fault in 6.3 MB of fresh
+ * pages beside 20 MB of idle freed ones. A request takes the best paged block that fits;
+ * whatever part of its bytes has no pages (all of them for a block without pages or address
+ * space from the arena's top) is faulted in fresh, so first the free blocks with the most
+ * pages are given back, as many resident bytes as that. So the RSS never grows while freed
+ * pages sit idle, the peak is about the most the command has in use at once, and freed memory
+ * that a later request fits is reused with its pages: giving back the 1024 chain's freed
+ * working buffers before the output chain was allocated made the chain fault 95 MB in again,
+ * and the 2048 chain ~1.9 GB (bench/bench_stages.c shows each stage's faults).
  *
  * One mutex: the library allocates from its worker threads as well, but rarely (a few hundred
  * calls per command, a few dozen blocks alive at once, so the lists are searched in order). */
@@ -141,6 +142,23 @@ static span *merge_free(span *s)
     return s;
 }
 
+/* Bytes of [p, p + n) whose pages are in memory (mincore; p and n on page boundaries). A
+ * block freed after use holds the pages its user wrote, which may be few of its bytes. */
+static size_t resident_bytes(const char *p, size_t n)
+{
+    enum { PAGE = 4096, BATCH = 4096 };
+    unsigned char vec[BATCH];
+    size_t count = 0;
+    for (size_t done = 0; done < n;) {
+        size_t bytes = n - done < (size_t)BATCH * PAGE ? n - done : (size_t)BATCH * PAGE;
+        /* (mincore fails only for a range not mapped: never the arena's; then count it all) */
+        if (mincore((void *)(p + done), bytes, vec) != 0) return count * PAGE + (n - done);
+        for (size_t i = 0; i < bytes / PAGE; i++) count += vec[i] & 1;
+        done += bytes;
+    }
+    return count * PAGE;
+}
+
 /* The whole huge pages (ARENA_ALIGN bytes, on their boundaries) inside block s: [*from, *to),
  * empty when it holds none. */
 static void whole_pages(const span *s, char **from, char **to)
@@ -151,19 +169,21 @@ static void whole_pages(const span *s, char **from, char **to)
     if (*to < *from) *to = *from;
 }
 
-/* Drops the pages of the whole huge pages inside the paged free block s: the bytes dropped (0
- * if none). Only whole ones: dropping part of a huge page makes the kernel split it into 4 KiB
- * pages, and its range then faults 4 KiB at a time (512 faults where one did) for as long as
- * the process lives. So the few pages at a block's ends that share a huge page with its
- * neighbours stay, as paged free blocks of their own. Seen in the 512 GGX chain on two threads,
- * where the order in which the workers allocate moves blocks: level 1's weights landed on such
- * split pages and took ~2,200 faults more than on one thread. */
+/* Drops the pages of the whole huge pages inside the paged free block s: how many of their
+ * bytes were in memory (0 if none, or if it failed). Only whole ones: dropping part of a huge
+ * page makes the kernel split it into 4 KiB pages, and its range then faults 4 KiB at a time
+ * (512 faults where one did) for as long as the process lives. So the few pages at a block's
+ * ends that share a huge page with its neighbours stay, as paged free blocks of their own.
+ * Seen in the 512 GGX chain on two threads, where the order in which the workers allocate
+ * moves blocks: level 1's weights landed on such split pages and took ~2,200 faults more than
+ * on one thread. */
 static size_t arena_release(span *s)
 {
     char *from, *to;
     whole_pages(s, &from, &to);
     if (from == to) return 0;
     char *end = s->start + s->size;
+    size_t resident = resident_bytes(from, (size_t)(to - from));
     /* the records first, so that a failure leaves the block as it was */
     span *head = NULL, *tail = NULL;
     if (from > s->start && !(head = malloc(sizeof *head))) return 0;
@@ -191,12 +211,13 @@ static size_t arena_release(span *s)
     arena.kept -= (size_t)(to - from);
     s->paged = 0;
     merge_free(s);
-    return (size_t)(to - from);
+    return resident;
 }
 
-/* Before `fresh` bytes without pages are handed out: gives back the paged free blocks with the
- * most whole huge pages until that many are gone (or none are left), so the RSS does not grow
- * while they sit idle. */
+/* Before `fresh` bytes are faulted in: gives back the paged free blocks with the most pages in
+ * memory inside their whole huge pages until that many resident bytes are gone (or none are
+ * left), so the RSS does not grow while freed pages sit idle. A paged block found to hold no
+ * pages at all becomes one of the blocks without pages. */
 static void arena_release_for(size_t fresh)
 {
     size_t released = 0;
@@ -205,9 +226,16 @@ static void arena_release_for(size_t fresh)
         size_t most_bytes = 0;
         for (span *s = arena.first; s; s = s->next) {
             if (s->used || !s->paged) continue;
+            if (resident_bytes(s->start, s->size) == 0) {
+                arena.kept -= s->size;
+                s->paged = 0;
+                s = merge_free(s); /* with its own kind only: never `most`, a paged block */
+                continue;
+            }
             char *from, *to;
             whole_pages(s, &from, &to);
-            if ((size_t)(to - from) > most_bytes) most = s, most_bytes = (size_t)(to - from);
+            size_t bytes = resident_bytes(from, (size_t)(to - from));
+            if (bytes > most_bytes) most = s, most_bytes = bytes;
         }
         if (!most) break;
         size_t bytes = arena_release(most);
@@ -243,12 +271,18 @@ static span *take_from(span *b, size_t size)
 }
 
 /* A block of `size` bytes (a multiple of ARENA_MIN) from the arena, or NULL: a paged free block
- * if one fits; otherwise, once as many paged bytes are given back, a free block without pages,
- * or fresh address space from the arena's top. */
+ * if one fits, otherwise a free block without pages or fresh address space from the arena's
+ * top. As many resident bytes of other free blocks as it has bytes without pages are given
+ * back first. */
 static span *arena_take(size_t size)
 {
     span *b = best_fit(size, 1);
-    if (b) return take_from(b, size);
+    if (b) {
+        b = take_from(b, size); /* in use now: not one of the blocks given back */
+        size_t fresh = size - resident_bytes(b->start, size);
+        if (fresh) arena_release_for(fresh);
+        return b;
+    }
     arena_release_for(size);
     b = best_fit(size, 0);
     if (b) return take_from(b, size);
@@ -271,8 +305,8 @@ static void arena_give(char *p)
     while (s && s->start != p) s = s->prev;
     if (!s || !s->used) return;
     s->used = 0;
-    s->paged = 1; /* it was in use: every page may have been touched */
-    arena.kept += s->size;
+    s->paged = resident_bytes(s->start, s->size) > 0; /* the pages its user wrote, if any */
+    if (s->paged) arena.kept += s->size;
     merge_free(s);
 }
 

@@ -1,6 +1,7 @@
 /* The CLI's allocator (cli/arena.c): blocks are usable, aligned and disjoint; freed arena
  * blocks are reused best-fit, split and merged; a fresh block is handed out untouched; freed
- * memory beyond 256 MiB goes back to the kernel; it is safe from several threads. */
+ * memory goes back to the kernel, as many resident bytes as a request faults in fresh; it is
+ * safe from several threads. */
 #define _DEFAULT_SOURCE /* mincore */
 #include "test_support.h"
 
@@ -11,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 /* a byte every 4093 and the last one (when it is not one of those) */
@@ -232,6 +234,47 @@ static void release_keeps_shared_huge_pages(void **state)
 #endif
 }
 
+/* A freed block holds the pages its user wrote, which may be few of its bytes: a request that
+ * takes such a block faults the rest in fresh, so as many resident bytes of other free blocks
+ * go back first (counting the partly written block whole kept them, and the RSS grew). Run in
+ * a child process, on an arena of its own whose layout is known: one used block apart, the
+ * two free blocks cannot merge. */
+static int partly_written_child(void)
+{
+    const size_t MB = (size_t)1 << 20;
+    unsigned char *dense = cli_arena_alloc(16 * MB, NULL);
+    unsigned char *fence = cli_arena_alloc(2 * MB, NULL);
+    unsigned char *sparse = cli_arena_alloc(64 * MB, NULL);
+    if (!dense || !fence || !sparse) return 1;
+    memset(dense, 2, 16 * MB);
+    memset(sparse, 1, 4 * MB); /* a buffer sized for the worst case, 4 MiB of it written */
+    cli_arena_free(dense, NULL);
+    cli_arena_free(sparse, NULL);
+    if (resident_bytes(dense, 16 * MB) != 16 * MB) return 2;
+    /* only the sparse block fits: 44 MiB of the 48 are fresh, so the dense block goes back */
+    unsigned char *big = cli_arena_alloc(48 * MB, NULL);
+    if (big != sparse) return 3;
+    if (resident_bytes(dense, 16 * MB) != 0) return 4;
+    if (resident_bytes(big, 4 * MB) != 4 * MB || big[4 * MB - 1] != 1) return 5; /* kept */
+    return 0;
+}
+
+static void partly_written_blocks_count_their_pages(void **state)
+{
+    (void)state;
+#if defined(__SANITIZE_ADDRESS__)
+    skip();
+#else
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (child == 0) _exit(partly_written_child());
+    int status = 0;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    assert_true(WIFEXITED(status));
+    assert_int_equal(WEXITSTATUS(status), 0);
+#endif
+}
+
 static void *churn(void *arg)
 {
     unsigned seed = (unsigned)(uintptr_t)arg;
@@ -267,7 +310,10 @@ static void threads_share_it(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(freed_blocks_are_reused), /* first: on a fresh arena, addresses are known */
+        /* first: its child process starts from the arena untouched */
+        cmocka_unit_test(partly_written_blocks_count_their_pages),
+        /* first in this process: on a fresh arena, addresses are known */
+        cmocka_unit_test(freed_blocks_are_reused),
         cmocka_unit_test(fresh_blocks_are_untouched),
         cmocka_unit_test(freed_memory_goes_back), /* after those two only: 40 MiB freed so far */
         cmocka_unit_test(release_keeps_shared_huge_pages),

@@ -174,10 +174,11 @@ static uint64_t peak_bytes(const ibl_cubemap *src, const ibl_specular_desc *desc
  * And a bar of its own, on the count (exact: the blocks' sizes, the same at every run): the
  * command `ibl prefilter city.exr --size 256` is held to 47 MB of peak RSS, 3 MB under its
  * bound of 3 x (the 1024x512 image in float RGBA + the chain in float RGBA) = 50 MB. It peaks
- * at 46.5 MB (docs/PERFORMANCE.md "At large sizes"): this count (32.3 MB) plus the source cube
- * (6.3 MB), the process (5.5 MB: `ibl --version`) and the arena's free ends of 2 MiB pages.
- * So the count may grow by 0.4 MB at most: 32.75 MB, which fails if the run comes to hold one
- * more buffer at its peak. */
+ * at 46 MB (docs/PERFORMANCE.md "At large sizes"): this count (31.7 MB) plus the source cube
+ * (6.3 MB), the process (5.5 MB: `ibl --version`) and what the CLI's arena keeps in 2 MiB
+ * pages shared by live blocks and free ones. So the count may grow by 0.9 MB at most: 32.6 MB,
+ * which fails if the run comes to hold one more buffer of that size at its peak. (The RSS also
+ * depends on where the arena puts the blocks; cli/arena.c and test_cli_arena keep that part.) */
 static void one_shot_peak_is_lower(void **state)
 {
     (void)state;
@@ -191,7 +192,7 @@ static void one_shot_peak_is_lower(void **state)
     printf("  256 GGX chain: reusable plan peak %.3f MB, one-shot %.3f MB\n", reusable / 1e6,
            once / 1e6);
     assert_true((double)once < 0.8 * (double)reusable);
-    assert_true(once <= 32750000u);
+    assert_true(once <= 32600000u);
     ibl_cubemap_free(ctx, &src);
     ibl_context_destroy(ctx);
 }

@@ -98,7 +98,8 @@ static ibl_status run_buffers(ibl_specular_plan *p)
             if (c->source_level == 0) continue;
             source_level *s = &p->pyramid[c->source_level];
             float **image = c->without_bright ? &s->uniform_not_bright : &s->uniform;
-            if (!*image && !(*image = ibl_alloc(ctx, (size_t)6 * s->edge * s->edge * 4 * sizeof(float))))
+            size_t floats = (size_t)6 * s->edge * s->edge * UNIFORM_CHANNELS;
+            if (!*image && !(*image = ibl_alloc(ctx, floats * sizeof(float))))
                 return ibl_context_status(ctx);
         }
     if (padded && !(p->padded_source = ibl_alloc(ctx, padded * sizeof(float))))

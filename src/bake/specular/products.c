@@ -53,15 +53,16 @@ static void padded_row_task(void *arg, int row)
      * centroid correction left out (their moment leaves are summed instead) */
     const float *face[6];
     const float *uniform = c->without_bright ? s->uniform_not_bright : s->uniform;
+    int n = c->source_level == 0 ? 4 : UNIFORM_CHANNELS; /* floats a texel */
     for (int g = 0; g < 6; g++)
-        face[g] = c->source_level == 0 ? ibl_cubemap_face(j->src, 0, g) : uniform + (size_t)g * S * S * 4;
+        face[g] = c->source_level == 0 ? ibl_cubemap_face(j->src, 0, g) : uniform + (size_t)g * S * S * n;
     int corrected = c->source_level > 0 && c->correction_block_count > 0 && !c->correction_difference;
     /* inside the face itself the padded source is the face: copied by rows */
     int y = row - c->origin, inside = y >= 0 && y < S;
     if (inside) {
-        const float *v = face[f] + (size_t)y * S * 4;
+        const float *v = face[f] + (size_t)y * S * n;
         float *o = out + c->origin;
-        for (int x = 0; x < S; x++) o[x] = v[4 * x], o[plane + x] = v[4 * x + 1], o[2 * plane + x] = v[4 * x + 2];
+        for (int x = 0; x < S; x++) o[x] = v[n * x], o[plane + x] = v[n * x + 1], o[2 * plane + x] = v[n * x + 2];
         for (int x = 0; corrected && x < S; x++)
             if (texel_corrected(c, s, f, x, y)) o[x] = o[plane + x] = o[2 * plane + x] = 0.0f;
     }
@@ -82,7 +83,7 @@ static void padded_row_task(void *arg, int row)
             out[X] = out[plane + X] = out[2 * plane + X] = 0.0f;
             continue;
         }
-        const float *v = face[g] + ((size_t)yy * S + x) * 4;
+        const float *v = face[g] + ((size_t)yy * S + x) * n;
         out[X] = v[0], out[plane + X] = v[1], out[2 * plane + X] = v[2];
     }
 }

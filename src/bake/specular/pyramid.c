@@ -252,16 +252,12 @@ static void uniform_row(const source_level *s, const source_level *recs, int row
         float om = s->first_field ? s->geometry[((size_t)y * M + x) * GEOMETRY_FIELDS + FIELD_SOLID_ANGLE]
                                   : s->records[record_index(s, f, x, y, FIELD_SOLID_ANGLE)];
         float inv = om > 0 ? 1.0f / om : 0.0f;
-        size_t o = (((size_t)f * M + y) * M + x) * 4;
-        if (s->uniform) {
+        size_t o = (((size_t)f * M + y) * M + x) * UNIFORM_CHANNELS;
+        if (s->uniform)
             for (int c = 0; c < 3; c++) s->uniform[o + c] = rec[c * BLOCK_TEXELS] * inv;
-            s->uniform[o + 3] = 0.0f;
-        }
-        if (s->uniform_not_bright) {
+        if (s->uniform_not_bright)
             for (int c = 0; c < 3; c++)
                 s->uniform_not_bright[o + c] = rec[(FIELD_POWER_NOT_BRIGHT - FIELD_POWER + c) * BLOCK_TEXELS] * inv;
-            s->uniform_not_bright[o + 3] = 0.0f;
-        }
     }
 }
 
