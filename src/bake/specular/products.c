@@ -217,7 +217,7 @@ static ibl_status products_batched(ibl_specular_plan *p, int level, int k, produ
         job->padded = padded, job->all_faces = 1;
         for (job->face = 0; job->face < 6; job->face++) padded_face(p, job);
         /* the level's uniform image is in the padded faces now: if nothing reads it after this
-         * piece, its memory (25 MB at the 1024 chain's level 1) goes to the weights */
+         * piece, its memory (19 MB at the 1024 chain's level 1) goes to the weights */
         source_level *s = &p->pyramid[c->source_level];
         if (c->source_level > 0 && p->one_shot && !uniform_read_later(p, level, k)) {
             float **image = c->without_bright ? &s->uniform_not_bright : &s->uniform;
