@@ -26,6 +26,19 @@
  * field is itself a dipole approximation good to ~1e-3 of the correction it carries. */
 #define PHONG_FAR_SERIES_MAX_U 0.1
 #define PHONG_FAR_SERIES_ERROR 1e-10
+/* A narrow Phong level's delta is summed on a grid of half the output's edge and read by
+ * GRID_TAPS-point Lagrange interpolation per axis (from GRID_TAP_OFFSET points before the one
+ * under the texel) where the taps lie on the texel's own face, when the grid's mean spacing is
+ * at most GRID_SPACING of the lobe's half width and the lobe is under GRID_PHONG_CULL of its
+ * peak long before the horizon (see refinement_grid_edge). */
+#define GRID_TAPS 6
+#define GRID_TAP_OFFSET 2
+#define GRID_BORDER 3
+/* The grid's points are culled against the groups four by four (its tiles of eight covered
+ * twice the output's area in reach). */
+#define GRID_TILE 4
+#define GRID_SPACING 0.6
+#define GRID_PHONG_CULL 1e-9
 
 typedef struct apply_job {
     const ibl_specular_sources *s;
@@ -40,6 +53,19 @@ typedef struct apply_job {
     int phong_far_series; /* a Phong far field by phong_far (its reach is inside the series') */
     /* a Phong near field: phong_near or its AVX2 twin */
     int (*near_sum)(const source_group *g, const double R[3], double x0, double n, double out[3]);
+    /* delta summed on a coarse grid of grid_edge points a face edge (refinement_grid_edge; 0:
+     * at every output texel): 6 grid_edge^2 x rgb, interpolated at the output texels */
+    int grid_edge;
+    double *grid;
+    /* the grid continued GRID_BORDER points beyond each face edge on the face's plane (so that
+     * every output texel's taps are on its own face's grid: delta is a function of direction,
+     * evaluated there as anywhere), grid_side = grid_edge + 2 GRID_BORDER points a face edge, in
+     * GRID_TILE tiles (grid_tiles a face edge), each marked live when a group reaches it */
+    int grid_side, grid_tiles;
+    unsigned char *grid_live;
+    /* every group's reach in one cone (unit centre, angle): a tile outside it is out of reach of
+     * every group, found with one test */
+    double all_centre[3], all_reach;
 } apply_job;
 
 static double angle_between(const double a[3], const double b[3])
@@ -123,12 +149,12 @@ static void phong_far(double n, double x, double f[2])
     f[1] = n * f[0] / x;
 }
 
-static void apply_tile(void *arg, int index)
+/* The groups in reach of the tile [x0, x1) x [y0, y1) of face `face` of an n-texel face (list,
+ * with the cosines of their near and far bounds); their count. */
+static int tile_groups(const apply_job *job, int face, int n, int x0, int y0, int x1, int y1,
+                       int *list, double *cos_near, double *cos_reach)
 {
-    const apply_job *job = arg;
     const ibl_specular_sources *s = job->s;
-    int n = job->n, T = job->tiles, face = index / (T * T), tx = index % T, ty = index / T % T;
-    int x0 = tx * TILE, y0 = ty * TILE, x1 = x0 + TILE < n ? x0 + TILE : n, y1 = y0 + TILE < n ? y0 + TILE : n;
     /* the tile's cone: its centre direction and the farthest corner */
     double c[3], q[3], radius = 0;
     ibl_cube_direction_d(face, 0.5 * (x0 + x1) / n, 0.5 * (y0 + y1) / n, c);
@@ -140,12 +166,13 @@ static void apply_tile(void *arg, int index)
         for (int m = 0; m < 3; m++) q[m] /= ql;
         radius = fmax(radius, angle_between(c, q));
     }
-    /* the groups in reach of the tile, with the cosines of their near and far bounds: a group
-     * is out of reach when the angle to it exceeds its reach angle plus the tile's radius, i.e.
-     * when c.centre < cos(reach angle + radius) (by the angle-sum rule, a little lower to stay
-     * conservative: the texels' own test below decides) */
-    int list[MAX_REGION_TEXELS], count = 0;
-    double cos_near[MAX_REGION_TEXELS], cos_reach[MAX_REGION_TEXELS];
+    /* a group is out of reach when the angle to it exceeds its reach angle plus the tile's
+     * radius, i.e. when c.centre < cos(reach angle + radius) (by the angle-sum rule, a little
+     * lower to stay conservative: the texels' own test decides) */
+    /* out of every group's reach at once (a margin of 1e-6 radians above the test below) */
+    double xa = c[0] * job->all_centre[0] + c[1] * job->all_centre[1] + c[2] * job->all_centre[2];
+    if (job->all_reach + radius + 1e-6 < IBL_PI && xa < cos(job->all_reach + radius + 1e-6)) return 0;
+    int count = 0;
     double cos_radius = cos(radius), sin_radius = sin(radius);
     for (int g = 0; g < s->groups; g++) {
         const source_group *gr = &s->group[g];
@@ -157,39 +184,153 @@ static void apply_tile(void *arg, int index)
         cos_reach[count] = job->cos_reach[g];
         list[count++] = g;
     }
-    if (!count) return;
+    return count;
+}
+
+/* delta(R) at the unit direction R from the tile's groups (times the normaliser: acc is the
+ * sum of f times the cells' weights). */
+static void direction_delta(const apply_job *job, const int *list, const double *cos_near,
+                            const double *cos_reach, int count, const double R[3], double acc[3])
+{
+    const ibl_specular_sources *s = job->s;
+    acc[0] = acc[1] = acc[2] = 0.0;
+    for (int i = 0; i < count; i++) {
+        const source_group *gr = &s->group[list[i]];
+        double xc = R[0] * gr->centre[0] + R[1] * gr->centre[1] + R[2] * gr->centre[2];
+        if (xc < cos_reach[i]) continue;
+        if (xc >= cos_near[i]) {
+            double near[3];
+            if (job->lobe.kind == IBL__LOBE_PHONG && xc > 0 && job->near_sum(gr, R, xc, job->lobe.n, near)) {
+                double fc = ibl__lobe_f(&job->lobe, xc);
+                for (int ch = 0; ch < 3; ch++) acc[ch] += fc * near[ch];
+                continue;
+            }
+            for (size_t k = 0; k < gr->count; k++) {
+                const double *d = gr->cell + k * 6, *w = d + 3;
+                double f = ibl__lobe_f(&job->lobe, R[0] * d[0] + R[1] * d[1] + R[2] * d[2]);
+                for (int ch = 0; ch < 3; ch++) acc[ch] += f * w[ch];
+            }
+            continue;
+        }
+        /* f(R.l) ~ f(x) + f'(x) R.(l - centre), x = R.centre */
+        double f[3];
+        if (job->phong_far_series) phong_far(job->lobe.n, xc, f);
+        else ibl__lobe_f012(&job->lobe, xc, f);
+        for (int ch = 0; ch < 3; ch++)
+            acc[ch] += f[0] * gr->energy[ch] +
+                       f[1] * (R[0] * gr->moment[ch][0] + R[1] * gr->moment[ch][1] + R[2] * gr->moment[ch][2]);
+    }
+}
+
+/* The unit direction of texel (x, y) of face `face` of an n-texel face. */
+static void texel_direction(int face, int n, int x, int y, double R[3])
+{
+    ibl_cube_direction_d(face, (x + 0.5) / n, (y + 0.5) / n, R);
+    double rl = sqrt(R[0] * R[0] + R[1] * R[1] + R[2] * R[2]);
+    for (int m = 0; m < 3; m++) R[m] /= rl;
+}
+
+/* The weights of the GRID_TAPS points at -1 - GRID_TAP_OFFSET .. GRID_TAPS - 1 - GRID_TAP_OFFSET
+ * around a position t in [0, 1) after point 0: Lagrange's polynomial through them. */
+static void lagrange_weights(double t, double w[GRID_TAPS])
+{
+    for (int k = 0; k < GRID_TAPS; k++) {
+        double wk = 1.0;
+        for (int j = 0; j < GRID_TAPS; j++)
+            if (j != k) wk *= (t - (double)(j - GRID_TAP_OFFSET)) / (double)(k - j);
+        w[k] = wk;
+    }
+}
+
+/* A tile of the level's coarse grid (job->grid_edge points a face edge, continued beyond the
+ * face's edges on its plane): delta at its points, into job->grid (zero where no group
+ * reaches). */
+static void grid_tile(void *arg, int index)
+{
+    const apply_job *job = arg;
+    int m = job->grid_edge, side = job->grid_side, T = job->grid_tiles;
+    int face = index / (T * T), tx = index % T, ty = index / T % T;
+    int X0 = tx * GRID_TILE, Y0 = ty * GRID_TILE;
+    int X1 = X0 + GRID_TILE < side ? X0 + GRID_TILE : side, Y1 = Y0 + GRID_TILE < side ? Y0 + GRID_TILE : side;
+    int list[MAX_REGION_TEXELS];
+    double cos_near[MAX_REGION_TEXELS], cos_reach[MAX_REGION_TEXELS];
+    int count = tile_groups(job, face, m, X0 - GRID_BORDER, Y0 - GRID_BORDER, X1 - GRID_BORDER,
+                            Y1 - GRID_BORDER, list, cos_near, cos_reach);
+    job->grid_live[index] = count > 0;
+    for (int Y = Y0; Y < Y1; Y++)
+        for (int X = X0; X < X1; X++) {
+            double R[3], acc[3] = {0, 0, 0};
+            if (count) {
+                texel_direction(face, m, X - GRID_BORDER, Y - GRID_BORDER, R);
+                direction_delta(job, list, cos_near, cos_reach, count, R, acc);
+            }
+            double *o = job->grid + (((size_t)face * side + Y) * side + X) * 3;
+            for (int ch = 0; ch < 3; ch++) o[ch] = acc[ch];
+        }
+}
+
+/* The first grid point (bordered coordinates) output texel x (of job->n) reads, and its
+ * position t after the point under it. */
+static int grid_first_tap(const apply_job *job, int x, double *t)
+{
+    double g = (x + 0.5) * job->grid_edge / job->n - 0.5;
+    int i = (int)floor(g);
+    *t = g - i;
+    return i - GRID_TAP_OFFSET + GRID_BORDER;
+}
+
+/* Whether any grid tile under the taps of the output tile [x0, x1) x [y0, y1) of `face` is
+ * live. */
+static int grid_tiles_live(const apply_job *job, int face, int x0, int y0, int x1, int y1)
+{
+    double t;
+    int T = job->grid_tiles;
+    int gx0 = grid_first_tap(job, x0, &t) / GRID_TILE, gx1 = (grid_first_tap(job, x1 - 1, &t) + GRID_TAPS - 1) / GRID_TILE;
+    int gy0 = grid_first_tap(job, y0, &t) / GRID_TILE, gy1 = (grid_first_tap(job, y1 - 1, &t) + GRID_TAPS - 1) / GRID_TILE;
+    for (int gy = gy0; gy <= gy1; gy++)
+        for (int gx = gx0; gx <= gx1; gx++)
+            if (job->grid_live[((size_t)face * T + gy) * T + gx]) return 1;
+    return 0;
+}
+
+/* delta at output texel (x, y) of `face` from the coarse grid, by GRID_TAPS-point Lagrange
+ * interpolation per axis on the face's own (bordered) grid. */
+static void grid_delta(const apply_job *job, int face, int x, int y, double acc[3])
+{
+    int side = job->grid_side;
+    double tx, ty, wx[GRID_TAPS], wy[GRID_TAPS];
+    int ix = grid_first_tap(job, x, &tx), iy = grid_first_tap(job, y, &ty);
+    lagrange_weights(tx, wx);
+    lagrange_weights(ty, wy);
+    acc[0] = acc[1] = acc[2] = 0.0;
+    for (int r = 0; r < GRID_TAPS; r++) {
+        const double *row = job->grid + (((size_t)face * side + iy + r) * side + ix) * 3;
+        double v[3] = {0, 0, 0};
+        for (int q = 0; q < GRID_TAPS; q++)
+            for (int ch = 0; ch < 3; ch++) v[ch] += wx[q] * row[3 * q + ch];
+        for (int ch = 0; ch < 3; ch++) acc[ch] += wy[r] * v[ch];
+    }
+}
+
+static void apply_tile(void *arg, int index)
+{
+    const apply_job *job = arg;
+    int n = job->n, T = job->tiles, face = index / (T * T), tx = index % T, ty = index / T % T;
+    int x0 = tx * TILE, y0 = ty * TILE, x1 = x0 + TILE < n ? x0 + TILE : n, y1 = y0 + TILE < n ? y0 + TILE : n;
+    int list[MAX_REGION_TEXELS], count = 0;
+    double cos_near[MAX_REGION_TEXELS], cos_reach[MAX_REGION_TEXELS];
+    if (job->grid ? !grid_tiles_live(job, face, x0, y0, x1, y1)
+                  : !(count = tile_groups(job, face, n, x0, y0, x1, y1, list, cos_near, cos_reach)))
+        return;
     for (int y = y0; y < y1; y++)
         for (int x = x0; x < x1; x++) {
-            double R[3], acc[3] = {0, 0, 0};
-            ibl_cube_direction_d(face, (x + 0.5) / n, (y + 0.5) / n, R);
-            double rl = sqrt(R[0] * R[0] + R[1] * R[1] + R[2] * R[2]);
-            for (int m = 0; m < 3; m++) R[m] /= rl;
-            for (int i = 0; i < count; i++) {
-                const source_group *gr = &s->group[list[i]];
-                double xc = R[0] * gr->centre[0] + R[1] * gr->centre[1] + R[2] * gr->centre[2];
-                if (xc < cos_reach[i]) continue;
-                if (xc >= cos_near[i]) {
-                    double near[3];
-                    if (job->lobe.kind == IBL__LOBE_PHONG && xc > 0 &&
-                        job->near_sum(gr, R, xc, job->lobe.n, near)) {
-                        double fc = ibl__lobe_f(&job->lobe, xc);
-                        for (int ch = 0; ch < 3; ch++) acc[ch] += fc * near[ch];
-                        continue;
-                    }
-                    for (size_t k = 0; k < gr->count; k++) {
-                        const double *d = gr->cell + k * 6, *w = d + 3;
-                        double f = ibl__lobe_f(&job->lobe, R[0] * d[0] + R[1] * d[1] + R[2] * d[2]);
-                        for (int ch = 0; ch < 3; ch++) acc[ch] += f * w[ch];
-                    }
-                    continue;
-                }
-                /* f(R.l) ~ f(x) + f'(x) R.(l - centre), x = R.centre */
-                double f[3];
-                if (job->phong_far_series) phong_far(job->lobe.n, xc, f);
-                else ibl__lobe_f012(&job->lobe, xc, f);
-                for (int ch = 0; ch < 3; ch++)
-                    acc[ch] += f[0] * gr->energy[ch] +
-                               f[1] * (R[0] * gr->moment[ch][0] + R[1] * gr->moment[ch][1] + R[2] * gr->moment[ch][2]);
+            double acc[3];
+            if (job->grid) {
+                grid_delta(job, face, x, y, acc);
+            } else {
+                double R[3];
+                texel_direction(face, n, x, y, R);
+                direction_delta(job, list, cos_near, cos_reach, count, R, acc);
             }
             float *p = ibl_cubemap_face(job->chain, job->level, face) + ((size_t)y * n + x) * 4;
             for (int ch = 0; ch < 3; ch++) {
@@ -197,6 +338,18 @@ static void apply_tile(void *arg, int index)
                 p[ch] = v > 0.0f ? v : 0.0f;
             }
         }
+}
+
+/* The edge of the coarse grid a level's delta is summed on (0: at the output texels): half the
+ * output's, for a Phong lobe nil before the horizon (delta is then a sum of cos^n lobes, as
+ * smooth as a Gaussian) whose half width is at least 1 / GRID_SPACING of the grid's mean
+ * spacing. */
+static int refinement_grid_edge(const ibl__lobe *lobe, int n)
+{
+    int m = n / 2;
+    if (lobe->kind != IBL__LOBE_PHONG || !(lobe->horizon < GRID_PHONG_CULL) || n % 2 || m < 2 * GRID_TAPS)
+        return 0;
+    return sqrt(4.0 * IBL_PI / 6.0) / m <= GRID_SPACING * lobe->half_angle ? m : 0;
 }
 
 ibl_status ibl_specular_sources_apply(const ibl_specular_sources *s, ibl_cubemap *chain)
@@ -229,6 +382,18 @@ ibl_status ibl_specular_sources_apply(const ibl_specular_sources *s, ibl_cubemap
             job.reach_angle[g] = gr->radius + job.reach;
             job.cos_tile[g] = cos(job.reach_angle[g]), job.sin_tile[g] = sin(job.reach_angle[g]);
         }
+        /* the cone of every group's reach: about their mean centre */
+        for (int g = 0; g < s->groups; g++)
+            for (int m = 0; m < 3; m++) job.all_centre[m] += s->group[g].centre[m];
+        double cl = sqrt(job.all_centre[0] * job.all_centre[0] + job.all_centre[1] * job.all_centre[1] +
+                         job.all_centre[2] * job.all_centre[2]);
+        job.all_reach = IBL_PI;
+        if (cl > 1e-6) {
+            job.all_reach = 0;
+            for (int m = 0; m < 3; m++) job.all_centre[m] /= cl;
+            for (int g = 0; g < s->groups; g++)
+                job.all_reach = fmax(job.all_reach, angle_between(job.all_centre, s->group[g].centre) + job.reach_angle[g]);
+        }
         double u_far = 1.0 - cos(fmin(widest, IBL_PI));
         job.phong_far_series = job.lobe.kind == IBL__LOBE_PHONG && u_far <= PHONG_FAR_SERIES_MAX_U &&
                                job.lobe.n * pow(u_far, 9.0) / 9.0 <= PHONG_FAR_SERIES_ERROR;
@@ -240,7 +405,23 @@ ibl_status ibl_specular_sources_apply(const ibl_specular_sources *s, ibl_cubemap
         job.level = l;
         job.n = ibl_level_size(chain->size, l);
         job.tiles = (job.n + TILE - 1) / TILE;
+        job.grid_edge = refinement_grid_edge(&job.lobe, job.n);
+        if (job.grid_edge) {
+            job.grid_side = job.grid_edge + 2 * GRID_BORDER;
+            job.grid_tiles = (job.grid_side + GRID_TILE - 1) / GRID_TILE;
+            size_t points = (size_t)6 * job.grid_side * job.grid_side;
+            job.grid = ibl_alloc(s->ctx, points * 3 * sizeof(double));
+            job.grid_live = ibl_alloc(s->ctx, (size_t)6 * job.grid_tiles * job.grid_tiles);
+            if (!job.grid || !job.grid_live) {
+                ibl_free(s->ctx, job.grid);
+                ibl_free(s->ctx, job.grid_live);
+                return ibl_context_status(s->ctx);
+            }
+            ibl_parallel_for(s->ctx, 6 * job.grid_tiles * job.grid_tiles, grid_tile, &job);
+        }
         ibl_parallel_for(s->ctx, 6 * job.tiles * job.tiles, apply_tile, &job);
+        ibl_free(s->ctx, job.grid);
+        ibl_free(s->ctx, job.grid_live);
     }
     return IBL_OK;
 }
