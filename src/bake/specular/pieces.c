@@ -202,8 +202,14 @@ static void place_core(const ibl_specular_plan *p, level_plan *lv, int output_ed
     int at_output = core_edge >= output_edge, edge = at_output ? output_edge : core_edge;
     pc->grid = grid_index(lv, edge, at_output, smooth && !at_output);
     /* a smooth core on the output texels is where its Lagrange grid would not divide them or
-     * would not be coarser: its corrections keep the bilinear rule */
-    if (correction_edge < edge) {
+     * would not be coarser: its corrections, in difference form, go on a Lagrange grid of half
+     * the output's edge when that is at most CORRECTION_GRID_SPACING_LAGRANGE half widths apart */
+    int half_edge = output_edge / 2;
+    if (smooth && at_output && output_edge % 2 == 0 && half_edge >= MIN_LAGRANGE_GRID_EDGE &&
+        texel_angle(half_edge) <= CORRECTION_GRID_SPACING_LAGRANGE * acc * lobe->half_angle) {
+        pc->has_correction_grid = 1;
+        pc->correction_grid = grid_index(lv, half_edge, 0, 1);
+    } else if (correction_edge < edge) {
         pc->has_correction_grid = 1;
         pc->correction_grid = grid_index(lv, correction_edge, 0, 0);
     }

@@ -71,6 +71,10 @@
  * (docs/SPECULAR.md "Accuracy"): that level went from 0.28% to 0.39% RMS at worst (interior)
  * and from 3.0% to 3.7% max (night); the other chains' grids are the same at 0.31 and 0.45. */
 #define CORE_GRID_SPACING_LAGRANGE 0.45
+/* The centroid corrections of a smooth Phong core on the output texels (its grid would not be
+ * coarser) are summed in difference form on a Lagrange grid of half the output's edge when it is
+ * at most this many half widths apart: the difference varies on the lobe's scale. */
+#define CORRECTION_GRID_SPACING_LAGRANGE 0.6
 /* Lagrange grids have at least 32 points a face edge: on 16 the face's own curvature (texels
  * 1.38 times the mean at its centre, 0.6 at its corners) cost phong level 3 of the 256 chain
  * (exponent 15.6) 0.2% RMS and up to 2.8% max. */
