@@ -268,38 +268,32 @@ static void suns_cut_by_texels(void **state)
     free(im.pixels);
 }
 
-/* chain_matches_input for a Phong chain whose two levels are both refined: exponents 2049
- * (cmft's first, 2.3 working texels a half width) and 250 (6.6): the sources' Phong near field
- * (summed in float from the group's centre, specular_sources.c) and its reach (the lobe's
- * 1e-12 cull). */
-static void phong_chain_matches_input(void **state)
+/* The two levels of a Phong chain of exponents table[0] and table[1] against the exact
+ * integral: RMS and max of each level, with the refinement and without it (the working cube
+ * alone). */
+static void phong_levels_error(const float table[2], double rms[2], double max[2],
+                               double plain_rms[2])
 {
-    (void)state;
     ibl_image im;
     make_image(&im);
     ibl_context *ctx = context(2);
     ibl_to_cube_desc conv = {.layout = IBL_LAYOUT_EQUIRECT, .size = SIZE};
     ibl_specular_desc desc = {.size = SIZE, .filter = IBL_FILTER_PHONG, .mapping = IBL_MAPPING_TABLE,
-                              .levels = 2, .table = (const float[]){2049.0f, 250.0f}, .table_count = 2};
+                              .levels = 2, .table = table, .table_count = 2};
     ibl_cubemap chain, plain, working;
     assert_int_equal(ibl_specular_prefilter_image(ctx, &im, &conv, &desc, &chain, NULL), IBL_OK);
     assert_int_equal(ibl_image_to_cubemap(ctx, &im, &conv, &working), IBL_OK);
     assert_int_equal(ibl_specular_prefilter(ctx, &working, &desc, &plain, NULL), IBL_OK);
     centre_tables();
     for (int level = 0; level < 2; level++) {
-        test_lobe lobe = {1, 0, level == 0 ? 2049.0 : 250.0};
-        double rms, max, plain_rms, plain_max;
+        test_lobe lobe = {1, 0, table[level]};
+        double plain_max;
         /* (a quarter of the random samples: two levels, and the test stays quick under ASan) */
-        level_error(&im, &chain, level, &lobe, RANDOM_SAMPLES / 4, &rms, &max);
-        level_error(&im, &plain, level, &lobe, 0, &plain_rms, &plain_max);
+        level_error(&im, &chain, level, &lobe, RANDOM_SAMPLES / 4, &rms[level], &max[level]);
+        level_error(&im, &plain, level, &lobe, 0, &plain_rms[level], &plain_max);
         print_message("phong level %d (n %.0f): %.3f%% RMS, %.2f%% max; working cube alone %.3f%% / %.2f%%\n",
-                      level, lobe.n, 100 * rms, 100 * max, 100 * plain_rms, 100 * plain_max);
-        /* the bars of chain_matches_input: measured 0.044% RMS and 0.06% max at level 0,
-         * 0.009% and 0.06% at level 1; the working cube alone is 4.2% and 0.63% RMS there, so
-         * the last check fails if the refinement is switched off */
-        assert_true(rms < 0.005);
-        assert_true(max < 0.02);
-        assert_true(plain_rms > 0.005);
+                      level, lobe.n, 100 * rms[level], 100 * max[level], 100 * plain_rms[level],
+                      100 * plain_max);
     }
     assert_same_on_one_thread(&im, &conv, &desc, &chain);
     ibl_cubemap_free(ctx, &chain);
@@ -307,6 +301,44 @@ static void phong_chain_matches_input(void **state)
     ibl_cubemap_free(ctx, &working);
     ibl_context_destroy(ctx);
     free(im.pixels);
+}
+
+/* chain_matches_input for a Phong chain whose two levels are both refined at every output
+ * texel: exponents 2049 (cmft's first, 2.3 working texels a half width) and 250 (6.6): the
+ * sources' Phong near field (summed in float from the group's centre, specular_sources_apply.c)
+ * and its reach (the lobe's 1e-12 cull). */
+static void phong_chain_matches_input(void **state)
+{
+    (void)state;
+    double rms[2], max[2], plain_rms[2];
+    phong_levels_error((const float[]){2049.0f, 250.0f}, rms, max, plain_rms);
+    for (int level = 0; level < 2; level++) {
+        /* the bars of chain_matches_input: measured 0.044% RMS and 0.06% max at level 0,
+         * 0.009% and 0.06% at level 1; the working cube alone is 4.2% and 0.63% RMS there, so
+         * the last check fails if the refinement is switched off */
+        assert_true(rms[level] < 0.005);
+        assert_true(max[level] < 0.02);
+        assert_true(plain_rms[level] > 0.005);
+    }
+}
+
+/* The same where both levels' refinement is summed on a grid of half the output's edge and
+ * interpolated (specular_sources_apply.c, refinement_grid_edge): exponents 600 at 128 (4.3
+ * output texels a half width, the grid 0.47 half widths apart) and 200 at 64 (2.6; 0.54). */
+static void phong_grid_refinement_matches_input(void **state)
+{
+    (void)state;
+    double rms[2], max[2], plain_rms[2];
+    phong_levels_error((const float[]){600.0f, 200.0f}, rms, max, plain_rms);
+    for (int level = 0; level < 2; level++) {
+        /* the bars of chain_matches_input: measured 0.034% RMS and 0.05% max at level 0, 0.031%
+         * and 0.06% at level 1 (summed at every output texel: 0.025% / 0.04%, 0.027% / 0.06%);
+         * the working cube alone is 1.6% and 0.54% RMS, so the last check fails if the
+         * refinement is switched off */
+        assert_true(rms[level] < 0.005);
+        assert_true(max[level] < 0.02);
+        assert_true(plain_rms[level] > 0.005);
+    }
 }
 
 /* A round sun of 0.6 degrees across (pixels weighted by the share of their area inside it, as
@@ -405,6 +437,7 @@ int main(void)
         cmocka_unit_test(chain_matches_input),
         cmocka_unit_test(suns_cut_by_texels),
         cmocka_unit_test(phong_chain_matches_input),
+        cmocka_unit_test(phong_grid_refinement_matches_input),
         cmocka_unit_test(polar_suns_match_input),
         cmocka_unit_test(no_sources_where_not_needed),
     };
