@@ -210,11 +210,14 @@ static void lagrange_column(const row_sources *rs, int k, int c, float out[4])
 #endif
 }
 
+/* floor(g) for g >= -1 (a texel centre's grid position is at least -1/2), without a call. */
+static inline int floor_from_minus_one(float g) { return (int)(g + 1.0f) - 1; }
+
 /* The first grid column Lagrange grid k reads at output column x, and the position gx. */
 static int lagrange_first_column(const row_sources *rs, int k, int x, float *gx)
 {
     *gx = (x + 0.5f) * rs->lagrange_scale[k] - 0.5f;
-    return (int)floorf(*gx) - TAP_OFFSET;
+    return floor_from_minus_one(*gx) - TAP_OFFSET;
 }
 
 /* Adds Lagrange grid k at output columns x0 .. x1 - 1 of the row to sums (4 floats a column):
@@ -228,12 +231,12 @@ static void add_lagrange_span(const row_sources *rs, int k, int x0, int x1, floa
     int first = lagrange_first_column(rs, k, x0, &gx);
     int last = lagrange_first_column(rs, k, x1 - 1, &gx) + TAPS - 1;
     for (int c = first; c <= last; c++) lagrange_column(rs, k, c, columns[c - first]);
-    int ratio = rs->lagrange_ratio[k];
-    for (int x = x0; x < x1; x++) {
+    int ratio = rs->lagrange_ratio[k], phase = x0 % ratio;
+    for (int x = x0; x < x1; x++, phase = phase + 1 == ratio ? 0 : phase + 1) {
         int ix = lagrange_first_column(rs, k, x, &gx) - first;
         float computed[TAPS];
         const float *wx = computed;
-        if (ratio <= LAGRANGE_PHASES) wx = rs->lagrange_wx[k][x % ratio];
+        if (ratio <= LAGRANGE_PHASES) wx = rs->lagrange_wx[k][phase];
         else lagrange_weights(gx - floorf(gx), computed);
         float *v = sums[x - x0];
 #if defined(__SSE2__)
@@ -260,7 +263,7 @@ static void add_texel_grids(const row_sources *rs, int n, int face, int y, int x
     __m128 acc = _mm_loadu_ps(v);
     for (int k = 0; k < rs->row_count; k++) {
         float gx = (x + 0.5f) * rs->scale[k] - 0.5f;
-        int ix = (int)floorf(gx);
+        int ix = floor_from_minus_one(gx);
         const float *a = rs->rows[k][0] + (ptrdiff_t)ix * 4, *b = rs->rows[k][1] + (ptrdiff_t)ix * 4;
         __m128 fx = _mm_set1_ps(gx - ix), a0 = _mm_loadu_ps(a), b0 = _mm_loadu_ps(b);
         __m128 top = _mm_add_ps(a0, _mm_mul_ps(fx, _mm_sub_ps(_mm_loadu_ps(a + 4), a0)));
@@ -271,7 +274,7 @@ static void add_texel_grids(const row_sources *rs, int n, int face, int y, int x
 #else
     for (int k = 0; k < rs->row_count; k++) {
         float gx = (x + 0.5f) * rs->scale[k] - 0.5f;
-        int ix = (int)floorf(gx);
+        int ix = floor_from_minus_one(gx);
         float fx = gx - ix;
         const float *a = rs->rows[k][0] + (ptrdiff_t)ix * 4, *b = rs->rows[k][1] + (ptrdiff_t)ix * 4;
         for (int c = 0; c < 4; c++) {
