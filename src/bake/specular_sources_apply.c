@@ -160,6 +160,12 @@ static int tile_groups(const apply_job *job, int face, int n, int x0, int y0, in
     ibl_cube_direction_d(face, 0.5 * (x0 + x1) / n, 0.5 * (y0 + y1) / n, c);
     double cl = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
     for (int m = 0; m < 3; m++) c[m] /= cl;
+    /* out of every group's reach at once, before the corners' angles: the tile's radius is at
+     * most its half diagonal on the face plane (2 / n a texel), the plane being at least 1 from
+     * the centre (a margin of 1e-6 radians above the test below) */
+    double bound = sqrt((double)(x1 - x0) * (x1 - x0) + (double)(y1 - y0) * (y1 - y0)) / n;
+    double xa = c[0] * job->all_centre[0] + c[1] * job->all_centre[1] + c[2] * job->all_centre[2];
+    if (job->all_reach + bound + 1e-6 < IBL_PI && xa < cos(job->all_reach + bound + 1e-6)) return 0;
     for (int k = 0; k < 4; k++) {
         ibl_cube_direction_d(face, (double)(k & 1 ? x1 : x0) / n, (double)(k & 2 ? y1 : y0) / n, q);
         double ql = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
@@ -169,9 +175,6 @@ static int tile_groups(const apply_job *job, int face, int n, int x0, int y0, in
     /* a group is out of reach when the angle to it exceeds its reach angle plus the tile's
      * radius, i.e. when c.centre < cos(reach angle + radius) (by the angle-sum rule, a little
      * lower to stay conservative: the texels' own test decides) */
-    /* out of every group's reach at once (a margin of 1e-6 radians above the test below) */
-    double xa = c[0] * job->all_centre[0] + c[1] * job->all_centre[1] + c[2] * job->all_centre[2];
-    if (job->all_reach + radius + 1e-6 < IBL_PI && xa < cos(job->all_reach + radius + 1e-6)) return 0;
     int count = 0;
     double cos_radius = cos(radius), sin_radius = sin(radius);
     for (int g = 0; g < s->groups; g++) {
