@@ -37,9 +37,11 @@
  * row), so the same region holds it; the cap's pixels are cut into cells of several columns
  * (cap_columns), a quarter of a texel or less both ways.
  *
- * The whole-image scans run in row bands, and the groups are made one per task, through the
- * context's parallel-for; every output texel is summed alone, in a fixed order of groups and
- * cells, so the result does not depend on the thread count. */
+ * delta is added to the chain by specular_sources_apply.c (a narrow Phong level's on a grid of
+ * half the output's edge, interpolated). The whole-image scans run in row bands, and the groups
+ * are made one per task, through the context's parallel-for; every output texel (or grid point)
+ * is summed alone, in a fixed order of groups and cells, so the result does not depend on the
+ * thread count. */
 #include "specular_sources_internal.h"
 #include "core/context_internal.h"
 #include "core/cpu.h"
