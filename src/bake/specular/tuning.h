@@ -73,7 +73,10 @@
 #define CORE_GRID_SPACING_LAGRANGE 0.45
 /* The centroid corrections of a smooth Phong core on the output texels (its grid would not be
  * coarser) are summed in difference form on a Lagrange grid of half the output's edge when it is
- * at most this many half widths apart: the difference varies on the lobe's scale. */
+ * at most this many half widths apart: the difference varies on the lobe's scale. cmft's
+ * exponent 862 at 128 (0.56 half widths on 64 points): on the six test HDRIs at most 0.263% RMS
+ * and 2.09% max (interior, night), against 0.234% and 2.13% with its 318 blocks (city.exr) at
+ * the output texels, for 38 M fewer leaf instructions. */
 #define CORRECTION_GRID_SPACING_LAGRANGE 0.6
 /* Lagrange grids have at least 32 points a face edge: on 16 the face's own curvature (texels
  * 1.38 times the mean at its centre, 0.6 at its corners) cost phong level 3 of the 256 chain
