@@ -406,7 +406,8 @@ static thread_pool *pool_create(int workers)
     return pool;
 }
 
-static void pool_run(thread_pool *pool, int count, ibl_task_fn task, void *arg)
+/* Posts a job: the workers wake (or stop spinning) and take its indices. */
+static void pool_post(thread_pool *pool, int count, ibl_task_fn task, void *arg)
 {
     pthread_mutex_lock(&pool->lock);
     pool->task = task;
@@ -418,6 +419,11 @@ static void pool_run(thread_pool *pool, int count, ibl_task_fn task, void *arg)
     atomic_fetch_add(&pool->generation, 1u);
     pthread_cond_broadcast(&pool->wake);
     pthread_mutex_unlock(&pool->lock);
+}
+
+/* The caller's end of a job: it runs the indices left, then waits for the workers'. */
+static void pool_finish(thread_pool *pool)
+{
     run_indices(pool);
     /* every index is taken: no more workers join, and those that did finish theirs */
     pthread_mutex_lock(&pool->lock);
@@ -429,6 +435,12 @@ static void pool_run(thread_pool *pool, int count, ibl_task_fn task, void *arg)
         while (atomic_load(&pool->active_workers) > 0) pthread_cond_wait(&pool->done, &pool->lock);
         pthread_mutex_unlock(&pool->lock);
     }
+}
+
+static void pool_run(thread_pool *pool, int count, ibl_task_fn task, void *arg)
+{
+    pool_post(pool, count, task, arg);
+    pool_finish(pool);
 }
 
 ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out)
@@ -638,6 +650,34 @@ void ibl_parallel_for(ibl_context *ctx, int count, ibl_task_fn task, void *task_
         return;
     }
     pool_run(ctx->pool, count, task, task_arg);
+    atomic_flag_clear(&ctx->pool->running);
+}
+
+void ibl__cpu_relax(void)
+{
+    cpu_relax();
+}
+
+int ibl__parallel_begin(ibl_context *ctx, int count, ibl_task_fn task, void *task_arg)
+{
+    if (count <= 0 || !ctx || !ctx->pool || ctx->desc.parallel_for) return 0;
+    if (atomic_flag_test_and_set(&ctx->pool->running)) return 0;
+    pool_post(ctx->pool, count, task, task_arg); /* `running` stays set until the end */
+    return 1;
+}
+
+int ibl__parallel_help(ibl_context *ctx)
+{
+    thread_pool *pool = ctx->pool;
+    int i = atomic_fetch_add_explicit(&pool->next, 1, memory_order_relaxed);
+    if (i >= pool->count) return 0;
+    pool->task(pool->task_arg, i);
+    return 1;
+}
+
+void ibl__parallel_end(ibl_context *ctx)
+{
+    pool_finish(ctx->pool);
     atomic_flag_clear(&ctx->pool->running);
 }
 

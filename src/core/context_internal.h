@@ -23,6 +23,20 @@ ibl_status ibl__progress(ibl_context *ctx, const char *stage, double fraction);
  * pool or while a loop runs. */
 void ibl__parallel_warm(ibl_context *ctx);
 
+/* A loop whose indices the pool's workers start on at once while the calling thread does
+ * something else (writes a file's finished front while the rest is encoded): begin posts it
+ * and returns 1, or returns 0 and runs nothing when it cannot be posted (no pool, the host's
+ * parallel_for hook, a loop already running: the caller then runs it with ibl_parallel_for).
+ * While it runs the caller may take indices itself with ibl__parallel_help (1 if it ran one,
+ * 0 when none is left to take) and must end it with ibl__parallel_end, which runs what is
+ * left and returns once every index is done. A parallel-for started meanwhile runs on its
+ * calling thread. Which thread runs an index never changes what it computes. */
+/* One pause of a spin-wait (the CPU's pause or yield instruction). */
+void ibl__cpu_relax(void);
+int ibl__parallel_begin(ibl_context *ctx, int count, ibl_task_fn task, void *task_arg);
+int ibl__parallel_help(ibl_context *ctx);
+void ibl__parallel_end(ibl_context *ctx);
+
 /* The memory budget (ibl_context_desc.max_bytes) for memory the library does not allocate
  * itself: third-party decoders (stb_image, OpenEXR) allocate with malloc, so their estimated
  * need is reserved while they run and released afterwards. Reserve fails with

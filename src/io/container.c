@@ -445,21 +445,31 @@ enum { LEVELS_CHUNK = 1 << 14 };
 typedef struct levels_job {
     ibl_format format;
     float hdr8_range, hdr8_max; /* RGBM/RGBD/RGBE: the range encoded, the largest value kept */
+    /* the loop's runs of texels, one a level, in the order the loop's indices take them */
     const float *src[IBL_MAX_LEVELS];
     uint8_t *dst[IBL_MAX_LEVELS];
     size_t texels[IBL_MAX_LEVELS];
     int first_chunk[IBL_MAX_LEVELS + 1];
     size_t unit; /* bytes a texel */
     atomic_size_t clamped; /* an integer sum: the same in any order */
+    atomic_uchar *done;    /* a streamed encode's: chunk i's bytes are written (else NULL) */
 } levels_job;
+
+/* The run and the first texel of chunk `index`, and its texel count. */
+static int chunk_place(const levels_job *j, int index, size_t *first, size_t *n)
+{
+    int r = 0;
+    while (index >= j->first_chunk[r + 1]) r++;
+    *first = (size_t)(index - j->first_chunk[r]) * LEVELS_CHUNK;
+    *n = j->texels[r] - *first < LEVELS_CHUNK ? j->texels[r] - *first : LEVELS_CHUNK;
+    return r;
+}
 
 static void levels_chunk(void *arg, int index)
 {
     levels_job *j = arg;
-    int l = 0;
-    while (index >= j->first_chunk[l + 1]) l++;
-    size_t first = (size_t)(index - j->first_chunk[l]) * LEVELS_CHUNK;
-    size_t n = j->texels[l] - first < LEVELS_CHUNK ? j->texels[l] - first : LEVELS_CHUNK;
+    size_t first, n;
+    int l = chunk_place(j, index, &first, &n);
     const float *src = j->src[l] + first * 4;
     uint8_t *dst = j->dst[l] + first * j->unit;
     size_t clamped = 0;
@@ -475,6 +485,7 @@ static void levels_chunk(void *arg, int index)
         clamped = ibl_pack_texels(j->format, src, n, dst);
     }
     if (clamped) atomic_fetch_add(&j->clamped, clamped);
+    if (j->done) atomic_store_explicit(&j->done[index], 1, memory_order_release);
 }
 
 /* Face by face (the block formats, whose encoders split their own work). */
@@ -492,33 +503,113 @@ static size_t encode_levels_by_face(ibl_context *ctx, ibl_format format, const i
     return clamped;
 }
 
+/* The loop's job for a texel format, its runs in the order of `order` (level numbers); the
+ * chunk count, or 0 past what one loop can count (2^45 texels, refused long before by the
+ * memory limit). */
+static size_t levels_setup(levels_job *j, ibl_format format, const ibl_write_desc *desc,
+                           const ibl_texture *tex, uint8_t *const dst[], const int order[])
+{
+    memset(j, 0, sizeof *j);
+    j->format = format;
+    j->unit = ibl__format_unit_bytes(format);
+    if (format == IBL_FORMAT_RGBM || format == IBL_FORMAT_RGBD || format == IBL_FORMAT_RGBE) {
+        j->hdr8_range = desc && desc->rgbm_range > 0.0f ? desc->rgbm_range : IBL_RGBM_DEFAULT_RANGE;
+        j->hdr8_max = format == IBL_FORMAT_RGBM ? j->hdr8_range : ibl_format_max_value(format);
+    }
+    size_t chunks = 0;
+    for (int r = 0; r < tex->levels; r++) {
+        int l = order[r];
+        j->src[r] = ibl_texture_level(tex, l, 0);
+        j->dst[r] = dst[l];
+        j->texels[r] = (size_t)ibl__level_texels(tex->kind, tex->width, tex->height, tex->depth, l) *
+                       (size_t)ibl_texture_faces(tex);
+        j->first_chunk[r] = (int)chunks;
+        chunks += (j->texels[r] + LEVELS_CHUNK - 1) / LEVELS_CHUNK;
+        if (chunks > 0x7fffffff) return 0;
+    }
+    j->first_chunk[tex->levels] = (int)chunks;
+    return chunks;
+}
+
 size_t ibl__encode_levels(ibl_context *ctx, ibl_format format, const ibl_write_desc *desc,
                           const ibl_texture *tex, uint8_t *const dst[], ibl_status *status)
 {
     *status = IBL_OK;
     if (ibl__format_is_block(format)) return encode_levels_by_face(ctx, format, desc, tex, dst, status);
+    int order[IBL_MAX_LEVELS];
+    for (int l = 0; l < tex->levels; l++) order[l] = l;
     levels_job j;
-    memset(&j, 0, sizeof j);
-    j.format = format;
-    j.unit = ibl__format_unit_bytes(format);
-    if (format == IBL_FORMAT_RGBM || format == IBL_FORMAT_RGBD || format == IBL_FORMAT_RGBE) {
-        j.hdr8_range = desc && desc->rgbm_range > 0.0f ? desc->rgbm_range : IBL_RGBM_DEFAULT_RANGE;
-        j.hdr8_max = format == IBL_FORMAT_RGBM ? j.hdr8_range : ibl_format_max_value(format);
-    }
-    size_t chunks = 0;
-    for (int l = 0; l < tex->levels; l++) {
-        j.src[l] = ibl_texture_level(tex, l, 0);
-        j.dst[l] = dst[l];
-        j.texels[l] = (size_t)ibl__level_texels(tex->kind, tex->width, tex->height, tex->depth, l) *
-                      (size_t)ibl_texture_faces(tex);
-        j.first_chunk[l] = (int)chunks;
-        chunks += (j.texels[l] + LEVELS_CHUNK - 1) / LEVELS_CHUNK;
-        /* past 2^45 texels (refused long before, by the memory limit) the count would not fit */
-        if (chunks > 0x7fffffff) return encode_levels_by_face(ctx, format, desc, tex, dst, status);
-    }
-    j.first_chunk[tex->levels] = (int)chunks;
+    size_t chunks = levels_setup(&j, format, desc, tex, dst, order);
+    if (!chunks) return encode_levels_by_face(ctx, format, desc, tex, dst, status);
     ibl_parallel_for(ctx, (int)chunks, levels_chunk, &j);
     return atomic_load(&j.clamped);
+}
+
+struct ibl__levels_stream {
+    ibl_context *ctx;
+    levels_job job;
+    int chunks;
+    int next;   /* every chunk before it is written */
+    int posted; /* the loop runs on the pool (ibl__parallel_begin) until the end */
+};
+
+ibl__levels_stream *ibl__encode_levels_begin(ibl_context *ctx, ibl_format format,
+                                             const ibl_write_desc *desc, const ibl_texture *tex,
+                                             uint8_t *const dst[])
+{
+    if (ibl__format_is_block(format) || tex->levels < 1) return NULL;
+    /* the runs in the order of their place in memory (a KTX2 file holds the smallest level
+     * first), so that the chunks are done front to back as the writer wants them */
+    int order[IBL_MAX_LEVELS];
+    for (int r = 0; r < tex->levels; r++) {
+        int k = r;
+        while (k > 0 && dst[order[k - 1]] > dst[r]) order[k] = order[k - 1], k--;
+        order[k] = r;
+    }
+    ibl__levels_stream *s = ibl_alloc(ctx, sizeof *s);
+    if (!s) return NULL;
+    size_t chunks = levels_setup(&s->job, format, desc, tex, dst, order);
+    s->job.done = chunks ? ibl_calloc(ctx, chunks, sizeof *s->job.done) : NULL;
+    if (!s->job.done) {
+        ibl_free(ctx, s);
+        return NULL;
+    }
+    s->ctx = ctx;
+    s->chunks = (int)chunks;
+    s->next = 0;
+    s->posted = ibl__parallel_begin(ctx, s->chunks, levels_chunk, &s->job);
+    if (!s->posted) { /* no pool to run it beside the caller: the whole encode now */
+        ibl_parallel_for(ctx, s->chunks, levels_chunk, &s->job);
+        s->next = s->chunks;
+    }
+    return s;
+}
+
+void ibl__encode_levels_wait(ibl__levels_stream *s, const uint8_t *end)
+{
+    while (s->next < s->chunks) {
+        size_t first, n;
+        int r = chunk_place(&s->job, s->next, &first, &n);
+        if (s->job.dst[r] + first * s->job.unit >= end) return;
+        if (atomic_load_explicit(&s->job.done[s->next], memory_order_acquire)) {
+            s->next++;
+            continue;
+        }
+        /* a chunk still being encoded: take one of those not started meanwhile, else wait for
+         * it (a worker has it: ~0.1 ms) */
+        if (!ibl__parallel_help(s->ctx))
+            while (!atomic_load_explicit(&s->job.done[s->next], memory_order_acquire)) ibl__cpu_relax();
+    }
+}
+
+size_t ibl__encode_levels_end(ibl__levels_stream *s)
+{
+    if (!s) return 0;
+    if (s->posted) ibl__parallel_end(s->ctx);
+    size_t clamped = atomic_load(&s->job.clamped);
+    ibl_free(s->ctx, s->job.done);
+    ibl_free(s->ctx, s);
+    return clamped;
 }
 
 ibl_status ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_range,

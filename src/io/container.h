@@ -96,6 +96,18 @@ size_t ibl__encode_level(ibl_context *ctx, ibl_format format, const ibl_write_de
  * another. Texel formats run as one parallel loop over the whole texture. */
 size_t ibl__encode_levels(ibl_context *ctx, ibl_format format, const ibl_write_desc *desc,
                           const ibl_texture *tex, uint8_t *const dst[], ibl_status *status);
+/* ibl__encode_levels of a texel format run beside the caller, which writes the bytes as they
+ * are done (output.c): begin starts the loop on the pool's workers, its chunks in the order of
+ * their place in memory, and returns at once (without a pool it encodes everything first);
+ * NULL for block formats or without memory, with nothing started. wait returns once every
+ * byte the encode writes below `end` is written, encoding chunks on the calling thread
+ * meanwhile. end waits for the rest, frees the stream and returns the texels stored at the
+ * format's largest value. The bytes are those of ibl__encode_levels. */
+ibl__levels_stream *ibl__encode_levels_begin(ibl_context *ctx, ibl_format format,
+                                             const ibl_write_desc *desc, const ibl_texture *tex,
+                                             uint8_t *const dst[]);
+void ibl__encode_levels_wait(ibl__levels_stream *s, const uint8_t *end);
+size_t ibl__encode_levels_end(ibl__levels_stream *s);
 /* The reverse of ibl__encode_level; rgbm_range as written (0: the default). */
 ibl_status ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_range,
                              const uint8_t *src, ibl_texture *tex, int level, int face);

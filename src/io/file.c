@@ -635,6 +635,14 @@ ibl_status ibl__encode_texture_for_path(ibl_context *ctx, const char *path,
                                        const ibl_texture *texture, const ibl_write_desc *desc,
                                        void **bytes, size_t *size)
 {
+    return ibl__encode_texture_streamed(ctx, path, texture, desc, bytes, size, NULL);
+}
+
+ibl_status ibl__encode_texture_streamed(ibl_context *ctx, const char *path,
+                                        const ibl_texture *texture, const ibl_write_desc *desc,
+                                        void **bytes, size_t *size, ibl__levels_stream **stream)
+{
+    if (stream) *stream = NULL;
     *bytes = NULL;
     *size = 0;
     if (!path) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_write_texture: missing path");
@@ -645,6 +653,8 @@ ibl_status ibl__encode_texture_for_path(ibl_context *ctx, const char *path,
     ibl_write_desc wd;
     memset(&wd, 0, sizeof wd);
     if (desc) wd = *desc;
+    if (type == IBL_FILE_KTX2 && stream)
+        return ibl__ktx2_encode_streamed(ctx, texture, &wd, path, bytes, size, stream);
     if (ibl_file_type_is_container(type))
         return encode_container(ctx, type, texture, &wd, path, bytes, size);
     if (texture->kind != IBL_TEXTURE_2D || texture->levels != 1)

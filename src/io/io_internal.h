@@ -96,6 +96,15 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
                             ibl_texture *out, ibl_file_info *info);
 ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_write_desc *desc,
                             const char *name, void **bytes, size_t *size);
+/* ibl__ktx2_encode whose level images may still be being encoded when it returns: with
+ * `stream` non-NULL and a texel format without supercompression, the header and everything
+ * outside the levels are in *bytes and the levels are encoded beside the caller (*stream: see
+ * ibl__encode_levels_begin in container.h; the caller waits for the bytes it reads and ends the
+ * stream, which also adds its clamped texels to desc->report); otherwise *stream is NULL. */
+typedef struct ibl__levels_stream ibl__levels_stream;
+ibl_status ibl__ktx2_encode_streamed(ibl_context *ctx, const ibl_texture *tex,
+                                     const ibl_write_desc *desc, const char *name, void **bytes,
+                                     size_t *size, ibl__levels_stream **stream);
 ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                             ibl_texture *out, ibl_file_info *info);
 ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_write_desc *desc,
@@ -123,6 +132,10 @@ ibl_status ibl__encode_image_for_path(ibl_context *ctx, const char *path, const 
 ibl_status ibl__encode_texture_for_path(ibl_context *ctx, const char *path,
                                        const ibl_texture *texture, const ibl_write_desc *desc,
                                        void **bytes, size_t *size);
+/* The same, a KTX2's levels streamed where ibl__ktx2_encode_streamed can (*stream). */
+ibl_status ibl__encode_texture_streamed(ibl_context *ctx, const char *path,
+                                        const ibl_texture *texture, const ibl_write_desc *desc,
+                                        void **bytes, size_t *size, ibl__levels_stream **stream);
 
 /* Largest edge any reader accepts before allocating (absurd sizes are refused). */
 enum { IBL_MAX_DIMENSION = 65536 };

@@ -294,6 +294,14 @@ static ibl_status compress_levels(ibl_context *ctx, const char *name, const ibl_
 ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_write_desc *desc,
                             const char *name, void **bytes, size_t *size)
 {
+    return ibl__ktx2_encode_streamed(ctx, tex, desc, name, bytes, size, NULL);
+}
+
+ibl_status ibl__ktx2_encode_streamed(ibl_context *ctx, const ibl_texture *tex,
+                                     const ibl_write_desc *desc, const char *name, void **bytes,
+                                     size_t *size, ibl__levels_stream **stream)
+{
+    if (stream) *stream = NULL;
     size_t clamped = 0; /* texels stored at the format's largest value */
     if (!name) name = "<ktx2>";
     if (!bytes || !size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output", name);
@@ -401,7 +409,9 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     } else {
         uint8_t *dst[IBL_MAX_LEVELS];
         for (int l = 0; l < tex->levels; l++) dst[l] = buf + level_off[l];
-        clamped += ibl__encode_levels(ctx, fmt, desc, tex, dst, &st);
+        ibl__levels_stream *s = stream ? ibl__encode_levels_begin(ctx, fmt, desc, tex, dst) : NULL;
+        if (s) *stream = s;
+        else clamped += ibl__encode_levels(ctx, fmt, desc, tex, dst, &st);
     }
     free_levels(ctx, &ld);
     if (st != IBL_OK) {
