@@ -521,7 +521,7 @@ void ibl__fast_leaf_sums(ibl_specular_plan *p, int level);
 
 /* ---- precomputed.c ---- */
 ibl_status ibl__fast_precompute_level(ibl_specular_plan *p, int level);
-void ibl__fast_precomputed_normalisers(const precomputed_piece *c, float *sums);
+void ibl__fast_precomputed_normalisers(ibl_context *ctx, const precomputed_piece *c, float *sums);
 void ibl__fast_precomputed_destroy(ibl_context *ctx, precomputed_piece *c);
 void ibl__fast_precomputed_release(ibl_context *ctx, precomputed_piece *c);
 ibl_status ibl__fast_precomputed_refill(ibl_specular_plan *p, int level, int k);

@@ -173,22 +173,38 @@ static void weights_task(void *arg, int index)
     c->normaliser[index] = den * c->weight_scale;
 }
 
-void ibl__fast_precomputed_normalisers(const precomputed_piece *c, float *sums)
+typedef struct normaliser_job {
+    const precomputed_piece *c;
+    float *sums;
+} normaliser_job;
+
+/* Base row b's normalisers added to the grid: each base stands for its own output texels, so
+ * the rows are independent (each output texel gets one addition, as in order). */
+static void normaliser_row_task(void *arg, int b)
 {
+    const normaliser_job *j = arg;
+    const precomputed_piece *c = j->c;
     int n = c->grid_edge;
-    for (int b = 0; b < c->base_edge; b++)
-        for (int a = 0; a < c->base_edge; a++) {
-            double den = c->normaliser[b * c->base_edge + a];
-            /* the distinct output texels base (a, b) stands for: faces, then flips */
-            for (int face = 0; face < 6; face++)
-                for (int fy = 0; fy < 2; fy++)
-                    for (int fx = 0; fx < 2; fx++) {
-                        int x = fx ? n - 1 - a : a, y = fy ? n - 1 - b : b;
-                        if ((fx && x == a) || (fy && y == b)) continue;
-                        float *o = sums + (((size_t)face * n + y) * n + x) * 4;
-                        o[3] = (float)(o[3] + den);
-                    }
-        }
+    for (int a = 0; a < c->base_edge; a++) {
+        double den = c->normaliser[b * c->base_edge + a];
+        /* the distinct output texels base (a, b) stands for: faces, then flips */
+        for (int face = 0; face < 6; face++)
+            for (int fy = 0; fy < 2; fy++)
+                for (int fx = 0; fx < 2; fx++) {
+                    int x = fx ? n - 1 - a : a, y = fy ? n - 1 - b : b;
+                    if ((fx && x == a) || (fy && y == b)) continue;
+                    float *o = j->sums + (((size_t)face * n + y) * n + x) * 4;
+                    o[3] = (float)(o[3] + den);
+                }
+    }
+}
+
+/* A loop over the base rows: on one thread it was 1.3 ms of the 512 chain's plan and 5 ms of
+ * the 1024 chain's, with the other thread waiting. */
+void ibl__fast_precomputed_normalisers(ibl_context *ctx, const precomputed_piece *c, float *sums)
+{
+    normaliser_job job = {c, sums};
+    ibl_parallel_for(ctx, c->base_edge, normaliser_row_task, &job);
 }
 
 /* Row `row` of face 0's padded geometry: each cell's texel's geometric moments (a cell without
@@ -500,7 +516,7 @@ ibl_status ibl__fast_precomputed_refill(ibl_specular_plan *p, int level, int k)
         for (int b = 0; b < c->base_edge; b++)
             for (int a = b + 1; a < c->base_edge; a++)
                 c->normaliser[b * c->base_edge + a] = c->normaliser[a * c->base_edge + b];
-        ibl__fast_precomputed_normalisers(c, lv->grids[pc->grid].sums);
+        ibl__fast_precomputed_normalisers(ctx, c, lv->grids[pc->grid].sums);
     }
     return st;
 }
