@@ -23,6 +23,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* ---- plan time: the bars' constants ---- */
 
@@ -205,18 +206,20 @@ static void super_cones(const float *cones, int count, float *supers)
 
 /* Where the records of level s come from when the level has none (a streamed level,
  * ibl__fast_pyramid_streamed): each gathered texel is made again from the source, in the same
- * operations, into one block row of scratch. */
+ * operations, into a block row of scratch; REMAKE_ROWS of them, one per task that remakes. */
+enum { REMAKE_ROWS = 4 };
 typedef struct texel_remake {
     const ibl_cubemap *src;
     int level;
-    float *row;
+    float *rows; /* REMAKE_ROWS rows of row_floats */
+    size_t row_floats;
 } texel_remake;
 
 /* Fills lane dst (of a block of records, B floats a field) with the texel of key: its geometry,
- * its fields from s's records (or made again from the source: remake) and its power from field
- * power_field. */
+ * its fields from s's records (or made again from the source: remake, into scratch row `row`)
+ * and its power from field power_field. */
 static void fill_texel(const ibl_specular_plan *p, const source_level *s, uint64_t key,
-                       const texel_remake *remake, int power_field, float *dst)
+                       const texel_remake *remake, int row, int power_field, float *dst)
 {
     const int B = BLOCK_TEXELS;
     size_t b;
@@ -226,7 +229,8 @@ static void fill_texel(const ibl_specular_plan *p, const source_level *s, uint64
     block_texel(s, b, t, &f, &x, &y);
     level_texel_geometry(p->face_axis[f], p->face_sign[f], s, f, x, y, g);
     /* the texel's fields from GEOMETRY_FIELDS on, B floats apart */
-    const float *rec = remake ? ibl__fast_streamed_texel(p, remake->src, remake->level, f, x, y, remake->row)
+    const float *rec = remake ? ibl__fast_streamed_texel(p, remake->src, remake->level, f, x, y,
+                                                         remake->rows + (size_t)row * remake->row_floats)
                               : s->records + field_index(s, b, GEOMETRY_FIELDS, t);
     for (int field = 0; field < GEOMETRY_FIELDS; field++) dst[field * B] = g[field];
     for (int field = GEOMETRY_FIELDS; field < COARSE_FIELDS; field++)
@@ -237,7 +241,8 @@ static void fill_texel(const ibl_specular_plan *p, const source_level *s, uint64
 /* Lane by lane in key order (texel k in lane k), GATHER_KEYS a task (whole blocks) through
  * ibl_parallel_for: each key fills its own slot. Filled on the calling thread they were, at
  * 512, ~7 ms between loops, most of it faulting in the fresh pages of the correction pool.
- * Texels made again from the source share one scratch row, so those are gathered in one task. */
+ * Texels made again from the source are gathered in REMAKE_ROWS tasks, each with its own
+ * scratch row (in one task they were 2 ms of the 1024 chain with the other thread waiting). */
 enum { GATHER_KEYS = 64 * BLOCK_TEXELS };
 
 typedef struct gather_job {
@@ -255,7 +260,7 @@ static void gather_task(void *arg, int index)
     const int B = BLOCK_TEXELS;
     int k0 = index * j->per_task, k1 = j->count - k0 < j->per_task ? j->count : k0 + j->per_task;
     for (int k = k0; k < k1; k++)
-        fill_texel(j->p, j->s, j->keys[k], j->remake, j->power_field,
+        fill_texel(j->p, j->s, j->keys[k], j->remake, index % REMAKE_ROWS, j->power_field,
                    j->records + (size_t)(k / B) * COARSE_FIELDS * B + k % B);
 }
 
@@ -298,7 +303,7 @@ static int gather_spans(const ibl_specular_plan *p, const source_level *s, const
             for (int field = 0; field < COARSE_FIELDS; field++) block[field * B + i] = 0.0f;
             block[FIELD_LUM_SPREAD * B + i] = 0.5f;
         }
-        fill_texel(p, s, keys[k], remake, power_field, block + lane % B);
+        fill_texel(p, s, keys[k], remake, 0, power_field, block + lane % B);
     }
     return cursor.blocks;
 }
@@ -324,7 +329,8 @@ static int gather_texels(const ibl_specular_plan *p, const source_level *s, uint
     if (span > 0) {
         blocks = gather_spans(p, s, keys, count, span, power_field, records, remake);
     } else {
-        int per_task = remake && count > 0 ? count : GATHER_KEYS; /* remade: one task */
+        /* remade: one task a scratch row */
+        int per_task = remake && count > 0 ? (count + REMAKE_ROWS - 1) / REMAKE_ROWS : GATHER_KEYS;
         gather_job job = {p, s, keys, count, power_field, per_task, records, remake};
         ibl_parallel_for(p->ctx, (count + per_task - 1) / per_task, gather_task, &job);
         for (int i = count; i < blocks * B; i++) { /* the rest of the last block: nothing */
@@ -458,29 +464,83 @@ static void bound_task(void *arg, int index)
         ibl__fast_block_bounds(j->p, j->c, s, b, s->records + field_index(s, b, FIELD_LUM_MEAN, 0));
 }
 
+/* select_corrections' passes over a level's texel bounds, in at most SCAN_TASKS tasks of
+ * whole blocks (as select_bright's; on the calling thread they were ~3 ms of the 1024 chain,
+ * between loops): counting the texels over BAR_STEPS bars at once (the bar and its doublings:
+ * integers, summed in task order), then listing those over the threshold, each task writing
+ * its keys after those of the tasks before it, so the keys come in block order as one pass
+ * gives them. */
+enum { BAR_STEPS = 8 };
+
+typedef struct bound_scan {
+    precomputed_piece *c;
+    const source_level *s;
+    size_t blocks, per_task;
+    double bars[BAR_STEPS]; /* counting: each twice the one before */
+    double threshold;       /* listing */
+    int power_field, remade;
+    uint64_t *keys;
+    int count[SCAN_TASKS][BAR_STEPS], first[SCAN_TASKS];
+} bound_scan;
+
+static void bound_count_task(void *arg, int index)
+{
+    bound_scan *j = arg;
+    size_t i0 = (size_t)index * j->per_task * BLOCK_TEXELS;
+    size_t i1 = (index + 1) * j->per_task < j->blocks ? (index + 1) * j->per_task * BLOCK_TEXELS : j->blocks * BLOCK_TEXELS;
+    int count[BAR_STEPS] = {0};
+    for (size_t i = i0; i < i1; i++)
+        for (int k = 0; k < BAR_STEPS && j->c->texel_bound[i] > j->bars[k]; k++) count[k]++;
+    memcpy(j->count[index], count, sizeof count);
+}
+
+/* Whether texel t of block b is a correction: over the threshold, and (a level with records)
+ * with some power in power_field. A streamed level's texels over the threshold have a positive
+ * luminance power (P > 0 in bound_task), so never all three channels 0; it has no bright
+ * texels, so power_field is FIELD_POWER. */
+static int is_correction(const bound_scan *j, size_t b, int t)
+{
+    const int B = BLOCK_TEXELS;
+    if (!(j->c->texel_bound[b * B + t] > j->threshold)) return 0;
+    if (j->remade) return 1;
+    const float *P = j->s->records + field_index(j->s, b, j->power_field, 0);
+    return !(P[t] == 0 && P[B + t] == 0 && P[2 * B + t] == 0);
+}
+
+static void correction_count_task(void *arg, int index)
+{
+    bound_scan *j = arg;
+    size_t b0 = (size_t)index * j->per_task, b1 = b0 + j->per_task < j->blocks ? b0 + j->per_task : j->blocks;
+    int count = 0;
+    for (size_t b = b0; b < b1; b++)
+        for (int t = 0; t < BLOCK_TEXELS; t++) count += is_correction(j, b, t);
+    j->count[index][0] = count;
+}
+
+static void correction_list_task(void *arg, int index)
+{
+    bound_scan *j = arg;
+    size_t b0 = (size_t)index * j->per_task, b1 = b0 + j->per_task < j->blocks ? b0 + j->per_task : j->blocks;
+    int k = j->first[index];
+    for (size_t b = b0; b < b1; b++)
+        for (int t = 0; t < BLOCK_TEXELS; t++)
+            if (is_correction(j, b, t)) j->keys[k++] = texel_key(j->s, b, t);
+}
+
 /* Gathers each texel over the threshold with its luminance moments and its power from
  * power_field (FIELD_POWER, or FIELD_POWER_NOT_BRIGHT for a piece without bright texels):
  * summed as a leaf while the padded source leaves it out (products.c), it turns the texel's
  * uniform share into its moment leaf. */
-static int gather_corrections(const ibl_specular_plan *p, precomputed_piece *c,
-                              const source_level *s, double threshold, int power_field,
+static int gather_corrections(const ibl_specular_plan *p, bound_scan *j, int tasks,
                               const texel_remake *remake)
 {
-    const int B = BLOCK_TEXELS;
-    size_t blocks = source_block_count(s);
+    precomputed_piece *c = j->c;
+    ibl_parallel_for(p->ctx, tasks, correction_count_task, j);
     int k = 0;
-    for (size_t b = 0; b < blocks; b++) {
-        /* (a streamed level has no records to look at: but its texels over the threshold have
-         * a positive luminance power, P > 0 in bound_task, so never all three channels 0; and
-         * it has no bright texels, so power_field is FIELD_POWER) */
-        const float *P = remake ? NULL : s->records + field_index(s, b, power_field, 0);
-        for (int t = 0; t < B; t++) {
-            if (!(c->texel_bound[b * B + t] > threshold)) continue;
-            if (P && P[t] == 0 && P[B + t] == 0 && P[2 * B + t] == 0) continue;
-            c->correction_keys[k++] = texel_key(s, b, t);
-        }
-    }
-    return gather_texels(p, s, c->correction_keys, k, c->gather_span, power_field, c->correction_records,
+    for (int i = 0; i < tasks; i++) j->first[i] = k, k += j->count[i][0];
+    j->keys = c->correction_keys;
+    ibl_parallel_for(p->ctx, tasks, correction_list_task, j);
+    return gather_texels(p, j->s, c->correction_keys, k, c->gather_span, j->power_field, c->correction_records,
                          c->correction_cones, c->correction_capacity, remake);
 }
 
@@ -491,28 +551,39 @@ ibl_status ibl__fast_select_corrections(ibl_specular_plan *p, precomputed_piece 
     size_t blocks = source_block_count(s);
     int power_field = c->without_bright ? FIELD_POWER_NOT_BRIGHT : FIELD_POWER;
     /* a streamed level's bounds were found as it was made */
-    texel_remake remake = {src, c->source_level, NULL};
+    texel_remake remake = {src, c->source_level, NULL, 0};
     if (!s->records) {
-        size_t row_floats = (size_t)6 * s->blocks_x * s->fields * BLOCK_TEXELS;
-        remake.row = ibl_calloc(p->ctx, row_floats, sizeof(float));
-        if (!remake.row) return ibl_context_status(p->ctx);
+        remake.row_floats = (size_t)6 * s->blocks_x * s->fields * BLOCK_TEXELS;
+        remake.rows = ibl_calloc(p->ctx, REMAKE_ROWS * remake.row_floats, sizeof(float));
+        if (!remake.rows) return ibl_context_status(p->ctx);
     } else {
         bound_job job = {p, c};
         ibl_parallel_for(p->ctx, (int)((blocks + BOUND_BLOCKS_PER_TASK - 1) / BOUND_BLOCKS_PER_TASK),
                          bound_task, &job);
     }
+    bound_scan j;
+    memset(&j, 0, sizeof j);
+    j.c = c, j.s = s, j.blocks = blocks, j.power_field = power_field, j.remade = remake.rows != NULL;
+    j.per_task = (blocks + SCAN_TASKS - 1) / SCAN_TASKS;
+    if (j.per_task < SCAN_MIN_BLOCKS) j.per_task = SCAN_MIN_BLOCKS;
+    int tasks = (int)((blocks + j.per_task - 1) / j.per_task);
+    /* the first of the bar's doublings that at most `capacity` texels pass */
     double bar = CORRECTION_BAR * accuracy_scale(p) * s->power / (4.0 * IBL_PI);
-    int capacity = c->correction_capacity * BLOCK_TEXELS;
-    for (;;) {
-        int count = 0;
-        for (size_t i = 0; i < blocks * BLOCK_TEXELS; i++) count += c->texel_bound[i] > bar;
-        if (count <= capacity) break;
-        bar *= 2.0;
+    int capacity = c->correction_capacity * BLOCK_TEXELS, found = 0;
+    while (!found) {
+        for (int k = 0; k < BAR_STEPS; k++) j.bars[k] = k ? j.bars[k - 1] * 2.0 : bar;
+        ibl_parallel_for(p->ctx, tasks, bound_count_task, &j);
+        for (int k = 0; k < BAR_STEPS && !found; k++) {
+            int count = 0;
+            for (int i = 0; i < tasks; i++) count += j.count[i][k];
+            if (count <= capacity) bar = j.bars[k], found = 1;
+        }
+        if (!found) bar = j.bars[BAR_STEPS - 1] * 2.0;
     }
     /* the padded source and the gathering compare the same floats */
     c->correction_threshold = (float)bar;
-    c->correction_block_count = gather_corrections(p, c, s, c->correction_threshold, power_field,
-                                                   remake.row ? &remake : NULL);
-    ibl_free(p->ctx, remake.row);
+    j.threshold = c->correction_threshold;
+    c->correction_block_count = gather_corrections(p, &j, tasks, remake.rows ? &remake : NULL);
+    ibl_free(p->ctx, remake.rows);
     return IBL_OK;
 }
