@@ -3,6 +3,7 @@
 #include "core/context_internal.h"
 
 #include <math.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <stdatomic.h>
@@ -596,9 +597,13 @@ void ibl__encode_levels_wait(ibl__levels_stream *s, const uint8_t *end)
             continue;
         }
         /* a chunk still being encoded: take one of those not started meanwhile, else wait for
-         * it (a worker has it: ~0.1 ms) */
+         * it (a worker has it: ~0.1 ms; on a loaded host the worker may have lost its CPU, so
+         * after a while the wait gives its own up) */
         if (!ibl__parallel_help(s->ctx))
-            while (!atomic_load_explicit(&s->job.done[s->next], memory_order_acquire)) ibl__cpu_relax();
+            for (int spins = 1; !atomic_load_explicit(&s->job.done[s->next], memory_order_acquire); spins++) {
+                if (spins % 4096 == 0) sched_yield();
+                else ibl__cpu_relax();
+            }
     }
 }
 
