@@ -31,11 +31,12 @@ void ibl__parallel_warm(ibl_context *ctx);
  * 0 when none is left to take) and must end it with ibl__parallel_end, which runs what is
  * left and returns once every index is done. A parallel-for started meanwhile runs on its
  * calling thread. Which thread runs an index never changes what it computes. */
-/* One pause of a spin-wait (the CPU's pause or yield instruction). */
-void ibl__cpu_relax(void);
 int ibl__parallel_begin(ibl_context *ctx, int count, ibl_task_fn task, void *task_arg);
 int ibl__parallel_help(ibl_context *ctx);
 void ibl__parallel_end(ibl_context *ctx);
+
+/* One pause of a spin-wait (the CPU's pause or yield instruction). */
+void ibl__cpu_relax(void);
 
 /* The memory budget (ibl_context_desc.max_bytes) for memory the library does not allocate
  * itself: third-party decoders (stb_image, OpenEXR) allocate with malloc, so their estimated
