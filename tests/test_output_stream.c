@@ -4,7 +4,7 @@
  * format, with the same count of clamped texels; a write that fails ends the encode and leaves
  * the pool free. And the pool's loop beside the caller (ibl__parallel_begin/help/end) runs
  * every index exactly once. */
-#include "test_support.h"
+#include "test_io_helpers.h"
 
 #include "core/context_internal.h"
 
@@ -39,21 +39,6 @@ static ibl_cubemap make_chain(ibl_context *ctx)
     return cube;
 }
 
-static void *read_all(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    void *bytes = malloc((size_t)n);
-    assert_non_null(bytes);
-    assert_int_equal(fread(bytes, 1, (size_t)n, f), (size_t)n);
-    fclose(f);
-    *size = (size_t)n;
-    return bytes;
-}
-
 /* The file written on two threads through an output set against ibl_encode_texture on one. */
 static void streamed_file_matches_the_encode(void **state)
 {
@@ -77,7 +62,7 @@ static void streamed_file_matches_the_encode(void **state)
         assert_int_equal(ibl_output_set_commit(set), IBL_OK);
         ibl_output_set_destroy(set);
         size_t got_size;
-        void *got = read_all(path, &got_size);
+        void *got = slurp(path, &got_size);
         assert_int_equal(got_size, want_size);
         assert_memory_equal(got, want, want_size);
         /* the rgba16f and RGBM writes clamp (the texels past 65504 or the range) */
