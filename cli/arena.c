@@ -226,15 +226,16 @@ static void arena_release_for(size_t fresh)
         size_t most_bytes = 0;
         for (span *s = arena.first; s; s = s->next) {
             if (s->used || !s->paged) continue;
-            if (resident_bytes(s->start, s->size) == 0) {
+            char *from, *to;
+            whole_pages(s, &from, &to);
+            size_t bytes = resident_bytes(from, (size_t)(to - from));
+            /* the whole block is read only when its huge pages hold nothing (its ends may) */
+            if (bytes == 0 && resident_bytes(s->start, s->size) == 0) {
                 arena.kept -= s->size;
                 s->paged = 0;
                 s = merge_free(s); /* with its own kind only: never `most`, a paged block */
                 continue;
             }
-            char *from, *to;
-            whole_pages(s, &from, &to);
-            size_t bytes = resident_bytes(from, (size_t)(to - from));
             if (bytes > most_bytes) most = s, most_bytes = bytes;
         }
         if (!most) break;
