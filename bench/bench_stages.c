@@ -6,21 +6,30 @@
  * already encoded while the rest is encoded; without OUT, the encode alone). The specular sources the CLI adds for an equirect (a few
  * ms) are left out; the chain is GGX with the linear mapping, as the command's default.
  *
- * Usage: bench_stages IN SIZE [THREADS] [OUT.ktx2]   (threads 0: every core)
+ * Usage: bench_stages [--task-times] IN SIZE [THREADS] [OUT.ktx2]   (threads 0: every core)
  *
  * Per stage: wall ms, CPU ms of the process (user + sys, getrusage), each thread's run time
  * (the kernel's per-task schedstat: a thread spinning in the pool's wait counts as running,
  * about 0.1 ms a parallel-for), the page faults taken and the RSS after it. Linux only (the
- * /proc files); elsewhere the thread and RSS columns are blank. */
+ * /proc files); elsewhere the thread and RSS columns are blank.
+ *
+ * --task-times runs the loops on bench/timed_pool.c instead of the library's pool (a host
+ * parallel-for that shares them out the same way and is told the thread count) and adds a
+ * column: the time spent inside the loops' tasks, summed over the threads. On one thread the
+ * wall time minus it is what runs outside any loop; the task time on two threads against one
+ * is what sharing the machine costs the tasks themselves. bench/threads_split.sh reads these
+ * over many runs. */
 #include "ibl/ibl.h"
 #include "bake/specular_internal.h"
 #include "../cli/arena.h"
+#include "timed_pool.h"
 
 #include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <unistd.h>
 #include <time.h>
 
 enum { MAX_THREADS = 16 };
@@ -78,6 +87,8 @@ static void take(snapshot *s)
 typedef struct timeline {
     snapshot last, start;
     double cpu_total;
+    const timed_pool *pool; /* --task-times */
+    double last_task_ms;
 } timeline;
 
 /* Prints the stage since the last mark and starts the next. */
@@ -89,6 +100,11 @@ static void mark(timeline *t, const char *stage)
     printf("%-22s %8.1f %8.1f %8.1f %8.1f %7ld %6ld  ", stage, (now.wall - t->last.wall) * 1e3,
            cpu, (now.user - t->last.user) * 1e3, (now.sys - t->last.sys) * 1e3,
            now.faults - t->last.faults, now.rss_mb);
+    if (t->pool) {
+        double task_ms = timed_pool_task_ms(t->pool);
+        printf(" %8.1f  ", task_ms - t->last_task_ms);
+        t->last_task_ms = task_ms;
+    }
     for (int i = 0; i < now.threads; i++)
         printf(" %7.1f", now.thread_ms[i] - (i < t->last.threads ? t->last.thread_ms[i] : 0.0));
     printf("\n");
@@ -122,8 +138,10 @@ static int fail(ibl_context *ctx, const char *what)
 
 int main(int argc, char **argv)
 {
+    int task_times = argc > 1 && strcmp(argv[1], "--task-times") == 0;
+    argc -= task_times, argv += task_times;
     if (argc < 3) {
-        fprintf(stderr, "usage: bench_stages IN SIZE [THREADS] [OUT.ktx2]\n");
+        fprintf(stderr, "usage: bench_stages [--task-times] IN SIZE [THREADS] [OUT.ktx2]\n");
         return 2;
     }
     const char *in = argv[1], *out = argc > 4 ? argv[4] : NULL;
@@ -138,11 +156,20 @@ int main(int argc, char **argv)
     cd.allocator.free = cli_arena_free;
     cd.progress = on_progress;
     cd.progress_user = &marks;
+    timed_pool *pool = NULL;
+    if (task_times) {
+        if (threads <= 0) threads = (int)sysconf(_SC_NPROCESSORS_ONLN);
+        pool = timed_pool_create(threads > 0 ? threads : 1);
+        if (!pool) return 1;
+        cd.parallel_for = timed_pool_parallel_for;
+        cd.parallel_host = pool;
+        t.pool = pool;
+    }
     ibl_context *ctx = NULL;
     if (ibl_context_create(&cd, &ctx) != IBL_OK) return 1;
-    printf("%s -> GGX %d, %d threads\n%-22s %8s %8s %8s %8s %7s %6s   %s\n", in, size, threads,
+    printf("%s -> GGX %d, %d threads\n%-22s %8s %8s %8s %8s %7s %6s %s  %s\n", in, size, threads,
            "stage", "wall ms", "CPU ms", "user", "sys", "faults", "RSS MB",
-           "run time per thread, ms");
+           pool ? "tasks ms" : "", "run time per thread, ms");
     take(&t.start);
     t.last = t.start;
 
@@ -217,9 +244,12 @@ int main(int argc, char **argv)
     }
     snapshot end;
     take(&end);
-    printf("%-22s %8.1f %8.1f %8.1f %8.1f %7ld %6ld\n", "total", (end.wall - t.start.wall) * 1e3,
+    printf("%-22s %8.1f %8.1f %8.1f %8.1f %7ld %6ld", "total", (end.wall - t.start.wall) * 1e3,
            (end.user - t.start.user + end.sys - t.start.sys) * 1e3, (end.user - t.start.user) * 1e3,
            (end.sys - t.start.sys) * 1e3, end.faults - t.start.faults, end.rss_mb);
+    if (pool) printf(" %8.1f", timed_pool_task_ms(pool));
+    printf("\n");
     ibl_context_destroy(ctx);
+    timed_pool_destroy(pool);
     return 0;
 }

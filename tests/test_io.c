@@ -5,6 +5,8 @@
 #include <errno.h>
 #include <math.h>
 #include <png.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -775,6 +777,77 @@ static void large_inputs_identical_at_any_thread_count(void **state)
     ibl_context_destroy(one);
 }
 
+/* A host's parallel-for on two threads (the caller and one of its own per loop), which
+ * remembers the largest loop it was given. */
+typedef struct two_thread_host {
+    atomic_int largest_loop;
+} two_thread_host;
+
+typedef struct host_loop {
+    atomic_int next;
+    int count;
+    ibl_task_fn task;
+    void *arg;
+} host_loop;
+
+static void *host_loop_run(void *p)
+{
+    host_loop *h = p;
+    for (int i; (i = atomic_fetch_add(&h->next, 1)) < h->count;) h->task(h->arg, i);
+    return NULL;
+}
+
+static void two_thread_parallel_for(void *host, int count, ibl_task_fn task, void *arg)
+{
+    two_thread_host *t = host;
+    int seen = atomic_load(&t->largest_loop);
+    while (count > seen && !atomic_compare_exchange_weak(&t->largest_loop, &seen, count)) {}
+    host_loop h = {0, count, task, arg};
+    pthread_t other;
+    int started = pthread_create(&other, NULL, host_loop_run, &h) == 0;
+    host_loop_run(&h);
+    if (started) pthread_join(other, NULL);
+}
+
+/* A host that says it runs loops on two threads gets the work split for two: the ZIP EXR's
+ * bands (1000x1024: 64 chunks of 16 rows, in 16 bands) come to it as one loop and decode to
+ * the same pixels as on one thread; a host that says nothing gets them in order on the
+ * calling thread, as before. */
+static void host_parallel_for_told_its_threads(void **state)
+{
+    (void)state;
+    enum { W = 1000, H = 1024, BANDS = 16 };
+    ibl_context *one = test_context(1);
+    ibl_image im = make_image(one, W, H);
+    for (size_t t = 0; t < (size_t)W * H; t++) {
+        float *p = im.pixels + t * 4;
+        p[0] = frand() * 8.0f, p[1] = frand(), p[2] = frand() * 0.5f, p[3] = 1.0f;
+    }
+    const char *path = test_path("hosted.exr");
+    ibl_write_desc wd = {.format = IBL_FORMAT_RGBA32F, .exr_compression = IBL_EXR_ZIP};
+    assert_int_equal(ibl_write_image(one, path, &im, &wd), IBL_OK);
+    ibl_image ref;
+    assert_int_equal(ibl_read_image(one, path, NULL, &ref, NULL), IBL_OK);
+    for (int told = 0; told <= 2; told += 2) {
+        two_thread_host host = {0};
+        ibl_context_desc d = {.parallel_for = two_thread_parallel_for, .parallel_host = &host,
+                              .threads = told};
+        ibl_context *ctx;
+        assert_int_equal(ibl_context_create(&d, &ctx), IBL_OK);
+        assert_int_equal(ibl_context_threads(ctx), told ? 2 : 1);
+        ibl_image back;
+        assert_int_equal(ibl_read_image(ctx, path, NULL, &back, NULL), IBL_OK);
+        assert_memory_equal(back.pixels, ref.pixels, (size_t)W * H * 4 * sizeof(float));
+        if (told) assert_true(atomic_load(&host.largest_loop) >= BANDS);
+        else assert_true(atomic_load(&host.largest_loop) < BANDS);
+        ibl_image_free(ctx, &back);
+        ibl_context_destroy(ctx);
+    }
+    ibl_image_free(one, &ref);
+    ibl_image_free(one, &im);
+    ibl_context_destroy(one);
+}
+
 static void atomic_write(void **state)
 {
     (void)state;
@@ -921,6 +994,7 @@ int main(void)
         cmocka_unit_test(wrong_magic),        cmocka_unit_test(absurd_dimensions),
         cmocka_unit_test(non_finite_pixels),  cmocka_unit_test(atomic_write),
         cmocka_unit_test(large_inputs_identical_at_any_thread_count),
+        cmocka_unit_test(host_parallel_for_told_its_threads),
         cmocka_unit_test(read_file_errors),   cmocka_unit_test(api_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

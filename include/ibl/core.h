@@ -71,7 +71,12 @@ typedef struct ibl_context_desc {
     ibl_allocator allocator;         /* zero: malloc/free                                       */
     ibl_parallel_for_fn parallel_for; /* zero: the built-in thread pool                          */
     void *parallel_host;             /* passed to parallel_for                                  */
-    int threads;                     /* built-in pool size; 0: every online core; 1: no threads */
+    int threads;                     /* built-in pool size; 0: every online core; 1: no threads.
+                                      * With parallel_for: how many threads the host runs a loop
+                                      * on (0: unknown, taken as 1), so that the library splits
+                                      * the work whose split depends on it (file reads, EXR
+                                      * decoding, ASTC encoders) for that many; more at once is
+                                      * safe, only slower */
     uint64_t max_bytes;              /* the memory budget (below); 0: ibl_default_max_bytes()   */
     ibl_progress_fn progress;        /* optional                                                */
     void *progress_user;
@@ -101,7 +106,7 @@ void ibl_context_destroy(ibl_context *ctx);
 const char *ibl_context_message(const ibl_context *ctx);
 /* The status of the last recorded failure. */
 ibl_status ibl_context_status(const ibl_context *ctx);
-/* Number of threads the context runs work on (1 when a host parallel_for is used: unknown). */
+/* Number of threads the context runs work on (with a host parallel_for: desc.threads, or 1). */
 int ibl_context_threads(const ibl_context *ctx);
 /* The memory budget in bytes: desc.max_bytes, or the default it resolved to. */
 uint64_t ibl_context_max_bytes(const ibl_context *ctx);

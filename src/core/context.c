@@ -467,7 +467,11 @@ ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out)
     for (int i = 0; i < IBL__CACHE_SLOTS; i++) atomic_init(&ctx->caches[i], NULL);
     ctx->thread_count = 1;
     ctx->cpu_features = d.kernels == IBL_KERNELS_PORTABLE ? 0u : ibl__cpu_detect();
-    if (!d.parallel_for) {
+    if (d.parallel_for) {
+        /* the host's word for its concurrency: the work is split for it, and a loop that runs
+         * on more threads at once only waits (the EXR bands' buffer slots) */
+        if (d.threads > 1) ctx->thread_count = d.threads < MAX_POOL_THREADS ? d.threads : MAX_POOL_THREADS;
+    } else {
         int threads = d.threads;
         if (threads <= 0) {
             long online = sysconf(_SC_NPROCESSORS_ONLN);
