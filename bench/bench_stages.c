@@ -14,8 +14,10 @@
  * /proc files); elsewhere the thread and RSS columns are blank.
  *
  * --task-times runs the loops on bench/timed_pool.c instead of the library's pool (a host
- * parallel-for that shares them out the same way and is told the thread count) and adds a
- * column: the time spent inside the loops' tasks, summed over the threads. On one thread the
+ * parallel-for that shares them out the same way) and adds a column: the time spent inside
+ * the loops' tasks, summed over the threads. The library is told at least two threads, so
+ * that one thread runs the loops two would share (the work it splits only for more than one
+ * thread, as a ZIP EXR's bands, would otherwise run outside any loop). On one thread the
  * wall time minus it is what runs outside any loop; the task time on two threads against one
  * is what sharing the machine costs the tasks themselves. bench/threads_split.sh reads these
  * over many runs. */
@@ -163,6 +165,7 @@ int main(int argc, char **argv)
         if (!pool) return 1;
         cd.parallel_for = timed_pool_parallel_for;
         cd.parallel_host = pool;
+        cd.threads = threads > 2 ? threads : 2;
         t.pool = pool;
     }
     ibl_context *ctx = NULL;

@@ -4,6 +4,7 @@
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 enum { MAX_THREADS = 64 };
@@ -20,8 +21,11 @@ struct timed_pool {
     int open; /* under lock: the current loop still takes workers */
     ibl_task_fn task;
     void *task_arg;
-    int count;
-    atomic_int next;
+    int shares;
+    struct share {
+        _Alignas(64) atomic_int next;
+        int end;
+    } share[MAX_THREADS]; /* each thread's cut of the indices, [next, end) */
     atomic_int active; /* workers inside the current loop */
     atomic_flag running; /* a loop is on: a loop a task starts runs inside it */
     atomic_llong task_ns[MAX_THREADS]; /* [0]: the caller */
@@ -38,13 +42,17 @@ static long long now_ns(void)
     return (long long)t.tv_sec * 1000000000LL + t.tv_nsec;
 }
 
+/* Its own share front to back, then what is left of the others'. */
 static void run_indices(timed_pool *pool, int id)
 {
     long long spent = 0;
-    for (int i; (i = atomic_fetch_add(&pool->next, 1)) < pool->count;) {
-        long long t0 = now_ns();
-        pool->task(pool->task_arg, i);
-        spent += now_ns() - t0;
+    for (int k = 0; k < pool->shares; k++) {
+        struct share *s = &pool->share[(id + k) % pool->shares];
+        for (int i; (i = atomic_fetch_add(&s->next, 1)) < s->end;) {
+            long long t0 = now_ns();
+            pool->task(pool->task_arg, i);
+            spent += now_ns() - t0;
+        }
     }
     atomic_fetch_add(&pool->task_ns[id], spent);
 }
@@ -78,8 +86,10 @@ static void *worker_main(void *p)
 timed_pool *timed_pool_create(int threads)
 {
     if (threads < 1 || threads > MAX_THREADS) return NULL;
-    timed_pool *pool = calloc(1, sizeof *pool);
+    size_t bytes = (sizeof(timed_pool) + 63) / 64 * 64;
+    timed_pool *pool = aligned_alloc(64, bytes);
     if (!pool) return NULL;
+    memset(pool, 0, bytes);
     pool->threads = threads;
     atomic_flag_clear(&pool->running);
     pthread_mutex_init(&pool->lock, NULL);
@@ -118,8 +128,12 @@ void timed_pool_parallel_for(void *host, int count, ibl_task_fn task, void *task
         return;
     }
     pthread_mutex_lock(&pool->lock);
-    pool->task = task, pool->task_arg = task_arg, pool->count = count;
-    atomic_store(&pool->next, 0);
+    pool->task = task, pool->task_arg = task_arg;
+    pool->shares = pool->threads < count ? pool->threads : count;
+    for (int s = 0; s < pool->shares; s++) {
+        atomic_store(&pool->share[s].next, (int)((long long)count * s / pool->shares));
+        pool->share[s].end = (int)((long long)count * (s + 1) / pool->shares);
+    }
     pool->open = pool->threads > 1;
     atomic_fetch_add(&pool->generation, 1u);
     pthread_cond_broadcast(&pool->wake);

@@ -4,8 +4,9 @@
  * outside them (on one thread, wall minus task time) is its serial part, and the task time on
  * two threads against one is what running both at once costs each (a shared memory bus, a
  * host's two virtual CPUs on one core). The loops are shared out as by the library's pool:
- * indices from one atomic counter, workers that wait awake 0.5 ms before they sleep, and a
- * worker that wakes after the caller took every index stays out of that loop. */
+ * one contiguous share of the indices per thread, which each runs before it takes from the
+ * others', workers that wait awake 0.5 ms before they sleep, and a worker that wakes after
+ * the caller took every index stays out of that loop. */
 #ifndef IBL_BENCH_TIMED_POOL_H
 #define IBL_BENCH_TIMED_POOL_H
 
