@@ -418,8 +418,9 @@ static void pool_destroy(thread_pool *pool)
 static thread_pool *pool_create(int workers)
 {
     /* the index shares sit on cache lines of their own: the pool is aligned as they are */
-    size_t bytes = (sizeof(thread_pool) + _Alignof(thread_pool) - 1) / _Alignof(thread_pool) * _Alignof(thread_pool);
-    thread_pool *pool = aligned_alloc(_Alignof(thread_pool), bytes);
+    size_t align = _Alignof(thread_pool);
+    size_t bytes = (sizeof(thread_pool) + align - 1) / align * align;
+    thread_pool *pool = aligned_alloc(align, bytes);
     if (!pool) return NULL;
     memset(pool, 0, bytes);
     atomic_flag_clear(&pool->running);
