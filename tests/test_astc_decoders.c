@@ -11,7 +11,6 @@
 #include "core/pixel_format.h"
 
 #include <math.h>
-#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -114,32 +113,6 @@ static void reuse_matches_fresh(void **state)
     }
 }
 
-/* A host's parallel-for that runs the tasks on threads of its own, four at a time. */
-typedef struct host_job {
-    int count;
-    atomic_int next;
-    ibl_task_fn task;
-    void *arg;
-} host_job;
-
-static void *host_worker(void *p)
-{
-    host_job *j = p;
-    for (int i; (i = atomic_fetch_add(&j->next, 1)) < j->count;) j->task(j->arg, i);
-    return NULL;
-}
-
-static void host_parallel_for(void *host, int count, ibl_task_fn task, void *task_arg)
-{
-    (void)host;
-    host_job j = {count, 0, task, task_arg};
-    pthread_t t[4];
-    int started = 0;
-    while (started < 4 && pthread_create(&t[started], NULL, host_worker, &j) == 0) started++;
-    host_worker(&j); /* whatever no thread took (all of it if none started) */
-    for (int i = 0; i < started; i++) pthread_join(t[i], NULL);
-}
-
 typedef struct nested_job {
     ibl_context *ctx;
     const case_data *c;
@@ -161,7 +134,9 @@ static void shared_by_threads(void **state)
 {
     case_data *c = *state;
     ibl_context_desc desc = {0};
-    desc.parallel_for = host_parallel_for;
+    test_host host = {.threads = 4};
+    desc.parallel_for = test_host_parallel_for;
+    desc.parallel_host = &host;
     ibl_context *ctx = NULL;
     assert_int_equal(ibl_context_create(&desc, &ctx), IBL_OK);
     nested_job j = {ctx, c, 0};

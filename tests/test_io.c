@@ -5,8 +5,6 @@
 #include <errno.h>
 #include <math.h>
 #include <png.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -777,38 +775,6 @@ static void large_inputs_identical_at_any_thread_count(void **state)
     ibl_context_destroy(one);
 }
 
-/* A host's parallel-for on two threads (the caller and one of its own per loop), which
- * remembers the largest loop it was given. */
-typedef struct two_thread_host {
-    atomic_int largest_loop;
-} two_thread_host;
-
-typedef struct host_loop {
-    atomic_int next;
-    int count;
-    ibl_task_fn task;
-    void *arg;
-} host_loop;
-
-static void *host_loop_run(void *p)
-{
-    host_loop *h = p;
-    for (int i; (i = atomic_fetch_add(&h->next, 1)) < h->count;) h->task(h->arg, i);
-    return NULL;
-}
-
-static void two_thread_parallel_for(void *host, int count, ibl_task_fn task, void *arg)
-{
-    two_thread_host *t = host;
-    int seen = atomic_load(&t->largest_loop);
-    while (count > seen && !atomic_compare_exchange_weak(&t->largest_loop, &seen, count)) {}
-    host_loop h = {0, count, task, arg};
-    pthread_t other;
-    int started = pthread_create(&other, NULL, host_loop_run, &h) == 0;
-    host_loop_run(&h);
-    if (started) pthread_join(other, NULL);
-}
-
 /* A host that says it runs loops on two threads gets the work split for two: the ZIP EXR's
  * bands (1000x1024: 64 chunks of 16 rows, in 16 bands) come to it as one loop and decode to
  * the same pixels as on one thread; a host that says nothing gets them in order on the
@@ -829,8 +795,8 @@ static void host_parallel_for_told_its_threads(void **state)
     ibl_image ref;
     assert_int_equal(ibl_read_image(one, path, NULL, &ref, NULL), IBL_OK);
     for (int told = 0; told <= 2; told += 2) {
-        two_thread_host host = {0};
-        ibl_context_desc d = {.parallel_for = two_thread_parallel_for, .parallel_host = &host,
+        test_host host = {.threads = 2};
+        ibl_context_desc d = {.parallel_for = test_host_parallel_for, .parallel_host = &host,
                               .threads = told};
         ibl_context *ctx;
         assert_int_equal(ibl_context_create(&d, &ctx), IBL_OK);

@@ -3,6 +3,8 @@
 #include <png.h>
 
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -174,3 +176,34 @@ void test_png_write_to_memory(void *png_write_struct, test_bytes *out)
     png_set_write_fn((png_structp)png_write_struct, out, png_sink_write, png_sink_flush);
 }
 
+
+typedef struct host_loop {
+    atomic_int next;
+    int count;
+    ibl_task_fn task;
+    void *arg;
+} host_loop;
+
+static void *host_loop_run(void *p)
+{
+    host_loop *h = p;
+    for (int i; (i = atomic_fetch_add(&h->next, 1)) < h->count;) h->task(h->arg, i);
+    return NULL;
+}
+
+void test_host_parallel_for(void *host, int count, ibl_task_fn task, void *task_arg)
+{
+    test_host *t = host;
+    /* loops may start inside tasks, on any thread */
+    int seen = atomic_load(&t->largest_loop);
+    while (count > seen && !atomic_compare_exchange_weak(&t->largest_loop, &seen, count)) {}
+    host_loop h = {0, count, task, task_arg};
+    enum { MAX_EXTRA = 15 };
+    pthread_t extra[MAX_EXTRA];
+    int started = 0;
+    while (started < t->threads - 1 && started < MAX_EXTRA &&
+           pthread_create(&extra[started], NULL, host_loop_run, &h) == 0)
+        started++;
+    host_loop_run(&h); /* whatever no thread took (all of it if none started) */
+    for (int i = 0; i < started; i++) pthread_join(extra[i], NULL);
+}

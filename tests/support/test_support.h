@@ -3,6 +3,7 @@
 #define IBL_TEST_SUPPORT_H
 
 #include <setjmp.h>
+#include <stdatomic.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -35,6 +36,15 @@ typedef struct test_bytes {
 } test_bytes;
 /* Makes a libpng write struct (png_structp) write into out. */
 void test_png_write_to_memory(void *png_write_struct, test_bytes *out);
+
+/* A host's parallel-for (ibl_context_desc.parallel_for with .parallel_host a test_host): each
+ * loop runs on the calling thread and threads - 1 threads started for it, which take its
+ * indices from one counter; the host remembers the largest loop it was given. */
+typedef struct test_host {
+    int threads;
+    atomic_int largest_loop;
+} test_host;
+void test_host_parallel_for(void *host, int count, ibl_task_fn task, void *task_arg);
 
 /* Fills a cube with a constant colour. */
 void test_fill_cube(ibl_cubemap *cube, float r, float g, float b);
