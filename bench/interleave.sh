@@ -23,12 +23,12 @@ for ((round = 0; round < ROUNDS; round++)); do
     start=$EPOCHREALTIME
     eval "${commands[$k]}" >/dev/null 2>&1
     end=$EPOCHREALTIME
-    echo "${labels[$k]} $start $end" >>"$times"
+    echo "$k $start $end" >>"$times"
   done
 done
-for label in "${labels[@]}"; do
-  awk -v l="$label" '$1 == l { print ($3 - $2) * 1000 }' "$times" | sort -g |
-    awk -v l="$label" '{ v[NR] = $1 }
+for k in "${!labels[@]}"; do
+  awk -v k="$k" '$1 == k { print ($3 - $2) * 1000 }' "$times" | sort -g |
+    awk -v l="${labels[$k]}" '{ v[NR] = $1 }
       END { m = (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2
             printf "%-12s median %8.1f ms   quartiles %8.1f %8.1f   fastest %8.1f\n", l, m,
                    v[int((NR + 3) / 4)], v[int((3 * NR + 3) / 4)], v[1] }'

@@ -6,7 +6,9 @@
 # RUNS overrides). With OTHER_IBL (another build's ibl, e.g. the previous commit's in a git
 # worktree) each hyperfine call runs both binaries side by side. The ratio to read is the
 # -j 1 mean over the -j 2 mean; on a shared host also compare user+sys, which others' load
-# changes less than the wall clock.
+# changes less than the wall clock. Then the same commands in turn (bench/interleave.sh, RUNS
+# rounds, medians): hyperfine's series of two-thread runs can sit in a slower state of this
+# host for seconds (docs/PERFORMANCE.md "At large sizes"), which interleaved runs share out.
 # Last, bench_pool_ceiling at 1 and 2 threads: what a perfectly parallel process of the same
 # shape gains on this host.
 set -eu
@@ -25,9 +27,13 @@ for c in "$(dirname "$0")/../tests/data/city.exr|256" "$DIR/city2048.exr|512"; d
   else
     hyperfine -N -w 2 -r "$RUNS" "$IBL $cmd -j 1" "$IBL $cmd -j 2"
   fi
+  bash "$(dirname "$0")/interleave.sh" "$RUNS" "$size -j 1" "$IBL $cmd -j 1" "$size -j 2" "$IBL $cmd -j 2"
 done
 # The host's own ceiling for a process of the 256 command's shape (bench_pool_ceiling.c: as
 # many parallel-fors through the same pool, arithmetic only, no serial code): the ratio the
 # command's can be read against.
 C=$BUILD/bench/bench_pool_ceiling
-if [ -x "$C" ]; then hyperfine -N -w 2 -r "$RUNS" "$C 1" "$C 2"; fi
+if [ -x "$C" ]; then
+  hyperfine -N -w 2 -r "$RUNS" "$C 1" "$C 2"
+  bash "$(dirname "$0")/interleave.sh" "$RUNS" "ceiling 1" "$C 1" "ceiling 2" "$C 2"
+fi
