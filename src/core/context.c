@@ -1,5 +1,6 @@
 /* The context: allocator, memory budget, failure message, progress and the parallel-for hook
- * with a default thread pool (workers pull indices from an atomic counter). */
+ * with a default thread pool (each thread runs its own contiguous share of a loop's indices,
+ * then takes from the others'). */
 #define _POSIX_C_SOURCE 200809L
 #include "ibl/core.h"
 #include "core/cpu.h"
