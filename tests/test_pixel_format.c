@@ -364,6 +364,41 @@ static void half_bulk_packing(void **state)
     }
 }
 
+/* ibl_unpack_texels from RGBA16F converts two texels at a time: every one of the 65,536 codes
+ * (as 16,384 texels, each code once in each channel) must give the bits of ibl_half_to_float,
+ * itself checked against the codes' values in double above (denormals, signed zeros, Inf and
+ * NaN payloads included), and so must every count and start, odd ones ending on the one-texel
+ * path. */
+static void half_bulk_unpacking(void **state)
+{
+    (void)state;
+    enum { TEXELS = 16384 };
+    uint8_t *buf = malloc(TEXELS * 8);
+    float *out = malloc((TEXELS + 1) * 4 * sizeof(float));
+    assert_non_null(buf);
+    assert_non_null(out);
+    for (int shift = 0; shift < 4; shift++) {
+        for (uint32_t t = 0; t < TEXELS; t++)
+            for (uint32_t c = 0; c < 4; c++) {
+                uint16_t h = (uint16_t)(t * 4 + (c + (uint32_t)shift) % 4);
+                buf[t * 8 + c * 2] = (uint8_t)h;
+                buf[t * 8 + c * 2 + 1] = (uint8_t)(h >> 8);
+            }
+        size_t first = (size_t)shift, count = TEXELS - (size_t)shift * 3;
+        out[count * 4] = 12345.0f;
+        ibl_unpack_texels(IBL_FORMAT_RGBA16F, buf + first * 8, count, out);
+        assert_true(out[count * 4] == 12345.0f); /* nothing written past the texels */
+        for (size_t i = 0; i < count * 4; i++) {
+            uint16_t h = (uint16_t)(buf[first * 8 + 2 * i] | buf[first * 8 + 2 * i + 1] << 8);
+            if (fbits(out[i]) != fbits(ibl_half_to_float(h)))
+                fail_msg("half 0x%04x: 0x%08x, one at a time 0x%08x", h, fbits(out[i]),
+                         fbits(ibl_half_to_float(h)));
+        }
+    }
+    free(out);
+    free(buf);
+}
+
 static void texel_packing(void **state)
 {
     (void)state;
@@ -419,6 +454,7 @@ int main(void)
         cmocka_unit_test(rg11b10_reference),
         cmocka_unit_test(texel_packing),
         cmocka_unit_test(half_bulk_packing),
+        cmocka_unit_test(half_bulk_unpacking),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -274,6 +274,37 @@ static size_t pack_rgba16f_sse2(const float *rgba, size_t count, uint8_t *dst)
     }
     return i;
 }
+
+/* Halves to floats, 8 at a time (two RGBA texels), exact for every code as ibl_half_to_float:
+ * the exponent is re-biased in place (112 more; 112 more again for Inf and NaN, whose payload
+ * is kept), and a zero or denormal half, m * 2^-24, is made as the float 2^-14 (1 + m/1024)
+ * less 2^-14, a subtraction without rounding. Returns the texels done. */
+static size_t unpack_rgba16f_sse2(const uint8_t *src, size_t count, float *rgba)
+{
+    const __m128i magnitude = _mm_set1_epi32(0x7fff), exponent = _mm_set1_epi32(0x0f800000);
+    const __m128i rebias = _mm_set1_epi32(112 << 23), one_exponent = _mm_set1_epi32(1 << 23);
+    const __m128 two_to_minus_14 = _mm_castsi128_ps(_mm_set1_epi32(113 << 23));
+    const __m128i zero = _mm_setzero_si128();
+    size_t i = 0;
+    for (; i + 2 <= count; i += 2) {
+        __m128i h8 = _mm_loadu_si128((const __m128i *)(const void *)(src + i * 8));
+        __m128i halves[2] = {_mm_unpacklo_epi16(h8, zero), _mm_unpackhi_epi16(h8, zero)};
+        for (int k = 0; k < 2; k++) {
+            __m128i h = halves[k];
+            __m128i o = _mm_slli_epi32(_mm_and_si128(h, magnitude), 13);
+            __m128i e = _mm_and_si128(o, exponent);
+            o = _mm_add_epi32(o, rebias);
+            o = _mm_add_epi32(o, _mm_and_si128(_mm_cmpeq_epi32(e, exponent), rebias));
+            __m128i small = _mm_cmpeq_epi32(e, zero);
+            __m128 renormal = _mm_sub_ps(_mm_castsi128_ps(_mm_add_epi32(o, one_exponent)), two_to_minus_14);
+            __m128i v = _mm_or_si128(_mm_andnot_si128(small, o),
+                                     _mm_and_si128(small, _mm_castps_si128(renormal)));
+            v = _mm_or_si128(v, _mm_slli_epi32(_mm_srli_epi32(h, 15), 31));
+            _mm_storeu_ps(rgba + (i + (size_t)k) * 4, _mm_castsi128_ps(v));
+        }
+    }
+    return i;
+}
 #endif
 
 /* Stored as the format's largest value instead of infinity (or its own clamp): counts the
@@ -361,8 +392,15 @@ void ibl_unpack_texels(ibl_format format, const uint8_t *src, size_t count, floa
     switch (format) {
     case IBL_FORMAT_RGBA16F:
     case IBL_FORMAT_RG16F:
-    case IBL_FORMAT_RGB16F:
-        for (size_t i = 0; i < count; i++) {
+    case IBL_FORMAT_RGB16F: {
+        size_t i = 0;
+#if defined(__SSE2__)
+        if (format == IBL_FORMAT_RGBA16F) {
+            i = unpack_rgba16f_sse2(src, count, rgba);
+            src += i * 8;
+        }
+#endif
+        for (; i < count; i++) {
             float *p = rgba + i * 4;
             p[1] = p[2] = 0.0f;
             p[3] = 1.0f;
@@ -370,6 +408,7 @@ void ibl_unpack_texels(ibl_format format, const uint8_t *src, size_t count, floa
                 p[c] = ibl_half_to_float((uint16_t)(src[0] | (src[1] << 8)));
         }
         break;
+    }
     case IBL_FORMAT_RGBA32F:
     case IBL_FORMAT_RG32F:
     case IBL_FORMAT_RGB32F:
