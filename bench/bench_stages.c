@@ -13,8 +13,8 @@
  * about 0.1 ms a parallel-for), the page faults taken and the RSS after it. Linux only (the
  * /proc files); elsewhere the thread and RSS columns are blank.
  *
- * --task-times runs the loops on bench/timed_pool.c instead of the library's pool (a host
- * parallel-for that shares them out the same way) and adds a column: the time spent inside
+ * --task-times runs the loops through bench/timed_pool.c (a host parallel-for that runs them
+ * on a second context's built-in pool, every task timed) and adds a column: the time spent inside
  * the loops' tasks, summed over the threads. The library is told at least two threads, so
  * that one thread runs the loops two would share (the work it splits only for more than one
  * thread, as a ZIP EXR's bands, would otherwise run outside any loop). On one thread the

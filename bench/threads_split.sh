@@ -1,7 +1,7 @@
 #!/bin/sh
 # bench/threads_split.sh BUILD [IN] [SIZE]: why two threads gain what they gain on this host,
 # stage by stage, for the prefilter's calls in one process (bench_stages --task-times: the
-# loops run on bench/timed_pool.c, which times every task). Runs bench_stages at 1 and 2
+# loops run on the library's pool through bench/timed_pool.c, which times every task). Runs bench_stages at 1 and 2
 # threads in turn, RUNS rounds (default 15), and prints per stage the medians of the wall
 # time and of the time inside tasks. From the totals:
 #   outside  the one-thread wall time spent outside any loop (reading the file, OpenEXR's

@@ -1,12 +1,10 @@
 /* A host parallel-for for benchmarks that times every task: ibl_context_desc.parallel_for with
  * .parallel_host a timed_pool, and .threads its thread count, so the library splits its work
- * as for its own pool. Each thread's time inside tasks is summed; what the process spends
- * outside them (on one thread, wall minus task time) is its serial part, and the task time on
- * two threads against one is what running both at once costs each (a shared memory bus, a
- * host's two virtual CPUs on one core). The loops are shared out as by the library's pool:
- * one contiguous share of the indices per thread, which each runs before it takes from the
- * others', workers that wait awake 0.5 ms before they sleep, and a worker that wakes after
- * the caller took every index stays out of that loop. */
+ * as for its own pool. The loops run on the library's own pool (a second context's, so they
+ * are shared out exactly as in a command), each task wrapped in two clock reads; the task
+ * times are summed over the threads. What the process spends outside them (on one thread, wall
+ * minus task time) is its serial part, and the task time on two threads against one is what
+ * running both at once costs each (a shared memory bus, a host's two virtual CPUs). */
 #ifndef IBL_BENCH_TIMED_POOL_H
 #define IBL_BENCH_TIMED_POOL_H
 

@@ -303,6 +303,19 @@ static void phong_levels_error(const float table[2], double rms[2], double max[2
     free(im.pixels);
 }
 
+/* The bars of chain_matches_input at both levels of phong_levels_error's chain, and the check
+ * that fails if the refinement is switched off: the working cube alone must miss the first. */
+static void assert_phong_levels_refined(const float table[2])
+{
+    double rms[2], max[2], plain_rms[2];
+    phong_levels_error(table, rms, max, plain_rms);
+    for (int level = 0; level < 2; level++) {
+        assert_true(rms[level] < 0.005);
+        assert_true(max[level] < 0.02);
+        assert_true(plain_rms[level] > 0.005);
+    }
+}
+
 /* chain_matches_input for a Phong chain whose two levels are both refined at every output
  * texel: exponents 2049 (cmft's first, 2.3 working texels a half width) and 250 (6.6): the
  * sources' Phong near field (summed in float from the group's centre, specular_sources_apply.c)
@@ -310,16 +323,9 @@ static void phong_levels_error(const float table[2], double rms[2], double max[2
 static void phong_chain_matches_input(void **state)
 {
     (void)state;
-    double rms[2], max[2], plain_rms[2];
-    phong_levels_error((const float[]){2049.0f, 250.0f}, rms, max, plain_rms);
-    for (int level = 0; level < 2; level++) {
-        /* the bars of chain_matches_input: measured 0.044% RMS and 0.06% max at level 0,
-         * 0.009% and 0.06% at level 1; the working cube alone is 4.2% and 0.63% RMS there, so
-         * the last check fails if the refinement is switched off */
-        assert_true(rms[level] < 0.005);
-        assert_true(max[level] < 0.02);
-        assert_true(plain_rms[level] > 0.005);
-    }
+    /* measured 0.044% RMS and 0.06% max at level 0, 0.009% and 0.06% at level 1; the working
+     * cube alone is 4.2% and 0.63% RMS there */
+    assert_phong_levels_refined((const float[]){2049.0f, 250.0f});
 }
 
 /* The same where both levels' refinement is summed on a grid of half the output's edge and
@@ -328,17 +334,10 @@ static void phong_chain_matches_input(void **state)
 static void phong_grid_refinement_matches_input(void **state)
 {
     (void)state;
-    double rms[2], max[2], plain_rms[2];
-    phong_levels_error((const float[]){600.0f, 200.0f}, rms, max, plain_rms);
-    for (int level = 0; level < 2; level++) {
-        /* the bars of chain_matches_input: measured 0.034% RMS and 0.05% max at level 0, 0.031%
-         * and 0.06% at level 1 (summed at every output texel: 0.025% / 0.04%, 0.027% / 0.06%);
-         * the working cube alone is 1.6% and 0.54% RMS, so the last check fails if the
-         * refinement is switched off */
-        assert_true(rms[level] < 0.005);
-        assert_true(max[level] < 0.02);
-        assert_true(plain_rms[level] > 0.005);
-    }
+    /* measured 0.034% RMS and 0.05% max at level 0, 0.031% and 0.06% at level 1 (summed at
+     * every output texel: 0.025% / 0.04%, 0.027% / 0.06%); the working cube alone is 1.6% and
+     * 0.54% RMS */
+    assert_phong_levels_refined((const float[]){600.0f, 200.0f});
 }
 
 /* A round sun of 0.6 degrees across (pixels weighted by the share of their area inside it, as

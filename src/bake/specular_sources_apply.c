@@ -243,8 +243,10 @@ static void texel_direction(int face, int n, int x, int y, double R[3])
     for (int m = 0; m < 3; m++) R[m] /= rl;
 }
 
-/* The weights of the GRID_TAPS points at -1 - GRID_TAP_OFFSET .. GRID_TAPS - 1 - GRID_TAP_OFFSET
- * around a position t in [0, 1) after point 0: Lagrange's polynomial through them. */
+/* The weights of the GRID_TAPS points at -GRID_TAP_OFFSET .. GRID_TAPS - 1 - GRID_TAP_OFFSET
+ * around a position t in [0, 1) after point 0: Lagrange's polynomial through them. The same
+ * taps as the fast filter's lagrange grids (specular/combine.c), in double here: those are
+ * summed in float, and their weights' float bits are part of every chain's output. */
 static void lagrange_weights(double t, double w[GRID_TAPS])
 {
     for (int k = 0; k < GRID_TAPS; k++) {
