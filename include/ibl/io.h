@@ -70,6 +70,21 @@ ibl_status ibl_read_texture(ibl_context *ctx, const char *path, const ibl_read_d
 /* The same from memory; name is used in messages (e.g. the path, or "<memory>"). */
 ibl_status ibl_decode_texture(ibl_context *ctx, const void *bytes, size_t size, const char *name,
                               const ibl_read_desc *desc, ibl_texture *out, ibl_file_info *info);
+/* What the bytes hold, from the header alone, so that work depending only on the size can be
+ * planned before (or beside) the decode: type, format, kind, width, height, depth, levels and
+ * has_alpha, equal to the info ibl_decode_texture gives (with default read options) for every
+ * file it accepts; info->pixels stays zero, as no pixel is looked at, decoded or allocated.
+ * A malformed header fails as the full decode does, with a one-line message naming `name`.
+ * Checks that need the pixel data are not made: a file whose header is sound but whose pixel
+ * data is cut short or corrupt (an EXR's chunks, a PNG's IDAT, a container's level that runs
+ * past the end) may succeed here and fail in ibl_decode_texture. Nor is the memory budget
+ * consulted: nothing the size of the image is allocated. */
+ibl_status ibl_decode_info(ibl_context *ctx, const void *bytes, size_t size, const char *name,
+                           ibl_file_info *info);
+/* ibl_decode_info for a file: reads only its head (the first 64 KiB; more, up to the whole
+ * file, when a header runs past that, e.g. an EXR with large attributes), so that a 100 MB
+ * EXR costs a few page reads. Pipes and devices are read whole. Errors name the path. */
+ibl_status ibl_read_info(ibl_context *ctx, const char *path, ibl_file_info *info);
 
 typedef enum ibl_tonemap {
     IBL_TONEMAP_DEFAULT = 0, /* filmic for 8-bit outputs, none otherwise */

@@ -203,13 +203,18 @@ ibl_status ibl__dds_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_w
     return IBL_OK;
 }
 
-ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
-                           ibl_texture *out, ibl_file_info *info)
+/* What the header (and its DX10 extension) says. */
+typedef struct dds_header {
+    const dxgi_map *dx;
+    ibl_texture_kind kind;
+    int width, height, depth, levels; /* depth: slices, or a cube-map array's layers */
+    size_t data_at;                   /* the first texel block                       */
+} dds_header;
+
+static ibl_status parse_header(ibl_context *ctx, const uint8_t *bytes, size_t size,
+                               const char *name, dds_header *hd)
 {
-    if (!name) name = "<dds>";
-    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
-    memset(out, 0, sizeof *out);
-    if (!bytes && size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
+    memset(hd, 0, sizeof *hd);
     if (size < 4 || ibl__rd32(bytes) != DDS_MAGIC)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a DDS file (wrong magic)", name);
     if (size < DATA_OFFSET_LEGACY)
@@ -286,7 +291,49 @@ ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     uint64_t levels = mips ? mips : 1;
     ibl_status st = ibl__check_dimensions(ctx, name, kind, width, height, depth, levels);
     if (st != IBL_OK) return st;
-    int w = (int)width, hh = (int)height, d = (int)depth;
+    hd->dx = dx;
+    hd->kind = kind;
+    hd->width = (int)width;
+    hd->height = (int)height;
+    hd->depth = (int)depth;
+    hd->levels = (int)levels;
+    hd->data_at = data_at;
+    return IBL_OK;
+}
+
+ibl_status ibl__dds_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                         ibl_file_info *info)
+{
+    dds_header hd;
+    ibl_status st = parse_header(ctx, bytes, size, name, &hd);
+    if (st != IBL_OK) return st;
+    ibl_texture tex; /* without texels: what ibl__fill_info reads */
+    memset(&tex, 0, sizeof tex);
+    tex.kind = hd.kind;
+    tex.width = hd.width;
+    tex.height = hd.height;
+    tex.depth = hd.depth;
+    tex.levels = hd.levels;
+    tex.format = hd.dx->format;
+    ibl__fill_info(info, IBL_FILE_DDS, &tex);
+    return IBL_OK;
+}
+
+ibl_status ibl__dds_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                           ibl_texture *out, ibl_file_info *info)
+{
+    if (!name) name = "<dds>";
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
+    memset(out, 0, sizeof *out);
+    if (!bytes && size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
+    dds_header hd;
+    ibl_status st = parse_header(ctx, bytes, size, name, &hd);
+    if (st != IBL_OK) return st;
+    const dxgi_map *dx = hd.dx;
+    ibl_texture_kind kind = hd.kind;
+    size_t data_at = hd.data_at;
+    uint64_t levels = (uint64_t)hd.levels;
+    int w = hd.width, hh = hd.height, d = hd.depth;
     int faces = kind == IBL_TEXTURE_CUBE ? 6 : kind == IBL_TEXTURE_CUBE_ARRAY ? 6 * d : 1;
     /* at most 17 levels * 6 * 2^48 * 16 (faces * 2^32 texels when 2^16 layers): fits in 64 bits */
     uint64_t need = 0;

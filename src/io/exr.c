@@ -45,6 +45,7 @@ typedef struct exr_shape {
     const uint8_t *chlist; /* part 0's channel list (checked)     */
     size_t chlist_len;
     size_t table;          /* the chunk offset table's position   */
+    uint64_t chunks;       /* level 0's chunks                    */
 } exr_shape;
 
 /* Scanlines per chunk of each compression (OpenEXR file layout). */
@@ -198,8 +199,9 @@ static int64_t box_extent(const int32_t *box, int axis)
     return (int64_t)box[2 + axis] - (int64_t)box[axis] + 1;
 }
 
-static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t size, const char *name,
-                                  exr_shape *sh)
+/* The headers (up to the chunk offset table): what ibl__exr_info checks of the structure. */
+static ibl_status check_headers(ibl_context *ctx, const uint8_t *b, size_t size, const char *name,
+                                exr_shape *sh)
 {
     memset(sh, 0, sizeof *sh);
     if (size < 8 || le32(b) != 20000630)
@@ -268,11 +270,23 @@ static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t siz
         if (w * lpc * sh->pixel_bytes > EXR_MAX_BUFFER)
             return ibl__fail(ctx, IBL_ERR_UNSUPPORTED, "%s: OpenEXR scanline blocks are too large", name);
     }
-    /* Every chunk of level 0 must exist: offset in the file, its header and data inside, and
-     * enough stored bytes for its pixels at the compression's best ratio. */
+    sh->table = pos;
+    sh->chunks = chunks;
+    return IBL_OK;
+}
+
+/* The headers, then every chunk of level 0 must exist: offset in the file, its header and
+ * data inside, and enough stored bytes for its pixels at the compression's best ratio. */
+static ibl_status check_structure(ibl_context *ctx, const uint8_t *b, size_t size, const char *name,
+                                  exr_shape *sh)
+{
+    ibl_status s = check_headers(ctx, b, size, name, sh);
+    if (s != IBL_OK) return s;
+    size_t pos = sh->table;
+    uint64_t chunks = sh->chunks;
+    uint64_t w = (uint64_t)box_extent(sh->data, 0), h = (uint64_t)box_extent(sh->data, 1);
     if (chunks > (size - pos) / 8)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated OpenEXR (offset table)", name);
-    sh->table = pos;
     size_t table_end = pos + (size_t)chunks * 8;
     size_t chunk_header = (sh->multipart ? 4u : 0u) + (sh->tiled ? 16u : 4u);
     uint64_t ratio = sh->subsampled ? 0 : max_expansion[sh->compression];
@@ -706,6 +720,54 @@ static int read_pixels(ibl_context *ctx, const uint8_t *bytes, size_t size, cons
     return rc;
 }
 
+/* The windows OpenEXR parsed must be those check_headers read (trust only what was checked),
+ * and the display window must be covered enough by the data window (EXR_MAX_FILL_RATIO). */
+static ibl_status check_windows(ibl_context *ctx, const char *name, const exr_shape *sh,
+                                const ibl__exr_header *hd)
+{
+    if (hd->data_min_x != sh->data[0] || hd->data_min_y != sh->data[1] ||
+        hd->data_max_x != sh->data[2] || hd->data_max_y != sh->data[3] ||
+        hd->display_min_x != sh->display[0] || hd->display_min_y != sh->display[1] ||
+        hd->display_max_x != sh->display[2] || hd->display_max_y != sh->display[3])
+        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: inconsistent OpenEXR windows", name);
+    int dw = (int)box_extent(sh->data, 0), dh = (int)box_extent(sh->data, 1);
+    int vw = (int)box_extent(sh->display, 0), vh = (int)box_extent(sh->display, 1);
+    uint64_t display = (uint64_t)vw * (uint64_t)vh, covered = window_overlap(sh);
+    if (display > EXR_FREE_FILL && covered < display / EXR_MAX_FILL_RATIO)
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
+                         "%s: the data window (%dx%d) covers %llu of the %dx%d texels of the "
+                         "display window; ibl fills at most %d/%d of an image with zeros",
+                         name, dw, dh, (unsigned long long)covered, vw, vh, EXR_MAX_FILL_RATIO - 1,
+                         EXR_MAX_FILL_RATIO);
+    return IBL_OK;
+}
+
+/* The format a decode reports: half when every channel read is half, alpha when A exists. */
+static ibl_format exr_format(const ibl__exr_header *hd)
+{
+    return hd->all_half ? (hd->has_alpha ? IBL_FORMAT_RGBA16F : IBL_FORMAT_RGB16F)
+                        : (hd->has_alpha ? IBL_FORMAT_RGBA32F : IBL_FORMAT_RGB32F);
+}
+
+ibl_status ibl__exr_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                         ibl_file_info *info)
+{
+    exr_shape sh;
+    ibl_status s = check_headers(ctx, bytes, size, name, &sh);
+    if (s != IBL_OK) return s;
+    char err[256] = "";
+    ibl__exr_header hd;
+    int rc = ibl__exr_read_header(bytes, size, &hd, err, sizeof err);
+    if (rc) return ibl__fail(ctx, (ibl_status)rc, "%s: %s", name, err);
+    s = check_windows(ctx, name, &sh, &hd);
+    if (s != IBL_OK) return s;
+    info->width = (int)box_extent(sh.display, 0); /* the decode's image is the display window */
+    info->height = (int)box_extent(sh.display, 1);
+    info->format = exr_format(&hd);
+    info->has_alpha = hd.has_alpha;
+    return IBL_OK;
+}
+
 ibl_status ibl__exr_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                            ibl_texture *out, ibl_file_info *info)
 {
@@ -726,26 +788,15 @@ ibl_status ibl__exr_decode_sanitized(ibl_context *ctx, const uint8_t *bytes, siz
     ibl__exr_header hd;
     int rc = ibl__exr_open(bytes, size, &reader, &hd, err, sizeof err);
     if (rc) return ibl__fail(ctx, (ibl_status)rc, "%s: %s", name, err);
-    /* OpenEXR parsed the same windows; trust only what was checked above. */
-    if (hd.data_min_x != sh.data[0] || hd.data_min_y != sh.data[1] || hd.data_max_x != sh.data[2] ||
-        hd.data_max_y != sh.data[3] || hd.display_min_x != sh.display[0] ||
-        hd.display_min_y != sh.display[1] || hd.display_max_x != sh.display[2] ||
-        hd.display_max_y != sh.display[3]) {
+    s = check_windows(ctx, name, &sh, &hd);
+    if (s != IBL_OK) {
         ibl__exr_close(reader);
-        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: inconsistent OpenEXR windows", name);
+        return s;
     }
     int dw = (int)box_extent(sh.data, 0), dh = (int)box_extent(sh.data, 1);
     int vw = (int)box_extent(sh.display, 0), vh = (int)box_extent(sh.display, 1);
     int same = memcmp(sh.data, sh.display, sizeof sh.data) == 0;
-    uint64_t display = (uint64_t)vw * (uint64_t)vh, covered = window_overlap(&sh);
-    if (display > EXR_FREE_FILL && covered < display / EXR_MAX_FILL_RATIO) {
-        ibl__exr_close(reader);
-        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
-                         "%s: the data window (%dx%d) covers %llu of the %dx%d texels of the "
-                         "display window; ibl fills at most %d/%d of an image with zeros",
-                         name, dw, dh, (unsigned long long)covered, vw, vh, EXR_MAX_FILL_RATIO - 1,
-                         EXR_MAX_FILL_RATIO);
-    }
+    uint64_t display = (uint64_t)vw * (uint64_t)vh;
     uint64_t texel = 4 * sizeof(float);
     s = ibl__budget_check(ctx, display * texel + (same ? 0 : (uint64_t)dw * (uint64_t)dh * texel));
     if (s != IBL_OK) {
@@ -803,11 +854,9 @@ ibl_status ibl__exr_decode_sanitized(ibl_context *ctx, const uint8_t *bytes, siz
         }
         ibl_free(ctx, target);
     }
-    int alpha = hd.has_alpha;
-    out->format = hd.all_half ? (alpha ? IBL_FORMAT_RGBA16F : IBL_FORMAT_RGB16F)
-                              : (alpha ? IBL_FORMAT_RGBA32F : IBL_FORMAT_RGB32F);
+    out->format = exr_format(&hd);
     info->format = out->format;
-    info->has_alpha = alpha;
+    info->has_alpha = hd.has_alpha;
     return IBL_OK;
 }
 

@@ -26,6 +26,11 @@ typedef struct ibl__exr_header {
 /* Opens a file held in memory (bytes must outlive the reader). Returns 0 or a status. */
 int ibl__exr_open(const void *bytes, size_t size, ibl__exr_reader **out, ibl__exr_header *header,
                   char *err, size_t err_size);
+/* The header of part 0 alone (Imf::Header::readFrom, then the checks InputFile makes of it):
+ * what ibl__exr_open gives, without the chunk offset table or any pixel. Returns 0 or a
+ * status. */
+int ibl__exr_read_header(const void *bytes, size_t size, ibl__exr_header *header, char *err,
+                         size_t err_size);
 /* Reads the whole data window into rgba (data-window width x height texels, 4 floats each,
  * top row first); missing alpha becomes 1, grey is copied to R, G and B. */
 int ibl__exr_read(ibl__exr_reader *reader, float *rgba, char *err, size_t err_size);

@@ -8,7 +8,9 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfPartType.h>
 #include <ImfRgbaFile.h>
+#include <ImfVersion.h>
 #include <Iex.h>
 
 #include <algorithm>
@@ -103,6 +105,67 @@ struct ibl__exr_reader {
     ibl__exr_header header;
 };
 
+// What ibl__exr_header says of a parsed header: windows, the channels read and their types.
+// Returns 0 or a status with its message in err.
+static int describe_header(const Imf::Header &h, ibl__exr_header &hd, char *err, size_t err_size)
+{
+    std::memset(&hd, 0, sizeof hd);
+    const Imath::Box2i dw = h.dataWindow(), dsp = h.displayWindow();
+    hd.data_min_x = dw.min.x;
+    hd.data_min_y = dw.min.y;
+    hd.data_max_x = dw.max.x;
+    hd.data_max_y = dw.max.y;
+    hd.display_min_x = dsp.min.x;
+    hd.display_min_y = dsp.min.y;
+    hd.display_max_x = dsp.max.x;
+    hd.display_max_y = dsp.max.y;
+    const Imf::ChannelList &ch = h.channels();
+    std::string prefix;
+    if (has(ch, "R") && has(ch, "G") && has(ch, "B")) {
+        hd.layout = IBL__EXR_RGB;
+    } else if (has(ch, "Y") && has(ch, "RY") && has(ch, "BY")) {
+        hd.layout = IBL__EXR_LUMA_CHROMA;
+    } else if (has(ch, "Y")) {
+        hd.layout = IBL__EXR_GREY;
+    } else {
+        // No top-level colour: take the first layer (alphabetically) with R, G and B.
+        std::set<std::string> layers;
+        ch.layers(layers);
+        for (const std::string &l : layers) {
+            if (has(ch, l + ".R") && has(ch, l + ".G") && has(ch, l + ".B")) {
+                prefix = l + ".";
+                hd.layout = IBL__EXR_RGB;
+                break;
+            }
+        }
+        if (!hd.layout) {
+            std::string names;
+            int count = 0;
+            for (Imf::ChannelList::ConstIterator it = ch.begin(); it != ch.end() && count < 6; ++it, ++count)
+                names += std::string(count ? ", " : "") + it.name();
+            std::string msg = "no R,G,B or Y channels (found: " + names + ")";
+            set_error(err, err_size, msg.c_str());
+            return IBL_ERR_UNSUPPORTED;
+        }
+        std::snprintf(hd.layer, sizeof hd.layer, "%s", prefix.substr(0, prefix.size() - 1).c_str());
+    }
+    hd.has_alpha = has(ch, prefix + "A") ? 1 : 0;
+    hd.all_half = 1;
+    const char *used_rgb[] = {"R", "G", "B", "A"};
+    const char *used_y[] = {"Y", "RY", "BY", "A"};
+    const char **used = hd.layout == IBL__EXR_RGB ? used_rgb : used_y;
+    for (int i = 0; i < 4; i++) {
+        const Imf::Channel *c = ch.findChannel(prefix + used[i]);
+        if (!c) continue;
+        if (c->type != Imf::HALF) hd.all_half = 0;
+        if ((c->xSampling != 1 || c->ySampling != 1) && hd.layout != IBL__EXR_LUMA_CHROMA) {
+            set_error(err, err_size, "subsampled colour channels are not supported");
+            return IBL_ERR_UNSUPPORTED;
+        }
+    }
+    return 0;
+}
+
 extern "C" int ibl__exr_open(const void *bytes, size_t size, ibl__exr_reader **out,
                              ibl__exr_header *header, char *err, size_t err_size)
 {
@@ -111,64 +174,36 @@ extern "C" int ibl__exr_open(const void *bytes, size_t size, ibl__exr_reader **o
         std::unique_ptr<ibl__exr_reader> r(new ibl__exr_reader());
         r->stream.reset(new MemIStream(static_cast<const char *>(bytes), size));
         r->file.reset(new Imf::InputFile(*r->stream, 0));
-        const Imf::Header &h = r->file->header();
-        ibl__exr_header &hd = r->header;
-        std::memset(&hd, 0, sizeof hd);
-        const Imath::Box2i dw = h.dataWindow(), dsp = h.displayWindow();
-        hd.data_min_x = dw.min.x;
-        hd.data_min_y = dw.min.y;
-        hd.data_max_x = dw.max.x;
-        hd.data_max_y = dw.max.y;
-        hd.display_min_x = dsp.min.x;
-        hd.display_min_y = dsp.min.y;
-        hd.display_max_x = dsp.max.x;
-        hd.display_max_y = dsp.max.y;
-        const Imf::ChannelList &ch = h.channels();
-        std::string prefix;
-        if (has(ch, "R") && has(ch, "G") && has(ch, "B")) {
-            hd.layout = IBL__EXR_RGB;
-        } else if (has(ch, "Y") && has(ch, "RY") && has(ch, "BY")) {
-            hd.layout = IBL__EXR_LUMA_CHROMA;
-        } else if (has(ch, "Y")) {
-            hd.layout = IBL__EXR_GREY;
-        } else {
-            // No top-level colour: take the first layer (alphabetically) with R, G and B.
-            std::set<std::string> layers;
-            ch.layers(layers);
-            for (const std::string &l : layers) {
-                if (has(ch, l + ".R") && has(ch, l + ".G") && has(ch, l + ".B")) {
-                    prefix = l + ".";
-                    hd.layout = IBL__EXR_RGB;
-                    break;
-                }
-            }
-            if (!hd.layout) {
-                std::string names;
-                int count = 0;
-                for (Imf::ChannelList::ConstIterator it = ch.begin(); it != ch.end() && count < 6; ++it, ++count)
-                    names += std::string(count ? ", " : "") + it.name();
-                std::string msg = "no R,G,B or Y channels (found: " + names + ")";
-                set_error(err, err_size, msg.c_str());
-                return IBL_ERR_UNSUPPORTED;
-            }
-            std::snprintf(hd.layer, sizeof hd.layer, "%s", prefix.substr(0, prefix.size() - 1).c_str());
-        }
-        hd.has_alpha = has(ch, prefix + "A") ? 1 : 0;
-        hd.all_half = 1;
-        const char *used_rgb[] = {"R", "G", "B", "A"};
-        const char *used_y[] = {"Y", "RY", "BY", "A"};
-        const char **used = hd.layout == IBL__EXR_RGB ? used_rgb : used_y;
-        for (int i = 0; i < 4; i++) {
-            const Imf::Channel *c = ch.findChannel(prefix + used[i]);
-            if (!c) continue;
-            if (c->type != Imf::HALF) hd.all_half = 0;
-            if ((c->xSampling != 1 || c->ySampling != 1) && hd.layout != IBL__EXR_LUMA_CHROMA) {
-                set_error(err, err_size, "subsampled colour channels are not supported");
-                return IBL_ERR_UNSUPPORTED;
-            }
-        }
-        *header = hd;
+        int rc = describe_header(r->file->header(), r->header, err, err_size);
+        if (rc) return rc;
+        *header = r->header;
         *out = r.release();
+        return 0;
+    });
+}
+
+extern "C" int ibl__exr_read_header(const void *bytes, size_t size, ibl__exr_header *header,
+                                    char *err, size_t err_size)
+{
+    return guarded(err, err_size, [&]() -> int {
+        MemIStream stream(static_cast<const char *>(bytes), size);
+        // the magic number and version field (check_headers in exr.c vetted both)
+        unsigned char head[8];
+        stream.read(reinterpret_cast<char *>(head), 8);
+        int version = static_cast<int>(static_cast<uint32_t>(head[4]) | static_cast<uint32_t>(head[5]) << 8 |
+                                             static_cast<uint32_t>(head[6]) << 16 | static_cast<uint32_t>(head[7]) << 24);
+        Imf::Header h;
+        h.readFrom(stream, version); // a multi-part file's first header is part 0's
+        if (!Imf::isMultiPart(version)) {
+            // as InputFile does for a single-part file before it reads the offset table
+            if (!Imf::isNonImage(version) && h.hasType())
+                h.setType(Imf::isTiled(version) ? Imf::TILEDIMAGE : Imf::SCANLINEIMAGE);
+            h.sanityCheck(Imf::isTiled(version));
+        }
+        ibl__exr_header hd;
+        int rc = describe_header(h, hd, err, err_size);
+        if (rc) return rc;
+        *header = hd;
         return 0;
     });
 }

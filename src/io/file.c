@@ -299,12 +299,9 @@ static ibl_status wait_for_fifo_writer(ibl_context *ctx, int fd, const char *pat
     return IBL_OK;
 }
 
-static ibl_status read_file(ibl_context *ctx, const char *path, int sniff, void **bytes, size_t *size)
+/* Opens path for reading (a FIFO once a writer came) and stats it; directories are refused. */
+static ibl_status open_input(ibl_context *ctx, const char *path, int *fd_out, struct stat *st)
 {
-    if (!path || !bytes || !size)
-        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_file: missing argument");
-    *bytes = NULL;
-    *size = 0;
     int fd;
     /* O_NONBLOCK: opening a FIFO that no process writes would otherwise wait forever; reads
      * block again below, and a FIFO without a writer then reads as empty */
@@ -318,17 +315,29 @@ static ibl_status read_file(ibl_context *ctx, const char *path, int sniff, void 
     }
     int flags = fcntl(fd, F_GETFL);
     if (flags >= 0) fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
-    struct stat st;
-    if (fstat(fd, &st) != 0) {
+    if (fstat(fd, st) != 0) {
         int e = errno;
         close(fd);
         return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(e));
     }
-    if (S_ISDIR(st.st_mode)) {
+    if (S_ISDIR(st->st_mode)) {
         close(fd);
         return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot open: %s", path, strerror(EISDIR));
     }
-    ibl_status s = IBL_OK;
+    *fd_out = fd;
+    return IBL_OK;
+}
+
+static ibl_status read_file(ibl_context *ctx, const char *path, int sniff, void **bytes, size_t *size)
+{
+    if (!path || !bytes || !size)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_file: missing argument");
+    *bytes = NULL;
+    *size = 0;
+    int fd = -1;
+    struct stat st;
+    ibl_status s = open_input(ctx, path, &fd, &st);
+    if (s != IBL_OK) return s;
     uint8_t *buf = NULL;
     size_t used = 0;
     if (!S_ISREG(st.st_mode)) {
@@ -514,6 +523,121 @@ ibl_status ibl_read_texture(ibl_context *ctx, const char *path, const ibl_read_d
     ibl_status s = read_file(ctx, path, 1, &bytes, &size);
     if (s != IBL_OK) return s;
     s = ibl_decode_texture(ctx, bytes, size, path, desc, out, info);
+    ibl_free(ctx, bytes);
+    return s;
+}
+
+ibl_status ibl_decode_info(ibl_context *ctx, const void *bytes, size_t size, const char *name,
+                           ibl_file_info *info)
+{
+    if (!name) name = "<memory>";
+    if (!info || (!bytes && size))
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: missing argument", name);
+    memset(info, 0, sizeof *info);
+    ibl_file_info fi;
+    memset(&fi, 0, sizeof fi);
+    const uint8_t *b = bytes;
+    ibl_file_type type = ibl_file_type_sniff(b, size);
+    /* a flat image is one level of one 2D image (the containers' parsers say all of it) */
+    fi.kind = IBL_TEXTURE_2D;
+    fi.depth = fi.levels = 1;
+    ibl_status s;
+    switch (type) {
+    case IBL_FILE_HDR: s = ibl__hdr_info(ctx, b, size, name, &fi); break;
+    case IBL_FILE_EXR: s = ibl__exr_info(ctx, b, size, name, &fi); break;
+    case IBL_FILE_PFM: s = ibl__pfm_info(ctx, b, size, name, &fi); break;
+    case IBL_FILE_PNG: s = ibl__png_info(ctx, b, size, name, &fi); break;
+    case IBL_FILE_JPEG: s = ibl__jpeg_info(ctx, b, size, name, &fi); break;
+    case IBL_FILE_KTX2: s = ibl__ktx2_info(ctx, b, size, name, &fi); break;
+    case IBL_FILE_KTX1: s = ibl__ktx1_info(ctx, b, size, name, &fi); break;
+    case IBL_FILE_DDS: s = ibl__dds_info(ctx, b, size, name, &fi); break;
+    default: return unknown_type(ctx, name, size);
+    }
+    if (s != IBL_OK) return s;
+    fi.type = type;
+    *info = fi;
+    return IBL_OK;
+}
+
+/* ibl_read_info reads the head of a regular file, and as many times more each time the
+ * header did not parse from what was read, up to the whole file (whose failure is then the
+ * one reported: that of a header that is malformed, not merely cut by the read). 64 KiB
+ * holds the header of every file ibl writes and of the usual EXR (a few hundred bytes of
+ * attributes and the chunk offsets after them are not read). */
+#define INFO_HEAD_BYTES ((size_t)64 << 10)
+enum { INFO_HEAD_GROWTH = 16 };
+
+/* Bytes [have, want) of the file into buf; *got: how many arrived (fewer at its end). */
+static ibl_status read_range(ibl_context *ctx, int fd, const char *path, uint8_t *buf,
+                             size_t have, size_t want, size_t *got)
+{
+    size_t done = have;
+    while (done < want) {
+        ssize_t r = pread(fd, buf + done, want - done, (off_t)done);
+        if (r < 0) {
+            if (errno == EINTR) continue;
+            return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot read: %s", path, strerror(errno));
+        }
+        if (r == 0) break;
+        done += (size_t)r;
+    }
+    *got = done;
+    return IBL_OK;
+}
+
+static ibl_status read_info_regular(ibl_context *ctx, int fd, const char *path, size_t file_size,
+                                    ibl_file_info *info)
+{
+    uint8_t *buf = NULL;
+    size_t have = 0, want = file_size < INFO_HEAD_BYTES ? file_size : INFO_HEAD_BYTES;
+    for (;;) {
+        uint8_t *grown = ibl_alloc(ctx, want ? want : 1);
+        if (!grown) {
+            ibl_free(ctx, buf);
+            return ibl__fail_named(ctx, ibl_context_status(ctx), path);
+        }
+        if (have) memcpy(grown, buf, have);
+        ibl_free(ctx, buf);
+        buf = grown;
+        size_t got = 0;
+        ibl_status s = read_range(ctx, fd, path, buf, have, want, &got);
+        if (s != IBL_OK) {
+            ibl_free(ctx, buf);
+            return s;
+        }
+        int whole = got < want || got >= file_size; /* the end (a file that shrank ends early) */
+        have = got;
+        s = ibl_decode_info(ctx, buf, have, path, info);
+        if (s == IBL_OK || whole) {
+            ibl_free(ctx, buf);
+            return s;
+        }
+        want = file_size / INFO_HEAD_GROWTH < have ? file_size : have * INFO_HEAD_GROWTH;
+    }
+}
+
+ibl_status ibl_read_info(ibl_context *ctx, const char *path, ibl_file_info *info)
+{
+    if (!path || !info)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "ibl_read_info: missing argument");
+    memset(info, 0, sizeof *info);
+    int fd = -1;
+    struct stat st;
+    ibl_status s = open_input(ctx, path, &fd, &st);
+    if (s != IBL_OK) return s;
+    if (S_ISREG(st.st_mode)) {
+        s = (uint64_t)st.st_size > (uint64_t)SIZE_MAX
+                ? ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: file too large", path)
+                : read_info_regular(ctx, fd, path, (size_t)st.st_size, info);
+        close(fd);
+        return s;
+    }
+    /* a pipe or device cannot be read again: all of it, as ibl_read_texture would */
+    uint8_t *bytes = NULL;
+    size_t size = 0;
+    s = read_stream(ctx, fd, path, 1, &bytes, &size);
+    close(fd);
+    if (s == IBL_OK) s = ibl_decode_info(ctx, bytes, size, path, info);
     ibl_free(ctx, bytes);
     return s;
 }

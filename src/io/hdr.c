@@ -118,6 +118,19 @@ static ibl_status parse_header(ibl_context *ctx, const uint8_t *b, size_t size, 
     return IBL_OK;
 }
 
+ibl_status ibl__hdr_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                         ibl_file_info *info)
+{
+    hdr_layout lay;
+    ibl_status s = parse_header(ctx, bytes, size, name, &lay);
+    if (s != IBL_OK) return s;
+    info->width = lay.width;
+    info->height = lay.height;
+    info->format = IBL_FORMAT_RGBE; /* as ibl__hdr_decode reports */
+    info->has_alpha = 0;
+    return IBL_OK;
+}
+
 /* ---- scanlines ----------------------------------------------------------------------- */
 
 /* Decodes one scanline of w pixels into scan (4w bytes); NULL or the problem. */

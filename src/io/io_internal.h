@@ -91,6 +91,27 @@ ibl_status ibl__exr_decode_sanitized(ibl_context *ctx, const uint8_t *bytes, siz
 ibl_status ibl__exr_encode(ibl_context *ctx, const ibl_image *image, const ibl_write_desc *desc,
                            const char *name, void **bytes, size_t *size);
 
+/* The header-only halves of the decoders (ibl_decode_info): each parses the header through
+ * the code its decoder runs first and fills what it knows of info (flat formats: width,
+ * height, format, has_alpha; containers: everything but pixels; file.c sets the rest). They
+ * read nothing past the header and check nothing that needs the pixel data. */
+ibl_status ibl__hdr_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                         ibl_file_info *info);
+ibl_status ibl__pfm_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                         ibl_file_info *info);
+ibl_status ibl__png_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                         ibl_file_info *info);
+ibl_status ibl__jpeg_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                          ibl_file_info *info);
+ibl_status ibl__exr_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                         ibl_file_info *info);
+ibl_status ibl__ktx2_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                          ibl_file_info *info);
+ibl_status ibl__ktx1_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                          ibl_file_info *info);
+ibl_status ibl__dds_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                         ibl_file_info *info);
+
 /* Containers: 2D, 3D, cube; every level; metadata. */
 ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                             ibl_texture *out, ibl_file_info *info);

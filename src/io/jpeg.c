@@ -78,6 +78,7 @@ typedef struct jpeg_read_state {
     const uint8_t *data;
     size_t size;
     ibl_texture *out;
+    int header_only;         /* stop after the header's checks (ibl__jpeg_info) */
     uint64_t reserved;       /* budget reserved for libjpeg's own buffers */
     ibl_status status;       /* a failure already recorded with its message, or IBL_OK */
     unsigned components_coded; /* bit c: component c appeared in a scan */
@@ -174,14 +175,11 @@ static int jpeg_read_all_scans(jpeg_read_state *st)
     return 1;
 }
 
-/* Runs libjpeg; everything it may touch after setjmp lives in *st (not in locals). The
- * caller destroys the decompressor and releases the reservation whatever happens. */
-static int jpeg_read_run(jpeg_read_state *st)
+/* libjpeg's jpeg_read_header and the refusals that need no more than the header; called
+ * under jpeg_read_run's setjmp. */
+static int jpeg_read_checked_header(jpeg_read_state *st)
 {
     j_decompress_ptr cinfo = &st->cinfo;
-    cinfo->err = jpeg_failure_init(&st->failure);
-    if (setjmp(st->failure.jump)) return 0;
-    jpeg_create_decompress(cinfo);
     jpeg_mem_src(cinfo, st->data, (unsigned long)st->size);
     (void)jpeg_read_header(cinfo, TRUE);
     if (cinfo->arith_code) {
@@ -206,6 +204,19 @@ static int jpeg_read_run(jpeg_read_state *st)
                                st->name, cinfo->num_components);
         return 0;
     }
+    return 1;
+}
+
+/* Runs libjpeg; everything it may touch after setjmp lives in *st (not in locals). The
+ * caller destroys the decompressor and releases the reservation whatever happens. */
+static int jpeg_read_run(jpeg_read_state *st)
+{
+    j_decompress_ptr cinfo = &st->cinfo;
+    cinfo->err = jpeg_failure_init(&st->failure);
+    if (setjmp(st->failure.jump)) return 0;
+    jpeg_create_decompress(cinfo);
+    if (!jpeg_read_checked_header(st)) return 0;
+    if (st->header_only) return 1;
     int w = (int)cinfo->image_width, h = (int)cinfo->image_height;
     /* libjpeg decodes whatever the header declares and fills missing data with zeros, warning
      * only when it gets there: a few kilobytes claiming 16000x8000 would cost gigabytes first.
@@ -256,8 +267,10 @@ static int jpeg_read_run(jpeg_read_state *st)
     return 1;
 }
 
-ibl_status ibl__jpeg_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
-                            ibl_texture *out, ibl_file_info *info)
+/* Runs jpeg_read_run on a new state and turns what it met into a status with a message
+ * naming the file; header_only: *width and *height receive the frame's size. */
+static ibl_status jpeg_read(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                            int header_only, ibl_texture *out, int *width, int *height)
 {
     jpeg_read_state *st = ibl_calloc(ctx, 1, sizeof *st);
     if (!st) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
@@ -266,7 +279,12 @@ ibl_status ibl__jpeg_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
     st->data = bytes;
     st->size = size;
     st->out = out;
+    st->header_only = header_only;
     int ok = jpeg_read_run(st);
+    if (ok && header_only) {
+        *width = (int)st->cinfo.image_width;
+        *height = (int)st->cinfo.image_height;
+    }
     jpeg_destroy_decompress(&st->cinfo);
     ibl__budget_release(ctx, st->reserved);
     ibl_status s = st->status;
@@ -279,12 +297,32 @@ ibl_status ibl__jpeg_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
         else
             s = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: bad JPEG (%s)", name, text);
     }
-    if (ok) {
+    ibl_free(ctx, st);
+    return s;
+}
+
+ibl_status ibl__jpeg_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                          ibl_file_info *info)
+{
+    int w = 0, h = 0;
+    ibl_status s = jpeg_read(ctx, bytes, size, name, 1, NULL, &w, &h);
+    if (s != IBL_OK) return s;
+    info->width = w;
+    info->height = h;
+    info->format = IBL_FORMAT_RGBA8_SRGB; /* as ibl__jpeg_decode reports */
+    info->has_alpha = 0;
+    return IBL_OK;
+}
+
+ibl_status ibl__jpeg_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                            ibl_texture *out, ibl_file_info *info)
+{
+    ibl_status s = jpeg_read(ctx, bytes, size, name, 0, out, NULL, NULL);
+    if (s == IBL_OK) {
         size_t texels = (size_t)out->width * (size_t)out->height;
         const uint8_t *samples = (const uint8_t *)out->data + texels * (4 * sizeof(float) - 4);
         s = ibl__rgba_samples_to_linear(ctx, samples, 0, 0.0, texels, out->data, name);
     }
-    ibl_free(ctx, st);
     if (s != IBL_OK) {
         ibl_texture_free(ctx, out);
         return s;

@@ -188,13 +188,19 @@ static ibl_status orientation(ibl_context *ctx, const char *name, const ibl_text
     return IBL_OK;
 }
 
-ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
-                            ibl_texture *out, ibl_file_info *info)
+/* What the header says, and where the key/value data ends. */
+typedef struct ktx1_header {
+    const gl_map *gl;
+    ibl_texture_kind kind;
+    int width, height, depth, levels;
+    uint32_t faces, kvd_len;
+} ktx1_header;
+
+/* The header and the key/value data's extent: everything before the first imageSize. */
+static ibl_status parse_header(ibl_context *ctx, const uint8_t *bytes, size_t size,
+                               const char *name, ktx1_header *hd)
 {
-    if (!name) name = "<ktx>";
-    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
-    memset(out, 0, sizeof *out);
-    if (!bytes && size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
+    memset(hd, 0, sizeof *hd);
     if (size < 12 || memcmp(bytes, KTX1_IDENTIFIER, 12) != 0)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a KTX 1 file (wrong identifier)", name);
     if (size < HEADER_BYTES)
@@ -238,10 +244,65 @@ ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
     ibl_status st = ibl__check_dimensions(ctx, name, kind, width, height ? height : 1,
                                           depth ? depth : 1, levels);
     if (st != IBL_OK) return st;
-    int w = (int)width, h = height ? (int)height : 1, d = depth ? (int)depth : 1;
     if (kvd_len > size - HEADER_BYTES)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: key/value data (%u bytes) runs past the end of "
                         "the file", name, kvd_len);
+    hd->gl = gl;
+    hd->kind = kind;
+    hd->width = (int)width;
+    hd->height = height ? (int)height : 1;
+    hd->depth = depth ? (int)depth : 1;
+    hd->levels = (int)levels;
+    hd->faces = faces;
+    hd->kvd_len = kvd_len;
+    return IBL_OK;
+}
+
+/* The key/value data into tex (kind and format set) and the flips of its KTXorientation. */
+static ibl_status read_metadata(ibl_context *ctx, const char *name, const uint8_t *bytes,
+                                const ktx1_header *hd, ibl_texture *tex, int flips[3])
+{
+    ibl_status st = ibl__kv_parse(ctx, name, bytes + HEADER_BYTES, hd->kvd_len, tex);
+    if (st == IBL_OK) st = orientation(ctx, name, tex, flips);
+    return st;
+}
+
+ibl_status ibl__ktx1_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                          ibl_file_info *info)
+{
+    ktx1_header hd;
+    ibl_status st = parse_header(ctx, bytes, size, name, &hd);
+    if (st != IBL_OK) return st;
+    ibl_texture tex; /* without texels: what ibl__fill_info reads, and the metadata */
+    memset(&tex, 0, sizeof tex);
+    tex.kind = hd.kind;
+    tex.width = hd.width;
+    tex.height = hd.height;
+    tex.depth = hd.depth;
+    tex.levels = hd.levels;
+    tex.format = hd.gl->format;
+    int flips[3];
+    st = read_metadata(ctx, name, bytes, &hd, &tex, flips);
+    if (st == IBL_OK) ibl__fill_info(info, IBL_FILE_KTX1, &tex);
+    ibl_texture_free(ctx, &tex);
+    return st;
+}
+
+ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                            ibl_texture *out, ibl_file_info *info)
+{
+    if (!name) name = "<ktx>";
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
+    memset(out, 0, sizeof *out);
+    if (!bytes && size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
+    ktx1_header hd;
+    ibl_status st = parse_header(ctx, bytes, size, name, &hd);
+    if (st != IBL_OK) return st;
+    const gl_map *gl = hd.gl;
+    ibl_texture_kind kind = hd.kind;
+    int w = hd.width, h = hd.height, d = hd.depth;
+    uint64_t levels = (uint64_t)hd.levels;
+    uint32_t faces = hd.faces, kvd_len = hd.kvd_len;
 
     /* Walk the levels once to validate every imageSize before allocating. */
     size_t texel = ibl_format_texel_bytes(gl->format);
@@ -272,9 +333,8 @@ ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
     st = ibl_texture_alloc(ctx, kind, w, h, d, (int)levels, out);
     if (st != IBL_OK) return ibl__fail_named(ctx, st, name);
     out->format = gl->format;
-    st = ibl__kv_parse(ctx, name, bytes + HEADER_BYTES, kvd_len, out);
     int flips[3];
-    if (st == IBL_OK) st = orientation(ctx, name, out, flips);
+    st = read_metadata(ctx, name, bytes, &hd, out, flips);
     if (st != IBL_OK) {
         ibl_texture_free(ctx, out);
         return st;

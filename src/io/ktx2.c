@@ -541,13 +541,25 @@ static ibl_status decode_levels(ibl_context *ctx, const char *name, const uint8_
     return IBL_OK;
 }
 
-ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
-                            ibl_texture *out, ibl_file_info *info)
+/* What the header, the level index, the DFD and the key/value data's place say. */
+typedef struct ktx2_header {
+    const vk_map *vk;
+    ibl_texture_kind kind;
+    int width, height, depth, levels; /* as the texture's (depth: slices or cube layers) */
+    int one_d;                        /* pixelHeight 0                                   */
+    uint32_t scheme, faces, layers;
+    uint32_t kvd_off, kvd_len;
+    uint64_t level_bytes[IBL_MAX_LEVELS], level_offset[IBL_MAX_LEVELS], level_raw[IBL_MAX_LEVELS];
+} ktx2_header;
+
+/* Everything before the level images: the header, the level index (each level's sizes agree
+ * with its dimensions), the DFD and where the key/value data lies. Reads only those bytes;
+ * with check_levels, each level must also lie inside the `size` bytes (the decoder's check;
+ * ibl__ktx2_info may hold only the head of the file). */
+static ibl_status parse_header(ibl_context *ctx, const uint8_t *bytes, size_t size,
+                               const char *name, int check_levels, ktx2_header *hd)
 {
-    if (!name) name = "<ktx2>";
-    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
-    memset(out, 0, sizeof *out);
-    if (!bytes && size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
+    memset(hd, 0, sizeof *hd);
     if (size < 12 || memcmp(bytes, KTX2_IDENTIFIER, 12) != 0)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a KTX 2.0 file (wrong identifier)", name);
     if (size < HEADER_BYTES)
@@ -626,7 +638,6 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
                         "%s: dfdTotalSize %u differs from kvdByteOffset - dfdByteOffset", name,
                         dfd_len);
 
-    uint64_t level_bytes[IBL_MAX_LEVELS], level_offset[IBL_MAX_LEVELS], level_raw[IBL_MAX_LEVELS];
     for (uint64_t l = 0; l < levels; l++) {
         const uint8_t *e = bytes + HEADER_BYTES + LEVEL_ENTRY_BYTES * l;
         uint64_t off = ibl__rd64(e), len = ibl__rd64(e + 8), raw = ibl__rd64(e + 16);
@@ -638,26 +649,85 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
                             "need %llu",
                             name, (unsigned long long)l, (unsigned long long)len,
                             (unsigned long long)raw, (unsigned long long)expect);
-        if (!in_file(off, len, size))
+        if (check_levels && !in_file(off, len, size))
             return ibl__fail(ctx, IBL_ERR_FORMAT,
                             "%s: level %llu (%llu bytes at offset %llu) runs past the end of the "
                             "file (%zu bytes)",
                             name, (unsigned long long)l, (unsigned long long)len,
                             (unsigned long long)off, size);
-        level_bytes[l] = len;
-        level_offset[l] = off;
-        level_raw[l] = raw;
+        hd->level_bytes[l] = len;
+        hd->level_offset[l] = off;
+        hd->level_raw[l] = raw;
     }
+    hd->vk = vk;
+    hd->kind = kind;
+    hd->width = w;
+    hd->height = h;
+    hd->depth = d;
+    hd->levels = (int)levels;
+    hd->one_d = one_d;
+    hd->scheme = scheme;
+    hd->faces = faces;
+    hd->layers = layers;
+    hd->kvd_off = kvd_off;
+    hd->kvd_len = kvd_len;
+    return IBL_OK;
+}
 
-    st = ibl_texture_alloc(ctx, kind, w, h, d, (int)levels, out);
+/* The key/value data into tex (whose kind and format are the header's), the 8-bit HDR
+ * encoding it names (tex->format, *range) and the flips its KTXorientation asks for. */
+static ibl_status read_metadata(ibl_context *ctx, const char *name, const uint8_t *bytes,
+                                const ktx2_header *hd, ibl_texture *tex, float *range, int flips[3])
+{
+    *range = 0.0f;
+    ibl_status st = ibl__kv_parse(ctx, name, bytes + hd->kvd_off, hd->kvd_len, tex);
+    if (st == IBL_OK && hd->vk->vk == VK_R8G8B8A8_UNORM)
+        st = hdr8_encoding(ctx, name, tex, &tex->format, range);
+    if (st == IBL_OK) st = orientation(ctx, name, tex, hd->one_d, flips);
+    return st;
+}
+
+ibl_status ibl__ktx2_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                          ibl_file_info *info)
+{
+    ktx2_header hd;
+    ibl_status st = parse_header(ctx, bytes, size, name, 0, &hd);
+    if (st != IBL_OK) return st;
+    /* a texture without texels: what ibl__fill_info reads, and the metadata */
+    ibl_texture tex;
+    memset(&tex, 0, sizeof tex);
+    tex.kind = hd.kind;
+    tex.width = hd.width;
+    tex.height = hd.height;
+    tex.depth = hd.depth;
+    tex.levels = hd.levels;
+    tex.format = hd.vk->format;
+    float range;
+    int flips[3];
+    st = read_metadata(ctx, name, bytes, &hd, &tex, &range, flips);
+    if (st == IBL_OK) ibl__fill_info(info, IBL_FILE_KTX2, &tex);
+    ibl_texture_free(ctx, &tex);
+    return st;
+}
+
+ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                            ibl_texture *out, ibl_file_info *info)
+{
+    if (!name) name = "<ktx2>";
+    if (!out) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no output texture", name);
+    memset(out, 0, sizeof *out);
+    if (!bytes && size) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no input", name);
+    ktx2_header hd;
+    ibl_status st = parse_header(ctx, bytes, size, name, 1, &hd);
+    if (st != IBL_OK) return st;
+
+    st = ibl_texture_alloc(ctx, hd.kind, hd.width, hd.height, hd.depth, hd.levels, out);
     if (st != IBL_OK) return ibl__fail_named(ctx, st, name);
-    out->format = vk->format;
-    st = ibl__kv_parse(ctx, name, bytes + kvd_off, kvd_len, out);
+    out->format = hd.vk->format;
     int flips[3];
     float range = 0.0f;
-    if (st == IBL_OK && vk->vk == VK_R8G8B8A8_UNORM) st = hdr8_encoding(ctx, name, out, &out->format, &range);
-    if (st == IBL_OK) st = orientation(ctx, name, out, one_d, flips);
-    if (st == IBL_OK) st = decode_levels(ctx, name, bytes, scheme, level_offset, level_bytes, level_raw, range, out);
+    st = read_metadata(ctx, name, bytes, &hd, out, &range, flips);
+    if (st == IBL_OK) st = decode_levels(ctx, name, bytes, hd.scheme, hd.level_offset, hd.level_bytes, hd.level_raw, range, out);
     if (st != IBL_OK) {
         ibl_texture_free(ctx, out);
         return st;
@@ -666,7 +736,7 @@ ibl_status ibl__ktx2_decode(ibl_context *ctx, const uint8_t *bytes, size_t size,
     if (flips[0] || flips[1] || flips[2]) {
         /* the texels now follow our layout; say so */
         st = ibl_texture_set_metadata(ctx, out, "KTXorientation",
-                                      kind == IBL_TEXTURE_3D ? "rdi" : one_d ? "r" : "rd");
+                                      hd.kind == IBL_TEXTURE_3D ? "rdi" : hd.one_d ? "r" : "rd");
         if (st != IBL_OK) {
             ibl_texture_free(ctx, out);
             return ibl__fail_named(ctx, st, name);

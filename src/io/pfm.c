@@ -50,9 +50,17 @@ static float load_float(const uint8_t *p, int little)
     return f;
 }
 
-ibl_status ibl__pfm_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
-                           ibl_texture *out, ibl_file_info *info)
+/* The header: "PF" or "Pf", width, height, scale, one white-space byte. */
+typedef struct pfm_header {
+    int width, height, channels;
+    int little;         /* the scale is negative: little-endian floats */
+    size_t data_offset; /* the first byte of the bottom row          */
+} pfm_header;
+
+static ibl_status parse_header(ibl_context *ctx, const uint8_t *bytes, size_t size,
+                               const char *name, pfm_header *hd)
 {
+    memset(hd, 0, sizeof *hd);
     if (size < 3 || bytes[0] != 'P' || (bytes[1] != 'F' && bytes[1] != 'f'))
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a PFM file", name);
     int channels = bytes[1] == 'F' ? 3 : 1;
@@ -70,13 +78,41 @@ ibl_status ibl__pfm_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     if (!endp || *endp || scale == 0.0 || !isfinite(scale))
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: bad PFM scale \"%s\"", name, ts);
     pos++; /* the single white-space byte ending the header */
-    int little = scale < 0.0;
+    hd->width = w;
+    hd->height = h;
+    hd->channels = channels;
+    hd->little = scale < 0.0;
+    hd->data_offset = pos;
+    return IBL_OK;
+}
+
+ibl_status ibl__pfm_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                         ibl_file_info *info)
+{
+    pfm_header hd;
+    ibl_status s = parse_header(ctx, bytes, size, name, &hd);
+    if (s != IBL_OK) return s;
+    info->width = hd.width;
+    info->height = hd.height;
+    info->format = IBL_FORMAT_RGB32F; /* as ibl__pfm_decode reports */
+    info->has_alpha = 0;
+    return IBL_OK;
+}
+
+ibl_status ibl__pfm_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                           ibl_texture *out, ibl_file_info *info)
+{
+    pfm_header hd;
+    ibl_status s = parse_header(ctx, bytes, size, name, &hd);
+    if (s != IBL_OK) return s;
+    int w = hd.width, h = hd.height, channels = hd.channels, little = hd.little;
+    size_t pos = hd.data_offset;
     size_t row_bytes = (size_t)w * (size_t)channels * 4;
     size_t need = row_bytes * (size_t)h; /* w, h <= 2^16: no overflow in 64-bit size_t */
     if (size - pos < need)
         return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated PFM data (%zu of %zu bytes)", name,
                         size - pos, need);
-    ibl_status s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, w, h, 1, 1, out);
+    s = ibl_texture_alloc(ctx, IBL_TEXTURE_2D, w, h, 1, 1, out);
     if (s != IBL_OK) {
         return ibl__fail_named(ctx, s, name);
     }

@@ -134,6 +134,8 @@ typedef struct png_read_state {
     const uint8_t *data;
     size_t size, pos;
     ibl_texture *out;
+    int header_only; /* stop after IHDR (ibl__png_info): no image, no IDAT check */
+    png_uint_32 width, height;
     int is16, has_alpha;
     uint8_t *raw;    /* RGBA samples of the whole image: the tail of out->data */
     png_bytep *rows; /* into raw */
@@ -198,6 +200,14 @@ static int png_read_run(png_read_state *st)
     png_uint_32 w = 0, h = 0;
     int depth = 0, color = 0;
     png_get_IHDR(png, pinfo, &w, &h, &depth, &color, NULL, NULL, NULL);
+    st->width = w;
+    st->height = h;
+    if (st->header_only) {
+        st->has_alpha = (color & PNG_COLOR_MASK_ALPHA) || png_get_valid(png, pinfo, PNG_INFO_tRNS);
+        st->is16 = depth == 16;
+        png_destroy_read_struct(&png, &pinfo, NULL);
+        return 1;
+    }
     /* A file too small to hold the declared image even at deflate's best ratio is refused
      * before anything is allocated; one that can hold it (a large image of one colour
      * compresses to almost nothing) is decoded if the budget allows. */
@@ -256,33 +266,83 @@ ibl_status ibl__png_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, 
     return ibl__png_decode_as(ctx, bytes, size, name, 0, out, info);
 }
 
-ibl_status ibl__png_decode_as(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
-                              int as_data, ibl_texture *out, ibl_file_info *info)
+/* The checks before libpng runs, then libpng on a new state (header_only: up to IHDR).
+ * Returns the state (ibl_free it and its rows) with *status, or NULL when none was made. */
+static png_read_state *png_read(ibl_context *ctx, const uint8_t *bytes, size_t size,
+                                const char *name, int header_only, ibl_texture *out,
+                                ibl_status *status)
 {
     /* the chunk walks below start after the signature */
     static const uint8_t signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-    if (size < sizeof signature || memcmp(bytes, signature, sizeof signature) != 0)
-        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a PNG file (no PNG signature)", name);
-    if (!png_chunks_inside(bytes, size))
-        return ibl__fail(ctx, IBL_ERR_FORMAT, "%s: truncated PNG (a chunk runs past the end of the file)", name);
+    *status = IBL_OK;
+    if (size < sizeof signature || memcmp(bytes, signature, sizeof signature) != 0) {
+        *status = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: not a PNG file (no PNG signature)", name);
+        return NULL;
+    }
+    if (!png_chunks_inside(bytes, size)) {
+        *status = ibl__fail(ctx, IBL_ERR_FORMAT,
+                            "%s: truncated PNG (a chunk runs past the end of the file)", name);
+        return NULL;
+    }
     png_read_state *st = ibl_calloc(ctx, 1, sizeof *st);
-    if (!st) return ibl__fail_named(ctx, ibl_context_status(ctx), name);
+    if (!st) {
+        *status = ibl__fail_named(ctx, ibl_context_status(ctx), name);
+        return NULL;
+    }
     st->ctx = ctx;
     st->name = name;
     st->data = bytes;
     st->size = size;
     st->out = out;
-    int ok = png_read_run(st);
-    ibl_free(ctx, st->rows);
-    ibl_status s = IBL_OK;
-    if (!ok) {
-        if (st->status == IBL_ERR_FORMAT) s = st->status; /* its message names the file */
-        else if (st->status != IBL_OK) s = ibl__fail_named(ctx, st->status, name);
-        else s = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: corrupt PNG (%s)", name, st->error);
+    st->header_only = header_only;
+    if (!png_read_run(st)) {
+        if (st->status == IBL_ERR_FORMAT) *status = st->status; /* its message names the file */
+        else if (st->status != IBL_OK) *status = ibl__fail_named(ctx, st->status, name);
+        else *status = ibl__fail(ctx, IBL_ERR_FORMAT, "%s: corrupt PNG (%s)", name, st->error);
     }
-    char encoding[16], range_text[32];
+    return st;
+}
+
+/* 8-bit files whose tEXt ibl.encoding is rgbm (read as data: never) hold RGBM. */
+static int png_is_rgbm(const uint8_t *bytes, size_t size, int as_data, int is16)
+{
+    char encoding[16];
     png_text_value(bytes, size, "ibl.encoding", encoding, sizeof encoding);
-    int rgbm = !as_data && !st->is16 && strcmp(encoding, "rgbm") == 0;
+    return !as_data && !is16 && strcmp(encoding, "rgbm") == 0;
+}
+
+/* The format and alpha the decoder reports. */
+static void png_fill_info(ibl_file_info *info, int rgbm, const png_read_state *st)
+{
+    info->format = rgbm ? IBL_FORMAT_RGBM : st->is16 ? IBL_FORMAT_RGBA16_UNORM : IBL_FORMAT_RGBA8_SRGB;
+    info->has_alpha = rgbm ? 0 : st->has_alpha; /* RGBM's alpha is the multiplier */
+}
+
+ibl_status ibl__png_info(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                         ibl_file_info *info)
+{
+    ibl_status s;
+    png_read_state *st = png_read(ctx, bytes, size, name, 1, NULL, &s);
+    if (!st) return s;
+    if (s == IBL_OK) {
+        info->width = (int)st->width;
+        info->height = (int)st->height;
+        png_fill_info(info, png_is_rgbm(bytes, size, 0, st->is16), st);
+    }
+    ibl_free(ctx, st);
+    return s;
+}
+
+ibl_status ibl__png_decode_as(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
+                              int as_data, ibl_texture *out, ibl_file_info *info)
+{
+    ibl_status s;
+    png_read_state *st = png_read(ctx, bytes, size, name, 0, out, &s);
+    if (!st) return s;
+    ibl_free(ctx, st->rows);
+    int ok = s == IBL_OK;
+    char range_text[32];
+    int rgbm = png_is_rgbm(bytes, size, as_data, st->is16);
     if (ok && rgbm) {
         png_text_value(bytes, size, "ibl.rgbm_range", range_text, sizeof range_text);
         float range = (float)strtod(range_text, NULL);
@@ -298,10 +358,8 @@ ibl_status ibl__png_decode_as(ibl_context *ctx, const uint8_t *bytes, size_t siz
     if (s != IBL_OK) {
         ibl_texture_free(ctx, out);
     } else {
-        out->format = rgbm ? IBL_FORMAT_RGBM : st->is16 ? IBL_FORMAT_RGBA16_UNORM : IBL_FORMAT_RGBA8_SRGB;
-        if (rgbm) st->has_alpha = 0; /* alpha was the multiplier */
-        info->format = out->format;
-        info->has_alpha = st->has_alpha;
+        png_fill_info(info, rgbm, st);
+        out->format = info->format;
     }
     ibl_free(ctx, st);
     return s;
