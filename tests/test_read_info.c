@@ -258,6 +258,29 @@ static void hand_made_flat_files_agree(void **state)
     for (int i = 0; i < 3 * 2 * 4; i++) hdr[n + i] = (uint8_t)(100 + i);
     spit(test_path("bottom_up.hdr"), hdr, (size_t)n + 3 * 2 * 4);
     assert_true(check_file(ctx, test_path("bottom_up.hdr"), 1));
+    /* an EXR whose display window (the decoded image) is not its data window: the 21x10 data
+     * at (0, 0) shown in a window from (-2, -1) to (24, 12) */
+    ibl_image im = make_image(ctx, 21, 10);
+    fill_random(im.pixels, 21 * 10 * 4);
+    assert_int_equal(ibl_write_image(ctx, test_path("windows.exr"), &im, NULL), IBL_OK);
+    ibl_image_free(ctx, &im);
+    size_t size;
+    uint8_t *b = slurp(test_path("windows.exr"), &size);
+    static const char attribute[] = "displayWindow\0box2i";
+    uint8_t *at = NULL;
+    for (size_t i = 0; i + sizeof attribute < size && !at; i++)
+        if (memcmp(b + i, attribute, sizeof attribute) == 0) at = b + i + sizeof attribute + 4;
+    assert_non_null(at);
+    const int32_t display[4] = {-2, -1, 24, 12};
+    for (int k = 0; k < 4; k++)
+        for (int j = 0; j < 4; j++) at[4 * k + j] = (uint8_t)((uint32_t)display[k] >> (8 * j));
+    spit(test_path("windows.exr"), b, size);
+    free(b);
+    assert_true(check_file(ctx, test_path("windows.exr"), 1));
+    ibl_file_info fi;
+    assert_int_equal(ibl_read_info(ctx, test_path("windows.exr"), &fi), IBL_OK);
+    assert_int_equal(fi.width, 27);
+    assert_int_equal(fi.height, 14);
     ibl_context_destroy(ctx);
 }
 
