@@ -372,6 +372,47 @@ static void header_past_the_first_read(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* Counts the bytes allocated through the context. */
+static void *counting_alloc(size_t bytes, void *user)
+{
+    *(size_t *)user += bytes;
+    return malloc(bytes ? bytes : 1);
+}
+
+static void counting_free(void *p, void *user)
+{
+    (void)user;
+    free(p);
+}
+
+/* ibl_read_info takes the head of a file, not the file: what it allocates through the context
+ * (the buffer of what it read, and small things) stays under 68 KiB for city.exr, a 208 KiB
+ * file of which the first 64 KiB are read. */
+static void reads_only_the_head(void **state)
+{
+    (void)state;
+    size_t allocated = 0;
+    ibl_context_desc d = {0};
+    d.threads = 1;
+    d.allocator.alloc = counting_alloc;
+    d.allocator.free = counting_free;
+    d.allocator.user = &allocated;
+    ibl_context *ctx = NULL;
+    assert_int_equal(ibl_context_create(&d, &ctx), IBL_OK);
+    size_t before = allocated;
+    ibl_file_info fi;
+    assert_int_equal(ibl_read_info(ctx, test_data("city.exr"), &fi), IBL_OK);
+    assert_true(fi.width > 0);
+    size_t used = allocated - before;
+    if (used > (68u << 10)) fail_msg("ibl_read_info allocated %zu bytes for city.exr", used);
+    ibl_texture t;
+    before = allocated;
+    assert_int_equal(ibl_read_texture(ctx, test_data("city.exr"), NULL, &t, NULL), IBL_OK);
+    ibl_texture_free(ctx, &t);
+    assert_true(allocated - before > (208u << 10)); /* the decode holds the file, at least */
+    ibl_context_destroy(ctx);
+}
+
 /* ---- broken pixel data, broken headers ----------------------------------------------- */
 
 /* A file whose pixel data is cut or scrambled after its header: the decode refuses it, the
@@ -521,6 +562,7 @@ int main(void)
         cmocka_unit_test(hand_made_flat_files_agree),
         cmocka_unit_test(container_files_agree),
         cmocka_unit_test(header_past_the_first_read),
+        cmocka_unit_test(reads_only_the_head),
         cmocka_unit_test(broken_pixels_keep_their_info),
         cmocka_unit_test(broken_headers_fail_as_the_decode),
         cmocka_unit_test(api_edges),
