@@ -7,7 +7,10 @@
  * path. When the first succeeds, the second must succeed too with the same texels, bit for
  * bit (the library's results do not depend on the thread count). Traps otherwise, and when:
  * - a failure's message does not start with the input's name (the one-line-error contract);
- * - an input leaves bytes allocated through the context behind. */
+ * - an input leaves bytes allocated through the context behind.
+ * Every target also runs the header-only reader (ibl_decode_info) on the input, under the same
+ * two traps; for ibl_decode_any, whose decode it must agree with, a decode that succeeds must
+ * give the same info field by field. */
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
@@ -20,7 +23,16 @@ __attribute__((unused)) static ibl_status ibl_decode_any(ibl_context *ctx, const
                                  const char *name, ibl_texture *out, ibl_file_info *info)
 {
     ibl_read_desc rd = {.clamp_infinite = 1};
-    return ibl_decode_texture(ctx, bytes, size, name, &rd, out, info);
+    ibl_status s = ibl_decode_texture(ctx, bytes, size, name, &rd, out, info);
+    if (s != IBL_OK) return s;
+    /* what the header alone says is what the decode found (the pixel report aside) */
+    ibl_file_info head;
+    if (ibl_decode_info(ctx, bytes, size, name, &head) != IBL_OK || head.type != info->type ||
+        head.format != info->format || head.kind != info->kind || head.width != info->width ||
+        head.height != info->height || head.depth != info->depth || head.levels != info->levels ||
+        head.has_alpha != info->has_alpha)
+        __builtin_trap();
+    return s;
 }
 
 /* The block readers on their own (targets bc6h and astc). An input is a 2-byte header and
@@ -129,6 +141,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!serial || !pool) return 0;
     size_t live = atomic_load(&fuzz_live_bytes);
     ibl_context *first = size & 1 ? pool : serial, *second = size & 1 ? serial : pool;
+    ibl_file_info head;
+    if (ibl_decode_info(first, data, size, "<fuzz>", &head) != IBL_OK &&
+        strncmp(ibl_context_message(first), "<fuzz>", 6) != 0)
+        __builtin_trap();
+    if (atomic_load(&fuzz_live_bytes) != live) __builtin_trap(); /* the header reader's leak */
     decoded a = decode(first, data, size);
     if (atomic_load(&fuzz_live_bytes) != live) __builtin_trap(); /* a leak through the context */
     if (a.status == IBL_OK) {
