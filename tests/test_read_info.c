@@ -8,6 +8,8 @@
 #include <dirent.h>
 #include <png.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "test_io_helpers.h"
 
@@ -527,6 +529,40 @@ static void broken_headers_fail_as_the_decode(void **state)
     ibl_context_destroy(ctx);
 }
 
+/* A FIFO cannot be read twice: it is read whole, and gives the file's info. */
+static void fifo_is_read_whole(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    ibl_texture t = make_texture(ctx, IBL_TEXTURE_CUBE, 8, 8, 1, 4);
+    const char *file = test_path("fifo_source.ktx2");
+    assert_int_equal(ibl_write_texture(ctx, file, &t, NULL), IBL_OK);
+    ibl_texture_free(ctx, &t);
+    ibl_file_info want, got;
+    assert_int_equal(ibl_read_info(ctx, file, &want), IBL_OK);
+    size_t n;
+    uint8_t *b = slurp(file, &n);
+    char fifo[1024];
+    snprintf(fifo, sizeof fifo, "%s", test_path("info.fifo"));
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    pid_t writer = fork();
+    assert_true(writer >= 0);
+    if (writer == 0) { /* the child writes the file into the FIFO and leaves */
+        FILE *f = fopen(fifo, "wb");
+        size_t w = f ? fwrite(b, 1, n, f) : 0;
+        if (f) fclose(f);
+        _exit(w == n ? 0 : 1);
+    }
+    ibl_status s = ibl_read_info(ctx, fifo, &got);
+    int status = 0;
+    assert_int_equal(waitpid(writer, &status, 0), writer);
+    assert_int_equal(s, IBL_OK);
+    assert_true(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    expect_same_info(&got, &want, "info.fifo");
+    free(b);
+    ibl_context_destroy(ctx);
+}
+
 /* Missing files, directories, empty and unknown files, missing arguments. */
 static void api_edges(void **state)
 {
@@ -565,6 +601,7 @@ int main(void)
         cmocka_unit_test(reads_only_the_head),
         cmocka_unit_test(broken_pixels_keep_their_info),
         cmocka_unit_test(broken_headers_fail_as_the_decode),
+        cmocka_unit_test(fifo_is_read_whole),
         cmocka_unit_test(api_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
