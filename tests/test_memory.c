@@ -609,9 +609,8 @@ static void nested_task(void *arg, int index)
 }
 
 /* A parallel loop started from inside a task of the context's pool (here: the parallel
- * zeroing of a large cube allocated in a task) runs on that thread instead of waiting for a
- * pool that is busy with the outer loop: this returns (it hung when the pool took the nested
- * job), and every cube still comes zeroed, on 1, 2 and 8 threads. */
+ * zeroing of a large cube allocated in a task) runs beside the outer loop: this returns, and
+ * every cube still comes zeroed, on 1, 2 and 8 threads. */
 static void parallel_loop_inside_a_task(void **state)
 {
     (void)state;
@@ -660,6 +659,124 @@ static void every_index_once_across_jobs(void **state)
             assert_int_equal(atomic_load(&job.wrong_job), 0);
         }
         ibl_context_destroy(ctx);
+    }
+}
+
+/* A loop started inside a task runs on every thread: the outer loop's other index returns at
+ * once, and its thread must then help the inner loop, whose first task waits (up to 10 s)
+ * until a second thread has run one of its tasks. A pool that ran nested loops on the calling
+ * thread alone fails this. */
+typedef struct helped_job {
+    ibl_context *ctx;
+    pthread_mutex_t lock;
+    pthread_t first;
+    int threads_seen;
+    _Atomic int two_seen, timed_out;
+} helped_job;
+
+static void helped_inner_task(void *arg, int index)
+{
+    (void)index;
+    helped_job *j = arg;
+    pthread_mutex_lock(&j->lock);
+    if (j->threads_seen == 0) {
+        j->first = pthread_self();
+        j->threads_seen = 1;
+    } else if (!pthread_equal(j->first, pthread_self())) {
+        j->threads_seen = 2;
+        atomic_store(&j->two_seen, 1);
+    }
+    pthread_mutex_unlock(&j->lock);
+    struct timespec start, now;
+    clock_gettime(CLOCK_MONOTONIC, &start);
+    while (!atomic_load(&j->two_seen) && !atomic_load(&j->timed_out)) {
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        if (now.tv_sec - start.tv_sec > 10) {
+            atomic_store(&j->timed_out, 1);
+            return;
+        }
+    }
+}
+
+static void helped_outer_task(void *arg, int index)
+{
+    helped_job *j = arg;
+    if (index == 0) ibl_parallel_for(j->ctx, 64, helped_inner_task, j);
+}
+
+static void nested_loop_runs_on_every_thread(void **state)
+{
+    (void)state;
+    helped_job job = {.ctx = budget_context(MiB, 2)};
+    pthread_mutex_init(&job.lock, NULL);
+    atomic_init(&job.two_seen, 0);
+    atomic_init(&job.timed_out, 0);
+    ibl_parallel_for(job.ctx, 2, helped_outer_task, &job);
+    assert_int_equal(atomic_load(&job.timed_out), 0);
+    assert_int_equal(job.threads_seen, 2);
+    pthread_mutex_destroy(&job.lock);
+    ibl_context_destroy(job.ctx);
+}
+
+/* Loops three deep, of many sizes, posted from every thread at once: every index of every
+ * loop runs once, on 2 and 8 threads, over many rounds (a lost wake-up hangs it, a job
+ * retired while another thread still reads it trips ASan or TSan). */
+enum { NEST_OUTER = 6, NEST_INNER = 26, NEST_LEAF = 3 };
+typedef struct deep_job {
+    ibl_context *ctx;
+    _Atomic int runs[NEST_OUTER][NEST_INNER][NEST_LEAF];
+} deep_job;
+
+typedef struct deep_inner {
+    deep_job *job;
+    int outer, inner;
+} deep_inner;
+
+static void deep_leaf_task(void *arg, int index)
+{
+    deep_inner *d = arg;
+    atomic_fetch_add(&d->job->runs[d->outer][d->inner][index], 1);
+}
+
+typedef struct deep_middle {
+    deep_job *job;
+    int outer;
+} deep_middle;
+
+static void deep_inner_task(void *arg, int index)
+{
+    deep_middle *m = arg;
+    deep_inner d = {m->job, m->outer, index};
+    ibl_parallel_for(m->job->ctx, NEST_LEAF, deep_leaf_task, &d);
+}
+
+static void deep_outer_task(void *arg, int index)
+{
+    deep_job *j = arg;
+    deep_middle m = {j, index};
+    ibl_parallel_for(j->ctx, 1 + index * 5, deep_inner_task, &m); /* 1 to 26 */
+}
+
+static void nested_loops_every_index_once(void **state)
+{
+    (void)state;
+    static const int threads[2] = {2, 8};
+    for (int t = 0; t < 2; t++) {
+        deep_job *job = calloc(1, sizeof *job);
+        assert_non_null(job);
+        job->ctx = budget_context(MiB, threads[t]);
+        for (int round = 0; round < 200; round++) {
+            for (int o = 0; o < NEST_OUTER; o++)
+                for (int i = 0; i < NEST_INNER; i++)
+                    for (int k = 0; k < NEST_LEAF; k++) atomic_init(&job->runs[o][i][k], 0);
+            ibl_parallel_for(job->ctx, NEST_OUTER, deep_outer_task, job);
+            for (int o = 0; o < NEST_OUTER; o++)
+                for (int i = 0; i < NEST_INNER; i++)
+                    for (int k = 0; k < NEST_LEAF; k++)
+                        assert_int_equal(atomic_load(&job->runs[o][i][k]), i < 1 + o * 5);
+        }
+        ibl_context_destroy(job->ctx);
+        free(job);
     }
 }
 
@@ -805,6 +922,8 @@ int main(void)
         cmocka_unit_test(freed_through_another_context),
         cmocka_unit_test(large_blocks_keep_no_header),
         cmocka_unit_test(every_index_once_across_jobs),
+        cmocka_unit_test(nested_loop_runs_on_every_thread),
+        cmocka_unit_test(nested_loops_every_index_once),
         cmocka_unit_test(budget_across_threads),
         cmocka_unit_test(peak_of_a_read),
         cmocka_unit_test(jpeg_bomb),

@@ -123,7 +123,9 @@ uint64_t ibl_default_max_bytes(void);
 void *ibl_alloc(ibl_context *ctx, size_t bytes);
 void *ibl_calloc(ibl_context *ctx, size_t count, size_t size);
 void ibl_free(ibl_context *ctx, void *ptr);
-/* Runs task over [0, count) with the context's parallel-for. */
+/* Runs task over [0, count) with the context's parallel-for. A task may start loops of its
+ * own: on the built-in pool they run beside the outer loop, on every thread (a host's
+ * parallel-for gets them as calls from inside its tasks). */
 void ibl_parallel_for(ibl_context *ctx, int count, ibl_task_fn task, void *task_arg);
 
 /* ------------------------------------------------------------------------------------------ */

@@ -1,23 +1,21 @@
 /* The context: allocator, memory budget, failure message, progress and the parallel-for hook
- * with a default thread pool (each thread runs its own contiguous share of a loop's indices,
- * then takes from the others'). */
+ * over the built-in thread pool (pool.c) or the host's. */
 #define _POSIX_C_SOURCE 200809L
 #include "ibl/core.h"
 #include "core/cpu.h"
 #include "core/context_internal.h"
+#include "core/pool.h"
 
 #include <fcntl.h>
-#include <pthread.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
-#include <time.h>
 #include <unistd.h>
 
-enum { MAX_POOL_THREADS = 64, MESSAGE_BYTES = 512 };
+enum { MESSAGE_BYTES = 512 };
 
 /* Blocks of ibl_alloc: see "the memory budget" below. A large block is kept without a header,
  * its start and its size as asked for in the context's table of LARGE_BLOCK_SLOTS. */
@@ -28,40 +26,9 @@ typedef struct large_block {
     size_t bytes;
 } large_block;
 
-/* One thread's share of a loop's indices, [next, end), on a cache line of its own. */
-typedef struct index_share {
-    _Alignas(64) atomic_int next;
-    int end;
-} index_share;
-
-typedef struct thread_pool thread_pool;
-typedef struct worker_seat {
-    thread_pool *pool;
-    int share; /* the share the worker starts on: 1 + its number (the caller's is 0) */
-} worker_seat;
-
-struct thread_pool {
-    pthread_t threads[MAX_POOL_THREADS];
-    worker_seat seats[MAX_POOL_THREADS];
-    int worker_count; /* threads besides the caller */
-    pthread_mutex_t lock;
-    pthread_cond_t wake;
-    pthread_cond_t done;
-    /* the current job */
-    ibl_task_fn task;
-    void *task_arg;
-    int shares; /* 1: one share, taken front to back by all (a loop beside the caller) */
-    index_share share[MAX_POOL_THREADS];
-    atomic_int active_workers; /* workers that joined the current job and are not done */
-    int open;                  /* the job still takes workers (under lock) */
-    atomic_uint generation;
-    atomic_int quit;
-    atomic_flag running; /* set while a job is on the pool */
-};
-
 struct ibl_context {
     ibl_context_desc desc; /* desc.max_bytes: the budget in effect (never 0) */
-    thread_pool *pool;
+    ibl__pool *pool; /* NULL: one thread, or the host's parallel-for */
     int thread_count;
     unsigned cpu_features; /* what kernels may use (core/cpu.h) */
     /* The budget's accounts: bytes of live blocks from ibl_alloc plus what decoders hold by
@@ -138,7 +105,6 @@ typedef struct block_header {
     void *start;     /* what the allocator returned */
 } block_header;
 
-static void cpu_relax(void);
 
 static int page_aligned(const void *p)
 {
@@ -149,7 +115,7 @@ static int page_aligned(const void *p)
  * header). A few dozen large blocks live at once in a prefilter, so the search is in order. */
 static int large_remember(ibl_context *ctx, void *start, size_t bytes)
 {
-    while (atomic_flag_test_and_set_explicit(&ctx->large_lock, memory_order_acquire)) cpu_relax();
+    while (atomic_flag_test_and_set_explicit(&ctx->large_lock, memory_order_acquire)) ibl__pool_relax();
     int kept = ctx->large_count < LARGE_BLOCK_SLOTS;
     if (kept) ctx->large[ctx->large_count++] = (large_block){start, bytes};
     atomic_flag_clear_explicit(&ctx->large_lock, memory_order_release);
@@ -159,7 +125,7 @@ static int large_remember(ibl_context *ctx, void *start, size_t bytes)
 /* Takes a block out of the table: 1 and its size if this context counted it. */
 static int large_forget(ibl_context *ctx, const void *start, size_t *bytes)
 {
-    while (atomic_flag_test_and_set_explicit(&ctx->large_lock, memory_order_acquire)) cpu_relax();
+    while (atomic_flag_test_and_set_explicit(&ctx->large_lock, memory_order_acquire)) ibl__pool_relax();
     int found = 0;
     for (int i = ctx->large_count - 1; i >= 0 && !found; i--) {
         if (ctx->large[i].start != start) continue;
@@ -298,188 +264,6 @@ uint64_t ibl_context_peak_bytes(const ibl_context *ctx)
     return ctx ? atomic_load_explicit(&((ibl_context *)ctx)->peak_bytes, memory_order_relaxed) : 0;
 }
 
-/* A loop's indices are cut into one contiguous share per thread: each thread runs its own
- * front to back, then takes what is left of the others'. Consecutive loops mostly walk the
- * same data in the same order (faces, rows, tiles), so a thread reads what it wrote itself,
- * from its own core's cache. With one counter for all, neighbouring indices went to both
- * threads in turn, and the 256 chain's tasks took 13% longer on two threads than on one,
- * against 5% with the shares (bench/threads_split.sh). Which thread runs an index changes
- * nothing in the result. */
-static void run_indices(thread_pool *pool, int own)
-{
-    for (int k = 0; k < pool->shares; k++) {
-        index_share *s = &pool->share[(own + k) % pool->shares];
-        for (;;) {
-            int i = atomic_fetch_add_explicit(&s->next, 1, memory_order_relaxed);
-            if (i >= s->end) break;
-            pool->task(pool->task_arg, i);
-        }
-    }
-}
-
-/* A parallel-for usually follows the last one within microseconds, so a thread waits awake
- * for a while before it sleeps on a condition variable: a wake-up through the kernel cost
- * ~35 us per call on a 2-core VM, and a prefilter makes hundreds of calls. The while is
- * SPIN_NS of the monotonic clock (read every SPIN_CHECK pauses; a pause takes ~25 ns on one
- * CPU and ~140 on another): 0.5 ms covers most of the serial stretches between a prefilter's
- * loops (the 256 GGX chain has ~14 a run over 0.1 ms, ~12 of them under 0.5 ms), after
- * which a worker woken through the kernel joined ~75 us late; with 0.1 ms of spinning that
- * was ~1 ms a run of the caller working alone. */
-#define SPIN_NS 500000L
-enum { SPIN_CHECK = 64 };
-
-static void cpu_relax(void)
-{
-#if defined(__x86_64__) || defined(__i386__)
-    __builtin_ia32_pause();
-#elif defined(__aarch64__)
-    __asm__ __volatile__("yield");
-#endif
-}
-
-static long monotonic_ns(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (long)t.tv_sec * 1000000000L + t.tv_nsec;
-}
-
-/* A worker's wake-up: a new job (generation past `seen`) or the end of the pool. */
-static int job_posted(thread_pool *pool, unsigned seen)
-{
-    return atomic_load(&pool->generation) != seen || atomic_load(&pool->quit);
-}
-
-/* The caller's: every worker that joined the job is done. */
-static int workers_done(thread_pool *pool, unsigned unused)
-{
-    (void)unused;
-    return atomic_load(&pool->active_workers) == 0;
-}
-
-/* Waits awake, up to SPIN_NS, until ready(pool, arg). */
-static void spin_until(int (*ready)(thread_pool *, unsigned), thread_pool *pool, unsigned arg)
-{
-    long deadline = 0;
-    for (int i = 0; !ready(pool, arg); i++) {
-        if (i % SPIN_CHECK == 0) {
-            long now = monotonic_ns();
-            if (!deadline) deadline = now + SPIN_NS;
-            else if (now >= deadline) return;
-        }
-        cpu_relax();
-    }
-}
-
-/* A worker joins a job only while the caller has not finished it: a worker woken late (it
- * slept through the gap before the job, and the kernel took its time) then goes back to wait
- * instead of making the caller wait for it. On two threads, the caller used to wait for such
- * a worker about 5 ms in the 256 GGX chain, whose short jobs it often ran alone. */
-static void *worker_main(void *arg)
-{
-    const worker_seat *seat = arg;
-    thread_pool *pool = seat->pool;
-    unsigned seen = 0;
-    for (;;) {
-        spin_until(job_posted, pool, seen);
-        pthread_mutex_lock(&pool->lock);
-        while (!atomic_load(&pool->quit) && atomic_load(&pool->generation) == seen)
-            pthread_cond_wait(&pool->wake, &pool->lock);
-        int quit = atomic_load(&pool->quit);
-        seen = atomic_load(&pool->generation);
-        int join = !quit && pool->open;
-        if (join) atomic_fetch_add(&pool->active_workers, 1);
-        pthread_mutex_unlock(&pool->lock);
-        if (quit) break;
-        if (!join) continue;
-        run_indices(pool, seat->share);
-        if (atomic_fetch_sub(&pool->active_workers, 1) == 1) {
-            pthread_mutex_lock(&pool->lock);
-            pthread_cond_signal(&pool->done);
-            pthread_mutex_unlock(&pool->lock);
-        }
-    }
-    return NULL;
-}
-
-static void pool_destroy(thread_pool *pool)
-{
-    if (!pool) return;
-    pthread_mutex_lock(&pool->lock);
-    atomic_store(&pool->quit, 1);
-    pthread_cond_broadcast(&pool->wake);
-    pthread_mutex_unlock(&pool->lock);
-    for (int i = 0; i < pool->worker_count; i++) pthread_join(pool->threads[i], NULL);
-    pthread_mutex_destroy(&pool->lock);
-    pthread_cond_destroy(&pool->wake);
-    pthread_cond_destroy(&pool->done);
-    free(pool);
-}
-
-static thread_pool *pool_create(int workers)
-{
-    /* the index shares sit on cache lines of their own: the pool is aligned as they are */
-    size_t align = _Alignof(thread_pool);
-    size_t bytes = (sizeof(thread_pool) + align - 1) / align * align;
-    thread_pool *pool = aligned_alloc(align, bytes);
-    if (!pool) return NULL;
-    memset(pool, 0, bytes);
-    atomic_flag_clear(&pool->running);
-    pthread_mutex_init(&pool->lock, NULL);
-    pthread_cond_init(&pool->wake, NULL);
-    pthread_cond_init(&pool->done, NULL);
-    for (int i = 0; i < workers; i++) {
-        pool->seats[i].pool = pool;
-        pool->seats[i].share = 1 + i;
-        if (pthread_create(&pool->threads[i], NULL, worker_main, &pool->seats[i]) != 0) break;
-        pool->worker_count++;
-    }
-    return pool;
-}
-
-/* Posts a job: the workers wake (or stop spinning) and take its indices, in one share per
- * thread, or in_order: one share that every thread takes front to back. */
-static void pool_post(thread_pool *pool, int count, ibl_task_fn task, void *arg, int in_order)
-{
-    pthread_mutex_lock(&pool->lock);
-    pool->task = task;
-    pool->task_arg = arg;
-    int shares = in_order ? 1 : pool->worker_count + 1;
-    if (shares > count) shares = count;
-    pool->shares = shares;
-    for (int s = 0; s < shares; s++) {
-        atomic_store_explicit(&pool->share[s].next, (int)((int64_t)count * s / shares), memory_order_relaxed);
-        pool->share[s].end = (int)((int64_t)count * (s + 1) / shares);
-    }
-    atomic_store(&pool->active_workers, 0);
-    pool->open = 1;
-    atomic_fetch_add(&pool->generation, 1u);
-    pthread_cond_broadcast(&pool->wake);
-    pthread_mutex_unlock(&pool->lock);
-}
-
-/* The caller's end of a job: it runs the indices left, then waits for the workers'. */
-static void pool_finish(thread_pool *pool)
-{
-    run_indices(pool, 0);
-    /* every index is taken: no more workers join, and those that did finish theirs */
-    pthread_mutex_lock(&pool->lock);
-    pool->open = 0;
-    pthread_mutex_unlock(&pool->lock);
-    spin_until(workers_done, pool, 0);
-    if (atomic_load(&pool->active_workers) > 0) {
-        pthread_mutex_lock(&pool->lock);
-        while (atomic_load(&pool->active_workers) > 0) pthread_cond_wait(&pool->done, &pool->lock);
-        pthread_mutex_unlock(&pool->lock);
-    }
-}
-
-static void pool_run(thread_pool *pool, int count, ibl_task_fn task, void *arg)
-{
-    pool_post(pool, count, task, arg, 0);
-    pool_finish(pool);
-}
-
 ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out)
 {
     if (!out) return IBL_ERR_INVALID_ARGUMENT;
@@ -507,21 +291,21 @@ ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out)
     if (d.parallel_for) {
         /* the host's word for its concurrency: the work is split for it, and a loop that runs
          * on more threads at once only waits (the EXR bands' buffer slots) */
-        if (d.threads > 1) ctx->thread_count = d.threads < MAX_POOL_THREADS ? d.threads : MAX_POOL_THREADS;
+        if (d.threads > 1) ctx->thread_count = d.threads < IBL__POOL_MAX_THREADS ? d.threads : IBL__POOL_MAX_THREADS;
     } else {
         int threads = d.threads;
         if (threads <= 0) {
             long online = sysconf(_SC_NPROCESSORS_ONLN);
             threads = online > 0 ? (int)online : 1;
         }
-        if (threads > MAX_POOL_THREADS) threads = MAX_POOL_THREADS;
+        if (threads > IBL__POOL_MAX_THREADS) threads = IBL__POOL_MAX_THREADS;
         if (threads > 1) {
-            ctx->pool = pool_create(threads - 1);
+            ctx->pool = ibl__pool_create(threads - 1);
             if (!ctx->pool) {
                 d.allocator.free(ctx, d.allocator.user);
                 return IBL_ERR_OUT_OF_MEMORY;
             }
-            ctx->thread_count = ctx->pool->worker_count + 1;
+            ctx->thread_count = ibl__pool_threads(ctx->pool);
         }
     }
     *out = ctx;
@@ -531,7 +315,7 @@ ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out)
 void ibl_context_destroy(ibl_context *ctx)
 {
     if (!ctx) return;
-    pool_destroy(ctx->pool);
+    ibl__pool_destroy(ctx->pool);
     for (int i = 0; i < IBL__CACHE_SLOTS; i++) {
         void *cache = atomic_load(&ctx->caches[i]);
         if (cache) ctx->cache_free[i](ctx, cache);
@@ -683,56 +467,37 @@ void ibl_parallel_for(ibl_context *ctx, int count, ibl_task_fn task, void *task_
         ctx->desc.parallel_for(ctx->desc.parallel_host, count, task, task_arg);
         return;
     }
-    /* A parallel loop started from inside one of the pool's tasks (a task that allocates a
-     * large image, which is zeroed in parallel) runs on the calling thread: the pool holds one
-     * job at a time. The chunks are the same, so the result is too. */
-    if (!ctx || !ctx->pool || count == 1 || atomic_flag_test_and_set(&ctx->pool->running)) {
+    if (!ctx || !ctx->pool || count == 1) {
         for (int i = 0; i < count; i++) task(task_arg, i);
         return;
     }
-    pool_run(ctx->pool, count, task, task_arg);
-    atomic_flag_clear(&ctx->pool->running);
+    ibl__pool_run(ctx->pool, count, task, task_arg);
 }
 
 void ibl__cpu_relax(void)
 {
-    cpu_relax();
+    ibl__pool_relax();
 }
 
 int ibl__parallel_begin(ibl_context *ctx, int count, ibl_task_fn task, void *task_arg)
 {
     if (count <= 0 || !ctx || !ctx->pool || ctx->desc.parallel_for) return 0;
-    if (atomic_flag_test_and_set(&ctx->pool->running)) return 0;
-    /* in order: the caller waits on the indices front to back (an output's encoded slices) */
-    pool_post(ctx->pool, count, task, task_arg, 1); /* `running` stays set until the end */
-    return 1;
+    return ibl__pool_begin(ctx->pool, count, task, task_arg);
 }
 
 int ibl__parallel_help(ibl_context *ctx)
 {
-    thread_pool *pool = ctx->pool;
-    int i = atomic_fetch_add_explicit(&pool->share[0].next, 1, memory_order_relaxed);
-    if (i >= pool->share[0].end) return 0;
-    pool->task(pool->task_arg, i);
-    return 1;
+    return ibl__pool_help(ctx->pool);
 }
 
 void ibl__parallel_end(ibl_context *ctx)
 {
-    pool_finish(ctx->pool);
-    atomic_flag_clear(&ctx->pool->running);
+    ibl__pool_end(ctx->pool);
 }
 
 void ibl__parallel_warm(ibl_context *ctx)
 {
-    if (!ctx || !ctx->pool || atomic_flag_test_and_set(&ctx->pool->running)) return;
-    thread_pool *pool = ctx->pool;
-    /* a generation without a job (open stays 0): the workers wake, join nothing, and spin */
-    pthread_mutex_lock(&pool->lock);
-    atomic_fetch_add(&pool->generation, 1u);
-    pthread_cond_broadcast(&pool->wake);
-    pthread_mutex_unlock(&pool->lock);
-    atomic_flag_clear(&pool->running);
+    if (ctx && ctx->pool && !ctx->desc.parallel_for) ibl__pool_warm(ctx->pool);
 }
 
 ibl_status ibl__progress(ibl_context *ctx, const char *stage, double fraction)

@@ -26,11 +26,12 @@ void ibl__parallel_warm(ibl_context *ctx);
 /* A loop whose indices the pool's workers start on at once while the calling thread does
  * something else (writes a file's finished front while the rest is encoded): begin posts it
  * and returns 1, or returns 0 and runs nothing when it cannot be posted (no pool, the host's
- * parallel_for hook, a loop already running: the caller then runs it with ibl_parallel_for).
+ * parallel_for hook, another begun loop running: the caller then runs it with ibl_parallel_for).
  * While it runs the caller may take indices itself with ibl__parallel_help (1 if it ran one,
  * 0 when none is left to take) and must end it with ibl__parallel_end, which runs what is
- * left and returns once every index is done. A parallel-for started meanwhile runs on its
- * calling thread. Which thread runs an index never changes what it computes. */
+ * left and returns once every index is done. Parallel-fors started meanwhile run beside it
+ * (one begun loop at a time: begin returns 0 while another runs). Which thread runs an index
+ * never changes what it computes. */
 int ibl__parallel_begin(ibl_context *ctx, int count, ibl_task_fn task, void *task_arg);
 int ibl__parallel_help(ibl_context *ctx);
 void ibl__parallel_end(ibl_context *ctx);

@@ -43,9 +43,7 @@ int ibl_format_from_name(const char *name, ibl_format *out)
 /* Large pixel blocks are zeroed in fixed 1 MiB chunks through ibl_parallel_for: zeroing a
  * fresh block is mostly the kernel faulting its pages in and clearing them, and one thread
  * doing it for a whole cube (the 512 chain: 33 MiB) is a serial stretch of every command.
- * Below ZERO_PARALLEL_BYTES one memset is cheaper than waking the workers. (An image
- * allocated inside a task of the context's pool is zeroed on that task's thread:
- * ibl_parallel_for runs a nested loop inline.) */
+ * Below ZERO_PARALLEL_BYTES one memset is cheaper than waking the workers. */
 #define ZERO_CHUNK_BYTES ((size_t)1 << 20)
 #define ZERO_PARALLEL_BYTES ((size_t)4 << 20)
 
