@@ -138,6 +138,21 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
                                   const ibl_specular_desc *desc, ibl_cubemap *out,
                                   ibl_specular_info *info);
 
+/* ibl_specular_prefilter in two halves. Prepare does everything that depends only on the desc
+ * and the source's face edge (the fast method's plan: about a sixth of a 256 chain's time),
+ * so a host that learns the source's size before it has the source (from a file's header)
+ * can prepare while it decodes and converts the input, e.g. as the two tasks of one
+ * ibl_parallel_for on the same context (`ibl prefilter` does: ibl_read_info, then the read and
+ * the conversion beside ibl_specular_prepare). The prepared chain then filters one source of
+ * that edge, once, with the same result as ibl_specular_prefilter bit for bit. */
+typedef struct ibl_specular_prepared ibl_specular_prepared;
+ibl_status ibl_specular_prepare(ibl_context *ctx, const ibl_specular_desc *desc, int source_size,
+                                ibl_specular_prepared **out);
+ibl_status ibl_specular_prefilter_prepared(ibl_specular_prepared *prepared,
+                                           const ibl_cubemap *src, ibl_cubemap *out,
+                                           ibl_specular_info *info);
+void ibl_specular_prepared_destroy(ibl_specular_prepared *prepared);
+
 /* ---- accuracy against a flat input (docs/SPECULAR.md "Accuracy against the input") ----
  *
  * The prefilter reads a cube; an image in another layout is converted first to a working cube

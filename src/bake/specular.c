@@ -148,27 +148,39 @@ static ibl_status mirror_level(ibl_context *ctx, const ibl_cubemap *src, ibl_cub
     return st == IBL_OK ? ibl_cubemap_resample(ctx, src, &view) : st;
 }
 
-ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
-                                  const ibl_specular_desc *desc_in, ibl_cubemap *out,
-                                  ibl_specular_info *info_out)
+/* What ibl_specular_prepare resolves from the desc and the source's edge alone. */
+struct ibl_specular_prepared {
+    ibl_context *ctx;
+    ibl_specular_desc desc; /* size, levels and dynamic resolved; source_size: the working edge */
+    ibl_specular_info info;
+    int source_size;         /* the edge of the cubes it takes */
+    int edge;                /* the working source's: a power of two */
+    ibl_specular_plan *plan; /* the fast method's, for one run; NULL for the other methods */
+    int used;
+};
+
+ibl_status ibl_specular_prepare(ibl_context *ctx, const ibl_specular_desc *desc_in,
+                                int source_size, ibl_specular_prepared **out)
 {
-    if (!ctx || !src || !src->data || !desc_in || !out) return IBL_ERR_INVALID_ARGUMENT;
-    memset(out, 0, sizeof *out);
+    if (!ctx || !desc_in || !out) return IBL_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (source_size < 1 || source_size > 16384)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: source size %d out of range",
+                         source_size);
     ibl_specular_desc desc = *desc_in;
-    int N = desc.size > 0 ? desc.size : src->size;
+    int N = desc.size > 0 ? desc.size : source_size;
     if (N < 1 || N > 16384)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: size %d out of range", N);
     desc.size = N;
-    int L = chain_levels(&desc, N);
-    desc.levels = L;
+    desc.levels = chain_levels(&desc, N);
     ibl_specular_info info;
-    ibl_status st = ibl__specular_mapping(ctx, &desc, N, L, &info);
+    ibl_status st = ibl__specular_mapping(ctx, &desc, N, desc.levels, &info);
     if (st != IBL_OK) return st;
 
     /* the dynamic plan (the dynamic presets) wants a power-of-two chain no larger than the
      * source; other sizes take the general code */
     int pow2 = 1;
-    while (pow2 < src->size) pow2 *= 2;
+    while (pow2 < source_size) pow2 *= 2;
     if (desc.dynamic && (desc.method == IBL_METHOD_REFERENCE || !is_pow2(N) || N > pow2)) desc.dynamic = 0;
     int box_or_gauss = desc.filter == IBL_FILTER_BOX || desc.filter == IBL_FILTER_GAUSS;
     int fast_plan = desc.method != IBL_METHOD_REFERENCE && !desc.dynamic && !box_or_gauss;
@@ -178,15 +190,99 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
      * exact area means, so the plan, whose memory and time grow with its source's texels,
      * is built at that edge and not at the source's. */
     int edge = pow2;
-    if (fast_plan) st = ibl_specular_source_size(ctx, &desc, src->size, &edge);
+    if (fast_plan) st = ibl_specular_source_size(ctx, &desc, source_size, &edge);
     if (st != IBL_OK) return st;
+    ibl_specular_prepared *p = ibl_calloc(ctx, 1, sizeof *p);
+    if (!p) return ibl_context_status(ctx);
+    p->ctx = ctx;
+    desc.source_size = edge;
+    p->desc = desc;
+    p->info = info;
+    p->source_size = source_size;
+    p->edge = edge;
+    int plan_path = !(box_or_gauss && !desc.dynamic) && desc.method != IBL_METHOD_REFERENCE;
+    if (plan_path) st = ibl__specular_plan_create(ctx, &p->desc, !desc.dynamic, &p->plan);
+    if (st != IBL_OK) {
+        ibl_specular_prepared_destroy(p);
+        return st;
+    }
+    *out = p;
+    return IBL_OK;
+}
+
+void ibl_specular_prepared_destroy(ibl_specular_prepared *p)
+{
+    if (!p) return;
+    ibl_specular_plan_destroy(p->plan);
+    ibl_free(p->ctx, p);
+}
+
+/* The filtering itself, from the working source s (level 0 of edge p->edge) into out. */
+static ibl_status filter_working(ibl_specular_prepared *p, const ibl_cubemap *s, ibl_cubemap *out)
+{
+    ibl_context *ctx = p->ctx;
+    const ibl_specular_desc *desc = &p->desc;
+    const ibl_specular_info *info = &p->info;
+    int N = desc->size, L = desc->levels;
+    ibl_status st = IBL_OK;
+    if ((desc->filter == IBL_FILTER_BOX || desc->filter == IBL_FILTER_GAUSS) && !desc->dynamic) {
+        float kernel_exponents[IBL_MAX_LEVELS];
+        for (int l = 0; l < L; l++) kernel_exponents[l] = ibl_specular_level_phong_exponent(info, l);
+        st = ibl_cubemap_alloc(ctx, N, L, out);
+        if (st == IBL_OK)
+            st = desc->filter == IBL_FILTER_BOX ? ibl__specular_box(ctx, s, out)
+                                                : ibl__specular_gauss(ctx, s, out, kernel_exponents);
+        if (st == IBL_OK && info->mirror) st = mirror_level(ctx, s, out, 0);
+        for (int l = 0; st == IBL_OK && l < L; l++)
+            st = ibl_edge_fixup_apply(ctx, desc->edge_fixup, out, l);
+        return st;
+    }
+    if (desc->method == IBL_METHOD_REFERENCE) {
+        st = ibl_cubemap_alloc(ctx, N, L, out);
+        if (st == IBL_OK) st = ibl__specular_reference(ctx, s, desc, info, out);
+        for (int l = 0; st == IBL_OK && l < L; l++) {
+            if (ibl__level_is_mirror(info, l)) st = mirror_level(ctx, s, out, l);
+            if (st == IBL_OK) st = ibl_edge_fixup_apply(ctx, desc->edge_fixup, out, l);
+        }
+        return st;
+    }
+    /* a plan's chain is allocated once its grids are summed: the pyramid's records and the
+     * precomputed weights are freed by then and the chain takes their memory */
+    st = ibl__specular_plan_run_grids(p->plan, s);
+    if (st == IBL_OK) st = ibl_cubemap_alloc(ctx, N, L, out);
+    if (st == IBL_OK) st = ibl__specular_plan_run_output(p->plan, s, out);
+    ibl_specular_plan_destroy(p->plan);
+    p->plan = NULL;
+    /* a mirror level the plan could only point-sample (its size does not divide the
+     * source's) is area-resampled here, as the reference does */
+    for (int l = 0; st == IBL_OK && l < L; l++) {
+        int n = ibl_level_size(N, l);
+        if (!ibl__level_is_mirror(info, l) || n >= s->size || s->size % n == 0) continue;
+        st = mirror_level(ctx, s, out, l);
+        if (st == IBL_OK) st = ibl_edge_fixup_apply(ctx, desc->edge_fixup, out, l);
+    }
+    return st;
+}
+
+ibl_status ibl_specular_prefilter_prepared(ibl_specular_prepared *p, const ibl_cubemap *src,
+                                           ibl_cubemap *out, ibl_specular_info *info_out)
+{
+    if (!p || !src || !src->data || !out) return IBL_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    ibl_context *ctx = p->ctx;
+    if (p->used)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "prefilter: a prepared chain runs once");
+    if (src->size != p->source_size)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT,
+                         "prefilter: prepared for a source of edge %d, given one of %d",
+                         p->source_size, src->size);
+    p->used = 1;
     ibl_cubemap work = {0};
     const ibl_cubemap *s = src;
-    if (edge != src->size) {
-        st = ibl_cubemap_alloc(ctx, edge, 1, &work);
-        if (st != IBL_OK) return st;
-        st = ibl_cubemap_resample(ctx, src, &work);
-        if (st != IBL_OK) goto done;
+    ibl_status st = IBL_OK;
+    if (p->edge != src->size) {
+        st = ibl_cubemap_alloc(ctx, p->edge, 1, &work);
+        if (st == IBL_OK) st = ibl_cubemap_resample(ctx, src, &work);
         s = &work;
     } else if (src->levels > 1) {
         work = *src;
@@ -194,53 +290,27 @@ ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
         work.owns_data = 0;
         s = &work;
     }
-    /* a plan's chain is allocated once its grids are summed: the pyramid's records and the
-     * precomputed weights are freed by then and the chain takes their memory */
-    int plan_path = !(box_or_gauss && !desc.dynamic) && desc.method != IBL_METHOD_REFERENCE;
-    if (!plan_path) st = ibl_cubemap_alloc(ctx, N, L, out);
-    if (st != IBL_OK) goto done;
-
-    if ((desc.filter == IBL_FILTER_BOX || desc.filter == IBL_FILTER_GAUSS) && !desc.dynamic) {
-        float kernel_exponents[IBL_MAX_LEVELS];
-        for (int l = 0; l < L; l++) kernel_exponents[l] = ibl_specular_level_phong_exponent(&info, l);
-        st = desc.filter == IBL_FILTER_BOX ? ibl__specular_box(ctx, s, out)
-                                           : ibl__specular_gauss(ctx, s, out, kernel_exponents);
-        if (st == IBL_OK && info.mirror) st = mirror_level(ctx, s, out, 0);
-        for (int l = 0; st == IBL_OK && l < L; l++)
-            st = ibl_edge_fixup_apply(ctx, desc.edge_fixup, out, l);
-    } else if (desc.method == IBL_METHOD_REFERENCE) {
-        st = ibl__specular_reference(ctx, s, &desc, &info, out);
-        for (int l = 0; st == IBL_OK && l < L; l++) {
-            if (ibl__level_is_mirror(&info, l)) st = mirror_level(ctx, s, out, l);
-            if (st == IBL_OK) st = ibl_edge_fixup_apply(ctx, desc.edge_fixup, out, l);
-        }
-    } else {
-        ibl_specular_plan *plan = NULL;
-        desc.source_size = s->size;
-        st = ibl__specular_plan_create(ctx, &desc, !desc.dynamic, &plan);
-        if (st == IBL_OK) st = ibl__specular_plan_run_grids(plan, s);
-        if (st == IBL_OK) st = ibl_cubemap_alloc(ctx, N, L, out);
-        if (st == IBL_OK) st = ibl__specular_plan_run_output(plan, s, out);
-        ibl_specular_plan_destroy(plan);
-        /* a mirror level the plan could only point-sample (its size does not divide the
-         * source's) is area-resampled here, as the reference does */
-        for (int l = 0; st == IBL_OK && l < L; l++) {
-            int n = ibl_level_size(N, l);
-            if (!ibl__level_is_mirror(&info, l) || n >= s->size ||
-                s->size % n == 0)
-                continue;
-            st = mirror_level(ctx, s, out, l);
-            if (st == IBL_OK) st = ibl_edge_fixup_apply(ctx, desc.edge_fixup, out, l);
-        }
-    }
-done:
+    if (st == IBL_OK) st = filter_working(p, s, out);
     if (work.owns_data) ibl_cubemap_free(ctx, &work);
     if (st != IBL_OK) {
         ibl_cubemap_free(ctx, out);
         memset(out, 0, sizeof *out);
     } else if (info_out) {
-        *info_out = info;
+        *info_out = p->info;
     }
+    return st;
+}
+
+ibl_status ibl_specular_prefilter(ibl_context *ctx, const ibl_cubemap *src,
+                                  const ibl_specular_desc *desc, ibl_cubemap *out,
+                                  ibl_specular_info *info)
+{
+    if (!ctx || !src || !src->data || !desc || !out) return IBL_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    ibl_specular_prepared *p = NULL;
+    ibl_status st = ibl_specular_prepare(ctx, desc, src->size, &p);
+    if (st == IBL_OK) st = ibl_specular_prefilter_prepared(p, src, out, info);
+    ibl_specular_prepared_destroy(p);
     return st;
 }
 
