@@ -58,6 +58,14 @@ void cli_warn_upsampling(const cli_common *c, const char *path, const cli_input_
                     "or a larger input)\n", path, out_size, o->detail, o->detail);
 }
 
+int cli_input_cube_size(const cli_input_options *o, const ibl_file_info *info)
+{
+    if (info->kind == IBL_TEXTURE_CUBE) return o->size > 0 ? o->size : info->width;
+    if (info->kind != IBL_TEXTURE_2D) return 0;
+    int natural = ibl_layout_cube_size(o->layout, info->width, info->height);
+    return natural > 0 && o->size > 0 ? o->size : natural;
+}
+
 int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
                      cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out)
 {

@@ -34,6 +34,9 @@ int cli_input_option(cli_args *a, const char *arg, cli_input_options *o);
  * (0 on success). If layout_out is not NULL it receives the layout used. */
 int cli_read_cubemap(ibl_context *ctx, const cli_common *c, const char *path,
                      cli_input_options *o, ibl_cubemap *out, ibl_layout *layout_out);
+/* The edge of the cube cli_read_cubemap makes with o from a file that holds what info says
+ * (ibl_read_info: known from the header alone); 0 when it cannot tell (or the read fails). */
+int cli_input_cube_size(const cli_input_options *o, const ibl_file_info *info);
 /* The two halves of cli_read_cubemap: the file as a texture (pixels reported), then the
  * texture (freed here, whatever happens) as a cube of the options' size and orientation;
  * each prints its error and returns an exit code. */

@@ -34,6 +34,9 @@ int ibl_layout_from_name(const char *name, ibl_layout *out);
 /* The layout an image of this size most likely holds (IBL_LAYOUT_AUTO if none fits). 1:1
  * images are reported as angular; pass --layout octahedral to override. */
 ibl_layout ibl_layout_detect(int width, int height);
+/* The face edge ibl_image_to_cubemap gives a width x height picture in `layout` (AUTO: the
+ * detected one) when its desc.size is 0; 0 when the layout does not fit that size. */
+int ibl_layout_cube_size(ibl_layout layout, int width, int height);
 
 /* How the picture's frame relates to the world frame:
  *   world = Yaw(yaw_degrees) * Mirror * ZUp * picture   (ZUp first, yaw last).

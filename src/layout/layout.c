@@ -295,6 +295,17 @@ static ibl_status check_image(ibl_context *ctx, const char *what, const ibl_imag
     return IBL_OK;
 }
 
+int ibl_layout_cube_size(ibl_layout layout, int width, int height)
+{
+    if (layout == IBL_LAYOUT_AUTO) layout = ibl_layout_detect(width, height);
+    if (layout == IBL_LAYOUT_AUTO || layout == IBL_LAYOUT_FACES || layout == IBL_LAYOUT_CUBE ||
+        (int)layout < 0 || layout > IBL_LAYOUT_CUBE || width < 1 || height < 1 ||
+        !size_fits(layout, width, height))
+        return 0;
+    int size = ibl__natural_cube_size(layout, width, height);
+    return size >= 1 && size <= MAX_CUBE_SIZE ? size : 0;
+}
+
 ibl_status ibl_image_to_cubemap(ibl_context *ctx, const ibl_image *image,
                                 const ibl_to_cube_desc *desc, ibl_cubemap *out)
 {
