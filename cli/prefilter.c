@@ -190,6 +190,11 @@ static void read_and_prepare_task(void *arg, int index)
  * 512 chain from 2048x1024, 32 MiB: the same time, 120 MB against 101; the 256 chain from
  * 1024x512, 8 MiB: 87 ms against 92, 44 MB against 46 (docs/PERFORMANCE.md). */
 #define OVERLAP_MAX_INPUT_BYTES ((uint64_t)16 << 20)
+/* Below this chain edge the plan is small and so is the gain, while the plan's memory, held
+ * beside the decode's buffers, raises the peak: the 128 chain from 1024x512 gained 1 ms of 63
+ * and its peak rose from 32 to 36 MB (the 64 chain's too), where the 256 chain's peak comes
+ * later, in level 1's weights, and does not move. */
+#define OVERLAP_MIN_CHAIN 256
 
 static uint64_t input_float_bytes(const ibl_file_info *head)
 {
@@ -200,10 +205,10 @@ static uint64_t input_float_bytes(const ibl_file_info *head)
 }
 
 /* Reads the input into cube and prepares the chain d for it: side by side when the header
- * tells the cube's edge, the input is small (OVERLAP_MAX_INPUT_BYTES) and no memory budget
- * was asked for (the two would hold memory at once, and the budget's verdict should not
- * depend on that); one after the other otherwise. Returns the exit code; on success
- * *prepared is set. */
+ * tells the cube's edge, the input is small (OVERLAP_MAX_INPUT_BYTES), the chain is not
+ * (OVERLAP_MIN_CHAIN) and no memory budget was asked for (the two would hold memory at once,
+ * and the budget's verdict should not depend on that); one after the other otherwise.
+ * Returns the exit code; on success *prepared is set. */
 static int read_and_prepare_input(cli_args *a, ibl_context *ctx, const char *in,
                                   const char *out, cli_input_options *io, const ibl_specular_desc *d,
                                   ibl_cubemap *cube, ibl_specular_prepared **prepared)
@@ -214,8 +219,10 @@ static int read_and_prepare_input(cli_args *a, ibl_context *ctx, const char *in,
     struct stat st; /* a pipe's head, once read, is gone: only regular files */
     if (a->common.max_memory_mib <= 0 && ibl_context_threads(ctx) > 1 && stat(in, &st) == 0 &&
         S_ISREG(st.st_mode) && ibl_read_info(ctx, in, &head) == IBL_OK &&
-        input_float_bytes(&head) <= OVERLAP_MAX_INPUT_BYTES)
+        input_float_bytes(&head) <= OVERLAP_MAX_INPUT_BYTES) {
         predicted = cli_input_cube_size(io, &head);
+        if ((d->size > 0 ? d->size : predicted) < OVERLAP_MIN_CHAIN) predicted = 0;
+    }
     read_and_prepare job = {ctx, &a->common, in, io, d, predicted, cube, 0, NULL, IBL_OK};
     if (predicted > 0) {
         cli_specular_check(a, ctx, d, predicted);

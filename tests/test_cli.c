@@ -261,9 +261,10 @@ static void identical_at_any_thread_count(void **state)
 }
 
 /* `ibl prefilter` prepares the chain beside the input's reading when the header tells the
- * cube's edge (more than one thread, no --max-memory), and one after the other otherwise: the
- * same bytes either way, for an equirect EXR at its own edge and at --source-size, a cube
- * KTX2 and an hcross HDR (each layout's edge from the header: cli_input_cube_size). */
+ * cube's edge (more than one thread, no --max-memory, a small input, a chain of 256 or more:
+ * cli/prefilter.c), and one after the other otherwise: the same bytes either way, for an
+ * equirect EXR at its own edge and at --source-size, a cube KTX2 and an hcross HDR (each
+ * layout's edge from the header: cli_input_cube_size). */
 static void prefilter_prepared_beside_the_read(void **state)
 {
     (void)state;
@@ -272,11 +273,11 @@ static void prefilter_prepared_beside_the_read(void **state)
     char cube[512], cross[512]; /* test_path's buffer is reused by the next call */
     snprintf(cube, sizeof cube, "%s", test_path("side-cube.ktx2"));
     snprintf(cross, sizeof cross, "%s", test_path("side-cross.hdr"));
-    assert_int_equal(test_run_cli(&text, "convert -q '%s' -o '%s' --size 32 --format rgba32f", studio, cube), 0);
-    assert_int_equal(test_run_cli(&text, "convert -q '%s' -o '%s' --out-layout hcross --size 24", studio, cross), 0);
+    assert_int_equal(test_run_cli(&text, "convert -q '%s' -o '%s' --size 256 --format rgba32f", studio, cube), 0);
+    assert_int_equal(test_run_cli(&text, "convert -q '%s' -o '%s' --out-layout hcross --size 96", studio, cross), 0);
     const struct {
         const char *in, *extra;
-    } cases[] = {{studio, ""}, {studio, "--source-size 48"}, {cube, ""}, {cross, ""}};
+    } cases[] = {{studio, ""}, {studio, "--source-size 384"}, {cube, ""}, {cross, ""}};
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         const char *runs[3] = {"-j 1", "-j 2", "-j 2 --max-memory 4000"};
         char first[512];
@@ -284,7 +285,7 @@ static void prefilter_prepared_beside_the_read(void **state)
             char name[64];
             snprintf(name, sizeof name, "side-%zu-%d.ktx2", c, r);
             const char *out = test_path(name);
-            int rc = test_run_cli(&text, "prefilter -q %s '%s' -o '%s' --size 16 --format rgba32f %s",
+            int rc = test_run_cli(&text, "prefilter -q %s '%s' -o '%s' --size 256 --levels 3 %s",
                                   runs[r], cases[c].in, out, cases[c].extra);
             if (rc) fail_msg("case %zu %s: %s", c, runs[r], text);
             if (r == 0) snprintf(first, sizeof first, "%s", out);
