@@ -217,11 +217,12 @@ static int read_and_prepare_input(cli_args *a, ibl_context *ctx, const char *in,
     ibl_file_info head;
     int predicted = 0;
     struct stat st; /* a pipe's head, once read, is gone: only regular files */
-    if (a->common.max_memory_mib <= 0 && ibl_context_threads(ctx) > 1 && stat(in, &st) == 0 &&
-        S_ISREG(st.st_mode) && ibl_read_info(ctx, in, &head) == IBL_OK &&
+    int small_chain = d->size > 0 && d->size < OVERLAP_MIN_CHAIN; /* 0: the source's edge */
+    if (a->common.max_memory_mib <= 0 && ibl_context_threads(ctx) > 1 && !small_chain &&
+        stat(in, &st) == 0 && S_ISREG(st.st_mode) && ibl_read_info(ctx, in, &head) == IBL_OK &&
         input_float_bytes(&head) <= OVERLAP_MAX_INPUT_BYTES) {
         predicted = cli_input_cube_size(io, &head);
-        if ((d->size > 0 ? d->size : predicted) < OVERLAP_MIN_CHAIN) predicted = 0;
+        if (d->size <= 0 && predicted < OVERLAP_MIN_CHAIN) predicted = 0;
     }
     read_and_prepare job = {ctx, &a->common, in, io, d, predicted, cube, 0, NULL, IBL_OK};
     if (predicted > 0) {
