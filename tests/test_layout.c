@@ -1081,6 +1081,42 @@ static void identical_at_any_thread_count(void **state)
     }
 }
 
+/* ibl_layout_cube_size says the edge ibl_image_to_cubemap makes when asked for none: checked by
+ * converting an image of every single-picture layout at several sizes (AUTO: detected), and 0
+ * for a size the layout does not fit and for the layouts that are not one picture. */
+static void cube_size_without_converting(void **state)
+{
+    (void)state;
+    ibl_context *ctx = test_context(1);
+    static const struct {
+        ibl_layout layout;
+        int w, h;
+    } cases[] = {
+        {IBL_LAYOUT_EQUIRECT, 64, 32},  {IBL_LAYOUT_EQUIRECT, 100, 50}, {IBL_LAYOUT_EQUIRECT, 200, 100},
+        {IBL_LAYOUT_HCROSS, 64, 48},    {IBL_LAYOUT_VCROSS, 48, 64},    {IBL_LAYOUT_HSTRIP, 96, 16},
+        {IBL_LAYOUT_VSTRIP, 16, 96},    {IBL_LAYOUT_ANGULAR, 60, 60},   {IBL_LAYOUT_OCTAHEDRAL, 40, 40},
+        {IBL_LAYOUT_AUTO, 128, 64},     {IBL_LAYOUT_AUTO, 96, 72},      {IBL_LAYOUT_AUTO, 30, 180},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        ibl_image im;
+        assert_int_equal(ibl_image_alloc(ctx, cases[i].w, cases[i].h, &im), IBL_OK);
+        ibl_cubemap cube;
+        ibl_to_cube_desc d = {.layout = cases[i].layout};
+        assert_int_equal(ibl_image_to_cubemap(ctx, &im, &d, &cube), IBL_OK);
+        if (ibl_layout_cube_size(cases[i].layout, cases[i].w, cases[i].h) != cube.size)
+            fail_msg("case %zu: %d, the conversion made %d", i,
+                     ibl_layout_cube_size(cases[i].layout, cases[i].w, cases[i].h), cube.size);
+        ibl_cubemap_free(ctx, &cube);
+        ibl_image_free(ctx, &im);
+    }
+    assert_int_equal(ibl_layout_cube_size(IBL_LAYOUT_HCROSS, 64, 64), 0);
+    assert_int_equal(ibl_layout_cube_size(IBL_LAYOUT_AUTO, 70, 13), 0);
+    assert_int_equal(ibl_layout_cube_size(IBL_LAYOUT_FACES, 64, 64), 0);
+    assert_int_equal(ibl_layout_cube_size(IBL_LAYOUT_CUBE, 64, 64), 0);
+    assert_int_equal(ibl_layout_cube_size(IBL_LAYOUT_EQUIRECT, 0, 0), 0);
+    ibl_context_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1100,6 +1136,7 @@ int main(void)
         cmocka_unit_test(image_mean_brute_force),
         cmocka_unit_test(image_mean_analytic),
         cmocka_unit_test(identical_at_any_thread_count),
+        cmocka_unit_test(cube_size_without_converting),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
