@@ -6,7 +6,14 @@
  * already encoded while the rest is encoded; without OUT, the encode alone). The specular sources the CLI adds for an equirect (a few
  * ms) are left out; the chain is GGX with the linear mapping, as the command's default.
  *
- * Usage: bench_stages [--task-times] IN SIZE [THREADS] [OUT.ktx2]   (threads 0: every core)
+ * Usage: bench_stages [--task-times] [--side-by-side] IN SIZE [THREADS] [OUT.ktx2]
+ *        (threads 0: every core)
+ *
+ * --side-by-side makes the first stages as `ibl prefilter` does for a small input (cli/
+ * prefilter.c): the header read (ibl_read_info), then the read with the conversion and the
+ * plan (ibl_specular_prepare) as the two tasks of one parallel-for, one stage "read, to cube |
+ * plan". With --task-times the loops the two tasks start are timed as any other (each
+ * thread's time inside tasks counted once: bench/timed_pool.c).
  *
  * Per stage: wall ms, CPU ms of the process (user + sys, getrusage), each thread's run time
  * (the kernel's per-task schedstat: a thread spinning in the pool's wait counts as running,
@@ -138,12 +145,118 @@ static int fail(ibl_context *ctx, const char *what)
     return 1;
 }
 
+/* The working cube and its one-shot plan, as ibl_specular_prefilter makes them for the fast
+ * method (src/bake/specular.c); prepared is set when they came from ibl_specular_prepare. */
+typedef struct working {
+    ibl_cubemap work;
+    ibl_specular_info info;
+    ibl_specular_plan *plan;
+    ibl_specular_prepared *prepared;
+} working;
+
+/* Reads IN, converts it, reduces it to the plan's edge if larger, then plans: a stage each. */
+static int working_in_turn(ibl_context *ctx, timeline *t, const char *in, int size, working *w)
+{
+    memset(w, 0, sizeof *w);
+    ibl_texture tex;
+    ibl_read_desc rd = {0};
+    if (ibl_read_texture(ctx, in, &rd, &tex, NULL) != IBL_OK) return fail(ctx, in);
+    mark(t, "read, decode");
+    ibl_image image = {tex.width, tex.height, ibl_texture_level(&tex, 0, 0)};
+    ibl_to_cube_desc td = {0};
+    ibl_cubemap cube;
+    if (ibl_image_to_cubemap(ctx, &image, &td, &cube) != IBL_OK) return fail(ctx, "to cube");
+    ibl_texture_free(ctx, &tex);
+    mark(t, "to cube");
+    ibl_specular_desc d;
+    memset(&d, 0, sizeof d);
+    d.size = size;
+    int edge = 0;
+    if (ibl_specular_levels(ctx, &d, cube.size, &w->info) != IBL_OK ||
+        ibl_specular_source_size(ctx, &d, cube.size, &edge) != IBL_OK)
+        return fail(ctx, "levels");
+    d.levels = w->info.levels;
+    w->work = cube;
+    if (edge != cube.size) {
+        if (ibl_cubemap_alloc(ctx, edge, 1, &w->work) != IBL_OK ||
+            ibl_cubemap_resample(ctx, &cube, &w->work) != IBL_OK)
+            return fail(ctx, "resample");
+        ibl_cubemap_free(ctx, &cube);
+        mark(t, "resample");
+    }
+    d.source_size = w->work.size;
+    if (ibl__specular_plan_create(ctx, &d, 1, &w->plan) != IBL_OK) return fail(ctx, "plan");
+    mark(t, "plan");
+    return 0;
+}
+
+typedef struct side_by_side {
+    ibl_context *ctx;
+    const char *in;
+    ibl_specular_desc desc;
+    int edge;
+    ibl_cubemap cube;
+    ibl_specular_prepared *prepared;
+    ibl_status read_status, prepare_status;
+} side_by_side;
+
+static void side_by_side_task(void *arg, int index)
+{
+    side_by_side *j = arg;
+    if (index == 1) {
+        j->prepare_status = ibl_specular_prepare(j->ctx, &j->desc, j->edge, &j->prepared);
+        return;
+    }
+    ibl_texture tex;
+    ibl_read_desc rd = {0};
+    j->read_status = ibl_read_texture(j->ctx, j->in, &rd, &tex, NULL);
+    if (j->read_status != IBL_OK) return;
+    ibl_image image = {tex.width, tex.height, ibl_texture_level(&tex, 0, 0)};
+    ibl_to_cube_desc td = {0};
+    j->read_status = ibl_image_to_cubemap(j->ctx, &image, &td, &j->cube);
+    ibl_texture_free(j->ctx, &tex);
+}
+
+/* The command's way: the cube's edge from the header, then the read with the conversion and
+ * the plan side by side; a larger cube is reduced to the plan's edge after, as
+ * ibl_specular_prefilter_prepared does. */
+static int working_side_by_side(ibl_context *ctx, timeline *t, const char *in, int size, working *w)
+{
+    memset(w, 0, sizeof *w);
+    ibl_file_info head;
+    if (ibl_read_info(ctx, in, &head) != IBL_OK) return fail(ctx, in);
+    side_by_side j = {ctx, in, {0}, ibl_layout_cube_size(IBL_LAYOUT_AUTO, head.width, head.height),
+                      {0}, NULL, IBL_OK, IBL_OK};
+    if (j.edge < 1) return fail(ctx, "the cube's edge from the header");
+    j.desc.size = size;
+    if (ibl_specular_levels(ctx, &j.desc, j.edge, &w->info) != IBL_OK) return fail(ctx, "levels");
+    ibl_parallel_for(ctx, 2, side_by_side_task, &j);
+    if (j.read_status != IBL_OK) return fail(ctx, in);
+    if (j.prepare_status != IBL_OK) return fail(ctx, "prepare");
+    w->prepared = j.prepared;
+    int edge = 0;
+    w->plan = ibl__specular_prepared_plan(j.prepared, &edge);
+    if (!w->plan) return fail(ctx, "a prepared chain without a plan");
+    mark(t, "read, to cube | plan");
+    w->work = j.cube;
+    if (edge != j.cube.size) {
+        if (ibl_cubemap_alloc(ctx, edge, 1, &w->work) != IBL_OK ||
+            ibl_cubemap_resample(ctx, &j.cube, &w->work) != IBL_OK)
+            return fail(ctx, "resample");
+        ibl_cubemap_free(ctx, &j.cube);
+        mark(t, "resample");
+    }
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     int task_times = argc > 1 && strcmp(argv[1], "--task-times") == 0;
     argc -= task_times, argv += task_times;
+    int side_by_side = argc > 1 && strcmp(argv[1], "--side-by-side") == 0;
+    argc -= side_by_side, argv += side_by_side;
     if (argc < 3) {
-        fprintf(stderr, "usage: bench_stages [--task-times] IN SIZE [THREADS] [OUT.ktx2]\n");
+        fprintf(stderr, "usage: bench_stages [--task-times] [--side-by-side] IN SIZE [THREADS] [OUT.ktx2]\n");
         return 2;
     }
     const char *in = argv[1], *out = argc > 4 ? argv[4] : NULL;
@@ -176,39 +289,11 @@ int main(int argc, char **argv)
     take(&t.start);
     t.last = t.start;
 
-    ibl_texture tex;
-    ibl_read_desc rd = {0};
-    if (ibl_read_texture(ctx, in, &rd, &tex, NULL) != IBL_OK) return fail(ctx, in);
-    mark(&t, "read, decode");
-    ibl_image image = {tex.width, tex.height, ibl_texture_level(&tex, 0, 0)};
-    ibl_to_cube_desc td = {0};
-    ibl_cubemap cube;
-    if (ibl_image_to_cubemap(ctx, &image, &td, &cube) != IBL_OK) return fail(ctx, "to cube");
-    ibl_texture_free(ctx, &tex);
-    mark(&t, "to cube");
-
-    /* as ibl_specular_prefilter does for the fast method (src/bake/specular.c) */
-    ibl_specular_desc d;
-    memset(&d, 0, sizeof d);
-    d.size = size;
-    ibl_specular_info info;
-    int edge = 0;
-    if (ibl_specular_levels(ctx, &d, cube.size, &info) != IBL_OK ||
-        ibl_specular_source_size(ctx, &d, cube.size, &edge) != IBL_OK)
-        return fail(ctx, "levels");
-    d.levels = info.levels;
-    ibl_cubemap work = cube;
-    if (edge != cube.size) {
-        if (ibl_cubemap_alloc(ctx, edge, 1, &work) != IBL_OK ||
-            ibl_cubemap_resample(ctx, &cube, &work) != IBL_OK)
-            return fail(ctx, "resample");
-        ibl_cubemap_free(ctx, &cube);
-        mark(&t, "resample");
-    }
-    d.source_size = work.size;
-    ibl_specular_plan *plan = NULL;
-    if (ibl__specular_plan_create(ctx, &d, 1, &plan) != IBL_OK) return fail(ctx, "plan");
-    mark(&t, "plan");
+    working w;
+    if ((side_by_side ? working_side_by_side : working_in_turn)(ctx, &t, in, size, &w) != 0) return 1;
+    ibl_specular_info info = w.info;
+    ibl_cubemap work = w.work;
+    ibl_specular_plan *plan = w.plan;
     marks.t = &t, marks.levels = info.levels;
     if (ibl__specular_plan_run_grids(plan, &work) != IBL_OK) return fail(ctx, "grids");
     marks.t = NULL;
@@ -216,7 +301,8 @@ int main(int argc, char **argv)
     if (ibl_cubemap_alloc(ctx, size, info.levels, &chain) != IBL_OK ||
         ibl__specular_plan_run_output(plan, &work, &chain) != IBL_OK)
         return fail(ctx, "output");
-    ibl_specular_plan_destroy(plan);
+    if (w.prepared) ibl_specular_prepared_destroy(w.prepared); /* its plan with it */
+    else ibl_specular_plan_destroy(plan);
     ibl_cubemap_free(ctx, &work);
     mark(&t, "output levels");
 

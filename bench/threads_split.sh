@@ -13,11 +13,15 @@
 #            sharing, and so the most the one-thread time over it can be on this host.
 # Defaults: tests/data/city.exr and 256 (the 256 GGX chain of `ibl prefilter`). Whole
 # commands add start-up, the manifest and exit on one thread (bench/threads.sh times those).
+# SIDE=1 makes the first stages as the command does for a small input (bench_stages
+# --side-by-side: the read and the conversion beside the plan, one stage).
 set -eu
 BUILD=${1:-build}
 IN=${2:-$(dirname "$0")/../tests/data/city.exr}
 SIZE=${3:-256}
 RUNS=${RUNS:-15}
+MODE=
+[ "${SIDE:-0}" = 1 ] && MODE=--side-by-side
 B=$BUILD/bench/bench_stages
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
@@ -25,7 +29,7 @@ i=0
 while [ "$i" -lt "$RUNS" ]; do
   for j in 1 2; do
     # the stage name is the first 22 columns; then wall, CPU, user, sys, faults, RSS, tasks
-    "$B" --task-times "$IN" "$SIZE" "$j" "$TMP/out.ktx2" |
+    "$B" --task-times $MODE "$IN" "$SIZE" "$j" "$TMP/out.ktx2" |
       awk -v j="$j" 'NR > 2 { name = substr($0, 1, 22); sub(/ +$/, "", name); gsub(/ /, "_", name);
                               split(substr($0, 23), f, " "); print j, name, f[1], f[7] }' >>"$TMP/rows"
   done

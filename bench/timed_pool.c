@@ -23,13 +23,19 @@ static long long now_ns(void)
     return (long long)t.tv_sec * 1000000000LL + t.tv_nsec;
 }
 
-/* Set on a thread while it runs a task: a loop that task starts runs on that thread (as the
- * library runs it), inside the task's own time, so its tasks are not timed again. */
+/* Set on a thread while it runs a task. A loop a task starts runs on the pool as any other
+ * (the library's pool runs it on every thread): a thread inside a task that runs one of its
+ * indices (helping while it waits) is already being timed, so only a thread outside any task
+ * times the index it runs. Each thread's time inside tasks is counted once. */
 static _Thread_local int in_task;
 
 static void timed_task(void *arg, int index)
 {
     const timed_loop *loop = arg;
+    if (in_task) {
+        loop->task(loop->task_arg, index);
+        return;
+    }
     long long t0 = now_ns();
     in_task = 1;
     loop->task(loop->task_arg, index);
@@ -58,10 +64,6 @@ void timed_pool_destroy(timed_pool *pool)
 void timed_pool_parallel_for(void *host, int count, ibl_task_fn task, void *task_arg)
 {
     timed_pool *pool = host;
-    if (in_task) {
-        for (int i = 0; i < count; i++) task(task_arg, i);
-        return;
-    }
     timed_loop loop = {pool, task, task_arg};
     ibl_parallel_for(pool->runner, count, timed_task, &loop);
 }

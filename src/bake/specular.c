@@ -210,6 +210,12 @@ ibl_status ibl_specular_prepare(ibl_context *ctx, const ibl_specular_desc *desc_
     return IBL_OK;
 }
 
+ibl_specular_plan *ibl__specular_prepared_plan(const ibl_specular_prepared *p, int *edge)
+{
+    *edge = p->edge;
+    return p->plan;
+}
+
 void ibl_specular_prepared_destroy(ibl_specular_prepared *p)
 {
     if (!p) return;

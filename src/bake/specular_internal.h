@@ -96,6 +96,10 @@ ibl_status ibl__specular_plan_create(ibl_context *ctx, const ibl_specular_desc *
 ibl_status ibl__specular_plan_run_grids(ibl_specular_plan *plan, const ibl_cubemap *src);
 ibl_status ibl__specular_plan_run_output(ibl_specular_plan *plan, const ibl_cubemap *src,
                                          ibl_cubemap *dst);
+/* The one-shot plan a prepared chain holds (NULL for the methods without one) and the edge of
+ * the working source it wants: for bench/bench_stages.c, which runs it step by step. The
+ * prepared chain keeps it (ibl_specular_prepared_destroy frees both). */
+ibl_specular_plan *ibl__specular_prepared_plan(const ibl_specular_prepared *prepared, int *edge);
 
 /* The dynamic path (specular_dynamic/): every filter as a plan whose run allocates nothing
  * (box and gauss chains with precomputed tables, the lobes as symmetric sparse operators over
