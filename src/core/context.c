@@ -115,7 +115,7 @@ static int page_aligned(const void *p)
  * header). A few dozen large blocks live at once in a prefilter, so the search is in order. */
 static int large_remember(ibl_context *ctx, void *start, size_t bytes)
 {
-    while (atomic_flag_test_and_set_explicit(&ctx->large_lock, memory_order_acquire)) ibl__pool_relax();
+    while (atomic_flag_test_and_set_explicit(&ctx->large_lock, memory_order_acquire)) ibl__cpu_relax();
     int kept = ctx->large_count < LARGE_BLOCK_SLOTS;
     if (kept) ctx->large[ctx->large_count++] = (large_block){start, bytes};
     atomic_flag_clear_explicit(&ctx->large_lock, memory_order_release);
@@ -125,7 +125,7 @@ static int large_remember(ibl_context *ctx, void *start, size_t bytes)
 /* Takes a block out of the table: 1 and its size if this context counted it. */
 static int large_forget(ibl_context *ctx, const void *start, size_t *bytes)
 {
-    while (atomic_flag_test_and_set_explicit(&ctx->large_lock, memory_order_acquire)) ibl__pool_relax();
+    while (atomic_flag_test_and_set_explicit(&ctx->large_lock, memory_order_acquire)) ibl__cpu_relax();
     int found = 0;
     for (int i = ctx->large_count - 1; i >= 0 && !found; i--) {
         if (ctx->large[i].start != start) continue;
@@ -472,11 +472,6 @@ void ibl_parallel_for(ibl_context *ctx, int count, ibl_task_fn task, void *task_
         return;
     }
     ibl__pool_run(ctx->pool, count, task, task_arg);
-}
-
-void ibl__cpu_relax(void)
-{
-    ibl__pool_relax();
 }
 
 int ibl__parallel_begin(ibl_context *ctx, int count, ibl_task_fn task, void *task_arg)

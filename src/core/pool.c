@@ -10,6 +10,7 @@
  * Which thread runs an index never changes what it computes. */
 #define _POSIX_C_SOURCE 200809L
 #include "core/pool.h"
+#include "core/context_internal.h"
 
 #include <pthread.h>
 #include <sched.h>
@@ -66,7 +67,7 @@ struct ibl__pool {
 #define SPIN_NS 500000L
 enum { SPIN_CHECK = 64, YIELD_AFTER = 4096 };
 
-void ibl__pool_relax(void)
+void ibl__cpu_relax(void)
 {
 #if defined(__x86_64__) || defined(__i386__)
     __builtin_ia32_pause();
@@ -106,7 +107,7 @@ static void wait_for_news(ibl__pool *pool, unsigned seen)
             if (!deadline) deadline = now + SPIN_NS;
             else if (now >= deadline) break;
         }
-        ibl__pool_relax();
+        ibl__cpu_relax();
     }
     pthread_mutex_lock(&pool->lock);
     atomic_fetch_add(&pool->sleepers, 1);
@@ -213,7 +214,7 @@ static void retire(ibl__pool *pool, pool_job *job)
     /* a thread that took it just before has found no index left and is on its way out */
     for (int i = 1; atomic_load(&job->users) > 0; i++) {
         if (i % YIELD_AFTER == 0) sched_yield();
-        else ibl__pool_relax();
+        else ibl__cpu_relax();
     }
 }
 

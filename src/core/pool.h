@@ -30,7 +30,4 @@ void ibl__pool_end(ibl__pool *pool);
 /* Wakes the workers without a job: they wait awake for a while (ibl__parallel_warm). */
 void ibl__pool_warm(ibl__pool *pool);
 
-/* One pause of a spin-wait (the CPU's pause or yield instruction). */
-void ibl__pool_relax(void);
-
 #endif

@@ -644,6 +644,20 @@ ibl_status ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_ran
     return IBL_OK;
 }
 
+ibl_texture ibl__header_texture(ibl_texture_kind kind, int width, int height, int depth, int levels,
+                                ibl_format format)
+{
+    ibl_texture tex;
+    memset(&tex, 0, sizeof tex);
+    tex.kind = kind;
+    tex.width = width;
+    tex.height = height;
+    tex.depth = depth;
+    tex.levels = levels;
+    tex.format = format;
+    return tex;
+}
+
 void ibl__fill_info(ibl_file_info *info, ibl_file_type type, const ibl_texture *tex)
 {
     if (!info) return;

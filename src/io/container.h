@@ -114,5 +114,9 @@ ibl_status ibl__decode_level(ibl_context *ctx, ibl_format format, float rgbm_ran
 
 /* Fills the file info of a decoded texture. */
 void ibl__fill_info(ibl_file_info *info, ibl_file_type type, const ibl_texture *tex);
+/* A texture without texels of what a container's header says: what ibl__fill_info reads, and
+ * where its key/value data goes (free it with ibl_texture_free). */
+ibl_texture ibl__header_texture(ibl_texture_kind kind, int width, int height, int depth, int levels,
+                                ibl_format format);
 
 #endif

@@ -307,14 +307,8 @@ ibl_status ibl__dds_info(ibl_context *ctx, const uint8_t *bytes, size_t size, co
     dds_header hd;
     ibl_status st = parse_header(ctx, bytes, size, name, &hd);
     if (st != IBL_OK) return st;
-    ibl_texture tex; /* without texels: what ibl__fill_info reads */
-    memset(&tex, 0, sizeof tex);
-    tex.kind = hd.kind;
-    tex.width = hd.width;
-    tex.height = hd.height;
-    tex.depth = hd.depth;
-    tex.levels = hd.levels;
-    tex.format = hd.dx->format;
+    ibl_texture tex = ibl__header_texture(hd.kind, hd.width, hd.height, hd.depth, hd.levels,
+                                          hd.dx->format);
     ibl__fill_info(info, IBL_FILE_DDS, &tex);
     return IBL_OK;
 }

@@ -279,8 +279,6 @@ static ibl_status read_stream(ibl_context *ctx, int fd, const char *path, int sn
     return s;
 }
 
-/* A regular file is read into one buffer of its size (which the budget may refuse); with
- * `sniff`, its first bytes must look like an image before anything is allocated. */
 /* A named FIFO that nobody writes would be waited for forever: wait a while for a writer's
  * first bytes, then say so. (Anonymous pipes, e.g. a shell's <(...), always have a writer.) */
 enum { FIFO_WAIT_MS = 10000 };
@@ -328,6 +326,8 @@ static ibl_status open_input(ibl_context *ctx, const char *path, int *fd_out, st
     return IBL_OK;
 }
 
+/* A regular file is read into one buffer of its size (which the budget may refuse); with
+ * `sniff`, its first bytes must look like an image before anything is allocated. */
 static ibl_status read_file(ibl_context *ctx, const char *path, int sniff, void **bytes, size_t *size)
 {
     if (!path || !bytes || !size)
@@ -567,24 +567,6 @@ ibl_status ibl_decode_info(ibl_context *ctx, const void *bytes, size_t size, con
 #define INFO_HEAD_BYTES ((size_t)64 << 10)
 enum { INFO_HEAD_GROWTH = 16 };
 
-/* Bytes [have, want) of the file into buf; *got: how many arrived (fewer at its end). */
-static ibl_status read_range(ibl_context *ctx, int fd, const char *path, uint8_t *buf,
-                             size_t have, size_t want, size_t *got)
-{
-    size_t done = have;
-    while (done < want) {
-        ssize_t r = pread(fd, buf + done, want - done, (off_t)done);
-        if (r < 0) {
-            if (errno == EINTR) continue;
-            return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot read: %s", path, strerror(errno));
-        }
-        if (r == 0) break;
-        done += (size_t)r;
-    }
-    *got = done;
-    return IBL_OK;
-}
-
 static ibl_status read_info_regular(ibl_context *ctx, int fd, const char *path, size_t file_size,
                                     ibl_file_info *info)
 {
@@ -599,12 +581,13 @@ static ibl_status read_info_regular(ibl_context *ctx, int fd, const char *path, 
         if (have) memcpy(grown, buf, have);
         ibl_free(ctx, buf);
         buf = grown;
-        size_t got = 0;
-        ibl_status s = read_range(ctx, fd, path, buf, have, want, &got);
+        size_t got = 0; /* the reads go on from where the last stopped */
+        ibl_status s = read_all(ctx, fd, path, buf + have, want - have, &got);
         if (s != IBL_OK) {
             ibl_free(ctx, buf);
             return s;
         }
+        got += have;
         int whole = got < want || got >= file_size; /* the end (a file that shrank ends early) */
         have = got;
         s = ibl_decode_info(ctx, buf, have, path, info);

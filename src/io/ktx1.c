@@ -273,14 +273,8 @@ ibl_status ibl__ktx1_info(ibl_context *ctx, const uint8_t *bytes, size_t size, c
     ktx1_header hd;
     ibl_status st = parse_header(ctx, bytes, size, name, &hd);
     if (st != IBL_OK) return st;
-    ibl_texture tex; /* without texels: what ibl__fill_info reads, and the metadata */
-    memset(&tex, 0, sizeof tex);
-    tex.kind = hd.kind;
-    tex.width = hd.width;
-    tex.height = hd.height;
-    tex.depth = hd.depth;
-    tex.levels = hd.levels;
-    tex.format = hd.gl->format;
+    ibl_texture tex = ibl__header_texture(hd.kind, hd.width, hd.height, hd.depth, hd.levels,
+                                          hd.gl->format);
     int flips[3];
     st = read_metadata(ctx, name, bytes, &hd, &tex, flips);
     if (st == IBL_OK) ibl__fill_info(info, IBL_FILE_KTX1, &tex);

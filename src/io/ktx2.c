@@ -693,15 +693,8 @@ ibl_status ibl__ktx2_info(ibl_context *ctx, const uint8_t *bytes, size_t size, c
     ktx2_header hd;
     ibl_status st = parse_header(ctx, bytes, size, name, 0, &hd);
     if (st != IBL_OK) return st;
-    /* a texture without texels: what ibl__fill_info reads, and the metadata */
-    ibl_texture tex;
-    memset(&tex, 0, sizeof tex);
-    tex.kind = hd.kind;
-    tex.width = hd.width;
-    tex.height = hd.height;
-    tex.depth = hd.depth;
-    tex.levels = hd.levels;
-    tex.format = hd.vk->format;
+    ibl_texture tex = ibl__header_texture(hd.kind, hd.width, hd.height, hd.depth, hd.levels,
+                                          hd.vk->format);
     float range;
     int flips[3];
     st = read_metadata(ctx, name, bytes, &hd, &tex, &range, flips);
