@@ -171,9 +171,10 @@ KERNEL_INLINE __m256 vector_leaf(const lobe_vectors *k, int ggx, __m256 u, __m25
     __m256 f0, f1, f2;
     if (ggx) {
         /* f = (1 - u) alpha4 / T^2, T = alpha2 + kappa u; f' and f'' in u; zero beyond the
-         * horizon. 1 / T by the reciprocal estimate and one Newton step (relative error ~1e-7) */
-        __m256 T = _mm256_fmadd_ps(k->slope, u, k->alpha2), it = _mm256_rcp_ps(T);
-        it = _mm256_mul_ps(it, _mm256_fnmadd_ps(T, it, k->two));
+         * horizon. 1 / T by a division, correctly rounded on every CPU: the reciprocal
+         * estimate (vrcpps), even after a Newton step, gives other bits on Intel than on AMD,
+         * and so did the chains */
+        __m256 T = _mm256_fmadd_ps(k->slope, u, k->alpha2), it = _mm256_div_ps(k->one, T);
         __m256 A = _mm256_mul_ps(k->alpha4, _mm256_mul_ps(it, it));
         __m256 xi = _mm256_mul_ps(x, it);
         f0 = _mm256_mul_ps(x, A);
