@@ -169,6 +169,15 @@ ibl_status ibl__encode_texture_streamed(ibl_context *ctx, const char *path,
                                         const ibl_texture *texture, const ibl_write_desc *desc,
                                         void **bytes, size_t *size, ibl__levels_stream **stream);
 
+/* An output set's file written in parts (output_texture.c): ibl__output_set_open makes the
+ * checks of ibl_output_set_add, reserves the set's next file for path (*index) and creates its
+ * temporary, open for writing (*fd: pwrite, from any thread); ibl__output_set_close then
+ * flushes and closes it, complete, or drops it (complete 0). A set holding a file that is
+ * open or was dropped is not committed. */
+ibl_status ibl__output_set_open(ibl_output_set *set, const char *path, int *index, int *fd);
+ibl_status ibl__output_set_close(ibl_output_set *set, int index, int complete);
+ibl_context *ibl__output_set_context(const ibl_output_set *set);
+
 /* Largest edge any reader accepts before allocating (absurd sizes are refused). */
 enum { IBL_MAX_DIMENSION = 65536 };
 
