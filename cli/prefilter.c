@@ -156,110 +156,6 @@ static ibl_status write_outputs(ibl_context *ctx, const char *in, const char *ou
     return st;
 }
 
-/* The chain filtered and written at once, for a KTX2 without supercompression: the file is
- * laid out from the chain's description before any level exists (ibl_output_set_begin_texture),
- * and a level that is the source itself (the mirror level 0 of a chain at the source's edge:
- * ibl_specular_prepared_level_is_source), with the manifest, is written beside the filter, as
- * the other task of one parallel-for: most of the file's bytes are then encoded, copied and
- * on their way to the disk before the filter ends, where written after it they were the
- * command's last stretch on one thread (the 256 chain's level 0 is 3 of its 4 MB; the 512
- * chain's, 12 of 16). The other levels follow the filter and the image's sources (which
- * never change a mirror level: ibl_specular_sources_refines); the bytes are those write_outputs
- * writes. The run returns the info it was prepared with (ibl_specular_prepared_info), which
- * the file's head and the manifest were made from. */
-typedef struct filter_and_write {
-    ibl_context *ctx;
-    ibl_specular_prepared *prepared;
-    const ibl_cubemap *cube;
-    ibl_cubemap *chain;
-    ibl_specular_info *info;
-    ibl_output_texture *writer;
-    ibl_output_set *set;
-    int source_level; /* -1: none */
-    const char *manifest_path, *manifest;
-    ibl_status filter_status, early_status;
-} filter_and_write;
-
-static void filter_and_write_task(void *arg, int index)
-{
-    filter_and_write *j = arg;
-    if (index == 1) {
-        j->filter_status = ibl_specular_prefilter_prepared(j->prepared, j->cube, j->chain, j->info);
-        return;
-    }
-    ibl_status st = IBL_OK;
-    if (j->source_level >= 0) st = ibl_output_texture_level(j->writer, j->source_level, j->cube->data);
-    if (st == IBL_OK) st = ibl_output_set_add(j->set, j->manifest_path, j->manifest, strlen(j->manifest));
-    j->early_status = st;
-}
-
-/* The levels not written beside the filter, one task each (level 1 alone is most of them). */
-typedef struct remaining_levels {
-    ibl_output_texture *writer;
-    const ibl_cubemap *chain;
-    int written; /* the level written beside the filter, or -1 */
-    ibl_status status[IBL_MAX_LEVELS];
-} remaining_levels;
-
-static void remaining_level_task(void *arg, int level)
-{
-    remaining_levels *j = arg;
-    j->status[level] = level == j->written ? IBL_OK
-                                           : ibl_output_texture_level(j->writer, level,
-                                                                      ibl_cubemap_face(j->chain, level, 0));
-}
-
-static ibl_status filter_and_write_ktx2(ibl_context *ctx, const char *in, const char *out,
-                                        ibl_specular_prepared *prepared, ibl_cubemap *cube,
-                                        const ibl_specular_sources *sources, ibl_cubemap *chain,
-                                        ibl_specular_info *info, const ibl_specular_desc *d,
-                                        const ibl_write_desc *wd)
-{
-    ibl_specular_info before;
-    ibl_status st = ibl_specular_prepared_info(prepared, &before);
-    ibl_texture shape = {.kind = IBL_TEXTURE_CUBE, .width = before.size, .height = before.size,
-                         .depth = 1, .levels = before.levels};
-    char *manifest = NULL, stem[4096], manifest_path[4200];
-    const char *ext, *name = base_name(out);
-    split_ext(out, stem, sizeof stem, &ext);
-    snprintf(manifest_path, sizeof manifest_path, "%s.manifest.json", stem);
-    if (st == IBL_OK) st = ibl_specular_set_metadata(ctx, &before, &shape);
-    if (st == IBL_OK)
-        st = ibl_chain_manifest(ctx, &before, d->edge_fixup, wd->format, &name, 1, &manifest);
-    ibl_output_set *set = NULL;
-    ibl_output_texture *writer = NULL;
-    if (st == IBL_OK) st = ibl_output_set_create(ctx, &set);
-    if (st == IBL_OK) st = ibl_output_set_protect(set, in);
-    if (st == IBL_OK) st = ibl_output_set_begin_texture(set, out, &shape, wd, &writer);
-    ibl_texture_free(ctx, &shape); /* its metadata: the writer holds the file's head */
-    int source_level = -1;
-    for (int l = 0; l < before.levels && source_level < 0; l++)
-        if (ibl_specular_prepared_level_is_source(prepared, l) && !ibl_specular_sources_refines(sources, l))
-            source_level = l;
-    filter_and_write job = {ctx, prepared, cube, chain, info, writer, set, source_level,
-                            manifest_path, manifest, IBL_OK, IBL_OK};
-    if (st == IBL_OK) {
-        ibl_parallel_for(ctx, 2, filter_and_write_task, &job);
-        st = job.filter_status != IBL_OK ? job.filter_status : job.early_status;
-    }
-    ibl_cubemap_free(ctx, cube); /* its pages go to the levels' encodes */
-    if (st == IBL_OK) st = ibl_specular_sources_apply(sources, chain);
-    if (st == IBL_OK) {
-        remaining_levels rest = {writer, chain, source_level, {IBL_OK}};
-        ibl_parallel_for(ctx, info->levels, remaining_level_task, &rest);
-        for (int l = 0; st == IBL_OK && l < info->levels; l++) st = rest.status[l];
-    }
-    if (st == IBL_OK) {
-        st = ibl_output_texture_finish(writer);
-        writer = NULL;
-    }
-    if (st == IBL_OK) st = ibl_output_set_commit(set);
-    ibl_output_texture_cancel(writer);
-    ibl_output_set_destroy(set);
-    ibl_free(ctx, manifest);
-    return st;
-}
-
 /* The input's reading and conversion, and the chain's preparation (ibl_specular_prepare):
  * the second needs only the cube's edge, which the file's header gives, so both run as the
  * two tasks of one parallel-for. The preparation's loops then fill the time the decoder
@@ -427,29 +323,16 @@ int cli_cmd_prefilter(int argc, char **argv)
         ibl_context_destroy(ctx);
         return rc;
     }
-    double t_read = cli_seconds(), t_filter;
+    double t_read = cli_seconds();
     ibl_specular_info info;
-    ibl_status st;
-    /* the file laid out first and written beside the filter: a KTX2 without supercompression
-     * (whose sizes come last); not under a memory budget, whose estimate counts the file's
-     * encode after the filter */
-    int by_levels = type == IBL_FILE_KTX2 && !atlas && wd.zstd_level == 0 && a.common.max_memory_mib <= 0;
-    if (by_levels) {
-        st = filter_and_write_ktx2(ctx, in, out, prepared, &cube, io.sources, &chain, &info, &d, &wd);
-        ibl_specular_prepared_destroy(prepared);
-        t_filter = cli_seconds();
-        if (st == IBL_OK) cli_warn_upsampling(&a.common, in, &io, info.size);
-    } else {
-        st = ibl_specular_prefilter_prepared(prepared, &cube, &chain, &info);
-        ibl_specular_prepared_destroy(prepared);
-        if (st == IBL_OK) st = ibl_specular_sources_apply(io.sources, &chain);
-        t_filter = cli_seconds();
-        ibl_cubemap_free(ctx, &cube);
-        if (st == IBL_OK) cli_warn_upsampling(&a.common, in, &io, info.size);
-        if (st == IBL_OK) st = write_outputs(ctx, in, out, &chain, &info, &d, &wd, atlas);
-    }
+    ibl_status st = ibl_specular_prefilter_prepared(prepared, &cube, &chain, &info);
+    ibl_specular_prepared_destroy(prepared);
+    if (st == IBL_OK) st = ibl_specular_sources_apply(io.sources, &chain);
     ibl_specular_sources_destroy(io.sources);
+    double t_filter = cli_seconds();
     ibl_cubemap_free(ctx, &cube);
+    if (st == IBL_OK) cli_warn_upsampling(&a.common, in, &io, info.size);
+    if (st == IBL_OK) st = write_outputs(ctx, in, out, &chain, &info, &d, &wd, atlas);
     ibl_cubemap_free(ctx, &chain);
     if (st != IBL_OK) {
         cli_report_failure(ctx, out, st);
@@ -457,16 +340,13 @@ int cli_cmd_prefilter(int argc, char **argv)
         return cli_exit_code(st);
     }
     double t1 = cli_seconds();
-    char stages[96];
-    if (by_levels)
-        snprintf(stages, sizeof stages, "read and plan %.3f, filter and write %.3f", t_read - t0, t1 - t_read);
-    else
-        snprintf(stages, sizeof stages, "read and plan %.3f, filter %.3f, write %.3f", t_read - t0,
-                 t_filter - t_read, t1 - t_filter);
-    cli_info(&a.common, "%s: %dx%dx6, %d levels, %s %s (%s mapping) in %.3f s (%s)\n", out, info.size,
-             info.size, info.levels, ibl_specular_filter_name(info.filter),
+    cli_info(&a.common,
+             "%s: %dx%dx6, %d levels, %s %s (%s mapping) in %.3f s (read and plan %.3f, filter %.3f, "
+             "write %.3f)\n",
+             out, info.size, info.size, info.levels, ibl_specular_filter_name(info.filter),
              d.method == IBL_METHOD_REFERENCE ? "reference" : d.dynamic ? "dynamic plan" : "fast",
-             ibl_specular_mapping_name(info.mapping), t1 - t0, stages);
+             ibl_specular_mapping_name(info.mapping), t1 - t0, t_read - t0, t_filter - t_read,
+             t1 - t_filter);
     ibl_context_destroy(ctx);
     return CLI_EXIT_OK;
 }

@@ -124,87 +124,11 @@ static void prepared_takes_its_edge_once(void **state)
     ibl_context_destroy(ctx);
 }
 
-static int info_equal(const ibl_specular_info *a, const ibl_specular_info *b)
-{
-    if (a->filter != b->filter || a->mapping != b->mapping || a->size != b->size ||
-        a->levels != b->levels || a->mirror != b->mirror)
-        return 0;
-    return memcmp(a->roughness, b->roughness, sizeof a->roughness) == 0 &&
-           memcmp(a->shininess, b->shininess, sizeof a->shininess) == 0 &&
-           memcmp(&a->lod_offset, &b->lod_offset, sizeof a->lod_offset) == 0 &&
-           memcmp(&a->blinn_factor, &b->blinn_factor, sizeof a->blinn_factor) == 0;
-}
-
-/* What a prepared chain tells before its run: the info the run returns, and which levels will
- * be the source's texels -- promised only where they are, bit for bit, and given where a
- * host can use it (the default GGX chain's level 0 at the source's edge). */
-static void prepared_tells_its_info_and_source_levels(void **state)
-{
-    (void)state;
-    ibl_context *ctx = test_context(2);
-    ibl_image image;
-    assert_int_equal(ibl_read_image(ctx, test_data("city.exr"), NULL, &image, NULL), IBL_OK);
-    struct {
-        ibl_specular_filter filter;
-        ibl_specular_method method;
-        int size, cube, mirror, dynamic;
-        ibl_edge_fixup fixup;
-        int level0_is_source;
-    } c[] = {
-        {IBL_FILTER_GGX, IBL_METHOD_FAST, 0, 64, 0, 0, IBL_EDGE_FIXUP_NONE, 1},
-        {IBL_FILTER_GGX, IBL_METHOD_FAST, 64, 64, 0, 0, IBL_EDGE_FIXUP_OVERLAP, 0},
-        {IBL_FILTER_GGX, IBL_METHOD_FAST, 48, 48, 0, 0, IBL_EDGE_FIXUP_NONE, 0}, /* worked at 64 */
-        {IBL_FILTER_GGX, IBL_METHOD_FAST, 32, 64, 0, 0, IBL_EDGE_FIXUP_NONE, 0}, /* smaller */
-        {IBL_FILTER_GGX, IBL_METHOD_REFERENCE, 16, 16, 0, 0, IBL_EDGE_FIXUP_NONE, 1},
-        {IBL_FILTER_PHONG, IBL_METHOD_FAST, 64, 64, 1, 0, IBL_EDGE_FIXUP_NONE, 1},
-        {IBL_FILTER_PHONG, IBL_METHOD_FAST, 64, 64, 0, 0, IBL_EDGE_FIXUP_NONE, 0}, /* filtered */
-        {IBL_FILTER_BOX, IBL_METHOD_FAST, 32, 32, 1, 0, IBL_EDGE_FIXUP_NONE, 1},
-        {IBL_FILTER_BLINN, IBL_METHOD_FAST, 32, 32, 1, 1, IBL_EDGE_FIXUP_NONE, 0}, /* dynamic */
-    };
-    for (size_t k = 0; k < sizeof c / sizeof c[0]; k++) {
-        ibl_specular_desc d = {0};
-        d.filter = c[k].filter;
-        d.method = c[k].method;
-        d.size = c[k].size;
-        d.mirror = c[k].mirror;
-        d.dynamic = c[k].dynamic;
-        d.edge_fixup = c[k].fixup;
-        ibl_cubemap src, chain;
-        assert_int_equal(ibl_image_to_cubemap(ctx, &image, &(ibl_to_cube_desc){.size = c[k].cube}, &src),
-                         IBL_OK);
-        ibl_specular_prepared *p;
-        assert_int_equal(ibl_specular_prepare(ctx, &d, src.size, &p), IBL_OK);
-        ibl_specular_info before, after;
-        assert_int_equal(ibl_specular_prepared_info(p, &before), IBL_OK);
-        int is_source[IBL_MAX_LEVELS];
-        for (int l = 0; l < before.levels; l++) is_source[l] = ibl_specular_prepared_level_is_source(p, l);
-        assert_int_equal(ibl_specular_prepared_level_is_source(p, -1), 0);
-        assert_int_equal(ibl_specular_prepared_level_is_source(p, before.levels), 0);
-        assert_int_equal(ibl_specular_prefilter_prepared(p, &src, &chain, &after), IBL_OK);
-        ibl_specular_prepared_destroy(p);
-        if (!info_equal(&before, &after)) fail_msg("case %zu: the info before the run differs", k);
-        if (is_source[0] != c[k].level0_is_source)
-            fail_msg("case %zu: level 0 is_source %d, expected %d", k, is_source[0], c[k].level0_is_source);
-        for (int l = 0; l < chain.levels; l++) {
-            if (!is_source[l]) continue;
-            int n = ibl_level_size(chain.size, l);
-            assert_int_equal(n, src.size);
-            if (memcmp(ibl_cubemap_face(&chain, l, 0), src.data, (size_t)6 * n * n * 4 * sizeof(float)))
-                fail_msg("case %zu: level %d promised as the source is not its bits", k, l);
-        }
-        ibl_cubemap_free(ctx, &chain);
-        ibl_cubemap_free(ctx, &src);
-    }
-    ibl_image_free(ctx, &image);
-    ibl_context_destroy(ctx);
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(prepared_beside_its_source_matches_prefilter),
         cmocka_unit_test(prepared_takes_its_edge_once),
-        cmocka_unit_test(prepared_tells_its_info_and_source_levels),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -157,9 +157,9 @@ ibl_status ibl_write_file_atomic(ibl_context *ctx, const char *path, const void 
                                  size_t size);
 
 /* A set of output files that appear together or not at all (src/io/output.c): each file is
- * written under a temporary name beside its path, and only the commit (after a last
- * cancellation check) flushes them and renames them into place, so a failure, a full disk
- * or a Ctrl-C leaves every target untouched. Destroying an uncommitted set removes its temporaries. New
+ * written and flushed under a temporary name beside its path, and only the commit renames
+ * them into place (after a last cancellation check), so a failure, a full disk or a Ctrl-C
+ * leaves every target untouched. Destroying an uncommitted set removes its temporaries. New
  * files get mode 0666 minus the umask; a replaced file keeps its mode. */
 typedef struct ibl_output_set ibl_output_set;
 ibl_status ibl_output_set_create(ibl_context *ctx, ibl_output_set **out);
@@ -173,24 +173,6 @@ ibl_status ibl_output_set_add_texture(ibl_output_set *set, const char *path,
                                       const ibl_texture *texture, const ibl_write_desc *desc);
 ibl_status ibl_output_set_commit(ibl_output_set *set);
 void ibl_output_set_destroy(ibl_output_set *set);
-/* A texture file of the set written level by level, each level as soon as its texels exist
- * (src/io/output_texture.c): a chain's mirror level, say, while the others are filtered.
- * begin lays path out (a .ktx2 without supercompression) from shape: kind, edges, levels,
- * format and metadata (its data is not read). level encodes one level's texels (its faces
- * one after the other, 4 floats a texel, as in an ibl_texture) and writes them in place:
- * levels come in any order, each once, from any thread, several at once. finish writes the
- * header, flushes the file and frees the writer; the file then belongs to the set like any
- * other, with the bytes ibl_output_set_add_texture writes for the same texture (and desc's
- * report filled likewise). cancel drops the file and frees the writer. A set is not
- * committed while a writer is open or after one failed or was cancelled; finish or cancel
- * every writer before destroying its set. */
-typedef struct ibl_output_texture ibl_output_texture;
-ibl_status ibl_output_set_begin_texture(ibl_output_set *set, const char *path,
-                                        const ibl_texture *shape, const ibl_write_desc *desc,
-                                        ibl_output_texture **out);
-ibl_status ibl_output_texture_level(ibl_output_texture *writer, int level, const float *texels);
-ibl_status ibl_output_texture_finish(ibl_output_texture *writer);
-void ibl_output_texture_cancel(ibl_output_texture *writer);
 /* Reads a whole file into a new buffer (freed with ibl_free); refuses files over max_bytes. */
 ibl_status ibl_read_file(ibl_context *ctx, const char *path, void **bytes, size_t *size);
 

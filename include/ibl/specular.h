@@ -152,14 +152,6 @@ ibl_status ibl_specular_prefilter_prepared(ibl_specular_prepared *prepared,
                                            const ibl_cubemap *src, ibl_cubemap *out,
                                            ibl_specular_info *info);
 void ibl_specular_prepared_destroy(ibl_specular_prepared *prepared);
-/* Before the run: the description the run will return (sizes, levels, per-level roughness
- * or shininess), e.g. for a file's header and metadata written before its texels. */
-ibl_status ibl_specular_prepared_info(const ibl_specular_prepared *prepared, ibl_specular_info *info);
-/* 1 when level `level` of the chain will hold the source's texels unchanged, bit for bit: a
- * mirror level at the source's edge, taken as it is (no resampling, no edge fixup). A host
- * can then store that level from the source while the rest is filtered (`ibl prefilter`
- * writes it to the file beside the filter: ibl_output_set_begin_texture). */
-int ibl_specular_prepared_level_is_source(const ibl_specular_prepared *prepared, int level);
 
 /* ---- accuracy against a flat input (docs/SPECULAR.md "Accuracy against the input") ----
  *
@@ -185,8 +177,6 @@ ibl_status ibl_specular_sources_create(ibl_context *ctx, const ibl_image *image,
 ibl_status ibl_specular_sources_apply(const ibl_specular_sources *sources, ibl_cubemap *chain);
 /* Working texels whose light is replaced by the image's (0: apply does nothing). */
 int ibl_specular_sources_count(const ibl_specular_sources *sources);
-/* 1 when apply changes level `level` of the chain (a narrow level; never a mirror level). */
-int ibl_specular_sources_refines(const ibl_specular_sources *sources, int level);
 void ibl_specular_sources_destroy(ibl_specular_sources *sources);
 
 /* A chain straight from an image in any layout: ibl_image_to_cubemap (conversion; NULL: the

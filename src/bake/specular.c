@@ -216,24 +216,6 @@ ibl_specular_plan *ibl__specular_prepared_plan(const ibl_specular_prepared *p, i
     return p->plan;
 }
 
-ibl_status ibl_specular_prepared_info(const ibl_specular_prepared *p, ibl_specular_info *info)
-{
-    if (!p || !info) return IBL_ERR_INVALID_ARGUMENT;
-    *info = p->info;
-    return IBL_OK;
-}
-
-/* Every path writes a mirror level at the working source's edge as a copy of it (mirror_level
- * here, ibl__fast_mirror_level in the fast plan), and the working source is the source itself
- * when their edges agree; the dynamic plan's levels are its own, so it is not promised. */
-int ibl_specular_prepared_level_is_source(const ibl_specular_prepared *p, int level)
-{
-    if (!p || level < 0 || level >= p->info.levels) return 0;
-    const ibl_specular_desc *d = &p->desc;
-    return !d->dynamic && d->edge_fixup == IBL_EDGE_FIXUP_NONE && p->edge == p->source_size &&
-           ibl_level_size(d->size, level) == p->source_size && ibl__level_is_mirror(&p->info, level);
-}
-
 void ibl_specular_prepared_destroy(ibl_specular_prepared *p)
 {
     if (!p) return;

@@ -874,11 +874,6 @@ int ibl_specular_sources_count(const ibl_specular_sources *s)
     return s ? s->groups : 0;
 }
 
-int ibl_specular_sources_refines(const ibl_specular_sources *s, int level)
-{
-    return s && s->groups && level >= 0 && level < s->info.levels && s->refined[level];
-}
-
 ibl_status ibl_specular_prefilter_image(ibl_context *ctx, const ibl_image *image,
                                         const ibl_to_cube_desc *conversion,
                                         const ibl_specular_desc *desc, ibl_cubemap *out,

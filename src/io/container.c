@@ -69,12 +69,6 @@ ibl_status ibl__check_texture(ibl_context *ctx, const ibl_texture *tex, const ch
 {
     if (!tex || !tex->data)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no texture data to write", name);
-    return ibl__check_shape(ctx, tex, name);
-}
-
-ibl_status ibl__check_shape(ibl_context *ctx, const ibl_texture *tex, const char *name)
-{
-    if (!tex) return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: no texture", name);
     if (tex->kind != IBL_TEXTURE_2D && tex->kind != IBL_TEXTURE_3D && tex->kind != IBL_TEXTURE_CUBE &&
         tex->kind != IBL_TEXTURE_CUBE_ARRAY)
         return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: unknown texture kind %d", name,

@@ -35,8 +35,6 @@ ibl_format ibl__container_format(const ibl_texture *tex, const ibl_write_desc *d
 
 /* Validates a texture handed to an encoder (kind, dimensions, levels, data). */
 ibl_status ibl__check_texture(ibl_context *ctx, const ibl_texture *tex, const char *name);
-/* The same without the data: a texture's shape and metadata, its texels to come later. */
-ibl_status ibl__check_shape(ibl_context *ctx, const ibl_texture *tex, const char *name);
 
 /* Texels of one face of one level (all slices of a 3D level). Dimensions must be at most
  * IBL_MAX_DIMENSION, so the product fits in 64 bits. */

@@ -126,17 +126,6 @@ typedef struct ibl__levels_stream ibl__levels_stream;
 ibl_status ibl__ktx2_encode_streamed(ibl_context *ctx, const ibl_texture *tex,
                                      const ibl_write_desc *desc, const char *name, void **bytes,
                                      size_t *size, ibl__levels_stream **stream);
-/* A KTX2 file laid out before its texels exist (the level-by-level writer, output_texture.c):
- * shape's kind, edges, levels and metadata (its data is not read), no supercompression. */
-typedef struct ibl__ktx2_layout {
-    ibl_format format;
-    uint8_t *head;    /* the bytes before the first level image, head_size of them (ibl_free) */
-    size_t head_size; /* the offset of the smallest level, which comes first                  */
-    size_t level_offset[IBL_MAX_LEVELS], level_size[IBL_MAX_LEVELS];
-    size_t total;     /* the file's size; the gaps between levels are zeros                   */
-} ibl__ktx2_layout;
-ibl_status ibl__ktx2_layout_make(ibl_context *ctx, const ibl_texture *shape, const ibl_write_desc *desc,
-                                 const char *name, ibl__ktx2_layout *out);
 ibl_status ibl__ktx1_decode(ibl_context *ctx, const uint8_t *bytes, size_t size, const char *name,
                             ibl_texture *out, ibl_file_info *info);
 ibl_status ibl__ktx1_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_write_desc *desc,
@@ -168,15 +157,6 @@ ibl_status ibl__encode_texture_for_path(ibl_context *ctx, const char *path,
 ibl_status ibl__encode_texture_streamed(ibl_context *ctx, const char *path,
                                         const ibl_texture *texture, const ibl_write_desc *desc,
                                         void **bytes, size_t *size, ibl__levels_stream **stream);
-
-/* An output set's file written in parts (output_texture.c): ibl__output_set_open makes the
- * checks of ibl_output_set_add, reserves the set's next file for path (*index) and creates its
- * temporary, open for writing (*fd: pwrite, from any thread); ibl__output_set_close then
- * flushes and closes it, complete, or drops it (complete 0). A set holding a file that is
- * open or was dropped is not committed. */
-ibl_status ibl__output_set_open(ibl_output_set *set, const char *path, int *index, int *fd);
-ibl_status ibl__output_set_close(ibl_output_set *set, int index, int complete);
-ibl_context *ibl__output_set_context(const ibl_output_set *set);
 
 /* Largest edge any reader accepts before allocating (absurd sizes are refused). */
 enum { IBL_MAX_DIMENSION = 65536 };

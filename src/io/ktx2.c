@@ -297,137 +297,6 @@ ibl_status ibl__ktx2_encode(ibl_context *ctx, const ibl_texture *tex, const ibl_
     return ibl__ktx2_encode_streamed(ctx, tex, desc, name, bytes, size, NULL);
 }
 
-/* The storage format of tex in a KTX2 (refused when KTX2 has no VkFormat for it), its
- * supercompression and the alignment of its level images. */
-static ibl_status ktx2_format(ibl_context *ctx, const char *name, const ibl_texture *tex,
-                              const ibl_write_desc *desc, ibl_format *fmt, const vk_map **vk,
-                              int *zstd, size_t *align)
-{
-    *fmt = ibl__container_format(tex, desc);
-    *vk = map_format(*fmt);
-    if (!*vk)
-        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
-                        "%s: KTX2 output does not support pixel format %s (use rgba16f, rgba32f, "
-                        "rg11b10f, rgb9e5, rg16f, rg32f, bc6h, bc6h-signed, astc4x4..astc8x8, "
-                        "rgbm, rgbd or rgbe)",
-                        name, ibl_format_name(*fmt));
-    *zstd = desc && desc->zstd_level > 0;
-    if (*zstd && desc->zstd_level > 22)
-        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: Zstandard level %d (1..22)", name,
-                        desc->zstd_level);
-    *align = *zstd ? 1 : lcm4(ibl__format_unit_bytes(*fmt));
-    return IBL_OK;
-}
-
-/* Every level's image size as encoded (raw), before any supercompression; refuses a texture
- * whose bytes would not fit in memory. */
-static ibl_status level_sizes(ibl_context *ctx, const char *name, const ibl_texture *tex,
-                              ibl_format fmt, level_data *ld)
-{
-    memset(ld, 0, sizeof *ld);
-    int faces = ibl_texture_faces(tex);
-    /* ibl__check_shape bounded every edge by IBL_MAX_DIMENSION: no 64-bit overflow. */
-    for (int l = 0; l < tex->levels; l++) {
-        uint64_t n = ibl__level_bytes(fmt, tex->kind, tex->width, tex->height, tex->depth, l) * (uint64_t)faces;
-        if (n > SIZE_MAX / 2)
-            return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
-        ld->raw[l] = ld->len[l] = (size_t)n;
-    }
-    return IBL_OK;
-}
-
-/* Everything a KTX2 file holds before its first level image (the smallest level's): header,
- * level index, data format descriptor, key/value data and the padding after them, in a new
- * buffer of level_off[levels - 1] bytes; and each level's offset, and the file's size. */
-static ibl_status write_head(ibl_context *ctx, const char *name, const ibl_texture *tex,
-                             ibl_format fmt, const vk_map *vk, const ibl_write_desc *desc,
-                             int zstd, size_t align, const level_data *ld, uint8_t **head,
-                             size_t level_off[], size_t *total_out)
-{
-    *head = NULL;
-    char range[32];
-    ibl_key_value fixed[4];
-    int nfixed = fixed_pairs(tex, fmt, desc, range, fixed);
-    uint8_t *kvd = NULL;
-    size_t kvd_len = 0;
-    ibl_status st = ibl__kv_build(ctx, name, fixed, nfixed, tex, &kvd, &kvd_len);
-    if (st != IBL_OK) return st;
-    size_t dfd_off = HEADER_BYTES + LEVEL_ENTRY_BYTES * (size_t)tex->levels;
-    uint8_t dfd[4 + 24 + 16 * 6];
-    size_t dfd_len = write_dfd(fmt, dfd);
-    size_t kvd_off = dfd_off + dfd_len;
-    uint64_t total = kvd_off + kvd_len;
-    for (int l = tex->levels - 1; l >= 0; l--) {
-        total = (total + align - 1) / align * align;
-        if (total > SIZE_MAX - ld->len[l]) {
-            ibl_free(ctx, kvd);
-            return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
-        }
-        level_off[l] = (size_t)total;
-        total += ld->len[l];
-    }
-    uint8_t *buf = ibl_calloc(ctx, level_off[tex->levels - 1], 1);
-    if (!buf) {
-        ibl_free(ctx, kvd);
-        return ibl__fail_named(ctx, ibl_context_status(ctx), name);
-    }
-    memcpy(buf, KTX2_IDENTIFIER, 12);
-    ibl__wr32(buf + 12, vk->vk);
-    ibl__wr32(buf + 16, vk->type_size);
-    ibl__wr32(buf + 20, (uint32_t)tex->width);
-    ibl__wr32(buf + 24, (uint32_t)tex->height);
-    ibl__wr32(buf + 28, tex->kind == IBL_TEXTURE_3D ? (uint32_t)tex->depth : 0);
-    int array = tex->kind == IBL_TEXTURE_CUBE_ARRAY;
-    ibl__wr32(buf + 32, array ? (uint32_t)tex->depth : 0); /* layerCount: 0 unless an array */
-    ibl__wr32(buf + 36, array ? 6u : (uint32_t)ibl_texture_faces(tex));
-    ibl__wr32(buf + 40, (uint32_t)tex->levels);
-    ibl__wr32(buf + 44, zstd ? SUPERCOMPRESSION_ZSTD : 0);
-    ibl__wr32(buf + 48, (uint32_t)dfd_off);
-    ibl__wr32(buf + 52, (uint32_t)dfd_len);
-    ibl__wr32(buf + 56, kvd_len ? (uint32_t)kvd_off : 0);
-    ibl__wr32(buf + 60, (uint32_t)kvd_len);
-    ibl__wr64(buf + 64, 0); /* sgdByteOffset */
-    ibl__wr64(buf + 72, 0); /* sgdByteLength */
-    for (int l = 0; l < tex->levels; l++) {
-        uint8_t *e = buf + HEADER_BYTES + LEVEL_ENTRY_BYTES * (size_t)l;
-        ibl__wr64(e, level_off[l]);
-        ibl__wr64(e + 8, ld->len[l]);
-        ibl__wr64(e + 16, ld->raw[l]);
-    }
-    memcpy(buf + dfd_off, dfd, dfd_len);
-    if (kvd_len) memcpy(buf + kvd_off, kvd, kvd_len);
-    ibl_free(ctx, kvd);
-    *head = buf;
-    *total_out = (size_t)total;
-    return IBL_OK;
-}
-
-ibl_status ibl__ktx2_layout_make(ibl_context *ctx, const ibl_texture *shape, const ibl_write_desc *desc,
-                                 const char *name, ibl__ktx2_layout *out)
-{
-    memset(out, 0, sizeof *out);
-    if (!name) name = "<ktx2>";
-    ibl_status st = ibl__check_shape(ctx, shape, name);
-    if (st != IBL_OK) return st;
-    const vk_map *vk;
-    int zstd;
-    size_t align;
-    st = ktx2_format(ctx, name, shape, desc, &out->format, &vk, &zstd, &align);
-    if (st == IBL_OK && zstd)
-        st = ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
-                       "%s: a KTX2 written level by level has no supercompression (its levels' "
-                       "sizes are known only once compressed)", name);
-    level_data ld;
-    if (st == IBL_OK) st = level_sizes(ctx, name, shape, out->format, &ld);
-    if (st == IBL_OK)
-        st = write_head(ctx, name, shape, out->format, vk, desc, 0, align, &ld, &out->head,
-                        out->level_offset, &out->total);
-    if (st != IBL_OK) return st;
-    out->head_size = out->level_offset[shape->levels - 1];
-    for (int l = 0; l < shape->levels; l++) out->level_size[l] = ld.len[l];
-    return IBL_OK;
-}
-
 ibl_status ibl__ktx2_encode_streamed(ibl_context *ctx, const ibl_texture *tex,
                                      const ibl_write_desc *desc, const char *name, void **bytes,
                                      size_t *size, ibl__levels_stream **stream)
@@ -440,38 +309,100 @@ ibl_status ibl__ktx2_encode_streamed(ibl_context *ctx, const ibl_texture *tex,
     *size = 0;
     ibl_status st = ibl__check_texture(ctx, tex, name);
     if (st != IBL_OK) return st;
-    ibl_format fmt;
-    const vk_map *vk;
-    int zstd;
-    size_t align;
-    st = ktx2_format(ctx, name, tex, desc, &fmt, &vk, &zstd, &align);
-    level_data ld;
-    if (st == IBL_OK) st = level_sizes(ctx, name, tex, fmt, &ld);
+    ibl_format fmt = ibl__container_format(tex, desc);
+    const vk_map *vk = map_format(fmt);
+    if (!vk)
+        return ibl__fail(ctx, IBL_ERR_UNSUPPORTED,
+                        "%s: KTX2 output does not support pixel format %s (use rgba16f, rgba32f, "
+                        "rg11b10f, rgb9e5, rg16f, rg32f, bc6h, bc6h-signed, astc4x4..astc8x8, "
+                        "rgbm, rgbd or rgbe)",
+                        name, ibl_format_name(fmt));
+    int zstd = desc && desc->zstd_level > 0;
+    if (zstd && desc->zstd_level > 22)
+        return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: Zstandard level %d (1..22)", name,
+                        desc->zstd_level);
+    size_t align = zstd ? 1 : lcm4(ibl__format_unit_bytes(fmt));
+    int faces = ibl_texture_faces(tex);
+
+    char range[32];
+    ibl_key_value fixed[4];
+    int nfixed = fixed_pairs(tex, fmt, desc, range, fixed);
+    uint8_t *kvd = NULL;
+    size_t kvd_len = 0;
+    st = ibl__kv_build(ctx, name, fixed, nfixed, tex, &kvd, &kvd_len);
     if (st != IBL_OK) return st;
+
+    level_data ld;
+    memset(&ld, 0, sizeof ld);
+    /* ibl__check_texture bounded every edge by IBL_MAX_DIMENSION: no 64-bit overflow. */
+    for (int l = 0; l < tex->levels; l++) {
+        uint64_t n = ibl__level_bytes(fmt, tex->kind, tex->width, tex->height, tex->depth, l) * (uint64_t)faces;
+        if (n > SIZE_MAX / 2) {
+            ibl_free(ctx, kvd);
+            return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
+        }
+        ld.raw[l] = ld.len[l] = (size_t)n;
+    }
     if (zstd && (st = compress_levels(ctx, name, tex, fmt, desc, &ld, &clamped)) != IBL_OK) {
         free_levels(ctx, &ld);
+        ibl_free(ctx, kvd);
         return st;
     }
-    size_t level_off[IBL_MAX_LEVELS], total;
-    uint8_t *head;
-    st = write_head(ctx, name, tex, fmt, vk, desc, zstd, align, &ld, &head, level_off, &total);
-    if (st != IBL_OK) {
-        free_levels(ctx, &ld);
-        return st;
+
+    size_t level_off[IBL_MAX_LEVELS];
+    size_t dfd_off = HEADER_BYTES + LEVEL_ENTRY_BYTES * (size_t)tex->levels;
+    uint8_t dfd[4 + 24 + 16 * 6];
+    size_t dfd_len = write_dfd(fmt, dfd);
+    size_t kvd_off = dfd_off + dfd_len;
+    uint64_t total = kvd_off + kvd_len;
+    for (int l = tex->levels - 1; l >= 0; l--) {
+        total = (total + align - 1) / align * align;
+        if (total > SIZE_MAX - ld.len[l]) {
+            free_levels(ctx, &ld);
+            ibl_free(ctx, kvd);
+            return ibl__fail(ctx, IBL_ERR_TOO_LARGE, "%s: texture is too large to encode", name);
+        }
+        level_off[l] = (size_t)total;
+        total += ld.len[l];
     }
     /* Only the bytes outside the levels are zeroed here: the level images are written in full
      * by the encoders, whose threads then also take the buffer's first-touch page faults. */
-    uint8_t *buf = ibl_alloc(ctx, total);
+    uint8_t *buf = ibl_alloc(ctx, (size_t)total);
     if (!buf) {
         free_levels(ctx, &ld);
-        ibl_free(ctx, head);
+        ibl_free(ctx, kvd);
         return ibl__fail_named(ctx, ibl_context_status(ctx), name);
     }
-    memcpy(buf, head, level_off[tex->levels - 1]);
-    ibl_free(ctx, head);
+    memset(buf, 0, level_off[tex->levels - 1]);
     for (int l = tex->levels - 1; l > 0; l--) /* the alignment padding after each level */
         memset(buf + level_off[l] + ld.len[l], 0, level_off[l - 1] - (level_off[l] + ld.len[l]));
-    memset(buf + level_off[0] + ld.len[0], 0, total - (level_off[0] + ld.len[0]));
+    memset(buf + level_off[0] + ld.len[0], 0, (size_t)total - (level_off[0] + ld.len[0]));
+    memcpy(buf, KTX2_IDENTIFIER, 12);
+    ibl__wr32(buf + 12, vk->vk);
+    ibl__wr32(buf + 16, vk->type_size);
+    ibl__wr32(buf + 20, (uint32_t)tex->width);
+    ibl__wr32(buf + 24, (uint32_t)tex->height);
+    ibl__wr32(buf + 28, tex->kind == IBL_TEXTURE_3D ? (uint32_t)tex->depth : 0);
+    int array = tex->kind == IBL_TEXTURE_CUBE_ARRAY;
+    ibl__wr32(buf + 32, array ? (uint32_t)tex->depth : 0); /* layerCount: 0 unless an array */
+    ibl__wr32(buf + 36, array ? 6u : (uint32_t)faces);
+    ibl__wr32(buf + 40, (uint32_t)tex->levels);
+    ibl__wr32(buf + 44, zstd ? SUPERCOMPRESSION_ZSTD : 0);
+    ibl__wr32(buf + 48, (uint32_t)dfd_off);
+    ibl__wr32(buf + 52, (uint32_t)dfd_len);
+    ibl__wr32(buf + 56, kvd_len ? (uint32_t)kvd_off : 0);
+    ibl__wr32(buf + 60, (uint32_t)kvd_len);
+    ibl__wr64(buf + 64, 0); /* sgdByteOffset */
+    ibl__wr64(buf + 72, 0); /* sgdByteLength */
+    for (int l = 0; l < tex->levels; l++) {
+        uint8_t *e = buf + HEADER_BYTES + LEVEL_ENTRY_BYTES * (size_t)l;
+        ibl__wr64(e, level_off[l]);
+        ibl__wr64(e + 8, ld.len[l]);
+        ibl__wr64(e + 16, ld.raw[l]);
+    }
+    memcpy(buf + dfd_off, dfd, dfd_len);
+    if (kvd_len) memcpy(buf + kvd_off, kvd, kvd_len);
+    ibl_free(ctx, kvd);
     /* A level's images are layer, face, slice, row: exactly our in-memory level block. */
     if (zstd) {
         for (int l = 0; l < tex->levels; l++) memcpy(buf + level_off[l], ld.bytes[l], ld.len[l]);
@@ -488,7 +419,7 @@ ibl_status ibl__ktx2_encode_streamed(ibl_context *ctx, const ibl_texture *tex,
         return ibl__fail_named(ctx, st, name);
     }
     *bytes = buf;
-    *size = total;
+    *size = (size_t)total;
     if (desc && desc->report) desc->report->clamped_texels += clamped;
     return IBL_OK;
 }

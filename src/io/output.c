@@ -1,6 +1,6 @@
 /* Output files that appear whole or not at all: every file of a set is written completely
- * under a temporary name in its own folder, and only the commit, after a last cancellation
- * check, flushes them all (fsync) and then renames them into place. A failure, a Ctrl-C or a full disk before the
+ * (and flushed) under a temporary name in its own folder, and only the commit renames them
+ * into place, after a last cancellation check. A failure, a Ctrl-C or a full disk before the
  * commit leaves the targets untouched and removes the temporaries; a rename cannot run out
  * of space, so a set is all or nothing except for a kill during the commit's few renames.
  *
@@ -29,9 +29,6 @@ typedef struct pending_file {
     char *temp;      /* its complete temporary, beside it                   */
     int replaced;    /* the target existed (its mode is kept)                */
     mode_t mode;
-    int fd;          /* the temporary, open: being written in parts, or written and
-                        waiting for its flush at the commit; -1: flushed and closed */
-    int incomplete;  /* written in parts and not closed complete: no commit  */
 } pending_file;
 
 struct ibl_output_set {
@@ -53,8 +50,6 @@ ibl_status ibl_output_set_create(ibl_context *ctx, ibl_output_set **out)
     return IBL_OK;
 }
 
-ibl_context *ibl__output_set_context(const ibl_output_set *set) { return set->ctx; }
-
 ibl_status ibl_output_set_protect(ibl_output_set *set, const char *input)
 {
     if (!set || !input) return IBL_ERR_INVALID_ARGUMENT;
@@ -71,8 +66,6 @@ ibl_status ibl_output_set_protect(ibl_output_set *set, const char *input)
 
 static void remove_pending(pending_file *f)
 {
-    if (f->fd >= 0) close(f->fd);
-    f->fd = -1;
     if (f->temp) unlink(f->temp);
 }
 
@@ -195,24 +188,28 @@ static ibl_status write_slices(int fd, const byte_source *src)
 #endif
 }
 
-/* Writes bytes to fd; keeps the mode of a replaced file. 0 or errno, and what failed. The
- * flush comes at the commit (flush_file). */
+/* Writes bytes to fd and flushes them; keeps the mode of a replaced file. 0 or errno, and
+ * what failed. */
 static int fill(int fd, const pending_file *f, const byte_source *src, const char **what)
 {
     *what = "write";
     if (write_slices(fd, src) != IBL_OK) return errno;
     *what = "set the mode of";
     if (f->replaced && fchmod(fd, f->mode) != 0) return errno;
+    *what = "flush";
+    if (fsync(fd) != 0) return errno;
     return 0;
 }
 
 /* Writes the temporary of f. The data goes first into an unnamed O_TMPFILE file, which
  * vanishes if the process is killed while writing (the long part), and is linked to its
  * temporary name once complete; where that is not possible, into the named temporary. */
-static int write_temporary(pending_file *f, const char *folder, const byte_source *src,
-                           const char **what)
+static int write_temporary(ibl_context *ctx, pending_file *f, const char *folder, const char *base,
+                           int serial, const byte_source *src, const char **what)
 {
     *what = "create a temporary file next to";
+    f->temp = temporary_name(ctx, folder, base, serial);
+    if (!f->temp) return ENOMEM;
 #ifdef O_TMPFILE
     int fd = open(folder[0] ? folder : ".", O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
     if (fd >= 0) {
@@ -220,7 +217,7 @@ static int write_temporary(pending_file *f, const char *folder, const byte_sourc
         char proc[64];
         snprintf(proc, sizeof proc, "/proc/self/fd/%d", fd);
         if (!e && linkat(AT_FDCWD, proc, AT_FDCWD, f->temp, AT_SYMLINK_FOLLOW) == 0) {
-            f->fd = fd;
+            close(fd);
             return 0;
         }
         close(fd);
@@ -231,39 +228,8 @@ static int write_temporary(pending_file *f, const char *folder, const byte_sourc
     int fd2 = open(f->temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd2 < 0) return errno;
     int e = fill(fd2, f, src, what);
-    if (e) close(fd2);
-    else f->fd = fd2;
+    if (close(fd2) != 0 && !e) e = errno, *what = "close";
     return e;
-}
-
-/* Makes f's temporary durable and closes it: 0 or errno. */
-static int flush_file(pending_file *f)
-{
-    if (f->fd < 0) return 0;
-    int e = fsync(f->fd) != 0 ? errno : 0;
-    if (close(f->fd) != 0 && !e) e = errno;
-    f->fd = -1;
-    return e;
-}
-
-/* The flushes wait for the commit: all of a set's files then share the file system's journal
- * commits, where a flush each as it was written made each file wait for one of its own (the
- * 256 chain's manifest: 0.6-1.2 ms alone after its KTX2's). At most this many written files
- * wait at once, each holding a descriptor; beyond, the oldest are flushed at once. */
-#define WAITING_FLUSHES_MAX 8
-
-static ibl_status flush_beyond(ibl_output_set *set, int keep)
-{
-    int waiting = 0;
-    for (int i = 0; i < set->count; i++) waiting += set->files[i].fd >= 0 && !set->files[i].incomplete;
-    for (int i = 0; i < set->count && waiting > keep; i++) {
-        pending_file *f = &set->files[i];
-        if (f->fd < 0 || f->incomplete) continue;
-        waiting--;
-        int e = flush_file(f);
-        if (e) return ibl__fail(set->ctx, IBL_ERR_IO, "%s: cannot flush it: %s", f->path, strerror(e));
-    }
-    return IBL_OK;
 }
 
 static ibl_status add_source(ibl_output_set *set, const char *path, const byte_source *src);
@@ -276,14 +242,9 @@ ibl_status ibl_output_set_add(ibl_output_set *set, const char *path, const void 
     return add_source(set, path, &src);
 }
 
-/* Checks path and reserves the set's next file for it (not yet counted): its target, mode
- * and temporary name; stale temporaries of the name are removed. *folder: ibl_free. */
-static ibl_status reserve_file(ibl_output_set *set, const char *path, pending_file **out,
-                               char **folder)
+static ibl_status add_source(ibl_output_set *set, const char *path, const byte_source *src)
 {
     ibl_context *ctx = set->ctx;
-    *out = NULL;
-    *folder = NULL;
     const char *slash = strrchr(path, '/');
     const char *base = slash ? slash + 1 : path;
     if (!base[0] || strcmp(base, ".") == 0 || strcmp(base, "..") == 0)
@@ -313,33 +274,18 @@ static ibl_status reserve_file(ibl_output_set *set, const char *path, pending_fi
     }
     pending_file *f = &set->files[set->count];
     memset(f, 0, sizeof *f);
-    f->fd = -1;
     f->replaced = exists && S_ISREG(target.st_mode);
     f->mode = f->replaced ? target.st_mode & 07777 : 0;
     f->path = ibl__strdup(ctx, path);
-    *folder = folder_of(ctx, path);
-    if (*folder) f->temp = temporary_name(ctx, *folder, base, set->count);
-    if (!f->path || !*folder || !f->temp) {
+    char *folder = folder_of(ctx, path);
+    if (!f->path || !folder) {
         ibl_free(ctx, f->path);
-        ibl_free(ctx, f->temp);
-        ibl_free(ctx, *folder);
-        *folder = NULL;
+        ibl_free(ctx, folder);
         return ibl__fail(ctx, ibl_context_status(ctx), "%s: out of memory", path);
     }
-    remove_stale_temporaries(*folder, base);
-    *out = f;
-    return IBL_OK;
-}
-
-static ibl_status add_source(ibl_output_set *set, const char *path, const byte_source *src)
-{
-    ibl_context *ctx = set->ctx;
-    pending_file *f;
-    char *folder;
-    ibl_status st = reserve_file(set, path, &f, &folder);
-    if (st != IBL_OK) return st;
+    remove_stale_temporaries(folder, base);
     const char *what;
-    int err = write_temporary(f, folder, src, &what);
+    int err = write_temporary(ctx, f, folder, base, set->count, src, &what);
     ibl_free(ctx, folder);
     if (err) {
         remove_pending(f);
@@ -348,49 +294,7 @@ static ibl_status add_source(ibl_output_set *set, const char *path, const byte_s
         return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot %s it: %s", path, what, strerror(err));
     }
     set->count++;
-    return flush_beyond(set, WAITING_FLUSHES_MAX);
-}
-
-/* A file written in parts goes straight to its named temporary: its writer may take long and
- * its parts come from several calls, so there is no single moment at which an unnamed file
- * could be linked; a kill leaves the temporary to the next write's clean-up. */
-ibl_status ibl__output_set_open(ibl_output_set *set, const char *path, int *index, int *fd)
-{
-    if (!set || !path || !index || !fd) return IBL_ERR_INVALID_ARGUMENT;
-    ibl_context *ctx = set->ctx;
-    pending_file *f;
-    char *folder;
-    ibl_status st = reserve_file(set, path, &f, &folder);
-    if (st != IBL_OK) return st;
-    ibl_free(ctx, folder);
-    f->fd = open(f->temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (f->fd < 0) {
-        int e = errno;
-        ibl_free(ctx, f->path);
-        ibl_free(ctx, f->temp);
-        return ibl__fail(ctx, IBL_ERR_IO, "%s: cannot create a temporary file next to it: %s",
-                         path, strerror(e));
-    }
-    f->incomplete = 1;
-    *index = set->count++;
-    *fd = f->fd;
     return IBL_OK;
-}
-
-ibl_status ibl__output_set_close(ibl_output_set *set, int index, int complete)
-{
-    if (!set || index < 0 || index >= set->count || !set->files[index].incomplete ||
-        set->files[index].fd < 0)
-        return IBL_ERR_INVALID_ARGUMENT;
-    pending_file *f = &set->files[index];
-    int e = complete && f->replaced && fchmod(f->fd, f->mode) != 0 ? errno : 0;
-    if (!complete || e) {
-        remove_pending(f); /* the set stays incomplete: it cannot be committed */
-        if (e) return ibl__fail(set->ctx, IBL_ERR_IO, "%s: cannot set the mode of it: %s", f->path, strerror(e));
-        return IBL_OK;
-    }
-    f->incomplete = 0; /* flushed at the commit, with the others */
-    return flush_beyond(set, WAITING_FLUSHES_MAX);
 }
 
 ibl_status ibl_output_set_commit(ibl_output_set *set)
@@ -402,13 +306,6 @@ ibl_status ibl_output_set_commit(ibl_output_set *set)
     if (ibl__progress(ctx, "write", 1.0) == IBL_ERR_CANCELLED)
         return ibl__fail(ctx, IBL_ERR_CANCELLED, "%s%s: cancelled; nothing written",
                          set->files[0].path, set->count > 1 ? " and the other outputs" : "");
-    for (int i = 0; i < set->count; i++)
-        if (set->files[i].incomplete)
-            return ibl__fail(ctx, IBL_ERR_INVALID_ARGUMENT, "%s: %s", set->files[i].path,
-                             set->files[i].fd >= 0 ? "still being written"
-                                                   : "not completely written; nothing committed");
-    ibl_status st = flush_beyond(set, 0);
-    if (st != IBL_OK) return st;
     set->committed = 1;
     for (int i = 0; i < set->count; i++) {
         pending_file *f = &set->files[i];
