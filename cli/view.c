@@ -47,8 +47,11 @@ static void bake_name(const char *input, char *out, size_t size)
     size_t n = strlen(path);
     while (n > 1 && path[n - 1] == '/') path[--n] = 0;
     if (n > 14 && strcmp(path + n - 14, "/manifest.json") == 0) path[n -= 14] = 0;
-    const char *slash = strrchr(path, '/');
-    snprintf(out, size, "%s", slash && slash[1] ? slash + 1 : path);
+    const char *slash = strrchr(path, '/'), *name = slash && slash[1] ? slash + 1 : path;
+    size_t len = strlen(name); /* a title: cut to fit */
+    if (len >= size) len = size - 1;
+    memcpy(out, name, len);
+    out[len] = 0;
 }
 
 /* The exposure `ibl render` picks for this probe (ibl_image_auto_exposure of its default
