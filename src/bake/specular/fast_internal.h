@@ -409,8 +409,9 @@ struct ibl_specular_plan {
      * piece sums level 0 leaf by leaf (has_level0_records). */
     float *level0_geometry;
     int has_level0_records;
-    /* run: the padded source of the precomputed piece being summed and its transpose
-     * (2 x 3 planes of padded_edge^2) */
+    /* run: the padded sources and transposes of the precomputed pieces whose weights the plan
+     * holds (ibl__fast_kept_padded_floats); a one-shot plan has none: its products make them
+     * level by level */
     float *padded_source;
     /* run: the gathered corrections of every precomputed piece, one after the other (only the
      * part a run uses is touched) */
@@ -534,6 +535,10 @@ ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap
 /* whether a one-shot plan's piece makes its weights batch by batch in the products (else whole,
  * ibl__fast_precomputed_refill) */
 int ibl__fast_products_batched(const precomputed_piece *c);
+/* the floats of padded sources and transposes that a level's pieces whose weights the plan holds
+ * use: 2 x 3 planes of padded_edge^2 for each face summed at once (the threads when they divide
+ * the six faces, else one) */
+size_t ibl__fast_kept_padded_floats(const ibl_specular_plan *p, int level);
 
 /* ---- gathering.c ---- */
 ibl_status ibl__fast_plan_bars(ibl_specular_plan *p, int level);

@@ -80,28 +80,26 @@ static void choose_subtexel_split(ibl_specular_plan *p)
     }
 }
 
-/* What a run needs besides the levels' own buffers: one padded face and its transpose for the
- * precomputed pieces (which run one after the other, face by face; those whose weights are made
- * batch by batch make their own six, products.c), and the uniform images of the coarse levels
- * they read. */
+/* What a run needs besides the levels' own buffers: the padded faces and their transposes for
+ * the precomputed pieces (products.c; a one-shot plan's products make them level by level), and
+ * the uniform images of the coarse levels they read. */
 static ibl_status run_buffers(ibl_specular_plan *p)
 {
     ibl_context *ctx = p->ctx;
     size_t padded = 0;
-    for (int l = 0; l < p->output_levels; l++)
+    for (int l = 0; l < p->output_levels; l++) {
+        size_t level_padded = ibl__fast_kept_padded_floats(p, l);
+        if (!p->one_shot && level_padded > padded) padded = level_padded;
         for (int k = 0; k < p->levels[l].piece_count; k++) {
             const precomputed_piece *c = p->levels[l].pieces[k].precomputed;
-            if (!c) continue;
-            /* (a piece whose products make their own six padded faces needs none) */
-            if (!ibl__fast_products_batched(c) && (size_t)6 * c->padded_edge * c->padded_edge > padded)
-                padded = (size_t)6 * c->padded_edge * c->padded_edge;
-            if (c->source_level == 0) continue;
+            if (!c || c->source_level == 0) continue;
             source_level *s = &p->pyramid[c->source_level];
             float **image = c->without_bright ? &s->uniform_not_bright : &s->uniform;
             size_t floats = (size_t)6 * s->edge * s->edge * UNIFORM_CHANNELS;
             if (!*image && !(*image = ibl_alloc(ctx, floats * sizeof(float))))
                 return ibl_context_status(ctx);
         }
+    }
     if (padded && !(p->padded_source = ibl_alloc(ctx, padded * sizeof(float))))
         return ibl_context_status(ctx);
     return IBL_OK;

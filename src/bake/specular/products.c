@@ -16,6 +16,8 @@
  * task applies its bases and their mirrors, so a batch needs only its own rows' weights. */
 #include "bake/specular/fast_internal.h"
 
+#include <stdatomic.h>
+
 typedef struct product_job {
     ibl_specular_plan *p;
     const precomputed_piece *c;
@@ -30,6 +32,10 @@ typedef struct product_job {
     const uint16_t *weights, *cells;
     size_t weight_origin;
     int first_row, rows; /* the loop's base rows: first_row .. first_row + rows - 1 */
+    /* whole-face tasks: face_slots padded buffers of 6 padded_edge^2 floats from `padded` on,
+     * and which of them a running face holds (outside the job, which each face copies) */
+    int face_slots;
+    atomic_int *slot_busy;
 } product_job;
 
 /* Face f's padded source (3 planes), then its transpose (3 more). */
@@ -174,12 +180,66 @@ static void padded_face(ibl_specular_plan *p, product_job *j)
     ibl_parallel_for(p->ctx, (P + TRANSPOSE_ROWS - 1) / TRANSPOSE_ROWS, transpose_task, j);
 }
 
-/* A piece whose weights the plan holds: face by face, every base row. */
-static void products_kept(ibl_specular_plan *p, product_job *job)
+static int product_face_slots(const ibl_context *ctx)
+{
+    int threads = ibl_context_threads(ctx);
+    return threads <= 6 && 6 % threads == 0 ? threads : 1;
+}
+
+size_t ibl__fast_kept_padded_floats(const ibl_specular_plan *p, int level)
+{
+    size_t floats = 0;
+    for (int k = 0; k < p->levels[level].piece_count; k++) {
+        const precomputed_piece *c = p->levels[level].pieces[k].precomputed;
+        /* (a piece whose products make their own six padded faces needs none) */
+        if (c && !ibl__fast_products_batched(c) && (size_t)6 * c->padded_edge * c->padded_edge > floats)
+            floats = (size_t)6 * c->padded_edge * c->padded_edge;
+    }
+    return floats * (size_t)product_face_slots(p->ctx);
+}
+
+/* One face of a piece whose weights the plan holds, whole on one thread: its padded source and
+ * transpose in a free buffer (at most face_slots faces run at once, one per thread), then every
+ * base row from the last, as the row loops do. */
+static void product_face_task(void *arg, int face)
+{
+    const product_job *shared = arg;
+    int slot = face % shared->face_slots;
+    for (;;) {
+        int expected = 0;
+        if (atomic_compare_exchange_strong(&shared->slot_busy[slot], &expected, 1)) break;
+        slot = (slot + 1) % shared->face_slots;
+    }
+    product_job j = *shared;
+    size_t P = (size_t)j.c->padded_edge;
+    j.face = face, j.all_faces = 0, j.padded = shared->padded + (size_t)slot * 6 * P * P;
+    for (int row = 0; row < (int)P; row++) padded_row_task(&j, row);
+    for (int t = 0; t < ((int)P + TRANSPOSE_ROWS - 1) / TRANSPOSE_ROWS; t++) transpose_task(&j, t);
+    for (int b = j.c->base_edge - 1; b >= 0; b--) product_row(&j, face, b);
+    atomic_store(&shared->slot_busy[slot], 0);
+}
+
+/* A piece whose weights the plan holds: every base row of the six faces. When the threads
+ * divide the six faces, a face is a task (product_face_slots): its thread pads the
+ * face and applies every weight to it, so the padded source it reads a few hundred times is
+ * in its own core's cache, and six tasks stand for the three loops a face took row by row
+ * (the 256 chain's level 1 on two threads: the padded rows one thread wrote were read by both,
+ * and its ~90 loops of pads and rows ended on one thread). Otherwise face by face, each padded
+ * by rows and summed row by row over all threads. The same products either way. */
+static void products_kept(ibl_specular_plan *p, product_job *job, float *padded)
 {
     const precomputed_piece *c = job->c;
-    job->padded = p->padded_source, job->all_faces = 0;
+    job->padded = padded, job->all_faces = 0;
     job->weights = c->weights, job->cells = c->vector_cells, job->weight_origin = 0;
+    job->face_slots = product_face_slots(p->ctx);
+    if (job->face_slots > 1) {
+        atomic_int busy[6];
+        for (int s = 0; s < 6; s++) atomic_init(&busy[s], 0);
+        job->slot_busy = busy;
+        ibl_parallel_for(p->ctx, 6, product_face_task, job);
+        job->slot_busy = NULL;
+        return;
+    }
     for (job->face = 0; job->face < 6; job->face++) {
         padded_face(p, job);
         job->first_row = 0, job->rows = c->base_edge;
@@ -263,19 +323,25 @@ static ibl_status products_batched(ibl_specular_plan *p, int level, int k, produ
     return st;
 }
 
+/* A reusable plan holds the padded buffers from its making (a run allocates nothing more); a
+ * one-shot plan's are made here for the level, after its weights were made and the geometry
+ * they came from freed (precomputed.c), so that the two are never held at once: the 256 GGX
+ * chain's peak is the level 1 refill's. */
 ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src)
 {
     level_plan *lv = &p->levels[level];
-    for (int k = 0; k < lv->piece_count; k++) {
+    float *padded = p->padded_source, *made = NULL;
+    size_t floats = ibl__fast_kept_padded_floats(p, level);
+    if (!padded && floats && !(padded = made = ibl_alloc(p->ctx, floats * sizeof(float))))
+        return ibl_context_status(p->ctx);
+    ibl_status st = IBL_OK;
+    for (int k = 0; st == IBL_OK && k < lv->piece_count; k++) {
         const precomputed_piece *c = lv->pieces[k].precomputed;
         if (!c) continue;
-        product_job job = {p, c, src, lv->grids[lv->pieces[k].grid].sums, 0, NULL, 0, NULL, NULL, 0, 0, 0};
-        if (c->weights) {
-            products_kept(p, &job);
-            continue;
-        }
-        ibl_status st = products_batched(p, level, k, &job);
-        if (st != IBL_OK) return st;
+        product_job job = {.p = p, .c = c, .src = src, .sums = lv->grids[lv->pieces[k].grid].sums};
+        if (c->weights) products_kept(p, &job, padded);
+        else st = products_batched(p, level, k, &job);
     }
-    return IBL_OK;
+    ibl_free(p->ctx, made);
+    return st;
 }
