@@ -198,9 +198,14 @@ size_t ibl__fast_kept_padded_floats(const ibl_specular_plan *p, int level)
     return floats * (size_t)product_face_slots(p->ctx);
 }
 
-/* One face of a piece whose weights the plan holds, whole on one thread: its padded source and
- * transpose in a free buffer (at most face_slots faces run at once, one per thread), then every
- * base row from the last, as the row loops do. */
+/* One face of a piece whose weights the plan holds: its padded source and transpose in a free
+ * buffer, then its base rows from the last, as a loop of their own: the face's thread runs them
+ * all unless another thread, out of faces, helps with the last ones.
+ *
+ * A buffer is always free in the end: a face holds one while it pads and while its rows run,
+ * and a row waits for nothing. (A thread waiting for its rows' last indices may start another
+ * face meanwhile, and so hold two buffers; it then waits here for a face of another thread,
+ * which finishes.) */
 static void product_face_task(void *arg, int face)
 {
     const product_job *shared = arg;
@@ -215,17 +220,17 @@ static void product_face_task(void *arg, int face)
     j.face = face, j.all_faces = 0, j.padded = shared->padded + (size_t)slot * 6 * P * P;
     for (int row = 0; row < (int)P; row++) padded_row_task(&j, row);
     for (int t = 0; t < ((int)P + TRANSPOSE_ROWS - 1) / TRANSPOSE_ROWS; t++) transpose_task(&j, t);
-    for (int b = j.c->base_edge - 1; b >= 0; b--) product_row(&j, face, b);
+    j.first_row = 0, j.rows = j.c->base_edge;
+    ibl_parallel_for(j.p->ctx, j.rows, product_row_task, &j);
     atomic_store(&shared->slot_busy[slot], 0);
 }
 
 /* A piece whose weights the plan holds: every base row of the six faces. When the threads
- * divide the six faces, a face is a task (product_face_slots): its thread pads the
- * face and applies every weight to it, so the padded source it reads a few hundred times is
- * in its own core's cache, and six tasks stand for the three loops a face took row by row
- * (the 256 chain's level 1 on two threads: the padded rows one thread wrote were read by both,
- * and its ~90 loops of pads and rows ended on one thread). Otherwise face by face, each padded
- * by rows and summed row by row over all threads. The same products either way. */
+ * divide the six faces, a face is a task (product_face_slots): its thread pads the face and
+ * applies the weights to it, so the padded source it reads a few hundred times is in its own
+ * core's cache (the 256 chain's level 1 on two threads: the padded rows one thread wrote were
+ * read by both, and its ~60 loops of pads ended on one thread). Otherwise face by face, each
+ * padded by rows and summed row by row over all threads. The same products either way. */
 static void products_kept(ibl_specular_plan *p, product_job *job, float *padded)
 {
     const precomputed_piece *c = job->c;
