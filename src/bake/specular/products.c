@@ -180,6 +180,21 @@ static void padded_face(ibl_specular_plan *p, product_job *j)
     ibl_parallel_for(p->ctx, (P + TRANSPOSE_ROWS - 1) / TRANSPOSE_ROWS, transpose_task, j);
 }
 
+/* The floats of one padded face and its transpose for the level's pieces whose weights the plan
+ * holds (a piece whose products make their own six padded faces needs none). */
+static size_t face_floats(const ibl_specular_plan *p, int level)
+{
+    size_t floats = 0;
+    for (int k = 0; k < p->levels[level].piece_count; k++) {
+        const precomputed_piece *c = p->levels[level].pieces[k].precomputed;
+        if (c && !ibl__fast_products_batched(c) && (size_t)6 * c->padded_edge * c->padded_edge > floats)
+            floats = (size_t)6 * c->padded_edge * c->padded_edge;
+    }
+    return floats;
+}
+
+/* How many faces are summed at once, each in its own padded buffer: the threads when they
+ * divide the six faces, else one. */
 static int product_face_slots(const ibl_context *ctx)
 {
     int threads = ibl_context_threads(ctx);
@@ -188,14 +203,7 @@ static int product_face_slots(const ibl_context *ctx)
 
 size_t ibl__fast_kept_padded_floats(const ibl_specular_plan *p, int level)
 {
-    size_t floats = 0;
-    for (int k = 0; k < p->levels[level].piece_count; k++) {
-        const precomputed_piece *c = p->levels[level].pieces[k].precomputed;
-        /* (a piece whose products make their own six padded faces needs none) */
-        if (c && !ibl__fast_products_batched(c) && (size_t)6 * c->padded_edge * c->padded_edge > floats)
-            floats = (size_t)6 * c->padded_edge * c->padded_edge;
-    }
-    return floats * (size_t)product_face_slots(p->ctx);
+    return face_floats(p, level) * (size_t)product_face_slots(p->ctx);
 }
 
 /* One face of a piece whose weights the plan holds: its padded source and transpose in a free
@@ -231,12 +239,12 @@ static void product_face_task(void *arg, int face)
  * core's cache (the 256 chain's level 1 on two threads: the padded rows one thread wrote were
  * read by both, and its ~60 loops of pads ended on one thread). Otherwise face by face, each
  * padded by rows and summed row by row over all threads. The same products either way. */
-static void products_kept(ibl_specular_plan *p, product_job *job, float *padded)
+static void products_kept(ibl_specular_plan *p, product_job *job, float *padded, int face_slots)
 {
     const precomputed_piece *c = job->c;
     job->padded = padded, job->all_faces = 0;
     job->weights = c->weights, job->cells = c->vector_cells, job->weight_origin = 0;
-    job->face_slots = product_face_slots(p->ctx);
+    job->face_slots = face_slots;
     if (job->face_slots > 1) {
         atomic_int busy[6];
         for (int s = 0; s < 6; s++) atomic_init(&busy[s], 0);
@@ -331,20 +339,29 @@ static ibl_status products_batched(ibl_specular_plan *p, int level, int k, produ
 /* A reusable plan holds the padded buffers from its making (a run allocates nothing more); a
  * one-shot plan's are made here for the level, after its weights were made and the geometry
  * they came from freed (precomputed.c), so that the two are never held at once: the 256 GGX
- * chain's peak is the level 1 refill's. */
+ * chain's peak is the level 1 refill's. It makes one a thread only where that keeps under the
+ * context's peak so far, and else one (the faces in turn over all threads): the Phong chain
+ * with cmft's exponents at 256 peaked 6 MB higher with two, in its products. */
 ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src)
 {
     level_plan *lv = &p->levels[level];
+    ibl_context *ctx = p->ctx;
     float *padded = p->padded_source, *made = NULL;
-    size_t floats = ibl__fast_kept_padded_floats(p, level);
-    if (!padded && floats && !(padded = made = ibl_alloc(p->ctx, floats * sizeof(float))))
-        return ibl_context_status(p->ctx);
+    int slots = product_face_slots(ctx);
+    size_t face = face_floats(p, level);
+    if (!padded && face) {
+        if (slots > 1 && ibl_context_current_bytes(ctx) + (uint64_t)slots * face * sizeof(float) >
+                             ibl_context_peak_bytes(ctx))
+            slots = 1;
+        if (!(padded = made = ibl_alloc(ctx, (size_t)slots * face * sizeof(float))))
+            return ibl_context_status(ctx);
+    }
     ibl_status st = IBL_OK;
     for (int k = 0; st == IBL_OK && k < lv->piece_count; k++) {
         const precomputed_piece *c = lv->pieces[k].precomputed;
         if (!c) continue;
         product_job job = {.p = p, .c = c, .src = src, .sums = lv->grids[lv->pieces[k].grid].sums};
-        if (c->weights) products_kept(p, &job, padded);
+        if (c->weights) products_kept(p, &job, padded, slots);
         else st = products_batched(p, level, k, &job);
     }
     ibl_free(p->ctx, made);
