@@ -32,9 +32,10 @@ typedef struct product_job {
     const uint16_t *weights, *cells;
     size_t weight_origin;
     int first_row, rows; /* the loop's base rows: first_row .. first_row + rows - 1 */
-    /* whole-face tasks: face_slots padded buffers of 6 padded_edge^2 floats from `padded` on,
-     * and which of them a running face holds (outside the job, which each face copies) */
+    /* whole-face tasks: face_slots padded buffers of 6 padded_edge^2 floats or more, and which
+     * of them a running face holds (outside the job, which each face copies) */
     int face_slots;
+    float *const *slot_padded;
     atomic_int *slot_busy;
 } product_job;
 
@@ -225,7 +226,7 @@ static void product_face_task(void *arg, int face)
     }
     product_job j = *shared;
     size_t P = (size_t)j.c->padded_edge;
-    j.face = face, j.all_faces = 0, j.padded = shared->padded + (size_t)slot * 6 * P * P;
+    j.face = face, j.all_faces = 0, j.padded = shared->slot_padded[slot];
     for (int row = 0; row < (int)P; row++) padded_row_task(&j, row);
     for (int t = 0; t < ((int)P + TRANSPOSE_ROWS - 1) / TRANSPOSE_ROWS; t++) transpose_task(&j, t);
     j.first_row = 0, j.rows = j.c->base_edge;
@@ -239,12 +240,12 @@ static void product_face_task(void *arg, int face)
  * core's cache (the 256 chain's level 1 on two threads: the padded rows one thread wrote were
  * read by both, and its ~60 loops of pads ended on one thread). Otherwise face by face, each
  * padded by rows and summed row by row over all threads. The same products either way. */
-static void products_kept(ibl_specular_plan *p, product_job *job, float *padded, int face_slots)
+static void products_kept(ibl_specular_plan *p, product_job *job, float *const *padded, int face_slots)
 {
     const precomputed_piece *c = job->c;
-    job->padded = padded, job->all_faces = 0;
+    job->padded = padded[0], job->all_faces = 0;
     job->weights = c->weights, job->cells = c->vector_cells, job->weight_origin = 0;
-    job->face_slots = face_slots;
+    job->face_slots = face_slots, job->slot_padded = padded;
     if (job->face_slots > 1) {
         atomic_int busy[6];
         for (int s = 0; s < 6; s++) atomic_init(&busy[s], 0);
@@ -336,25 +337,32 @@ static ibl_status products_batched(ibl_specular_plan *p, int level, int k, produ
     return st;
 }
 
-/* A reusable plan holds the padded buffers from its making (a run allocates nothing more); a
- * one-shot plan's are made here for the level, after its weights were made and the geometry
- * they came from freed (precomputed.c), so that the two are never held at once: the 256 GGX
- * chain's peak is the level 1 refill's. It makes one a thread only where that keeps under the
- * context's peak so far, and else one (the faces in turn over all threads): the Phong chain
- * with cmft's exponents at 256 peaked 6 MB higher with two, in its products. */
+/* A reusable plan holds the padded buffers from its making, one block (a run allocates nothing
+ * more); a one-shot plan's are made here for the level, after its weights were made and the
+ * geometry they came from freed (precomputed.c), so that the two are never held at once: the
+ * 256 GGX chain's peak is the level 1 refill's. One block a buffer, so that the first fits in
+ * the freed geometry's pages (11 floats a texel against a buffer's 6: two in one block did not,
+ * and took fresh pages: the 256 chain's RSS 40 -> 46 MB). It makes one a thread only where that
+ * keeps under the context's peak so far, and else one (the faces in turn over all threads):
+ * the Phong chain with cmft's exponents at 256 peaked 6 MB higher with two, in its products. */
 ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src)
 {
     level_plan *lv = &p->levels[level];
     ibl_context *ctx = p->ctx;
-    float *padded = p->padded_source, *made = NULL;
-    int slots = product_face_slots(ctx);
+    float *padded[6] = {NULL};
+    int slots = product_face_slots(ctx), made = 0;
     size_t face = face_floats(p, level);
-    if (!padded && face) {
+    if (p->padded_source) {
+        for (int s = 0; s < slots; s++) padded[s] = p->padded_source + (size_t)s * face;
+    } else if (face) {
         if (slots > 1 && ibl_context_current_bytes(ctx) + (uint64_t)slots * face * sizeof(float) >
                              ibl_context_peak_bytes(ctx))
             slots = 1;
-        if (!(padded = made = ibl_alloc(ctx, (size_t)slots * face * sizeof(float))))
-            return ibl_context_status(ctx);
+        for (; made < slots; made++)
+            if (!(padded[made] = ibl_alloc(ctx, face * sizeof(float)))) {
+                while (made > 0) ibl_free(ctx, padded[--made]);
+                return ibl_context_status(ctx);
+            }
     }
     ibl_status st = IBL_OK;
     for (int k = 0; st == IBL_OK && k < lv->piece_count; k++) {
@@ -364,6 +372,6 @@ ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap
         if (c->weights) products_kept(p, &job, padded, slots);
         else st = products_batched(p, level, k, &job);
     }
-    ibl_free(p->ctx, made);
+    while (made > 0) ibl_free(ctx, padded[--made]);
     return st;
 }
