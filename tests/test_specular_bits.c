@@ -130,10 +130,59 @@ static void pinned_outputs(void **state)
 #endif
 }
 
+/* A reusable plan's run of the GGX 128 chain on a context of `threads`, on the library's pool
+ * or (host) on a host's parallel_for that runs every loop on that many threads of its own. */
+static uint64_t plan_hash(const ibl_cubemap *src, int threads, int host)
+{
+    test_host h = {.threads = threads};
+    ibl_context_desc cd = {.threads = threads};
+    if (host) cd.parallel_for = test_host_parallel_for, cd.parallel_host = &h;
+    ibl_context *ctx = NULL;
+    assert_int_equal(ibl_context_create(&cd, &ctx), IBL_OK);
+    ibl_specular_desc d = {.filter = IBL_FILTER_GGX, .size = 128, .source_size = src->size};
+    ibl_specular_plan *plan = NULL;
+    assert_int_equal(ibl_specular_plan_create(ctx, &d, &plan), IBL_OK);
+    ibl_cubemap out = {0};
+    assert_int_equal(ibl_cubemap_alloc(ctx, 128, ibl_specular_plan_info(plan)->levels, &out), IBL_OK);
+    assert_int_equal(ibl_specular_plan_run(plan, src, &out), IBL_OK);
+    uint64_t hash = test_fnv1a(out.data, ibl_cubemap_floats(128, out.levels) * sizeof(float));
+    ibl_cubemap_free(ctx, &out);
+    ibl_specular_plan_destroy(plan);
+    ibl_context_destroy(ctx);
+    return hash;
+}
+
+/* The products of a piece whose weights the plan holds run a face a task when the threads
+ * divide the six faces (each face padded in a buffer of its thread's), its rows a loop of their
+ * own on the library's pool and in turn on a host's parallel_for, and face by face over all
+ * threads otherwise: the GGX 128 chain is the pinned one at every such count, on either. */
+static void face_tasks_at_any_thread_count(void **state)
+{
+    (void)state;
+#if !defined(__x86_64__)
+    skip();
+#else
+    const pinned_chain *c = &chains[1];
+    uint64_t want = ibl__cpu_has(NULL, IBL__CPU_AVX2_FMA | IBL__CPU_F16C) ? c->avx2 : c->portable;
+    ibl_context *ctx = test_context(1);
+    ibl_image image;
+    assert_int_equal(ibl_read_image(ctx, test_data(c->file), NULL, &image, NULL), IBL_OK);
+    ibl_cubemap src;
+    assert_int_equal(ibl_image_to_cubemap(ctx, &image, &(ibl_to_cube_desc){.size = 128}, &src), IBL_OK);
+    static const int counts[] = {1, 2, 3, 4, 6};
+    for (int i = 0; i < 5; i++) check("pool", c, plan_hash(&src, counts[i], 0), want, 0);
+    for (int threads = 2; threads <= 3; threads++) check("host", c, plan_hash(&src, threads, 1), want, 0);
+    ibl_cubemap_free(ctx, &src);
+    ibl_image_free(ctx, &image);
+    ibl_context_destroy(ctx);
+#endif
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(pinned_outputs),
+        cmocka_unit_test(face_tasks_at_any_thread_count),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

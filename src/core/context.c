@@ -490,6 +490,11 @@ void ibl__parallel_end(ibl_context *ctx)
     ibl__pool_end(ctx->pool);
 }
 
+int ibl__parallel_on_own_pool(const ibl_context *ctx)
+{
+    return ctx && ctx->pool && !ctx->desc.parallel_for;
+}
+
 void ibl__parallel_warm(ibl_context *ctx)
 {
     if (ctx && ctx->pool && !ctx->desc.parallel_for) ibl__pool_warm(ctx->pool);

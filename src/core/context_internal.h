@@ -36,6 +36,14 @@ int ibl__parallel_begin(ibl_context *ctx, int count, ibl_task_fn task, void *tas
 int ibl__parallel_help(ibl_context *ctx);
 void ibl__parallel_end(ibl_context *ctx);
 
+/* 1 when loops run on the library's own pool (src/core/pool.c), 0 for a host's parallel_for
+ * or none. The own pool's thread that waits for its loop's last indices takes the oldest open
+ * loop with indices left, so a task that holds something while a loop of its own finishes is
+ * not entered again on that thread while an older loop has indices: a host's scheduler may
+ * start any task there (work stealing), and a task that then waits for what the first one
+ * holds never returns. */
+int ibl__parallel_on_own_pool(const ibl_context *ctx);
+
 /* One pause of a spin-wait (the CPU's pause or yield instruction). */
 void ibl__cpu_relax(void);
 

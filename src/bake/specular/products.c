@@ -15,6 +15,7 @@
  * the six first and the weights a batch of base rows at a time (products_batched): a base row's
  * task applies its bases and their mirrors, so a batch needs only its own rows' weights. */
 #include "bake/specular/fast_internal.h"
+#include "core/context_internal.h"
 
 #include <stdatomic.h>
 
@@ -208,13 +209,15 @@ size_t ibl__fast_kept_padded_floats(const ibl_specular_plan *p, int level)
 }
 
 /* One face of a piece whose weights the plan holds: its padded source and transpose in a free
- * buffer, then its base rows from the last, as a loop of their own: the face's thread runs them
- * all unless another thread, out of faces, helps with the last ones.
- *
- * A buffer is always free in the end: a face holds one while it pads and while its rows run,
- * and a row waits for nothing. (A thread waiting for its rows' last indices may start another
- * face meanwhile, and so hold two buffers; it then waits here for a face of another thread,
- * which finishes.) */
+ * buffer, then its base rows from the last. On the library's own pool the rows are a loop of
+ * their own: the face's thread runs them all unless another thread, out of faces, helps with
+ * the last ones. A buffer is always free in the end: a face holds one while it pads and while
+ * its rows run, a row waits for nothing, and a thread waits for its rows' last indices only
+ * while another thread runs one, which that thread took when no face was left to take (the
+ * oldest loop first), so no thread starts a second face while it holds a buffer. A host's
+ * parallel_for promises no such order (a work-stealing scheduler may start a face on a thread
+ * whose face waits for its rows, and two such threads would wait for each other's buffers):
+ * there a face runs its rows itself. */
 static void product_face_task(void *arg, int face)
 {
     const product_job *shared = arg;
@@ -230,7 +233,9 @@ static void product_face_task(void *arg, int face)
     for (int row = 0; row < (int)P; row++) padded_row_task(&j, row);
     for (int t = 0; t < ((int)P + TRANSPOSE_ROWS - 1) / TRANSPOSE_ROWS; t++) transpose_task(&j, t);
     j.first_row = 0, j.rows = j.c->base_edge;
-    ibl_parallel_for(j.p->ctx, j.rows, product_row_task, &j);
+    if (ibl__parallel_on_own_pool(j.p->ctx)) ibl_parallel_for(j.p->ctx, j.rows, product_row_task, &j);
+    else
+        for (int i = 0; i < j.rows; i++) product_row_task(&j, i);
     atomic_store(&shared->slot_busy[slot], 0);
 }
 
