@@ -338,15 +338,35 @@ static void combine_task(void *arg, int index)
     }
 }
 
-void ibl__fast_combine(ibl_specular_plan *p, ibl_cubemap *dst, int level)
+ibl_status ibl__fast_combine(ibl_specular_plan *p, ibl_cubemap *dst, int level)
 {
     level_plan *lv = &p->levels[level];
+    int made[MAX_PIECES] = {0};
+    ibl_status st = IBL_OK;
     for (int g = 0; g < lv->grid_count; g++) {
-        if (!lv->grids[g].bordered) continue;
-        border_job bj = {p, &lv->grids[g]};
+        sum_grid *gr = &lv->grids[g];
+        if (!gr->bordered_floats) continue;
+        /* a one-shot plan's bordered copies are made here and freed after the level */
+        if (!gr->bordered) {
+            gr->bordered = ibl_alloc(p->ctx, gr->bordered_floats * sizeof(float));
+            if (!gr->bordered) {
+                st = ibl_context_status(p->ctx);
+                break;
+            }
+            made[g] = 1;
+        }
+        border_job bj = {p, gr};
         ibl_parallel_for(p->ctx, 6, border_task, &bj);
-        if (lv->grids[g].lagrange) ibl_parallel_for(p->ctx, 6, lagrange_border_task, &bj);
+        if (gr->lagrange) ibl_parallel_for(p->ctx, 6, lagrange_border_task, &bj);
     }
-    combine_job job = {p, dst, level};
-    ibl_parallel_for(p->ctx, 6 * ibl_level_size(p->output_edge, level), combine_task, &job);
+    if (st == IBL_OK) {
+        combine_job job = {p, dst, level};
+        ibl_parallel_for(p->ctx, 6 * ibl_level_size(p->output_edge, level), combine_task, &job);
+    }
+    for (int g = 0; g < lv->grid_count; g++)
+        if (made[g]) {
+            ibl_free(p->ctx, lv->grids[g].bordered);
+            lv->grids[g].bordered = NULL;
+        }
+    return st;
 }

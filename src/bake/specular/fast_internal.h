@@ -249,6 +249,8 @@ typedef struct sum_grid {
     float *bordered;       /* coarse grids: 6 (edge + 2 border)^2 x 4, the sums with a border
                             * (grid_border) across the face edges (corner: the mean of its
                             * three texels), as the seamless bilinear sampler reads them      */
+    size_t bordered_floats; /* its size (two copies for a Lagrange grid): a one-shot plan makes
+                             * it only for the level's combine (combine.c)                     */
 } sum_grid;
 
 /* Texels of a coarse grid's border: the 6-point reads of a Lagrange grid take three beyond a
@@ -551,7 +553,7 @@ void ibl__fast_block_bounds(const ibl_specular_plan *p, const precomputed_piece 
                             const source_level *s, size_t b, const float *lum);
 
 /* ---- combine.c ---- */
-void ibl__fast_combine(ibl_specular_plan *p, ibl_cubemap *dst, int level);
+ibl_status ibl__fast_combine(ibl_specular_plan *p, ibl_cubemap *dst, int level);
 
 /* ---- mirror.c ---- */
 void ibl__fast_mirror_level(ibl_specular_plan *p, const ibl_cubemap *src, ibl_cubemap *dst,

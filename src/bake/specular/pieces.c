@@ -243,10 +243,13 @@ static ibl_status allocate_grids(ibl_specular_plan *p, level_plan *lv)
         gr->sums = ibl_alloc(p->ctx, (size_t)6 * gr->edge * gr->edge * 4 * sizeof(float));
         if (!gr->sums) return ibl_context_status(p->ctx);
         if (!gr->at_output) {
-            /* a Lagrange grid keeps two copies: the border unfolded, then resampled (combine.c) */
+            /* a Lagrange grid keeps two copies: the border unfolded, then resampled (combine.c);
+             * a one-shot plan makes them for the level's combine only, after the run's buffers
+             * are freed (the Phong 256 chain's peak held 4.8 MB of them, read only at the end) */
             size_t m = (size_t)gr->edge + 2 * grid_border(gr), copies = gr->lagrange ? 2 : 1;
-            gr->bordered = ibl_alloc(p->ctx, copies * 6 * m * m * 4 * sizeof(float));
-            if (!gr->bordered) return ibl_context_status(p->ctx);
+            gr->bordered_floats = copies * 6 * m * m * 4;
+            if (!p->one_shot && !(gr->bordered = ibl_alloc(p->ctx, gr->bordered_floats * sizeof(float))))
+                return ibl_context_status(p->ctx);
         }
     }
     lv->task_begin[lv->grid_count] = lv->task_count;

@@ -440,8 +440,8 @@ ibl_status ibl__specular_plan_run_output(ibl_specular_plan *p, const ibl_cubemap
     if (p->dynamic) return run_dynamic(p, src, dst);
     for (int l = 0; st == IBL_OK && l < p->output_levels; l++) {
         if (level_is_mirror(p, l)) ibl__fast_mirror_level(p, src, dst, l);
-        else ibl__fast_combine(p, dst, l);
-        st = ibl_edge_fixup_apply(p->ctx, p->desc.edge_fixup, dst, l);
+        else st = ibl__fast_combine(p, dst, l);
+        if (st == IBL_OK) st = ibl_edge_fixup_apply(p->ctx, p->desc.edge_fixup, dst, l);
     }
     return st;
 }
