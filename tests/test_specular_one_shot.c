@@ -169,14 +169,14 @@ static uint64_t peak_bytes(const ibl_cubemap *src, const ibl_specular_desc *desc
 
 /* The 256 GGX chain from city.exr on a 256 source, on two threads. Measured: the reusable plan
  * peaks at 48.9 MB (every coarse level's records next to every piece's weights and the chain),
- * the one-shot prefilter at 28.1 MB (0.58). The bar, 0.8 of the reusable plan's peak, fails if
+ * the one-shot prefilter at 20.9 MB (0.43). The bar, 0.8 of the reusable plan's peak, fails if
  * the one-shot plan comes to hold its weights or its pyramid's records through the run again.
  * And a bar of its own, on the count (exact: the blocks' sizes, the same at every run): the
  * command `ibl prefilter city.exr --size 256` is held to 47 MB of peak RSS, 3 MB under its
  * bound of 3 x (the 1024x512 image in float RGBA + the chain in float RGBA) = 50 MB. It peaks
- * at 44 MB (docs/PERFORMANCE.md "At large sizes"): this count (28.1 MB) plus the source cube
+ * at 42 MB (docs/PERFORMANCE.md "At large sizes"): this count (20.9 MB) plus the source cube
  * (6.3 MB), the process (5.5 MB: `ibl --version`) and what the CLI's arena keeps in 2 MiB
- * pages shared by live blocks and free ones. So the count may grow by 0.9 MB at most: 29.0 MB,
+ * pages shared by live blocks and free ones. So the count may grow by 0.9 MB at most: 21.8 MB,
  * which fails if the run comes to hold one more buffer of that size at its peak (the padded
  * faces, one a thread, beside the weights or the geometry they are made from, for one). (The RSS
  * also depends on where the arena puts the blocks; cli/arena.c and test_cli_arena keep that
@@ -194,16 +194,20 @@ static void one_shot_peak_is_lower(void **state)
     printf("  256 GGX chain: reusable plan peak %.3f MB, one-shot %.3f MB\n", reusable / 1e6,
            once / 1e6);
     assert_true((double)once < 0.8 * (double)reusable);
-    assert_true(once <= 29000000u);
+    assert_true(once <= 21800000u);
     ibl_cubemap_free(ctx, &src);
     ibl_context_destroy(ctx);
 }
 
 /* Under any memory budget the one-shot prefilter either makes the chain it makes without one
  * or fails with IBL_ERR_TOO_LARGE and holds nothing after: budgets from a twelfth of its peak
- * to the peak, on a chain with Lagrange grids (whose bordered copies the one-shot plan makes
- * only for the level's combine, after the run's buffers are freed) and on the GGX 128 chain
- * (padded faces a level, one a thread where that keeps under the peak so far). */
+ * to twice the peak, on a chain with Lagrange grids (whose bordered copies the one-shot plan
+ * makes only for the level's combine, after the run's buffers are freed) and on the GGX 128
+ * chain (padded faces a level, one a thread where that keeps under the peak so far; the
+ * corrections' records made as they are gathered). A plan whose weights would take more than
+ * half of what the budget leaves sums those pieces as leaves instead (a different chain): on
+ * these two, a budget that small is too small for the leaves as well (at the peak itself the
+ * GGX 128 chain is refused that way), so every chain made is the same. */
 static void one_shot_under_any_budget(void **state)
 {
     (void)state;
@@ -220,7 +224,7 @@ static void one_shot_under_any_budget(void **state)
         ibl_cubemap_free(ctx, &out);
         ibl_context_destroy(ctx);
         int made = 0, refused = 0;
-        for (int k = 1; k <= 12; k++) {
+        for (int k = 1; k <= 24; k++) {
             ibl_context_desc cd = {.threads = 2, .max_bytes = peak * (uint64_t)k / 12};
             assert_int_equal(ibl_context_create(&cd, &ctx), IBL_OK);
             ibl_cubemap o = {0};
@@ -238,7 +242,7 @@ static void one_shot_under_any_budget(void **state)
             assert_int_equal(ibl_context_current_bytes(ctx), 0);
             ibl_context_destroy(ctx);
         }
-        assert_true(made >= 1 && refused >= 1); /* the peak's budget makes it, a twelfth does not */
+        assert_true(made >= 1 && refused >= 1); /* twice the peak makes it, a twelfth does not */
         ibl_cubemap_free(io, &src);
     }
     ibl_context_destroy(io);

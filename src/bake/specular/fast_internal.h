@@ -311,7 +311,10 @@ struct precomputed_piece {
      * Phong pieces', gathering.c) */
     int gather_span;
     int correction_capacity, correction_block_count;
-    float *correction_records; /* run: in the plan's correction pool                           */
+    /* run: in the plan's correction pool, or (a one-shot plan: own_records) a block of the
+     * piece's own, made as the corrections are gathered and freed after the level's sums */
+    float *correction_records;
+    int own_records;
     float *correction_cones;
     uint64_t *correction_keys; /* correction_capacity BLOCK_TEXELS: scratch of the gathering    */
     float *texel_bound;    /* run: each texel's bound (block order)                             */
@@ -417,7 +420,7 @@ struct ibl_specular_plan {
     float *padded_source;
     /* run: the gathered corrections of every precomputed piece, one after the other (only the
      * part a run uses is touched) */
-    float *correction_pool;
+    float *correction_pool; /* (a reusable plan's: a one-shot plan's pieces make their own) */
     size_t correction_pool_blocks;
     /* a plan made for one run (ibl_specular_prefilter), whose largest buffers are never held
      * at once: the records only the pyramid reads are made by the run and freed as soon as the

@@ -99,7 +99,8 @@ ibl_status ibl__fast_gathering_buffers(ibl_specular_plan *p)
 {
     ibl_context *ctx = p->ctx;
     size_t record_bytes = (size_t)COARSE_FIELDS * BLOCK_TEXELS * sizeof(float);
-    if (p->correction_pool_blocks &&
+    /* (a one-shot plan's pieces make their corrections' records as they gather them) */
+    if (p->correction_pool_blocks && !p->one_shot &&
         !(p->correction_pool = ibl_alloc(ctx, p->correction_pool_blocks * record_bytes)))
         return ibl_context_status(ctx);
     for (int l = 0; l < p->pyramid_levels; l++) {
@@ -315,17 +316,25 @@ static int gather_spans(const ibl_specular_plan *p, const source_level *s, const
  * Unfilled lanes hold nothing: no power, no solid angle, beyond every piece. The records are
  * s's, or made again (remake, when s has none). */
 static int gather_texels(const ibl_specular_plan *p, const source_level *s, uint64_t *keys,
-                         int count, int span, int power_field, float *records, float *cones,
+                         int count, int span, int power_field, float **made_records, float *cones,
                          int capacity, const texel_remake *remake)
 {
     const int B = BLOCK_TEXELS;
     qsort(keys, (size_t)count, sizeof *keys, key_order);
+    int blocks = (count + B - 1) / B;
     if (span > 0) {
         lane_cursor trial = {span, 0, 0, 0, 0, 0};
         for (int k = 0; k < count; k++) next_lane(&trial, s, keys[k]);
         if (trial.blocks > capacity) span = 0;
+        else blocks = trial.blocks;
     }
-    int blocks = (count + B - 1) / B;
+    /* NULL: a one-shot plan's corrections, made here as many as they are (a pool of every
+     * piece's capacity, mostly never written, sat on pages other blocks had written and set
+     * the 256 chain's peak RSS 6.5 MB higher in some runs) */
+    if (!*made_records &&
+        !(*made_records = ibl_alloc(p->ctx, ((size_t)blocks > 0 ? (size_t)blocks : 1) * COARSE_FIELDS * B * sizeof(float))))
+        return -1;
+    float *records = *made_records;
     if (span > 0) {
         blocks = gather_spans(p, s, keys, count, span, power_field, records, remake);
     } else {
@@ -411,7 +420,7 @@ void ibl__fast_select_bright(ibl_specular_plan *p, int level)
         j.bar *= 2.0;
     }
     ibl_parallel_for(p->ctx, tasks, bright_mark_task, &j);
-    s->bright_block_count = gather_texels(p, s, s->bright_keys, count, 0, FIELD_POWER, s->bright_records,
+    s->bright_block_count = gather_texels(p, s, s->bright_keys, count, 0, FIELD_POWER, &s->bright_records,
                                           s->bright_cones, s->bright_capacity, NULL);
 }
 
@@ -540,7 +549,7 @@ static int gather_corrections(const ibl_specular_plan *p, bound_scan *j, int tas
     for (int i = 0; i < tasks; i++) j->first[i] = k, k += j->count[i][0];
     j->keys = c->correction_keys;
     ibl_parallel_for(p->ctx, tasks, correction_list_task, j);
-    return gather_texels(p, j->s, c->correction_keys, k, c->gather_span, j->power_field, c->correction_records,
+    return gather_texels(p, j->s, c->correction_keys, k, c->gather_span, j->power_field, &c->correction_records,
                          c->correction_cones, c->correction_capacity, remake);
 }
 
@@ -583,7 +592,9 @@ ibl_status ibl__fast_select_corrections(ibl_specular_plan *p, precomputed_piece 
     /* the padded source and the gathering compare the same floats */
     c->correction_threshold = (float)bar;
     j.threshold = c->correction_threshold;
-    c->correction_block_count = gather_corrections(p, &j, tasks, remake.rows ? &remake : NULL);
+    int gathered = gather_corrections(p, &j, tasks, remake.rows ? &remake : NULL);
     ibl_free(p->ctx, remake.rows);
+    if (gathered < 0) return ibl_context_status(p->ctx);
+    c->correction_block_count = gathered;
     return IBL_OK;
 }

@@ -303,7 +303,8 @@ static ibl_status gather_corrections(ibl_specular_plan *p, const ibl_cubemap *sr
         for (int k = 0; k < p->levels[l].piece_count; k++) {
             precomputed_piece *c = p->levels[l].pieces[k].precomputed;
             if (!c || c->correction_capacity == 0 || c->source_level != level) continue;
-            c->correction_records = p->correction_pool + *pool_used * COARSE_FIELDS * BLOCK_TEXELS;
+            c->own_records = !p->correction_pool;
+            if (!c->own_records) c->correction_records = p->correction_pool + *pool_used * COARSE_FIELDS * BLOCK_TEXELS;
             ibl_status st = ibl__fast_select_corrections(p, c, src);
             if (st != IBL_OK) return st;
             *pool_used += (size_t)c->correction_block_count;

@@ -60,6 +60,7 @@ void ibl__fast_precomputed_destroy(ibl_context *ctx, precomputed_piece *c)
     ibl_free(ctx, c->correction_cones);
     ibl_free(ctx, c->texel_bound);
     ibl_free(ctx, c->kept_geometry);
+    if (c->own_records) ibl_free(ctx, c->correction_records);
     ibl_free(ctx, c);
 }
 
@@ -328,12 +329,19 @@ static void pack(ibl_context *ctx, precomputed_piece *c, const int32_t *found_ro
     ibl_parallel_for(ctx, (int)((bases + PACK_BASES - 1) / PACK_BASES), pack_task, &pj);
 }
 
+/* What a one-shot plan's piece frees once its level's grids are summed: the weights made for
+ * the products and the records of its corrections. */
 void ibl__fast_precomputed_release(ibl_context *ctx, precomputed_piece *c)
 {
     ibl_free(ctx, c->weights);
     ibl_free(ctx, c->vector_cells);
     c->weights = NULL;
     c->vector_cells = NULL;
+    if (c->own_records) {
+        ibl_free(ctx, c->correction_records);
+        c->correction_records = NULL;
+        c->own_records = 0;
+    }
 }
 
 /* Where each base's rows and weights start: the bases' counts summed PACK_BASES at a time by a
