@@ -36,7 +36,8 @@ struct ibl_context {
     _Atomic uint64_t live_bytes;
     _Atomic uint64_t peak_bytes;
     atomic_flag message_lock; /* a failure on a worker thread may race one on another */
-    ibl_status last_status;
+    /* read without the lock: a pool task checks whether another one has failed */
+    _Atomic int last_status;
     char message[MESSAGE_BYTES];
     /* The large blocks this context counts, whose size is kept here rather than in a header
      * (see "the memory budget" below). Pool tasks allocate too: one writer at a time. */
@@ -283,6 +284,7 @@ ibl_status ibl_context_create(const ibl_context_desc *desc, ibl_context **out)
     ctx->desc = d;
     atomic_init(&ctx->live_bytes, 0);
     atomic_init(&ctx->peak_bytes, 0);
+    atomic_init(&ctx->last_status, (int)IBL_OK);
     atomic_flag_clear(&ctx->message_lock);
     atomic_flag_clear(&ctx->large_lock);
     for (int i = 0; i < IBL__CACHE_SLOTS; i++) atomic_init(&ctx->caches[i], NULL);
@@ -354,7 +356,8 @@ const char *ibl_context_message(const ibl_context *ctx)
 
 ibl_status ibl_context_status(const ibl_context *ctx)
 {
-    return ctx ? ctx->last_status : IBL_OK;
+    return ctx ? (ibl_status)atomic_load_explicit(&((ibl_context *)ctx)->last_status, memory_order_relaxed)
+               : IBL_OK;
 }
 
 int ibl_context_threads(const ibl_context *ctx)
@@ -368,7 +371,7 @@ ibl_status ibl__fail(ibl_context *ctx, ibl_status status, const char *fmt, ...)
     /* one writer at a time: allocations fail on worker threads as well */
     while (atomic_flag_test_and_set_explicit(&ctx->message_lock, memory_order_acquire)) {
     }
-    ctx->last_status = status;
+    atomic_store_explicit(&ctx->last_status, (int)status, memory_order_relaxed);
     if (fmt) {
         /* formatted aside first: arguments may point into the message being replaced */
         char text[MESSAGE_BYTES];
