@@ -203,6 +203,20 @@ static int product_face_slots(const ibl_context *ctx)
     return threads <= 6 && 6 % threads == 0 ? threads : 1;
 }
 
+/* Whether the level's kept pieces apply enough weights to each padded face for a buffer a
+ * thread (FACE_TASK_WEIGHTS_PER_CELL). */
+static int faces_worth_a_buffer_each(const ibl_specular_plan *p, int level)
+{
+    double weights = 0, cells = 0;
+    for (int k = 0; k < p->levels[level].piece_count; k++) {
+        const precomputed_piece *c = p->levels[level].pieces[k].precomputed;
+        if (!c || ibl__fast_products_batched(c)) continue;
+        weights += (double)c->first_weight[(size_t)c->base_edge * c->base_edge];
+        if ((double)c->padded_edge * c->padded_edge > cells) cells = (double)c->padded_edge * c->padded_edge;
+    }
+    return weights >= FACE_TASK_WEIGHTS_PER_CELL * cells;
+}
+
 size_t ibl__fast_kept_padded_floats(const ibl_specular_plan *p, int level)
 {
     return face_floats(p, level) * (size_t)product_face_slots(p->ctx);
@@ -348,8 +362,9 @@ static ibl_status products_batched(ibl_specular_plan *p, int level, int k, produ
  * 256 GGX chain's peak is the level 1 refill's. One block a buffer, so that the first fits in
  * the freed geometry's pages (11 floats a texel against a buffer's 6: two in one block did not,
  * and took fresh pages: the 256 chain's RSS 40 -> 46 MB). It makes one a thread only where that
- * keeps under the context's peak so far, and else one (the faces in turn over all threads):
- * the Phong chain with cmft's exponents at 256 peaked 6 MB higher with two, in its products. */
+ * keeps under the context's peak so far and the faces are read enough to pay for it
+ * (faces_worth_a_buffer_each), and else one (the faces in turn over all threads): the Phong
+ * chain with cmft's exponents at 256 peaked 6 MB higher with two, in its products. */
 ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src)
 {
     level_plan *lv = &p->levels[level];
@@ -360,8 +375,9 @@ ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap
     if (p->padded_source) {
         for (int s = 0; s < slots; s++) padded[s] = p->padded_source + (size_t)s * face;
     } else if (face) {
-        if (slots > 1 && ibl_context_current_bytes(ctx) + (uint64_t)slots * face * sizeof(float) >
-                             ibl_context_peak_bytes(ctx))
+        if (slots > 1 && (!faces_worth_a_buffer_each(p, level) ||
+                          ibl_context_current_bytes(ctx) + (uint64_t)slots * face * sizeof(float) >
+                              ibl_context_peak_bytes(ctx)))
             slots = 1;
         for (; made < slots; made++)
             if (!(padded[made] = ibl_alloc(ctx, face * sizeof(float)))) {
