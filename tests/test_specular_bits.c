@@ -58,13 +58,11 @@ static const pinned_chain chains[] = {
      0x4f87c6f03eaa0d3aull, 0x043e2e901978e65aull, 0x043e2e901978e65aull},
 };
 
-/* The chain's output hash on a context with these threads and kernels. */
-static uint64_t chain_hash(const pinned_chain *c, const ibl_cubemap *src, int threads,
-                           ibl_kernels kernels)
+/* The chain's output hash on a context made from cd, by ibl_specular_prefilter or (a dynamic
+ * chain, or `reusable`) a plan made and run once. */
+static uint64_t hash_on(const pinned_chain *c, const ibl_cubemap *src, ibl_context_desc cd,
+                        int reusable)
 {
-    ibl_context_desc cd = {0};
-    cd.threads = threads;
-    cd.kernels = kernels;
     ibl_context *ctx = NULL;
     assert_int_equal(ibl_context_create(&cd, &ctx), IBL_OK);
     ibl_specular_desc d = {0};
@@ -73,8 +71,8 @@ static uint64_t chain_hash(const pinned_chain *c, const ibl_cubemap *src, int th
     d.mirror = c->mirror;
     d.edge_fixup = c->fixup;
     ibl_cubemap out = {0};
-    if (c->dynamic) {
-        d.dynamic = 1;
+    if (c->dynamic || reusable) {
+        d.dynamic = c->dynamic;
         d.source_size = src->size;
         ibl_specular_plan *plan = NULL;
         assert_int_equal(ibl_specular_plan_create(ctx, &d, &plan), IBL_OK);
@@ -88,6 +86,13 @@ static uint64_t chain_hash(const pinned_chain *c, const ibl_cubemap *src, int th
     ibl_cubemap_free(ctx, &out);
     ibl_context_destroy(ctx);
     return h;
+}
+
+/* The chain's output hash on a context with these threads and kernels. */
+static uint64_t chain_hash(const pinned_chain *c, const ibl_cubemap *src, int threads,
+                           ibl_kernels kernels)
+{
+    return hash_on(c, src, (ibl_context_desc){.threads = threads, .kernels = kernels}, 0);
 }
 
 static void check(const char *what, const pinned_chain *c, uint64_t got, uint64_t want, int verbose)
@@ -130,26 +135,14 @@ static void pinned_outputs(void **state)
 #endif
 }
 
-/* A reusable plan's run of the GGX 128 chain on a context of `threads`, on the library's pool
- * or (host) on a host's parallel_for that runs every loop on that many threads of its own. */
-static uint64_t plan_hash(const ibl_cubemap *src, int threads, int host)
+/* A reusable plan's run of chain c on a context of `threads`, on the library's pool or (host)
+ * on a host's parallel_for that runs every loop on that many threads of its own. */
+static uint64_t plan_hash(const pinned_chain *c, const ibl_cubemap *src, int threads, int host)
 {
     test_host h = {.threads = threads};
     ibl_context_desc cd = {.threads = threads};
     if (host) cd.parallel_for = test_host_parallel_for, cd.parallel_host = &h;
-    ibl_context *ctx = NULL;
-    assert_int_equal(ibl_context_create(&cd, &ctx), IBL_OK);
-    ibl_specular_desc d = {.filter = IBL_FILTER_GGX, .size = 128, .source_size = src->size};
-    ibl_specular_plan *plan = NULL;
-    assert_int_equal(ibl_specular_plan_create(ctx, &d, &plan), IBL_OK);
-    ibl_cubemap out = {0};
-    assert_int_equal(ibl_cubemap_alloc(ctx, 128, ibl_specular_plan_info(plan)->levels, &out), IBL_OK);
-    assert_int_equal(ibl_specular_plan_run(plan, src, &out), IBL_OK);
-    uint64_t hash = test_fnv1a(out.data, ibl_cubemap_floats(128, out.levels) * sizeof(float));
-    ibl_cubemap_free(ctx, &out);
-    ibl_specular_plan_destroy(plan);
-    ibl_context_destroy(ctx);
-    return hash;
+    return hash_on(c, src, cd, 1);
 }
 
 /* The products of a piece whose weights the plan holds run a face a task when the threads
@@ -170,8 +163,8 @@ static void face_tasks_at_any_thread_count(void **state)
     ibl_cubemap src;
     assert_int_equal(ibl_image_to_cubemap(ctx, &image, &(ibl_to_cube_desc){.size = 128}, &src), IBL_OK);
     static const int counts[] = {1, 2, 3, 4, 6};
-    for (int i = 0; i < 5; i++) check("pool", c, plan_hash(&src, counts[i], 0), want, 0);
-    for (int threads = 2; threads <= 3; threads++) check("host", c, plan_hash(&src, threads, 1), want, 0);
+    for (int i = 0; i < 5; i++) check("pool", c, plan_hash(c, &src, counts[i], 0), want, 0);
+    for (int threads = 2; threads <= 3; threads++) check("host", c, plan_hash(c, &src, threads, 1), want, 0);
     ibl_cubemap_free(ctx, &src);
     ibl_image_free(ctx, &image);
     ibl_context_destroy(ctx);
