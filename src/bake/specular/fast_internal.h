@@ -246,6 +246,10 @@ typedef struct sum_grid {
     int lagrange;          /* read by 6-point Lagrange interpolation (a Phong core), not bilinear */
     int tiles;             /* TILE_EDGE tiles per face edge                                    */
     float *sums;           /* 6 edge^2 x 4: sum g P (rgb), sum g Omega (the normaliser)         */
+    /* a one-shot plan holds a level's sums for its plan's normalisers and its run only; between
+     * them it keeps face 0's normalisers here (edge^2: every face's are face 0's, leaf_sums.c)
+     * and the sums are NULL (pieces.c, ibl__fast_grids_set_aside / ibl__fast_grids_restore) */
+    float *normalisers;
     float *bordered;       /* coarse grids: 6 (edge + 2 border)^2 x 4, the sums with a border
                             * (grid_border) across the face edges (corner: the mean of its
                             * three texels), as the seamless bilinear sampler reads them      */
@@ -302,7 +306,8 @@ struct precomputed_piece {
                                 * padded source */
     /* a one-shot plan's piece on a Lagrange grid computes its weights once, at the run: its
      * normalisers are found with them (ibl__fast_precomputed_refill) and added to the grid's
-     * then, and the level's bars take the piece's integral instead (gathering.c) */
+     * then (ibl__fast_precomputed_run_normalisers), and the level's bars take the piece's
+     * integral instead (gathering.c) */
     int normalisers_at_run;
     /* ... and keeps the padded geometry its rows were found on for those weights when it is
      * small (KEPT_GEOMETRY_BYTES), instead of making it again; NULL otherwise */
@@ -318,6 +323,8 @@ struct precomputed_piece {
     float *correction_cones;
     uint64_t *correction_keys; /* correction_capacity BLOCK_TEXELS: scratch of the gathering    */
     float *texel_bound;    /* run: each texel's bound (block order)                             */
+    /* (a one-shot plan frees the keys once its corrections are gathered, and the bounds too
+     * unless its padded source leaves the corrected texels out by them: plan.c) */
     float correction_threshold; /* run: texels over it are left out of the padded source and
                                  * summed as leaves                                            */
 };
@@ -517,6 +524,10 @@ const float *ibl__fast_streamed_texel(const ibl_specular_plan *p, const ibl_cube
 
 /* ---- pieces.c ---- */
 ibl_status ibl__fast_plan_pieces(ibl_specular_plan *p, int level);
+/* A one-shot plan's grids of a level: their sums made (with the normalisers set aside, if any),
+ * and the normalisers set aside with the sums freed. */
+ibl_status ibl__fast_grids_restore(ibl_specular_plan *p, int level);
+ibl_status ibl__fast_grids_set_aside(ibl_specular_plan *p, int level);
 double ibl__fast_piece_peak(const lobe_piece *piece);
 double ibl__fast_piece_integral(const lobe_piece *piece);
 int ibl__fast_core_normalisers_later(const level_plan *lv);
@@ -531,6 +542,7 @@ void ibl__fast_precomputed_normalisers(ibl_context *ctx, const precomputed_piece
 void ibl__fast_precomputed_destroy(ibl_context *ctx, precomputed_piece *c);
 void ibl__fast_precomputed_release(ibl_context *ctx, precomputed_piece *c);
 ibl_status ibl__fast_precomputed_refill(ibl_specular_plan *p, int level, int k);
+void ibl__fast_precomputed_run_normalisers(ibl_specular_plan *p, int level, int k);
 float *ibl__fast_precomputed_geometry(ibl_specular_plan *p, int level, int k);
 void ibl__fast_precomputed_weights(ibl_specular_plan *p, int level, int k, const float *geometry,
                                    size_t first, size_t end, uint16_t *weights, uint16_t *cells);

@@ -232,7 +232,13 @@ int ibl__fast_core_normalisers_later(const level_plan *lv)
     return 1;
 }
 
-/* Every grid's leaf-sum tasks (6 faces of tiles) and its sums. */
+static size_t grid_bytes(const sum_grid *gr)
+{
+    return (size_t)6 * gr->edge * gr->edge * 4 * sizeof(float);
+}
+
+/* Every grid's leaf-sum tasks (6 faces of tiles) and its sums (a one-shot plan's: when its plan
+ * finds the level's normalisers, ibl__fast_grids_restore). */
 static ibl_status allocate_grids(ibl_specular_plan *p, level_plan *lv)
 {
     lv->task_count = 0;
@@ -240,8 +246,7 @@ static ibl_status allocate_grids(ibl_specular_plan *p, level_plan *lv)
         sum_grid *gr = &lv->grids[g];
         lv->task_begin[g] = lv->task_count;
         lv->task_count += 6 * gr->tiles * gr->tiles;
-        gr->sums = ibl_alloc(p->ctx, (size_t)6 * gr->edge * gr->edge * 4 * sizeof(float));
-        if (!gr->sums) return ibl_context_status(p->ctx);
+        if (!p->one_shot && !(gr->sums = ibl_alloc(p->ctx, grid_bytes(gr)))) return ibl_context_status(p->ctx);
         if (!gr->at_output) {
             /* a Lagrange grid keeps two copies: the border unfolded, then resampled (combine.c);
              * a one-shot plan makes them for the level's combine only, after the run's buffers
@@ -253,6 +258,44 @@ static ibl_status allocate_grids(ibl_specular_plan *p, level_plan *lv)
         }
     }
     lv->task_begin[lv->grid_count] = lv->task_count;
+    return IBL_OK;
+}
+
+/* A one-shot plan holds a level's sums only while its plan finds the level's normalisers and
+ * while its run sums the level, each level in turn: the normalisers are all the plan writes in
+ * them, and face 0's are every face's (leaf_sums.c copies them; a precomputed piece adds the
+ * same to each face), so between the two a level keeps face 0's, a quarter of a face's sums.
+ * The Phong chain with cmft's exponents at 256 held every level's grids, 11 MB, beside level
+ * 0's weights and the geometry they are made from; its level 0 grids now come after that
+ * geometry is freed. The floats are copied, so the sums are the same bits. */
+ibl_status ibl__fast_grids_set_aside(ibl_specular_plan *p, int level)
+{
+    level_plan *lv = &p->levels[level];
+    for (int g = 0; g < lv->grid_count; g++) {
+        sum_grid *gr = &lv->grids[g];
+        size_t points = (size_t)gr->edge * gr->edge;
+        if (!(gr->normalisers = ibl_alloc(p->ctx, points * sizeof(float)))) return ibl_context_status(p->ctx);
+        for (size_t i = 0; i < points; i++) gr->normalisers[i] = gr->sums[i * 4 + 3];
+        ibl_free(p->ctx, gr->sums);
+        gr->sums = NULL;
+    }
+    return IBL_OK;
+}
+
+ibl_status ibl__fast_grids_restore(ibl_specular_plan *p, int level)
+{
+    level_plan *lv = &p->levels[level];
+    for (int g = 0; g < lv->grid_count; g++) {
+        sum_grid *gr = &lv->grids[g];
+        size_t points = (size_t)gr->edge * gr->edge;
+        if (gr->sums) continue;
+        if (!(gr->sums = ibl_alloc(p->ctx, grid_bytes(gr)))) return ibl_context_status(p->ctx);
+        if (!gr->normalisers) continue;
+        for (size_t f = 0; f < 6; f++)
+            for (size_t i = 0; i < points; i++) gr->sums[(f * points + i) * 4 + 3] = gr->normalisers[i];
+        ibl_free(p->ctx, gr->normalisers);
+        gr->normalisers = NULL;
+    }
     return IBL_OK;
 }
 

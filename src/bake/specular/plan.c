@@ -54,6 +54,7 @@ void ibl_specular_plan_destroy(ibl_specular_plan *p)
         }
         for (int g = 0; g < lv->grid_count; g++) {
             ibl_free(ctx, lv->grids[g].sums);
+            ibl_free(ctx, lv->grids[g].normalisers);
             ibl_free(ctx, lv->grids[g].bordered);
         }
     }
@@ -67,6 +68,8 @@ const ibl_specular_info *ibl_specular_plan_info(const ibl_specular_plan *plan)
 
 /* A lobe narrower than SUBTEXEL_BELOW_TEXELS source texels is summed over k x k sub-texels of
  * level 0 (each with its parent's radiance), as the reference splits such texels. */
+#define FREE_AND_CLEAR(ctx, ptr) (ibl_free((ctx), (ptr)), (ptr) = NULL)
+
 static void choose_subtexel_split(ibl_specular_plan *p)
 {
     int S = p->source_edge;
@@ -183,8 +186,10 @@ static ibl_status plan_fast(ibl_specular_plan *p)
     if (st == IBL_OK && needs_level0_records(p)) st = ibl__fast_level0_records(p);
     for (int l = 0; st == IBL_OK && l < p->output_levels; l++) {
         if (level_is_mirror(p, l)) continue;
-        ibl__fast_normalisers(p, l);
-        st = ibl__fast_plan_bars(p, l);
+        if (p->one_shot) st = ibl__fast_grids_restore(p, l);
+        if (st == IBL_OK) ibl__fast_normalisers(p, l);
+        if (st == IBL_OK) st = ibl__fast_plan_bars(p, l);
+        if (st == IBL_OK && p->one_shot) st = ibl__fast_grids_set_aside(p, l);
     }
     if (st == IBL_OK) st = ibl__fast_gathering_buffers(p);
     return st;
@@ -307,6 +312,11 @@ static ibl_status gather_corrections(ibl_specular_plan *p, const ibl_cubemap *sr
             if (!c->own_records) c->correction_records = p->correction_pool + *pool_used * COARSE_FIELDS * BLOCK_TEXELS;
             ibl_status st = ibl__fast_select_corrections(p, c, src);
             if (st != IBL_OK) return st;
+            /* the selection's scratch, and the texels' bounds unless the padded source leaves
+             * the corrected texels out by them (products.c) */
+            if (p->one_shot) FREE_AND_CLEAR(p->ctx, c->correction_keys);
+            if (p->one_shot && (c->correction_block_count == 0 || c->correction_difference))
+                FREE_AND_CLEAR(p->ctx, c->texel_bound);
             *pool_used += (size_t)c->correction_block_count;
         }
     return IBL_OK;
@@ -335,6 +345,7 @@ static ibl_status run_pyramid(ibl_specular_plan *p, const ibl_cubemap *src)
         }
         if (st != IBL_OK) return st;
         if (p->pyramid[l].bright_scale > 0) ibl__fast_select_bright(p, l);
+        if (p->one_shot) FREE_AND_CLEAR(p->ctx, p->pyramid[l].bright_keys);
         if (l != made - 1) ibl__fast_uniform_level(p, l); /* (a streamed level's: made with it) */
         st = gather_corrections(p, src, l, &pool_used);
         if (st != IBL_OK) return st;
@@ -359,24 +370,31 @@ static ibl_status check_run(const ibl_specular_plan *p, const ibl_cubemap *src,
 }
 
 /* A filtered level's grids: leaf sums, then products (a one-shot plan's weights made for them
- * and freed after: whole, or batch by batch by the products where that takes less memory). */
+ * and freed after: whole, or batch by batch by the products where that takes less memory). A
+ * one-shot plan makes the level's sums after the weights, once the geometry they were made
+ * from is freed (pieces.c, ibl__fast_grids_restore), then adds the normalisers its plan left
+ * to the run. */
 static ibl_status level_sums(ibl_specular_plan *p, const ibl_cubemap *src, int l)
 {
     level_plan *lv = &p->levels[l];
-    ibl__fast_leaf_sums(p, l);
     for (int k = 0; k < lv->piece_count; k++) {
         const precomputed_piece *c = lv->pieces[k].precomputed;
         ibl_status st = c && !ibl__fast_products_batched(c) ? ibl__fast_precomputed_refill(p, l, k) : IBL_OK;
         if (st != IBL_OK) return st;
     }
-    ibl_status st = ibl__fast_products(p, l, src);
+    ibl_status st = p->one_shot ? ibl__fast_grids_restore(p, l) : IBL_OK;
+    if (st != IBL_OK) return st;
+    for (int k = 0; k < lv->piece_count; k++) {
+        const precomputed_piece *c = lv->pieces[k].precomputed;
+        if (c && c->normalisers_at_run) ibl__fast_precomputed_run_normalisers(p, l, k);
+    }
+    ibl__fast_leaf_sums(p, l);
+    st = ibl__fast_products(p, l, src);
     if (st != IBL_OK) return st;
     for (int k = 0; p->one_shot && k < lv->piece_count; k++)
         if (lv->pieces[k].precomputed) ibl__fast_precomputed_release(p->ctx, lv->pieces[k].precomputed);
     return IBL_OK;
 }
-
-#define FREE_AND_CLEAR(ctx, ptr) (ibl_free((ctx), (ptr)), (ptr) = NULL)
 
 /* Whether a mirror level is made from the pyramid or level 0's geometry (mirror.c: a level
  * smaller than the source) rather than copied or sampled from the source. */

@@ -449,6 +449,17 @@ static ibl_status one_shot_normalisers(ibl_context *ctx, weights_job *job)
     return IBL_OK;
 }
 
+/* Whether a level before `level` keeps its core's padded geometry for the run (KEPT_GEOMETRY_BYTES
+ * in tuning.h: the first one only). */
+static int geometry_kept_before(const ibl_specular_plan *p, int level)
+{
+    for (int l = 0; l < level; l++)
+        if (p->levels[l].piece_count > 0 && p->levels[l].pieces[0].precomputed &&
+            p->levels[l].pieces[0].precomputed->kept_geometry)
+            return 1;
+    return 0;
+}
+
 /* Sets up piece k of a level as precomputed weights when it can be (a symmetric grid, level 0
  * only without sub-texels, a reach the padded face holds); leaves it to the leaf sums when the
  * border would be too deep or the weights too many. */
@@ -511,7 +522,7 @@ static ibl_status precompute_piece(ibl_specular_plan *p, int level, int k)
             for (int a = b + 1; a < c->base_edge; a++)
                 c->normaliser[b * c->base_edge + a] = c->normaliser[a * c->base_edge + b];
         if (packed == 1) pc->precomputed = c;
-        if (packed == 1 && c->normalisers_at_run &&
+        if (packed == 1 && c->normalisers_at_run && !geometry_kept_before(p, level) &&
             GEOMETRY_FIELDS * plane * sizeof(float) <= KEPT_GEOMETRY_BYTES)
             c->kept_geometry = geometry, geometry = NULL;
     }
@@ -581,13 +592,18 @@ ibl_status ibl__fast_precomputed_refill(ibl_specular_plan *p, int level, int k)
     }
     ibl_free(ctx, geometry);
     c->kept_geometry = NULL;
-    if (st == IBL_OK && c->normalisers_at_run) {
-        /* the normalisers the plan left to this run: the bases below the diagonal take their
-         * mirrors', as precompute_piece does, and all are added to the grid's sums */
-        for (int b = 0; b < c->base_edge; b++)
-            for (int a = b + 1; a < c->base_edge; a++)
-                c->normaliser[b * c->base_edge + a] = c->normaliser[a * c->base_edge + b];
-        ibl__fast_precomputed_normalisers(ctx, c, lv->grids[pc->grid].sums);
-    }
     return st;
+}
+
+/* The normalisers the plan left to the run (normalisers_at_run), found by the refill: the bases
+ * below the diagonal take their mirrors', as precompute_piece does, and all are added to the
+ * grid's sums. */
+void ibl__fast_precomputed_run_normalisers(ibl_specular_plan *p, int level, int k)
+{
+    const lobe_piece *pc = &p->levels[level].pieces[k];
+    precomputed_piece *c = pc->precomputed;
+    for (int b = 0; b < c->base_edge; b++)
+        for (int a = b + 1; a < c->base_edge; a++)
+            c->normaliser[b * c->base_edge + a] = c->normaliser[a * c->base_edge + b];
+    ibl__fast_precomputed_normalisers(p->ctx, c, p->levels[level].grids[pc->grid].sums);
 }

@@ -157,7 +157,9 @@
 /* A one-shot plan's core that finds its weights at the run (normalisers_at_run) keeps the padded
  * geometry its rows were found on until then when it takes at most 8 MiB (11 floats a padded
  * cell: 5.8 MB for cmft's exponent 2049, whose core reads 256 texels a face edge at any output
- * size), instead of making it again: 3 ms of one thread for that core at 256. */
+ * size), instead of making it again: 3 ms of one thread for that core at 256. Only the first
+ * such level keeps it (precomputed.c): a later level's would sit beside the first level's
+ * products, where cmft's chain at 256 peaks (4.1 MB of levels 1-4's, for ~2 ms of one thread). */
 #define KEPT_GEOMETRY_BYTES (8u << 20)
 /* Rows of the padded source transposed per task (the transposed copy serves the mirror bases). */
 #define TRANSPOSE_ROWS 16
