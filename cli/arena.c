@@ -33,9 +33,9 @@
  *
  * Kept, but never beside fresh memory: a free block either still has pages ("paged": its user
  * wrote some of it) or has none (never written, or dropped with madvise MADV_DONTNEED: the
- * address range stays reserved, the pages go at once; a later use faults in zeroed ones; only
- * the whole 2 MiB pages inside the block go, see arena_release), and free neighbours merge
- * only with their own kind. Which pages a block holds is the kernel's count (mincore), not its
+ * address range stays reserved, the pages go at once; a later use faults in zeroed ones; of a
+ * block the whole 2 MiB pages inside it go, and a block with none, a fragment, goes first and
+ * whole, see arena_release_for), and free neighbours merge only with their own kind. Which pages a block holds is the kernel's count (mincore), not its
  * size: buffers sized for the worst case (gathered records, bright blocks) are often mostly
  * unwritten, and counting them whole let the 256 GGX chain's output fault in 6.3 MB of fresh
  * pages beside 20 MB of idle freed ones. A request takes the best paged block that fits;
@@ -178,7 +178,8 @@ static void whole_pages(const span *s, char **from, char **to)
  * bytes were in memory (0 if none, or if it failed). Only whole ones: dropping part of a huge
  * page makes the kernel split it into 4 KiB pages, and its range then faults 4 KiB at a time
  * (512 faults where one did) for as long as the process lives. So the few pages at a block's
- * ends that share a huge page with its neighbours stay, as paged free blocks of their own.
+ * ends that share a huge page with its neighbours stay, as paged free blocks of their own
+ * (fragments: the first to go at a later request, arena_release_for).
  * Seen in the 512 GGX chain on two threads, where the order in which the workers allocate
  * moves blocks: level 1's weights landed on such split pages and took ~2,200 faults more than
  * on one thread. */

@@ -1,6 +1,7 @@
 /* The CLI's allocator (cli/arena.c): blocks are usable, aligned and disjoint; freed arena
  * blocks are reused best-fit, split and merged; a fresh block is handed out untouched; freed
- * memory goes back to the kernel, as many resident bytes as a request faults in fresh; it is
+ * memory goes back to the kernel, as many resident bytes as a request faults in fresh, the free
+ * blocks that hold no whole huge page first; it is
  * safe from several threads. */
 #define _DEFAULT_SOURCE /* mincore */
 #include "test_support.h"
@@ -184,7 +185,8 @@ static void fresh_blocks_are_untouched(void **state)
 
 /* A freed block gives back only the whole 2 MiB pages inside it: the pages at its ends that
  * share a 2 MiB page with a block in use stay (dropping part of a huge page splits it, and the
- * range then faults 4 KiB at a time). 2 MiB is the arena's alignment and the huge page size
+ * range then faults 4 KiB at a time), as fragments: fragments_go_first has what becomes of
+ * them at the next request that faults fresh pages. 2 MiB is the arena's alignment and the huge page size
  * on x86-64; with 4 KiB pages only, the same bytes stay and go. */
 static void release_keeps_shared_huge_pages(void **state)
 {
@@ -277,6 +279,50 @@ static void partly_written_blocks_count_their_pages(void **state)
 #endif
 }
 
+/* A free block that holds no whole 2 MiB page (a fragment: here 1 MiB between two blocks in
+ * use, which keep the huge pages it is on) goes back before the whole pages of larger free
+ * blocks, and its range is never handed out again (its huge pages are split; fresh address
+ * space faults 2 MiB at once). In a child process, on an arena of its own. */
+#if !defined(__SANITIZE_ADDRESS__)
+static int fragment_child(void)
+{
+    const size_t MB = (size_t)1 << 20;
+    unsigned char *a = cli_arena_alloc(MB, NULL), *fragment = cli_arena_alloc(MB, NULL);
+    unsigned char *b = cli_arena_alloc(MB, NULL), *large = cli_arena_alloc(8 * MB, NULL);
+    unsigned char *c = cli_arena_alloc(MB, NULL);
+    if (!a || !fragment || !b || !large || !c) return 1;
+    memset(a, 1, MB), memset(fragment, 2, MB), memset(b, 3, MB), memset(large, 4, 8 * MB), memset(c, 5, MB);
+    cli_arena_free(fragment, NULL);
+    cli_arena_free(large, NULL);
+    if (resident_bytes(fragment, MB) != MB) return 2;
+    /* 1 MiB more than the large block: fresh, so 9 MiB go back, the fragment first */
+    unsigned char *fresh = cli_arena_alloc(9 * MB, NULL);
+    if (!fresh || fresh == large) return 3;
+    if (resident_bytes(fragment, MB) != 0) return 4;
+    if (resident_bytes(a, MB) != MB || resident_bytes(b, MB) != MB || a[MB - 1] != 1 || b[0] != 3) return 5;
+    /* a request the fragment fits gets other memory */
+    unsigned char *again = cli_arena_alloc(MB, NULL);
+    if (!again || again == fragment) return 6;
+    return 0;
+}
+#endif
+
+static void fragments_go_first(void **state)
+{
+    (void)state;
+#if defined(__SANITIZE_ADDRESS__)
+    skip();
+#else
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (child == 0) _exit(fragment_child());
+    int status = 0;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    assert_true(WIFEXITED(status));
+    assert_int_equal(WEXITSTATUS(status), 0);
+#endif
+}
+
 static void *churn(void *arg)
 {
     unsigned seed = (unsigned)(uintptr_t)arg;
@@ -314,6 +360,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         /* first: its child process starts from the arena untouched */
         cmocka_unit_test(partly_written_blocks_count_their_pages),
+        cmocka_unit_test(fragments_go_first), /* (a child process too) */
         /* first in this process: on a fresh arena, addresses are known */
         cmocka_unit_test(freed_blocks_are_reused),
         cmocka_unit_test(fresh_blocks_are_untouched),
