@@ -242,6 +242,18 @@ static void release_keeps_shared_huge_pages(void **state)
  * a child process, on an arena of its own whose layout is known: one used block apart, the
  * two free blocks cannot merge. */
 #if !defined(__SANITIZE_ADDRESS__)
+/* Runs check in a child process (an arena of its own, untouched): it must return 0. */
+static void in_child(int (*check)(void))
+{
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (child == 0) _exit(check());
+    int status = 0;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    assert_true(WIFEXITED(status));
+    assert_int_equal(WEXITSTATUS(status), 0);
+}
+
 static int partly_written_child(void)
 {
     const size_t MB = (size_t)1 << 20;
@@ -269,13 +281,7 @@ static void partly_written_blocks_count_their_pages(void **state)
 #if defined(__SANITIZE_ADDRESS__)
     skip();
 #else
-    pid_t child = fork();
-    assert_true(child >= 0);
-    if (child == 0) _exit(partly_written_child());
-    int status = 0;
-    assert_int_equal(waitpid(child, &status, 0), child);
-    assert_true(WIFEXITED(status));
-    assert_int_equal(WEXITSTATUS(status), 0);
+    in_child(partly_written_child);
 #endif
 }
 
@@ -313,13 +319,7 @@ static void fragments_go_first(void **state)
 #if defined(__SANITIZE_ADDRESS__)
     skip();
 #else
-    pid_t child = fork();
-    assert_true(child >= 0);
-    if (child == 0) _exit(fragment_child());
-    int status = 0;
-    assert_int_equal(waitpid(child, &status, 0), child);
-    assert_true(WIFEXITED(status));
-    assert_int_equal(WEXITSTATUS(status), 0);
+    in_child(fragment_child);
 #endif
 }
 

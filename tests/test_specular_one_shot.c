@@ -192,22 +192,31 @@ static uint64_t peak_bytes(const ibl_cubemap *src, const ibl_specular_desc *desc
  * one more buffer of that size at its peak (the padded faces, one a thread, beside the weights
  * or the geometry they are made from, for one). (The RSS also depends on where the arena puts
  * the blocks; cli/arena.c and test_cli_arena keep that part.) */
+/* The peaks of case c's chain from city.exr on a 256 source: the one-shot prefilter's and, when
+ * reusable is not NULL, a reusable plan's. */
+static uint64_t peaks_of(const chain_case *c, uint64_t *reusable)
+{
+    ibl_context *ctx = test_context(1);
+    ibl_specular_desc d = case_desc(c);
+    ibl_cubemap src;
+    read_source(ctx, c, &d, c->size, &src);
+    assert_int_equal(src.size, 256);
+    if (reusable) *reusable = peak_bytes(&src, &d, 0);
+    uint64_t once = peak_bytes(&src, &d, 1);
+    ibl_cubemap_free(ctx, &src);
+    ibl_context_destroy(ctx);
+    return once;
+}
+
 static void one_shot_peak_is_lower(void **state)
 {
     (void)state;
-    ibl_context *ctx = test_context(1);
     chain_case c = {"city.exr", IBL_FILTER_GGX, 256, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_DEFAULT, NULL, 0};
-    ibl_specular_desc d = case_desc(&c);
-    ibl_cubemap src;
-    read_source(ctx, &c, &d, c.size, &src);
-    assert_int_equal(src.size, 256);
-    uint64_t reusable = peak_bytes(&src, &d, 0), once = peak_bytes(&src, &d, 1);
+    uint64_t reusable = 0, once = peaks_of(&c, &reusable);
     printf("  256 GGX chain: reusable plan peak %.3f MB, one-shot %.3f MB\n", reusable / 1e6,
            once / 1e6);
     assert_true((double)once < 0.8 * (double)reusable);
     assert_true(once <= 19600000u);
-    ibl_cubemap_free(ctx, &src);
-    ibl_context_destroy(ctx);
 }
 
 /* The Phong chain with cmft's exponents at 256 (on two threads, as above): the chain of that
@@ -220,17 +229,10 @@ static void one_shot_peak_is_lower(void **state)
 static void cmft_chain_peak(void **state)
 {
     (void)state;
-    ibl_context *ctx = test_context(1);
     chain_case c = {"city.exr", IBL_FILTER_PHONG, 256, 0, IBL_EDGE_FIXUP_NONE, IBL_MAPPING_TABLE, cmft_256, 9};
-    ibl_specular_desc d = case_desc(&c);
-    ibl_cubemap src;
-    read_source(ctx, &c, &d, c.size, &src);
-    assert_int_equal(src.size, 256);
-    uint64_t once = peak_bytes(&src, &d, 1);
+    uint64_t once = peaks_of(&c, NULL);
     printf("  256 Phong chain, cmft's exponents: one-shot %.3f MB\n", once / 1e6);
     assert_true(once <= 29500000u);
-    ibl_cubemap_free(ctx, &src);
-    ibl_context_destroy(ctx);
 }
 
 /* Under any memory budget the one-shot prefilter either makes the chain it makes without one

@@ -265,9 +265,11 @@ static ibl_status allocate_grids(ibl_specular_plan *p, level_plan *lv)
  * while its run sums the level, each level in turn: the normalisers are all the plan writes in
  * them, and face 0's are every face's (leaf_sums.c copies them; a precomputed piece adds the
  * same to each face), so between the two a level keeps face 0's, a quarter of a face's sums.
- * The Phong chain with cmft's exponents at 256 held every level's grids, 11 MB, beside level
- * 0's weights and the geometry they are made from; its level 0 grids now come after that
- * geometry is freed. The floats are copied, so the sums are the same bits. */
+ * The run makes a level's sums once its weights are made and the geometry they came from is
+ * freed (plan.c): the Phong chain with cmft's exponents at 256 has 11 MB of grids, and its
+ * peak, level 0's products, holds level 0's 8.3 MB of them only, where its weights (7.2 MB)
+ * and their geometry (5.8 MB) would otherwise have met all 11. The floats are copied, so the
+ * sums are the same bits. */
 ibl_status ibl__fast_grids_set_aside(ibl_specular_plan *p, int level)
 {
     level_plan *lv = &p->levels[level];
@@ -282,6 +284,8 @@ ibl_status ibl__fast_grids_set_aside(ibl_specular_plan *p, int level)
     return IBL_OK;
 }
 
+/* (at the plan a grid has no normalisers yet: ibl__fast_normalisers writes every point's next;
+ * at the run every grid has the ones its plan set aside) */
 ibl_status ibl__fast_grids_restore(ibl_specular_plan *p, int level)
 {
     level_plan *lv = &p->levels[level];

@@ -66,10 +66,10 @@ const ibl_specular_info *ibl_specular_plan_info(const ibl_specular_plan *plan)
     return plan ? &plan->info : NULL;
 }
 
-/* A lobe narrower than SUBTEXEL_BELOW_TEXELS source texels is summed over k x k sub-texels of
- * level 0 (each with its parent's radiance), as the reference splits such texels. */
 #define FREE_AND_CLEAR(ctx, ptr) (ibl_free((ctx), (ptr)), (ptr) = NULL)
 
+/* A lobe narrower than SUBTEXEL_BELOW_TEXELS source texels is summed over k x k sub-texels of
+ * level 0 (each with its parent's radiance), as the reference splits such texels. */
 static void choose_subtexel_split(ibl_specular_plan *p)
 {
     int S = p->source_edge;
