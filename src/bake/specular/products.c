@@ -363,8 +363,8 @@ static ibl_status products_batched(ibl_specular_plan *p, int level, int k, produ
  * the freed geometry's pages (11 floats a texel against a buffer's 6: two in one block did not,
  * and took fresh pages: the 256 chain's RSS 40 -> 46 MB). It makes one a thread only where that
  * keeps under the context's peak so far and the faces are read enough to pay for it
- * (faces_worth_a_buffer_each), and else one (the faces in turn over all threads): the Phong
- * chain with cmft's exponents at 256 peaked 6 MB higher with two, in its products. */
+ * (faces_worth_a_buffer_each), and else one (the faces in turn over all threads), so that a
+ * buffer a thread never raises the context's peak. */
 ibl_status ibl__fast_products(ibl_specular_plan *p, int level, const ibl_cubemap *src)
 {
     level_plan *lv = &p->levels[level];
