@@ -31,21 +31,21 @@
  * library's ibl_alloc keeps no header in its large blocks either (src/core/context.c): the
  * blocks this returns from the arena start on a page boundary, which is what it asks of them.
  *
- * Kept, but never beside fresh memory: a free block either still has pages ("paged": its user
- * wrote some of it) or has none (never written, or dropped with madvise MADV_DONTNEED: the
- * address range stays reserved, the pages go at once; a later use faults in zeroed ones; of a
- * block the whole 2 MiB pages inside it go, and a block with none, a fragment, goes first and
- * whole, see arena_release_for), and free neighbours merge only with their own kind. Which pages a block holds is the kernel's count (mincore), not its
- * size: buffers sized for the worst case (gathered records, bright blocks) are often mostly
- * unwritten, and counting them whole let the 256 GGX chain's output fault in 6.3 MB of fresh
- * pages beside 20 MB of idle freed ones. A request takes the best paged block that fits;
- * whatever part of its bytes has no pages (all of them for a block without pages or address
- * space from the arena's top) is faulted in fresh, so first the free blocks with the most
- * pages are given back, as many resident bytes as that. So the RSS never grows while freed
- * pages sit idle, the peak is about the most the command has in use at once, and freed memory
- * that a later request fits is reused with its pages: giving back the 1024 chain's freed
- * working buffers before the output chain was allocated made the chain fault 95 MB in again,
- * and the 2048 chain ~1.9 GB (bench/bench_stages.c shows each stage's faults).
+ * Kept, but never beside fresh memory: a free block either still has pages ("paged": its user wrote
+ * some of it) or has none (never written, or dropped with madvise MADV_DONTNEED: the address range
+ * stays reserved, the pages go at once; a later use faults in zeroed ones; of a block the whole 2
+ * MiB pages inside it go, and a block with none, a fragment, goes first and whole, see
+ * arena_release_for), and free neighbours merge only with their own kind. Which pages a block holds
+ * is the kernel's count (mincore), not its size: buffers sized for the worst case (gathered
+ * records, bright blocks) are often mostly unwritten, and counting them whole let the 256 GGX
+ * chain's output fault in 6.3 MB of fresh pages beside 20 MB of idle freed ones. A request takes
+ * the best paged block that fits; whatever part of its bytes has no pages (all of them for a block
+ * without pages or address space from the arena's top) is faulted in fresh, so first free blocks
+ * with pages are given back (arena_release_for says which), as many resident bytes as that. So the RSS never grows
+ * while freed pages sit idle, the peak is about the most the command has in use at once, and freed
+ * memory that a later request fits is reused with its pages: giving back the 1024 chain's freed
+ * working buffers before the output chain was allocated made the chain fault 95 MB in again, and
+ * the 2048 chain ~1.9 GB (bench/bench_stages.c shows each stage's faults).
  *
  * One mutex: the library allocates from its worker threads as well, but rarely (a few hundred
  * calls per command, a few dozen blocks alive at once, so the lists are searched in order). */
@@ -77,8 +77,7 @@ static struct {
     int tried;
     char *base, *top, *end; /* reserved [base, end), handed out [base, top) */
     span *first, *last;     /* every block of [base, top), by address */
-    size_t kept;            /* the sum of the paged free blocks' sizes */
-} arena = {PTHREAD_MUTEX_INITIALIZER, 0, NULL, NULL, NULL, NULL, NULL, 0};
+} arena = {PTHREAD_MUTEX_INITIALIZER, 0, NULL, NULL, NULL, NULL, NULL};
 
 /* AddressSanitizer sees overruns of malloc'd blocks only: its builds keep every block there */
 #if defined(__SANITIZE_ADDRESS__)
@@ -219,7 +218,6 @@ static size_t arena_release(span *s)
     } else {
         s->size = (size_t)(to - from);
     }
-    arena.kept -= (size_t)(to - from);
     s->paged = 0;
     merge_free(s);
     return resident;
@@ -234,7 +232,6 @@ static int release_fragment(span *s, size_t *released)
     size_t resident = resident_bytes(s->start, s->size);
     if (madvise(s->start, s->size, MADV_DONTNEED) != 0) return 0;
     *released += resident;
-    arena.kept -= s->size;
     s->paged = 0;
     s->split = 1;
     merge_free(s);
@@ -245,9 +242,10 @@ static int release_fragment(span *s, size_t *released)
  * bytes are gone (or none are left), so the RSS does not grow while freed pages sit idle.
  * First the fragments of FRAGMENT_MIN bytes and more, the smallest first: a block under a
  * huge page, or between two blocks in use, holds no whole huge page, and as long as a block in
- * use shares its huge pages the pages stay. Most such blocks fit no later request; kept, they held 12 MB of the Phong chain
- * with cmft's exponents at 256 when its output was made, where its whole peak is ~50 MB
- * (splitting their huge pages costs the ranges around them 4 KiB pages). Then the blocks with
+ * use shares its huge pages the pages stay. Most such blocks fit no later request; kept, they
+ * held 12 MB of the Phong chain with cmft's exponents at 256 when its output was made, where
+ * its whole peak is ~50 MB (splitting their huge pages costs the ranges around them 4 KiB
+ * pages). Then the blocks with
  * the most pages in memory inside their whole huge pages. A paged block found to hold no
  * pages at all becomes one of the blocks without pages. */
 static void arena_release_for(size_t fresh)
@@ -259,7 +257,8 @@ static void arena_release_for(size_t fresh)
             char *from, *to;
             if (s->used || !s->paged) continue;
             whole_pages(s, &from, &to);
-            if (from == to && s->size >= FRAGMENT_MIN && (!least || s->size < least->size)) least = s;
+            int fragment = from == to && s->size >= FRAGMENT_MIN;
+            if (fragment && (!least || s->size < least->size)) least = s;
         }
         if (!least || !release_fragment(least, &released)) break; /* (refused: keep the pages) */
     }
@@ -273,7 +272,6 @@ static void arena_release_for(size_t fresh)
             size_t bytes = resident_bytes(from, (size_t)(to - from));
             /* the whole block is read only when its huge pages hold nothing (its ends may) */
             if (bytes == 0 && resident_bytes(s->start, s->size) == 0) {
-                arena.kept -= s->size;
                 s->paged = 0;
                 s = merge_free(s); /* with its own kind only: never `most`, a paged block */
                 continue;
@@ -310,7 +308,6 @@ static span *take_from(span *b, size_t size)
         link_after(b, rest);
         b->size = size;
     }
-    if (b->paged) arena.kept -= b->size;
     b->used = 1;
     return b;
 }
@@ -352,7 +349,6 @@ static void arena_give(char *p)
     if (!s || !s->used) return;
     s->used = 0;
     s->paged = resident_bytes(s->start, s->size) > 0; /* the pages its user wrote, if any */
-    if (s->paged) arena.kept += s->size;
     merge_free(s);
 }
 
